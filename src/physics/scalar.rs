@@ -1,0 +1,387 @@
+//! The number type the physics is written against.
+//!
+//! # Units and the default fixed format
+//!
+//! Lengths are measured in **cell pitches**: one pitch is `s + l`, a short tile plus a
+//! long tile. In that unit the seed's `⌊a / (s+l)⌋` (eq. 6) is the integer part of `a`,
+//! so point → tile costs a floor and one compare instead of a division. Time is in
+//! seconds, velocities in pitches per second.
+//!
+//! The firmware default is [`I8F24`]: a 32-bit word with 24 fraction bits. Its range,
+//! ±128 pitches, holds the largest board the level format allows (127 tiles = 64
+//! pitches per axis) with a margin for a marble falling off an edge, after which the
+//! marble is frozen (see `MarbleState::Out`). One LSB is 2⁻²⁴ pitch, about 0.7 nm
+//! at a 12 mm pitch, so the quantities that are small in this unit stay exact enough:
+//!
+//! * the velocity gained per step, `g·dt` at 0.01 g and 1024 steps/s, is about
+//!   0.008 pitch/s = 130 000 LSB (relative rounding 4·10⁻⁶);
+//! * `g·dt²`, the position gained from rest in one step, is 7.8·10⁻⁶ pitch = 130 LSB.
+//!   That is why the integrator never forms `g·dt²` from rounded parts: it adds the
+//!   exact `½·a·dt²` that is precomputed once per tilt sample (see `integrate`).
+//!
+//! Accelerations in pitches/s² (a full `g` is ~800 pitch/s²) do not fit in I8F24,
+//! so the physics never stores them: it stores velocity increments per step.
+//! Millimetres with I16F16 were the other candidate; there `g·dt` at 0.01 g is 6 400
+//! LSB and the per-step rounding of the velocity gives 0.3 mm after 10 s — six times
+//! the accuracy target — which is why the unit is the pitch and not the millimetre.
+//!
+//! Only the contact path divides or takes square roots ([`Scalar::sqrt`],
+//! [`Scalar::div`]); the free-flight step is adds, shifts and a few multiplies.
+
+use core::fmt::Debug;
+use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
+
+use fixed::types::{I16F16, I32F32, I8F24};
+
+/// A real number as the physics needs it. Implemented for three fixed-point formats,
+/// `f32`, [`MicroF32`] (f32 with `micromath`'s approximate square root) and `f64`.
+pub trait Scalar:
+    Copy
+    + PartialOrd
+    + PartialEq
+    + Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + 'static
+{
+    /// Zero.
+    const ZERO: Self;
+    /// One.
+    const ONE: Self;
+    /// A short stable name, used by tools and reports.
+    const NAME: &'static str;
+    /// The largest magnitude the physics may hold safely in this type (positions,
+    /// velocities): inputs are clamped below it.
+    const LIMIT: f64;
+    /// The integer `n`, exactly (`|n| < 128` for the narrowest format).
+    fn from_int(n: i32) -> Self;
+    /// The nearest value to `x` (setup and tests; not used inside the step).
+    fn from_f64(x: f64) -> Self;
+    /// `num / den`, rounded to nearest; setup only (`den != 0`).
+    fn ratio(num: i64, den: i64) -> Self {
+        Self::from_f64(num as f64 / den as f64)
+    }
+    /// The value as `f64` (exact for every implemented type except `f64` itself,
+    /// which is the identity).
+    fn to_f64(self) -> f64;
+    /// `⌊self⌋` as an integer, exact.
+    fn floor_int(self) -> i32;
+    /// `self · 2^-n`, rounded to nearest for fixed point: a time step `dt = 2^-n`
+    /// multiplies without a multiplier and without bias.
+    fn shr(self, n: u32) -> Self;
+    /// Square root of a non-negative value (contact path only). Negative → zero.
+    fn sqrt(self) -> Self;
+    /// `self / rhs` for `rhs != 0` (contact path only); zero when `rhs == 0`.
+    fn div(self, rhs: Self) -> Self;
+    /// Bits of the exact value, for state hashing.
+    fn hash_bits(self) -> u64;
+    /// Absolute value.
+    fn abs(self) -> Self {
+        if self < Self::ZERO {
+            -self
+        } else {
+            self
+        }
+    }
+    /// `self / 2` (exact in fixed point up to the last bit).
+    fn half(self) -> Self {
+        self.shr(1)
+    }
+    /// The larger of two values.
+    fn max(self, o: Self) -> Self {
+        if self > o {
+            self
+        } else {
+            o
+        }
+    }
+    /// The smaller of two values.
+    fn min(self, o: Self) -> Self {
+        if self < o {
+            self
+        } else {
+            o
+        }
+    }
+    /// Clamped into `[lo, hi]`.
+    fn clamp(self, lo: Self, hi: Self) -> Self {
+        self.max(lo).min(hi)
+    }
+}
+
+macro_rules! fixed_scalar {
+    ($t:ty, $name:literal, $limit:expr) => {
+        impl Scalar for $t {
+            const ZERO: Self = <$t>::ZERO;
+            const ONE: Self = <$t>::ONE;
+            const NAME: &'static str = $name;
+            const LIMIT: f64 = $limit;
+            #[inline]
+            fn from_int(n: i32) -> Self {
+                <$t>::saturating_from_num(n)
+            }
+            fn from_f64(x: f64) -> Self {
+                <$t>::saturating_from_num(x)
+            }
+            fn ratio(num: i64, den: i64) -> Self {
+                // Exact rational → fixed, rounded to nearest, without going through f64.
+                let frac = <$t>::FRAC_NBITS;
+                let scaled = (num as i128) << frac;
+                let den = den as i128;
+                let q = scaled.div_euclid(den);
+                let r = scaled.rem_euclid(den);
+                let q = if 2 * r.abs() >= den.abs() { q + den.signum() } else { q };
+                let bits = q.clamp(<$t>::MIN.to_bits() as i128, <$t>::MAX.to_bits() as i128);
+                <$t>::from_bits(bits as _)
+            }
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self.to_num::<f64>()
+            }
+            #[inline]
+            fn floor_int(self) -> i32 {
+                // Arithmetic shift is floor division by 2^FRAC: exact for negatives too.
+                (self.to_bits() >> <$t>::FRAC_NBITS) as i32
+            }
+            #[inline]
+            fn shr(self, n: u32) -> Self {
+                if n == 0 {
+                    return self;
+                }
+                let bits = self.to_bits();
+                // Round half away from zero so that +v and -v move by mirror amounts.
+                let half = 1 << (n - 1);
+                let r = if bits >= 0 { (bits + half) >> n } else { -((-bits + half) >> n) };
+                <$t>::from_bits(r)
+            }
+            fn sqrt(self) -> Self {
+                if self <= <$t>::ZERO {
+                    <$t>::ZERO
+                } else {
+                    <$t>::sqrt(self)
+                }
+            }
+            fn div(self, rhs: Self) -> Self {
+                if rhs == <$t>::ZERO {
+                    <$t>::ZERO
+                } else {
+                    self.saturating_div(rhs)
+                }
+            }
+            #[inline]
+            fn hash_bits(self) -> u64 {
+                self.to_bits() as i64 as u64
+            }
+        }
+    };
+}
+
+fixed_scalar!(I8F24, "i8f24", 120.0);
+fixed_scalar!(I16F16, "i16f16", 30000.0);
+fixed_scalar!(I32F32, "i32f32", 2.0e9);
+
+impl Scalar for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const NAME: &'static str = "f32";
+    const LIMIT: f64 = 1.0e30;
+    fn from_int(n: i32) -> Self {
+        n as f32
+    }
+    fn from_f64(x: f64) -> Self {
+        x as f32
+    }
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+    fn floor_int(self) -> i32 {
+        libm::floorf(self) as i32
+    }
+    fn shr(self, n: u32) -> Self {
+        self * pow2_neg_f32(n)
+    }
+    fn sqrt(self) -> Self {
+        if self <= 0.0 {
+            0.0
+        } else {
+            libm::sqrtf(self)
+        }
+    }
+    fn div(self, rhs: Self) -> Self {
+        if rhs == 0.0 {
+            0.0
+        } else {
+            self / rhs
+        }
+    }
+    fn hash_bits(self) -> u64 {
+        self.to_bits() as u64
+    }
+}
+
+impl Scalar for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const NAME: &'static str = "f64";
+    const LIMIT: f64 = 1.0e300;
+    fn from_int(n: i32) -> Self {
+        n as f64
+    }
+    fn from_f64(x: f64) -> Self {
+        x
+    }
+    fn to_f64(self) -> f64 {
+        self
+    }
+    fn floor_int(self) -> i32 {
+        libm::floor(self) as i32
+    }
+    fn shr(self, n: u32) -> Self {
+        self * pow2_neg_f32(n) as f64
+    }
+    fn sqrt(self) -> Self {
+        if self <= 0.0 {
+            0.0
+        } else {
+            libm::sqrt(self)
+        }
+    }
+    fn div(self, rhs: Self) -> Self {
+        if rhs == 0.0 {
+            0.0
+        } else {
+            self / rhs
+        }
+    }
+    fn hash_bits(self) -> u64 {
+        self.to_bits()
+    }
+}
+
+fn pow2_neg_f32(n: u32) -> f32 {
+    // 2^-n built from the exponent field: exact, no libm call. n ≤ 126 in practice.
+    f32::from_bits((127u32.saturating_sub(n.min(126))) << 23)
+}
+
+/// `f32` whose square root is `micromath`'s fast approximation (a few per cent of an
+/// ULP budget traded for speed): the study's "f32 + micromath" backend.
+#[derive(Clone, Copy, PartialEq, PartialOrd, Debug, Default)]
+pub struct MicroF32(pub f32);
+
+impl Add for MicroF32 {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        MicroF32(self.0 + o.0)
+    }
+}
+impl Sub for MicroF32 {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        MicroF32(self.0 - o.0)
+    }
+}
+impl Mul for MicroF32 {
+    type Output = Self;
+    fn mul(self, o: Self) -> Self {
+        MicroF32(self.0 * o.0)
+    }
+}
+impl Neg for MicroF32 {
+    type Output = Self;
+    fn neg(self) -> Self {
+        MicroF32(-self.0)
+    }
+}
+impl AddAssign for MicroF32 {
+    fn add_assign(&mut self, o: Self) {
+        self.0 += o.0
+    }
+}
+impl SubAssign for MicroF32 {
+    fn sub_assign(&mut self, o: Self) {
+        self.0 -= o.0
+    }
+}
+
+impl Scalar for MicroF32 {
+    const ZERO: Self = MicroF32(0.0);
+    const ONE: Self = MicroF32(1.0);
+    const NAME: &'static str = "f32-micromath";
+    const LIMIT: f64 = 1.0e30;
+    fn from_int(n: i32) -> Self {
+        MicroF32(n as f32)
+    }
+    fn from_f64(x: f64) -> Self {
+        MicroF32(x as f32)
+    }
+    fn to_f64(self) -> f64 {
+        self.0 as f64
+    }
+    fn floor_int(self) -> i32 {
+        use micromath::F32Ext;
+        F32Ext::floor(self.0) as i32
+    }
+    fn shr(self, n: u32) -> Self {
+        MicroF32(self.0 * pow2_neg_f32(n))
+    }
+    fn sqrt(self) -> Self {
+        use micromath::F32Ext;
+        if self.0 <= 0.0 {
+            MicroF32(0.0)
+        } else {
+            MicroF32(F32Ext::sqrt(self.0))
+        }
+    }
+    fn div(self, rhs: Self) -> Self {
+        if rhs.0 == 0.0 {
+            MicroF32(0.0)
+        } else {
+            MicroF32(self.0 / rhs.0)
+        }
+    }
+    fn hash_bits(self) -> u64 {
+        self.0.to_bits() as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_floor_is_exact_for_negatives() {
+        assert_eq!(I8F24::from_f64(-0.5).floor_int(), -1);
+        assert_eq!(I8F24::from_int(-3).floor_int(), -3);
+        assert_eq!(I8F24::from_bits(-1).floor_int(), -1);
+        assert_eq!(I8F24::from_bits(0).floor_int(), 0);
+    }
+
+    #[test]
+    fn shr_rounds_to_nearest_symmetrically() {
+        let x = I8F24::from_bits(3);
+        assert_eq!(x.shr(1).to_bits(), 2);
+        assert_eq!((-x).shr(1).to_bits(), -2);
+        assert_eq!(I8F24::from_bits(5).shr(2).to_bits(), 1);
+        assert_eq!(1.5f32.shr(1), 0.75);
+        assert_eq!(3.0f64.shr(10), 3.0 / 1024.0);
+    }
+
+    #[test]
+    fn ratio_rounds_to_nearest() {
+        let r = I8F24::ratio(1, 3);
+        let err = (r.to_f64() - 1.0 / 3.0).abs();
+        assert!(err <= 0.5 / (1u64 << 24) as f64);
+        assert_eq!(I8F24::ratio(-1, 2).to_f64(), -0.5);
+        assert_eq!(I16F16::ratio(2, 12), I16F16::from_f64(2.0 / 12.0));
+    }
+
+    #[test]
+    fn micromath_sqrt_is_close() {
+        let s = MicroF32(2.0).sqrt().0;
+        assert!((s - core::f32::consts::SQRT_2).abs() < 0.01);
+    }
+}
