@@ -4,3 +4,12 @@
 #![warn(missing_docs)]
 
 pub mod physics;
+/// Pin-agnostic LED-matrix frames, BCM scanning and on-time integration.
+pub mod matrix;
+#[cfg(any(feature = "board-qemu", feature = "board-microbit"))]
+pub mod app;
+pub mod board;
+/// Accelerometer axis mapping, plausibility, calibration and fault supervision.
+pub mod sensor;
+/// Two-button debouncing and the A / B / A+B-hold combinations.
+pub mod buttons;

@@ -40,6 +40,7 @@ pub trait Scalar:
     + PartialOrd
     + PartialEq
     + Debug
+    + Default
     + Add<Output = Self>
     + Sub<Output = Self>
     + Mul<Output = Self>
@@ -65,6 +66,23 @@ pub trait Scalar:
     fn ratio(num: i64, den: i64) -> Self {
         Self::from_f64(num as f64 / den as f64)
     }
+    /// `num / den` rounded away from zero (setup only). The integrator rounds the
+    /// per-step displacement `½·a·dt²` this way so that rounding can only ever make
+    /// the marble fall *further* along the pull: energy may leak, never appear.
+    fn ratio_away(num: i64, den: i64) -> Self {
+        let x = Self::ratio(num, den);
+        let exact = num as f64 / den as f64;
+        if x.to_f64().abs() < exact.abs() {
+            if exact > 0.0 {
+                // The next representable value up: the negation of next_down of −x.
+                -((-x).next_down())
+            } else {
+                x.next_down()
+            }
+        } else {
+            x
+        }
+    }
     /// The value as `f64` (exact for every implemented type except `f64` itself,
     /// which is the identity).
     fn to_f64(self) -> f64;
@@ -73,10 +91,14 @@ pub trait Scalar:
     /// `self · 2^-n`, rounded to nearest for fixed point: a time step `dt = 2^-n`
     /// multiplies without a multiplier and without bias.
     fn shr(self, n: u32) -> Self;
+    /// `self · 2^n`, saturating at the type's range (fixed point).
+    fn shl(self, n: u32) -> Self;
     /// Square root of a non-negative value (contact path only). Negative → zero.
     fn sqrt(self) -> Self;
     /// `self / rhs` for `rhs != 0` (contact path only); zero when `rhs == 0`.
     fn div(self, rhs: Self) -> Self;
+    /// The next representable value below `self` (tests probe tile boundaries with it).
+    fn next_down(self) -> Self;
     /// Bits of the exact value, for state hashing.
     fn hash_bits(self) -> u64;
     /// Absolute value.
@@ -130,6 +152,15 @@ macro_rules! fixed_scalar {
             fn ratio(num: i64, den: i64) -> Self {
                 // Exact rational → fixed, rounded to nearest, without going through f64.
                 let frac = <$t>::FRAC_NBITS;
+                // i64 when it fits: i128 division is a slow library call on Cortex-M.
+                if num.unsigned_abs() < (1u64 << (62 - frac)) && den > 0 {
+                    let scaled = num << frac;
+                    let q = scaled.div_euclid(den);
+                    let r = scaled.rem_euclid(den);
+                    let q = if 2 * r >= den { q + 1 } else { q };
+                    let bits = q.clamp(<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
+                    return <$t>::from_bits(bits as _);
+                }
                 let scaled = (num as i128) << frac;
                 let den = den as i128;
                 let q = scaled.div_euclid(den);
@@ -158,6 +189,10 @@ macro_rules! fixed_scalar {
                 let r = if bits >= 0 { (bits + half) >> n } else { -((-bits + half) >> n) };
                 <$t>::from_bits(r)
             }
+            #[inline]
+            fn shl(self, n: u32) -> Self {
+                self.saturating_mul_int(1 << n)
+            }
             fn sqrt(self) -> Self {
                 if self <= <$t>::ZERO {
                     <$t>::ZERO
@@ -171,6 +206,9 @@ macro_rules! fixed_scalar {
                 } else {
                     self.saturating_div(rhs)
                 }
+            }
+            fn next_down(self) -> Self {
+                <$t>::from_bits(self.to_bits().saturating_sub(1))
             }
             #[inline]
             fn hash_bits(self) -> u64 {
@@ -204,6 +242,9 @@ impl Scalar for f32 {
     fn shr(self, n: u32) -> Self {
         self * pow2_neg_f32(n)
     }
+    fn shl(self, n: u32) -> Self {
+        self * (1u64 << n) as f32
+    }
     fn sqrt(self) -> Self {
         if self <= 0.0 {
             0.0
@@ -217,6 +258,9 @@ impl Scalar for f32 {
         } else {
             self / rhs
         }
+    }
+    fn next_down(self) -> Self {
+        f32::next_down(self)
     }
     fn hash_bits(self) -> u64 {
         self.to_bits() as u64
@@ -243,6 +287,9 @@ impl Scalar for f64 {
     fn shr(self, n: u32) -> Self {
         self * pow2_neg_f32(n) as f64
     }
+    fn shl(self, n: u32) -> Self {
+        self * (1u64 << n) as f64
+    }
     fn sqrt(self) -> Self {
         if self <= 0.0 {
             0.0
@@ -256,6 +303,9 @@ impl Scalar for f64 {
         } else {
             self / rhs
         }
+    }
+    fn next_down(self) -> Self {
+        f64::next_down(self)
     }
     fn hash_bits(self) -> u64 {
         self.to_bits()
@@ -328,6 +378,9 @@ impl Scalar for MicroF32 {
     fn shr(self, n: u32) -> Self {
         MicroF32(self.0 * pow2_neg_f32(n))
     }
+    fn shl(self, n: u32) -> Self {
+        MicroF32(self.0 * (1u64 << n) as f32)
+    }
     fn sqrt(self) -> Self {
         use micromath::F32Ext;
         if self.0 <= 0.0 {
@@ -342,6 +395,9 @@ impl Scalar for MicroF32 {
         } else {
             MicroF32(self.0 / rhs.0)
         }
+    }
+    fn next_down(self) -> Self {
+        MicroF32(f32::next_down(self.0))
     }
     fn hash_bits(self) -> u64 {
         self.0.to_bits() as u64

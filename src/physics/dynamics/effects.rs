@@ -1,0 +1,132 @@
+//! Optional effects. A scene declares the ones it needs ([`Effects`]); the step runs
+//! only those. Rolling costs nothing per step even when on (it scales the kick once
+//! per tilt sample); the others are skipped by one branch per step when off, and
+//! [`crate::physics::world::StepStats`] counts every run so a test can show that a
+//! switched-off effect never executes.
+
+use super::super::geometry::frame::Frame;
+use super::super::scalar::Scalar;
+use super::super::vec::Vec3;
+use super::integrate::Kick;
+use super::respond::restitution;
+
+/// The effects a scene asks for. Walls, floor and restitution are always on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Effects {
+    /// Solid-sphere rolling: tangential acceleration is 5/7 of sliding.
+    pub rolling: bool,
+    /// Rolling resistance (a constant deceleration opposing motion, and a static
+    /// threshold below which the marble stays put).
+    pub friction: bool,
+    /// The board's own rotation: fictitious forces in the board frame and eq. 1's
+    /// `v_b` at contacts.
+    pub board_motion: bool,
+    /// Holes in the floor: full 3-D motion (falling). Off: the plane only.
+    pub holes: bool,
+    /// Several marbles: marble–marble collisions.
+    pub marbles: bool,
+}
+
+impl Effects {
+    /// Every effect on.
+    pub const ALL: Effects = Effects { rolling: true, friction: true, board_motion: true, holes: true, marbles: true };
+    /// Every effect off: walls, floor and restitution only.
+    pub const NONE: Effects =
+        Effects { rolling: false, friction: false, board_motion: false, holes: false, marbles: false };
+}
+
+/// Rolling resistance for a marble on the floor (tangent plane x'–z').
+///
+/// `decel` is the deceleration per step (pitch/s per step, `c_rr·g_n·dt`). A marble
+/// whose speed is below `decel` and whose tilt pull is too is held exactly still
+/// (static friction): that is what keeps a resting marble from creeping. Otherwise
+/// the kick gets a constant-magnitude component against the motion.
+///
+/// Speeds are scaled by 1/16 before squaring so that `v²` stays inside the narrowest
+/// fixed format's range at the speed cap.
+pub fn rolling_resistance<S: Scalar>(v: &mut Vec3<S>, kick: &mut Kick<S>, decel: S, k: u32) {
+    const SCALE: u32 = 4;
+    let (vx, vz) = (v.x.shr(SCALE), v.z.shr(SCALE));
+    let speed = (vx * vx + vz * vz).sqrt();
+    let limit = decel.shr(SCALE);
+    let (dx, dz, len) = if speed > limit {
+        (vx, vz, speed)
+    } else {
+        let (ax, az) = (kick.dv.x.shr(SCALE), kick.dv.z.shr(SCALE));
+        let pull = (ax * ax + az * az).sqrt();
+        if pull <= limit {
+            v.x = S::ZERO;
+            v.z = S::ZERO;
+            kick.dv.x = S::ZERO;
+            kick.dv.z = S::ZERO;
+            kick.dp.x = S::ZERO;
+            kick.dp.z = S::ZERO;
+            return;
+        }
+        (ax, az, pull)
+    };
+    let (ux, uz) = (dx.div(len), dz.div(len));
+    let half_step = decel.shr(k + 1);
+    kick.dv.x -= decel * ux;
+    kick.dv.z -= decel * uz;
+    kick.dp.x -= half_step * ux;
+    kick.dp.z -= half_step * uz;
+}
+
+/// The board's rotation as the physics needs it, in the tile frame.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct BoardMotion<S> {
+    /// Angular velocity times `dt` (radians per step).
+    pub omega: Vec3<S>,
+    /// Angular acceleration times `dt²` (radians per step²).
+    pub omega_dot: Vec3<S>,
+    /// The point the board turns about (tile frame, pitch).
+    pub pivot: Vec3<S>,
+}
+
+impl<S: Scalar> BoardMotion<S> {
+    /// The rotation from frame `prev` to frame `cur` (eq. 4 frames of the board),
+    /// expressed in `prev`'s tile frame, as a small rotation vector (radians):
+    /// `Bₚᵀ B_c ≈ I + [θ]×`.
+    pub fn rotation_between(prev: &Frame<S>, cur: &Frame<S>) -> Vec3<S> {
+        // Columns of B_cur in prev's tile coordinates (eq. 4 applied to directions).
+        let cx = prev.dir_to_tile(cur.basis[0]);
+        let cy = prev.dir_to_tile(cur.basis[1]);
+        let cz = prev.dir_to_tile(cur.basis[2]);
+        Vec3::new((cy.z - cz.y).half(), (cz.x - cx.z).half(), (cx.y - cy.x).half())
+    }
+
+    /// Velocity of the board surface at tile point `p` (pitch/step): `ω × (p − pivot)`.
+    #[inline]
+    pub fn surface_velocity(&self, p: Vec3<S>) -> Vec3<S> {
+        self.omega.cross(p - self.pivot)
+    }
+
+    /// The fictitious accelerations of the rotating board frame acting on a marble at
+    /// `p` moving at `v_step` (pitch/step): Euler `−ω̇×r`, centrifugal `−ω×(ω×r)` and
+    /// Coriolis `−2ω×v`, as a kick at step `dt = 2^-k`.
+    pub fn kick(&self, p: Vec3<S>, v_step: Vec3<S>, k: u32) -> Kick<S> {
+        let r = p - self.pivot;
+        let euler = -self.omega_dot.cross(r);
+        let centrifugal = -self.omega.cross(self.omega.cross(r));
+        let coriolis = -self.omega.cross(v_step).scale(S::from_int(2));
+        let a = euler + centrifugal + coriolis; // pitch/step²
+        Kick { dv: a.shl(k), dp: a.shr(1) }
+    }
+}
+
+/// Two equal marbles in contact along unit normal `n` (from 1 to 2), in the contact
+/// solver's units (pitch/T). Returns the new velocities. The pair's relative motion obeys eq. 1 with the
+/// other marble as the "board", each taking half of the momentum change.
+pub fn marble_pair<S: Scalar>(v1: Vec3<S>, v2: Vec3<S>, n: Vec3<S>, e: S, threshold: S) -> (Vec3<S>, Vec3<S>) {
+    let vn = (v2 - v1).dot(n);
+    if vn >= S::ZERO {
+        return (v1, v2);
+    }
+    let e = if -vn <= threshold { S::ZERO } else { e };
+    // Eq. 1 for marble 2 against marble 1: the change it would get off an immovable
+    // board, halved because the "board" recoils with equal mass.
+    let dv = (restitution(v2, v1, n, e) - v2).shr(1);
+    (v1 - dv, v2 + dv)
+}

@@ -1,0 +1,132 @@
+//! Collision response: eq. 1, and what happens in the step in which a contact starts.
+//!
+//! Eq. 1, `v_m' = v_m − (1 + e)((v_m − v_b)·n) n`, is the seed's law for a bounce off
+//! a board moving at `v_b`. The seed does not say *when* in a step the bounce
+//! happens, nor what to do with a marble that merely rests on a surface. Here:
+//!
+//! * The normal motion in the step is a parabola (constant acceleration), so the
+//!   impact time and the approach speed at impact are solved exactly from the state
+//!   at the end of the step: with approach speed `w`, acceleration into the surface
+//!   `b` and depth `δ`, the speed at impact is `w_c = √(w² − 2bδ)` (energy along the
+//!   normal) and the time since impact `τ = 2δ/(w + w_c)`. Eq. 1 is applied at that
+//!   instant, and the rest of the step is flown exactly. For `e = 1` this conserves
+//!   energy to the last bit of rounding, at any step size.
+//! * **Restitution threshold.** When `w_c` is below the threshold the impact is a
+//!   *contact*: the marble is put on the surface with no normal velocity (resting or
+//!   sliding). No bounce, no jitter, no sinking, and no root is taken (the threshold
+//!   test compares squares): a marble resting against a wall costs a few adds a step.
+//! * Positional correction only ever moves the marble along the normal back to where
+//!   the exact motion puts it; a push-out that would lift it against the
+//!   acceleration is paid for from its normal speed, so it never injects energy.
+//!
+//! All quantities here are in the solver's time unit `T = 1/32 s` (pitch/T,
+//! pitch/T²): at the 64 pitch/s speed cap a speed is at most 2 pitch/T, so its square
+//! fits the narrowest fixed format, while the energies of slow bounces keep ~10⁵ LSB
+//! of resolution (in per-step units at 1024 steps/s they had ~500).
+
+use super::super::scalar::Scalar;
+use super::super::vec::Vec3;
+
+/// Eq. 1: the marble's velocity after bouncing off a board moving at `v_b`.
+#[inline]
+pub fn restitution<S: Scalar>(v_m: Vec3<S>, v_b: Vec3<S>, n: Vec3<S>, e: S) -> Vec3<S> {
+    let vn = (v_m - v_b).dot(n);
+    v_m - n.scale((S::ONE + e) * vn)
+}
+
+/// What a contact turned out to be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Outcome {
+    /// Already moving away: only pushed out.
+    Separating,
+    /// Slower than the restitution threshold: put on the surface, normal speed zero.
+    Contact,
+    /// A bounce (eq. 1 at the instant of impact).
+    Collision,
+}
+
+/// `log2` of the solver's time unit: `T = 2^-5 s`.
+pub const T_LOG2: u32 = 5;
+
+/// One contact to resolve, in solver units (pitch, `T`).
+#[derive(Clone, Copy, Debug)]
+pub struct Impact<S> {
+    /// Unit normal out of the board, towards the marble.
+    pub n: Vec3<S>,
+    /// Penetration depth at the end of the step (pitch, `> 0`).
+    pub depth: S,
+    /// Marble velocity (pitch/T).
+    pub v: Vec3<S>,
+    /// Board velocity at the contact (pitch/T); zero unless the board moves.
+    pub v_board: Vec3<S>,
+    /// Acceleration over the step (pitch/T²).
+    pub acc: Vec3<S>,
+    /// The step's length in `T` (the latest the impact can have been).
+    pub dt: S,
+}
+
+/// How to move the marble: along `n` by `push` (pitch), and its normal velocity
+/// relative to the board becomes `vn` (pitch/T).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resolution<S> {
+    /// Distance to move along the normal.
+    pub push: S,
+    /// New normal velocity relative to the board (pitch/T).
+    pub vn: S,
+    /// Which case applied.
+    pub outcome: Outcome,
+}
+
+/// Resolves one contact with restitution `e` and restitution threshold `threshold`
+/// (pitch/T).
+pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
+    let two = S::from_int(2);
+    let vn = (c.v - c.v_board).dot(c.n);
+    let w = -vn;
+    let b = -c.acc.dot(c.n);
+    let delta = c.depth;
+    if w <= S::ZERO {
+        // Moving away but overlapping (an edge came into reach sideways). Lifting it
+        // by δ against b costs b·δ of energy: take it from the normal speed.
+        let mut out = vn;
+        if b > S::ZERO {
+            let e2 = vn * vn - two * b * delta;
+            out = if e2 > S::ZERO { e2.sqrt() } else { S::ZERO };
+        }
+        return Resolution { push: delta, vn: out, outcome: Outcome::Separating };
+    }
+    let wc2 = w * w - two * b * delta;
+    if wc2 <= threshold * threshold {
+        return Resolution { push: delta, vn: S::ZERO, outcome: Outcome::Contact };
+    }
+    let wc = wc2.sqrt();
+    let tau = (two * delta).div(w + wc).min(c.dt);
+    // The velocity at impact: tangential part as now, normal part −w_c.
+    let v_c = c.v + c.n.scale(w - wc);
+    let out = (restitution(v_c, c.v_board, c.n, e) - c.v_board).dot(c.n);
+    let u = out * tau - b * tau * tau.half();
+    if u <= S::ZERO {
+        return Resolution { push: delta, vn: S::ZERO, outcome: Outcome::Contact };
+    }
+    // Rounding must not add energy: the normal energy after (½vn² + b·u) may not
+    // exceed the energy before (½w² − b·δ, the state at the end of the step).
+    let mut vn = out - b * tau;
+    let before = w * w.half() - b * delta;
+    if vn * vn.half() + b * u > before {
+        let room = before - b * u;
+        let mut mag = if room > S::ZERO { (room + room).sqrt() } else { S::ZERO };
+        // The root rounds, and an approximate one (micromath) may overshoot: step
+        // down an ULP at a time, then by 1/64 at a time.
+        let mut tries = 0;
+        while mag > S::ZERO && mag * mag.half() + b * u > before && tries < 16 {
+            mag = if tries < 4 { mag.next_down() } else { mag - mag.shr(6) }.max(S::ZERO);
+            tries += 1;
+        }
+        if tries == 16 {
+            mag = S::ZERO;
+        }
+        vn = if vn < S::ZERO { -mag } else { mag };
+    }
+    Resolution { push: delta + u, vn, outcome: Outcome::Collision }
+}

@@ -1,0 +1,122 @@
+//! A 3-vector over any [`Scalar`]: positions, velocities and normals in the tile frame.
+
+use core::ops::{Add, AddAssign, Neg, Sub, SubAssign};
+
+use super::scalar::Scalar;
+
+/// `(x, y, z)`; in the tile frame x' runs along the grid columns, y' up out of the
+/// board, z' along the grid rows towards the player.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Vec3<S> {
+    /// x' component.
+    pub x: S,
+    /// y' component (up).
+    pub y: S,
+    /// z' component.
+    pub z: S,
+}
+
+impl<S: Scalar> Vec3<S> {
+    /// The zero vector.
+    pub const ZERO: Self = Vec3 { x: S::ZERO, y: S::ZERO, z: S::ZERO };
+
+    /// A vector from its components.
+    #[inline]
+    pub const fn new(x: S, y: S, z: S) -> Self {
+        Vec3 { x, y, z }
+    }
+    /// Every component times `k`.
+    #[inline]
+    pub fn scale(self, k: S) -> Self {
+        Vec3::new(self.x * k, self.y * k, self.z * k)
+    }
+    /// Every component times `2^-n` (see [`Scalar::shr`]).
+    #[inline]
+    pub fn shr(self, n: u32) -> Self {
+        Vec3::new(self.x.shr(n), self.y.shr(n), self.z.shr(n))
+    }
+    /// Every component times `2^n` (see [`Scalar::shl`]).
+    #[inline]
+    pub fn shl(self, n: u32) -> Self {
+        Vec3::new(self.x.shl(n), self.y.shl(n), self.z.shl(n))
+    }
+    /// Dot product.
+    #[inline]
+    pub fn dot(self, o: Self) -> S {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    /// Cross product.
+    #[inline]
+    pub fn cross(self, o: Self) -> Self {
+        Vec3::new(
+            self.y * o.z - self.z * o.y,
+            self.z * o.x - self.x * o.z,
+            self.x * o.y - self.y * o.x,
+        )
+    }
+    /// `|v|²`. Callers keep `v` small (per-step units) so this cannot overflow.
+    #[inline]
+    pub fn length_sq(self) -> S {
+        self.dot(self)
+    }
+    /// The component along the axis `axis` (0 = x', 1 = y', 2 = z').
+    #[inline]
+    pub fn axis(self, axis: usize) -> S {
+        match axis {
+            0 => self.x,
+            1 => self.y,
+            _ => self.z,
+        }
+    }
+    /// Component-wise clamp into `[-limit, limit]`.
+    #[inline]
+    pub fn clamp_abs(self, limit: S) -> Self {
+        Vec3::new(
+            self.x.clamp(-limit, limit),
+            self.y.clamp(-limit, limit),
+            self.z.clamp(-limit, limit),
+        )
+    }
+    /// Converts every component through `f64` (tests and tools).
+    pub fn cast<T: Scalar>(self) -> Vec3<T> {
+        Vec3::new(T::from_f64(self.x.to_f64()), T::from_f64(self.y.to_f64()), T::from_f64(self.z.to_f64()))
+    }
+    /// The components as `f64`.
+    pub fn to_f64(self) -> [f64; 3] {
+        [self.x.to_f64(), self.y.to_f64(), self.z.to_f64()]
+    }
+}
+
+impl<S: Scalar> Add for Vec3<S> {
+    type Output = Self;
+    #[inline]
+    fn add(self, o: Self) -> Self {
+        Vec3::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl<S: Scalar> Sub for Vec3<S> {
+    type Output = Self;
+    #[inline]
+    fn sub(self, o: Self) -> Self {
+        Vec3::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl<S: Scalar> Neg for Vec3<S> {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        Vec3::new(-self.x, -self.y, -self.z)
+    }
+}
+impl<S: Scalar> AddAssign for Vec3<S> {
+    #[inline]
+    fn add_assign(&mut self, o: Self) {
+        *self = *self + o;
+    }
+}
+impl<S: Scalar> SubAssign for Vec3<S> {
+    #[inline]
+    fn sub_assign(&mut self, o: Self) {
+        *self = *self - o;
+    }
+}

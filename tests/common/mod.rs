@@ -1,0 +1,149 @@
+//! Helpers shared by the host tests.
+#![allow(dead_code)]
+
+use marble_rolling::physics::geometry::grid::TileGrid;
+use marble_rolling::physics::{Effects, Params, PhysicsSpec, Scalar, TileIndex, World};
+
+/// Room for a 127 × 2 × 127 grid.
+pub const WORDS: usize = 1016;
+pub type Grid = TileGrid<WORDS>;
+
+/// Runs `$body::<S>()` as one `#[test]` per scalar backend.
+#[macro_export]
+macro_rules! for_each_backend {
+    ($name:ident, $body:ident) => {
+        mod $name {
+            use super::*;
+            #[test]
+            fn i8f24() {
+                $body::<fixed::types::I8F24>();
+            }
+            #[test]
+            fn i16f16() {
+                $body::<fixed::types::I16F16>();
+            }
+            #[test]
+            fn i32f32() {
+                $body::<fixed::types::I32F32>();
+            }
+            #[test]
+            fn f32() {
+                $body::<f32>();
+            }
+            #[test]
+            fn f32_micromath() {
+                $body::<marble_rolling::physics::MicroF32>();
+            }
+            #[test]
+            fn f64() {
+                $body::<f64>();
+            }
+        }
+    };
+}
+
+/// A grid from a picture, one character per tile column `[i, *, k]` (row = k):
+/// `#` wall (floor and wall tile), `.` floor, `O` hole (nothing).
+pub fn grid(rows: &[&str]) -> Grid {
+    let nz = rows.len();
+    let nx = rows[0].len();
+    let mut g = Grid::new(nx, 2, nz).expect("grid dims");
+    for (k, row) in rows.iter().enumerate() {
+        for (i, ch) in row.bytes().enumerate() {
+            match ch {
+                b'#' => {
+                    g.set(i, 0, k, true);
+                    g.set(i, 1, k, true);
+                }
+                b'.' => {
+                    g.set(i, 0, k, true);
+                }
+                _ => {}
+            }
+        }
+    }
+    g
+}
+
+/// An open floor of `n × n` tiles with no walls.
+pub fn open_floor(n: usize) -> Grid {
+    let mut g = Grid::new(n, 2, n).expect("grid dims");
+    for k in 0..n {
+        for i in 0..n {
+            g.set(i, 0, k, true);
+        }
+    }
+    g
+}
+
+/// A closed box of `cells × cells` cells with no inner walls.
+pub fn closed_box(cells: usize) -> Grid {
+    let n = 2 * cells + 1;
+    let mut g = open_floor(n);
+    for k in 0..n {
+        for i in 0..n {
+            if i == 0 || k == 0 || i == n - 1 || k == n - 1 {
+                g.set(i, 1, k, true);
+            }
+        }
+    }
+    g
+}
+
+pub fn spec(effects: Effects) -> PhysicsSpec {
+    PhysicsSpec { effects, ..PhysicsSpec::DEFAULT }
+}
+
+pub fn params<S: Scalar>(spec: PhysicsSpec) -> Params<S> {
+    Params::new(spec).expect("valid spec")
+}
+
+/// The centre of cell `[i, k]` (both odd) in pitches.
+pub fn cell_centre<S: Scalar>(p: &Params<S>, i: i32, k: i32) -> (S, S) {
+    let (x0, x1) = p.layout.span_xz(i);
+    let (z0, z1) = p.layout.span_xz(k);
+    ((x0 + x1).half(), (z0 + z1).half())
+}
+
+pub fn world<'a, S: Scalar>(p: Params<S>, g: &'a Grid, starts: &[(S, S)]) -> World<'a, S, 4> {
+    World::new(p, g.view(), starts).expect("valid world")
+}
+
+/// Whether the marble's centre is closer than `r - tol` to any solid tile.
+pub fn min_clearance<S: Scalar>(w: &World<'_, S, 4>, idx: usize) -> f64 {
+    let m = w.marbles()[idx];
+    let p = w.params();
+    let c = m.pos.to_f64();
+    let mut best = f64::INFINITY;
+    let t = w.tiles();
+    for k in 0..t.nz() as i32 {
+        for j in 0..t.ny() as i32 {
+            for i in 0..t.nx() as i32 {
+                let ti = TileIndex::new(i, j, k);
+                if !t.is_solid(ti) {
+                    continue;
+                }
+                let b = p.layout.tile_box(ti);
+                let (lo, hi) = (b.min.to_f64(), b.max.to_f64());
+                let mut d2 = 0.0;
+                for a in 0..3 {
+                    let v = if c[a] < lo[a] { lo[a] - c[a] } else if c[a] > hi[a] { c[a] - hi[a] } else { 0.0 };
+                    d2 += v * v;
+                }
+                best = best.min(d2.sqrt());
+            }
+        }
+    }
+    best
+}
+
+/// A tolerance for quantities that go through a square root or a division: the
+/// 16-fraction-bit format squares small numbers coarsely and micromath's root is an
+/// approximation, so they get a looser bound than the other backends.
+pub fn loose<S: Scalar>() -> f64 {
+    match S::NAME {
+        "i16f16" => 1e-2,
+        "f32-micromath" => 5e-2,
+        _ => 1e-3,
+    }
+}
