@@ -4,6 +4,7 @@
 #![warn(missing_docs)]
 
 pub mod physics;
+pub mod game;
 /// Pin-agnostic LED-matrix frames, BCM scanning and on-time integration.
 pub mod matrix;
 #[cfg(any(feature = "board-qemu", feature = "board-microbit"))]
@@ -11,5 +12,7 @@ pub mod app;
 pub mod board;
 /// Accelerometer axis mapping, plausibility, calibration and fault supervision.
 pub mod sensor;
+/// Tilt input path: accelerometer sample → filtered, calibrated gravity for the physics.
+pub mod tilt;
 /// Two-button debouncing and the A / B / A+B-hold combinations.
 pub mod buttons;

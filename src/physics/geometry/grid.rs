@@ -68,7 +68,7 @@ impl<const WORDS: usize> TileGrid<WORDS> {
     }
 
     /// The borrowed view the physics reads.
-    pub fn view(&self) -> Tiles<'_> {
+    pub const fn view(&self) -> Tiles<'_> {
         Tiles { nx: self.nx, ny: self.ny, nz: self.nz, bits: &self.bits }
     }
 }

@@ -1,0 +1,521 @@
+//! The text level format, parsed by one `const fn` at compile time (built-in levels
+//! live in flash, and a malformed one fails the build naming its line and column)
+//! and at run time (host tools get the same error as a value — never a panic).
+//!
+//! ```text
+//! name: Corridor            ← header: `key: value` lines, all optional
+//! effects: rolling, friction
+//! ---                       ← end of header
+//! #########                 ← grid: one character per tile column [i, *, k]
+//! #S.....G#
+//! #########
+//! ```
+//!
+//! | key | meaning | default |
+//! |-----|---------|---------|
+//! | `name` | shown by tools | `untitled` |
+//! | `short_mm` | short tile width `s` (walls, posts) | `2` |
+//! | `long_mm` | long tile width `l` (cells) | `10` |
+//! | `marble_radius_mm` | marble radius, `2r < l` | `3.5` |
+//! | `restitution` | `e` in eq. 1, 0 ..= 1 | `0.5` |
+//! | `effects` | comma list of `rolling`, `friction`, `board_motion` | `rolling` |
+//! | `rolling_resistance` | rolling-resistance coefficient (with `friction`) | `0.01` |
+//! | `time_limit_s` | seconds before the attempt times out, 1 ..= 3600 | `60` |
+//!
+//! Numbers take up to three decimals (`rolling_resistance` six). Grid characters:
+//! `#` wall (a tile in layer `j = 1` on top of the floor), `.` floor, `O` hole (no
+//! floor tile), `S` marble start, `G` goal. Column `i` is the character's position,
+//! row `k` the line's; even indices are short tiles, odd ones long, so `S` and `G`
+//! must sit at odd column and odd row (a long×long cell). Holes and several `S` switch
+//! on the `holes` and `marbles` effects. All rows have the same length, at most 127.
+
+use crate::physics::dynamics::effects::Effects;
+use crate::physics::geometry::grid::{words_for, TileGrid, Tiles, MAX_TILES_XZ};
+use crate::physics::world::PhysicsSpec;
+
+/// Most marbles a level may start (several `S`).
+pub const MAX_MARBLES: usize = 4;
+/// Most goal cells a level may have.
+pub const MAX_GOALS: usize = 4;
+
+/// What is wrong with a level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LevelErrorKind {
+    /// A header line without `:`.
+    MissingColon,
+    /// A header key this format does not know.
+    UnknownKey,
+    /// A number that does not parse or has too many decimals.
+    BadNumber,
+    /// A number outside the key's range.
+    OutOfRange,
+    /// An unknown name in `effects`.
+    UnknownEffect,
+    /// No `---` line.
+    MissingSeparator,
+    /// No grid rows after `---`.
+    EmptyGrid,
+    /// A row longer or shorter than the first.
+    RaggedRow,
+    /// More than 127 columns or rows.
+    TooLarge,
+    /// A character that is not `# . O S G`.
+    BadTile,
+    /// `S` or `G` on a short tile (even column or row).
+    NotACell,
+    /// No `S`, or more than [`MAX_MARBLES`].
+    StartCount,
+    /// No `G`, or more than [`MAX_GOALS`].
+    GoalCount,
+    /// The marble does not fit in a cell (`2r ≥ l`).
+    MarbleTooBig,
+    /// The name is not valid UTF-8.
+    BadName,
+}
+
+impl LevelErrorKind {
+    /// A short description.
+    pub const fn message(self) -> &'static str {
+        match self {
+            LevelErrorKind::MissingColon => "expected `key: value`",
+            LevelErrorKind::UnknownKey => "unknown header key",
+            LevelErrorKind::BadNumber => "not a number (at most 3 decimals)",
+            LevelErrorKind::OutOfRange => "value out of range",
+            LevelErrorKind::UnknownEffect => "unknown effect (rolling, friction, board_motion)",
+            LevelErrorKind::MissingSeparator => "no `---` line between header and grid",
+            LevelErrorKind::EmptyGrid => "the grid has no rows",
+            LevelErrorKind::RaggedRow => "row length differs from the first row",
+            LevelErrorKind::TooLarge => "grid larger than 127 tiles",
+            LevelErrorKind::BadTile => "unknown tile (use # . O S G)",
+            LevelErrorKind::NotACell => "S and G must be on a cell (odd column and odd row)",
+            LevelErrorKind::StartCount => "need 1 to 4 marble starts (S)",
+            LevelErrorKind::GoalCount => "need 1 to 4 goal cells (G)",
+            LevelErrorKind::MarbleTooBig => "marble does not fit a cell (2·radius ≥ long_mm)",
+            LevelErrorKind::BadName => "name is not valid UTF-8",
+        }
+    }
+}
+
+/// An error with the 1-based line and column it was found at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LevelError {
+    /// 1-based line.
+    pub line: u32,
+    /// 1-based column (characters).
+    pub column: u32,
+    /// What is wrong.
+    pub kind: LevelErrorKind,
+}
+
+impl core::fmt::Display for LevelError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}:{}: {}", self.line, self.column, self.kind.message())
+    }
+}
+
+/// Everything about a level except its tiles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LevelInfo<'a> {
+    /// The level's name.
+    pub name: &'a str,
+    /// Physics parameters and effects.
+    pub spec: PhysicsSpec,
+    /// Seconds before the attempt times out.
+    pub time_limit_s: u32,
+    /// Tiles along x' (columns).
+    pub nx: u8,
+    /// Tiles along z' (rows).
+    pub nz: u8,
+    starts: [(u8, u8); MAX_MARBLES],
+    n_starts: u8,
+    goals: [(u8, u8); MAX_GOALS],
+    n_goals: u8,
+}
+
+impl LevelInfo<'_> {
+    /// Start cells `(i, k)`.
+    pub fn starts(&self) -> &[(u8, u8)] {
+        &self.starts[..self.n_starts as usize]
+    }
+    /// Goal cells `(i, k)`.
+    pub fn goals(&self) -> &[(u8, u8)] {
+        &self.goals[..self.n_goals as usize]
+    }
+}
+
+/// A parsed level: header and owned tiles (`WORDS` words of occupancy bits).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Level<'a, const WORDS: usize> {
+    /// The header and the cells that matter to the rules.
+    pub info: LevelInfo<'a>,
+    /// `tile_state`.
+    pub grid: TileGrid<WORDS>,
+}
+
+/// A borrowed level: what the game, the renderer and the autopilot take.
+#[derive(Clone, Copy, Debug)]
+pub struct LevelView<'a> {
+    /// Header and cells.
+    pub info: LevelInfo<'a>,
+    /// Tiles.
+    pub tiles: Tiles<'a>,
+}
+
+impl<'a, const WORDS: usize> Level<'a, WORDS> {
+    /// The borrowed view.
+    pub const fn view(&'a self) -> LevelView<'a> {
+        LevelView { info: self.info, tiles: self.grid.view() }
+    }
+}
+
+/// Occupancy words a level needs (`0` when its grid is malformed; `parse` then reports
+/// why). Use it to size [`Level`] for a `const` level.
+pub const fn words_needed(src: &str) -> usize {
+    let b = src.as_bytes();
+    let Some(grid_start) = grid_start(b) else { return 1 };
+    let (nx, nz) = grid_size(b, grid_start);
+    let w = words_for(if nx == 0 { 1 } else { nx }, 2, if nz == 0 { 1 } else { nz });
+    if w == 0 {
+        1
+    } else {
+        w
+    }
+}
+
+const fn line_end(b: &[u8], mut i: usize) -> usize {
+    while i < b.len() && b[i] != b'\n' {
+        i += 1;
+    }
+    i
+}
+
+/// The end of a line without a trailing `\r` and spaces.
+const fn trim_end(b: &[u8], start: usize, mut end: usize) -> usize {
+    while end > start && (b[end - 1] == b'\r' || b[end - 1] == b' ' || b[end - 1] == b'\t') {
+        end -= 1;
+    }
+    end
+}
+
+const fn skip_spaces(b: &[u8], mut i: usize, end: usize) -> usize {
+    while i < end && (b[i] == b' ' || b[i] == b'\t') {
+        i += 1;
+    }
+    i
+}
+
+/// Byte offset of the first grid row (after the `---` line).
+const fn grid_start(b: &[u8]) -> Option<usize> {
+    let mut i = 0;
+    while i < b.len() {
+        let e = line_end(b, i);
+        let t = trim_end(b, i, e);
+        if t - i == 3 && b[i] == b'-' && b[i + 1] == b'-' && b[i + 2] == b'-' {
+            return Some(if e < b.len() { e + 1 } else { e });
+        }
+        i = e + 1;
+    }
+    None
+}
+
+/// Columns of the first row and number of non-empty rows.
+const fn grid_size(b: &[u8], start: usize) -> (usize, usize) {
+    let mut i = start;
+    let mut nx = 0;
+    let mut nz = 0;
+    while i < b.len() {
+        let e = line_end(b, i);
+        let t = trim_end(b, i, e);
+        if t > i {
+            if nz == 0 {
+                nx = count_chars(b, i, t);
+            }
+            nz += 1;
+        }
+        i = e + 1;
+    }
+    (nx, nz)
+}
+
+const fn count_chars(b: &[u8], start: usize, end: usize) -> usize {
+    let mut n = 0;
+    let mut i = start;
+    while i < end {
+        if b[i] & 0xC0 != 0x80 {
+            n += 1;
+        }
+        i += 1;
+    }
+    n
+}
+
+const fn err<T>(line: usize, b: &[u8], line_start: usize, at: usize, kind: LevelErrorKind) -> Result<T, LevelError> {
+    Err(LevelError { line: line as u32, column: (count_chars(b, line_start, at) + 1) as u32, kind })
+}
+
+const fn eq_bytes(b: &[u8], start: usize, end: usize, word: &[u8]) -> bool {
+    if end - start != word.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < word.len() {
+        if b[start + i] != word[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// A decimal with at most `decimals` fraction digits, scaled by `10^decimals`.
+const fn decimal(b: &[u8], start: usize, end: usize, decimals: u32) -> Option<u64> {
+    let mut i = start;
+    let mut value: u64 = 0;
+    let mut seen_digit = false;
+    let mut frac: i32 = -1;
+    while i < end {
+        let c = b[i];
+        if c == b'.' {
+            if frac >= 0 {
+                return None;
+            }
+            frac = 0;
+        } else if c.is_ascii_digit() {
+            if frac >= 0 {
+                if frac as u32 >= decimals {
+                    return None;
+                }
+                frac += 1;
+            }
+            value = match value.checked_mul(10) {
+                Some(v) => v + (c - b'0') as u64,
+                None => return None,
+            };
+            if value > 1_000_000_000_000 {
+                return None;
+            }
+            seen_digit = true;
+        } else {
+            return None;
+        }
+        i += 1;
+    }
+    if !seen_digit {
+        return None;
+    }
+    let used = if frac < 0 { 0 } else { frac as u32 };
+    let mut scale = used;
+    while scale < decimals {
+        value *= 10;
+        scale += 1;
+    }
+    Some(value)
+}
+
+/// Parses a level. `WORDS` must be at least [`words_needed`]`(src)`.
+pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, LevelError> {
+    let b = src.as_bytes();
+    let mut spec = PhysicsSpec::DEFAULT;
+    let mut effects = Effects { rolling: true, ..Effects::NONE };
+    let mut name: &str = "untitled";
+    let mut time_limit_s = 60u32;
+    let mut radius_line = (0usize, 0usize, 0usize);
+    let mut i = 0;
+    let mut line = 1;
+    let mut separator = false;
+    // Header.
+    while i < b.len() {
+        let e = line_end(b, i);
+        let t = trim_end(b, i, e);
+        let s = skip_spaces(b, i, t);
+        if eq_bytes(b, s, t, b"---") {
+            separator = true;
+            i = if e < b.len() { e + 1 } else { e };
+            line += 1;
+            break;
+        }
+        if s < t {
+            let mut colon = s;
+            while colon < t && b[colon] != b':' {
+                colon += 1;
+            }
+            if colon == t {
+                return err(line, b, i, s, LevelErrorKind::MissingColon);
+            }
+            let kend = trim_end(b, s, colon);
+            let v = skip_spaces(b, colon + 1, t);
+            if eq_bytes(b, s, kend, b"name") {
+                let (_, rest) = b.split_at(v);
+                let (bytes, _) = rest.split_at(t - v);
+                match core::str::from_utf8(bytes) {
+                    Ok(n) => name = n,
+                    Err(_) => return err(line, b, i, v, LevelErrorKind::BadName),
+                }
+            } else if eq_bytes(b, s, kend, b"effects") {
+                let mut p = v;
+                while p < t {
+                    let p0 = skip_spaces(b, p, t);
+                    let mut q = p0;
+                    while q < t && b[q] != b',' {
+                        q += 1;
+                    }
+                    let qe = trim_end(b, p0, q);
+                    if eq_bytes(b, p0, qe, b"rolling") {
+                        effects.rolling = true;
+                    } else if eq_bytes(b, p0, qe, b"friction") {
+                        effects.friction = true;
+                    } else if eq_bytes(b, p0, qe, b"board_motion") {
+                        effects.board_motion = true;
+                    } else if qe > p0 {
+                        return err(line, b, i, p0, LevelErrorKind::UnknownEffect);
+                    }
+                    p = q + 1;
+                }
+            } else {
+                let (decimals, lo, hi): (u32, u64, u64) = if eq_bytes(b, s, kend, b"short_mm")
+                    || eq_bytes(b, s, kend, b"long_mm")
+                    || eq_bytes(b, s, kend, b"marble_radius_mm")
+                {
+                    (3, 1, 100_000)
+                } else if eq_bytes(b, s, kend, b"restitution") {
+                    (3, 0, 1000)
+                } else if eq_bytes(b, s, kend, b"rolling_resistance") {
+                    (6, 0, 1_000_000)
+                } else if eq_bytes(b, s, kend, b"time_limit_s") {
+                    (0, 1, 3600)
+                } else {
+                    return err(line, b, i, s, LevelErrorKind::UnknownKey);
+                };
+                let Some(n) = decimal(b, v, t, decimals) else {
+                    return err(line, b, i, v, LevelErrorKind::BadNumber);
+                };
+                if n < lo || n > hi {
+                    return err(line, b, i, v, LevelErrorKind::OutOfRange);
+                }
+                let n = n as u32;
+                if eq_bytes(b, s, kend, b"short_mm") {
+                    spec.short_um = n;
+                } else if eq_bytes(b, s, kend, b"long_mm") {
+                    spec.long_um = n;
+                } else if eq_bytes(b, s, kend, b"marble_radius_mm") {
+                    spec.radius_um = n;
+                    radius_line = (line, i, v);
+                } else if eq_bytes(b, s, kend, b"restitution") {
+                    spec.restitution_milli = n;
+                } else if eq_bytes(b, s, kend, b"rolling_resistance") {
+                    spec.rolling_resistance_ppm = n;
+                } else {
+                    time_limit_s = n;
+                }
+            }
+        }
+        i = e + 1;
+        line += 1;
+    }
+    if !separator {
+        return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::MissingSeparator });
+    }
+    if 2 * spec.radius_um as u64 >= spec.long_um as u64 || spec.short_um as u64 + spec.long_um as u64 > 100_000 {
+        let (l, ls, at) = if radius_line.0 > 0 { radius_line } else { (1, 0, 0) };
+        return err(l, b, ls, at, LevelErrorKind::MarbleTooBig);
+    }
+    // Grid.
+    let (nx, nz) = grid_size(b, i);
+    if nz == 0 || nx == 0 {
+        return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::EmptyGrid });
+    }
+    if nx > MAX_TILES_XZ || nz > MAX_TILES_XZ {
+        return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::TooLarge });
+    }
+    let mut grid = match TileGrid::<WORDS>::new(nx, 2, nz) {
+        Ok(g) => g,
+        Err(_) => return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::TooLarge }),
+    };
+    let mut starts = [(0u8, 0u8); MAX_MARBLES];
+    let mut n_starts = 0usize;
+    let mut goals = [(0u8, 0u8); MAX_GOALS];
+    let mut n_goals = 0usize;
+    let mut holes = false;
+    let mut k = 0usize;
+    let mut last_row_line = line;
+    while i < b.len() {
+        let e = line_end(b, i);
+        let t = trim_end(b, i, e);
+        if t > i {
+            let mut col = 0usize;
+            let mut p = i;
+            while p < t {
+                let c = b[p];
+                if col >= nx {
+                    return err(line, b, i, p, LevelErrorKind::RaggedRow);
+                }
+                let cell = col % 2 == 1 && k % 2 == 1;
+                match c {
+                    b'#' => {
+                        grid.set(col, 0, k, true);
+                        grid.set(col, 1, k, true);
+                    }
+                    b'.' => {
+                        grid.set(col, 0, k, true);
+                    }
+                    b'O' => holes = true,
+                    b'S' | b'G' => {
+                        if !cell {
+                            return err(line, b, i, p, LevelErrorKind::NotACell);
+                        }
+                        grid.set(col, 0, k, true);
+                        if c == b'S' {
+                            if n_starts == MAX_MARBLES {
+                                return err(line, b, i, p, LevelErrorKind::StartCount);
+                            }
+                            starts[n_starts] = (col as u8, k as u8);
+                            n_starts += 1;
+                        } else {
+                            if n_goals == MAX_GOALS {
+                                return err(line, b, i, p, LevelErrorKind::GoalCount);
+                            }
+                            goals[n_goals] = (col as u8, k as u8);
+                            n_goals += 1;
+                        }
+                    }
+                    _ => return err(line, b, i, p, LevelErrorKind::BadTile),
+                }
+                // Advance one character (multi-byte ones are reported above as BadTile).
+                p += 1;
+                col += 1;
+            }
+            if col != nx {
+                return err(line, b, i, t, LevelErrorKind::RaggedRow);
+            }
+            k += 1;
+            last_row_line = line;
+        }
+        i = e + 1;
+        line += 1;
+    }
+    if n_starts == 0 {
+        return Err(LevelError { line: last_row_line as u32, column: 1, kind: LevelErrorKind::StartCount });
+    }
+    if n_goals == 0 {
+        return Err(LevelError { line: last_row_line as u32, column: 1, kind: LevelErrorKind::GoalCount });
+    }
+    effects.holes = holes;
+    effects.marbles = n_starts > 1;
+    spec.effects = effects;
+    Ok(Level {
+        info: LevelInfo {
+            name,
+            spec,
+            time_limit_s,
+            nx: nx as u8,
+            nz: nz as u8,
+            starts,
+            n_starts: n_starts as u8,
+            goals,
+            n_goals: n_goals as u8,
+        },
+        grid,
+    })
+}

@@ -1,0 +1,149 @@
+//! The built-in levels, parsed at compile time into flash. Rising difficulty; together
+//! they use every effect (rolling everywhere; friction from 3; holes in 4, 7, 8;
+//! several marbles in 5 and 8; board motion in 6 and 8).
+
+use super::level::{parse, words_needed, Level, LevelView};
+
+/// Parses a built-in level at compile time; a malformed one stops the build with its
+/// line, column and what is wrong.
+macro_rules! builtin {
+    ($src:expr) => {{
+        const SRC: &str = $src;
+        const LEVEL: Level<'static, { words_needed(SRC) }> = match parse(SRC) {
+            Ok(l) => l,
+            Err(e) => ::const_panic::concat_panic!(
+                "built-in level: line ",
+                e.line,
+                ", column ",
+                e.column,
+                ": ",
+                e.kind.message()
+            ),
+        };
+        LEVEL.view()
+    }};
+}
+
+/// Every built-in level, in playing order.
+pub static LEVELS: [LevelView<'static>; 8] = [
+    builtin!(
+        "name: first-roll
+time_limit_s: 30
+---
+#########
+#S.....G#
+#########
+"
+    ),
+    builtin!(
+        "name: corner
+time_limit_s: 30
+---
+#########
+#S......#
+#######.#
+#G......#
+#########
+"
+    ),
+    builtin!(
+        "name: switchback
+effects: rolling, friction
+time_limit_s: 60
+---
+#############
+#S..........#
+###########.#
+#...........#
+#.###########
+#..........G#
+#############
+"
+    ),
+    builtin!(
+        "name: stepping-stones
+effects: rolling, friction
+restitution: 0.4
+time_limit_s: 60
+---
+#############
+#S....O.....#
+#.###.#.###.#
+#.#O..#..O#.#
+#.###.#.#####
+#.....#....G#
+#############
+"
+    ),
+    builtin!(
+        "name: two-marbles
+effects: rolling, friction
+time_limit_s: 60
+---
+###########
+#S.......G#
+#.#######.#
+#S........#
+###########
+"
+    ),
+    builtin!(
+        "name: rocking-board
+effects: rolling, friction, board_motion
+time_limit_s: 90
+---
+###############
+#S............#
+#.###########.#
+#.#.........#.#
+#.#.#######.#.#
+#...#G......#.#
+#####.#######.#
+#.............#
+###############
+"
+    ),
+    builtin!(
+        "name: cavern
+effects: rolling, friction
+restitution: 0.3
+time_limit_s: 120
+---
+#################
+#S....O.........#
+#.###.#.#######.#
+#.#O....O.....#.#
+#.#.#########.#.#
+#...#O......#.#.#
+###.#.#####.#.#.#
+#O..#...O.#...#G#
+#################
+"
+    ),
+    builtin!(
+        "name: grand-tour
+short_mm: 2
+long_mm: 10
+marble_radius_mm: 3.5
+restitution: 0.5
+effects: rolling, friction, board_motion
+rolling_resistance: 0.015
+time_limit_s: 180
+---
+###################
+#S................#
+#.###O#########.#.#
+#...#...O.....#.#.#
+###.#.#######.#.#.#
+#O..#.#G....#...#.#
+#.###.#####.#####.#
+#S....O...........#
+###################
+"
+    ),
+];
+
+/// A built-in level by name.
+pub fn by_name(name: &str) -> Option<(usize, LevelView<'static>)> {
+    LEVELS.iter().copied().enumerate().find(|(_, l)| l.info.name == name)
+}

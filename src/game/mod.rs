@@ -1,0 +1,6 @@
+//! The game: levels, the rules that turn physics into won / fell / time-up, and the
+//! autopilot.
+
+pub mod level;
+pub mod levels;
+pub mod rules;

@@ -1,0 +1,211 @@
+//! The rules: a level's marbles in a [`World`], stepped frame by frame, judged after
+//! every frame: a marble's centre inside a goal cell wins, a marble out of play
+//! (through a hole, off an open edge) falls, and the level's time limit ends the
+//! attempt.
+
+use crate::physics::dynamics::effects::BoardMotion;
+use crate::physics::geometry::frame::Frame;
+use crate::physics::world::{Params, SetupError, World};
+use crate::physics::{Scalar, Vec3};
+
+use super::level::{LevelView, MAX_MARBLES};
+
+/// Frame rate and substeps, both powers of two: `dt = 2^-(frame_log2 + substeps_log2)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GameConfig {
+    /// `log2` of the frame rate (the firmware's physics tick).
+    pub frame_log2: u32,
+    /// `log2` of the physics steps per frame.
+    pub substeps_log2: u32,
+}
+
+impl GameConfig {
+    /// 128 frames/s × 8 substeps = 1024 steps/s (see the accuracy study in `docs/`).
+    pub const DEFAULT: GameConfig = GameConfig { frame_log2: 7, substeps_log2: 3 };
+
+    /// Frames per second.
+    pub const fn frame_hz(&self) -> u32 {
+        1 << self.frame_log2
+    }
+}
+
+impl Default for GameConfig {
+    fn default() -> Self {
+        GameConfig::DEFAULT
+    }
+}
+
+/// Where an attempt stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Still rolling.
+    Playing,
+    /// A marble reached a goal cell.
+    Won,
+    /// A marble fell through a hole or off the board.
+    Fell,
+    /// The time limit ran out.
+    TimeUp,
+}
+
+impl Phase {
+    /// `won`, `fell`, `timeout` or `playing` (tools, logs).
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            Phase::Playing => "playing",
+            Phase::Won => "won",
+            Phase::Fell => "fell",
+            Phase::TimeUp => "timeout",
+        }
+    }
+}
+
+/// One attempt at a level.
+#[derive(Clone, Debug)]
+pub struct Game<'a, S: Scalar> {
+    level: LevelView<'a>,
+    config: GameConfig,
+    world: World<'a, S, MAX_MARBLES>,
+    frames: u32,
+    phase: Phase,
+    board: Option<(Frame<S>, Vec3<S>)>,
+}
+
+impl<'a, S: Scalar> Game<'a, S> {
+    /// A fresh attempt at `level`.
+    pub fn new(level: LevelView<'a>, config: GameConfig) -> Result<Self, SetupError> {
+        let mut spec = level.info.spec;
+        spec.step_log2 = config.frame_log2 + config.substeps_log2;
+        let params = Params::<S>::new(spec)?;
+        let mut starts = [(S::ZERO, S::ZERO); MAX_MARBLES];
+        let n = level.info.starts().len();
+        for (slot, &(i, k)) in starts.iter_mut().zip(level.info.starts()) {
+            *slot = cell_centre(&params, i, k);
+        }
+        let world = World::new(params, level.tiles, &starts[..n])?;
+        Ok(Game { level, config, world, frames: 0, phase: Phase::Playing, board: None })
+    }
+
+    /// Starts the attempt over (same level, same configuration).
+    pub fn restart(&mut self) {
+        if let Ok(fresh) = Game::new(self.level, self.config) {
+            let g = self.world.gravity_mg();
+            *self = fresh;
+            self.world.set_gravity_mg(g);
+        }
+    }
+
+    /// The level.
+    pub fn level(&self) -> &LevelView<'a> {
+        &self.level
+    }
+    /// The physics world.
+    pub fn world(&self) -> &World<'a, S, MAX_MARBLES> {
+        &self.world
+    }
+    /// Mutable physics world (tests and tools).
+    pub fn world_mut(&mut self) -> &mut World<'a, S, MAX_MARBLES> {
+        &mut self.world
+    }
+    /// The configuration.
+    pub fn config(&self) -> GameConfig {
+        self.config
+    }
+    /// Frames played.
+    pub fn frames(&self) -> u32 {
+        self.frames
+    }
+    /// Physics steps taken.
+    pub fn steps(&self) -> u64 {
+        (self.frames as u64) << self.config.substeps_log2
+    }
+    /// Where the attempt stands.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Sets the apparent gravity (milli-g, board frame: flat is `(0, -1000, 0)`),
+    /// as the tilt path delivers it. With `board_motion`, the change from the last
+    /// call also sets the board's rotation (eq. 4 frames of the tilted board).
+    pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
+        self.world.set_gravity_mg(g);
+        if self.level.info.spec.effects.board_motion {
+            self.track_board(g);
+        }
+    }
+
+    fn track_board(&mut self, g: [i32; 3]) {
+        let (ex, ez) = self.world.extent();
+        let pivot = Vec3::new(ex.half(), S::ZERO, ez.half());
+        let norm = isqrt((g[0] as i64).pow(2) + (g[1] as i64).pow(2) + (g[2] as i64).pow(2)).max(1);
+        // A board turned by the small angle θ sees gravity (−θz, −1, θx)·g.
+        let angle = Vec3::new(S::ratio(g[2] as i64, norm), S::ZERO, S::ratio(-(g[0] as i64), norm));
+        let frame = Frame::rotated(angle, pivot);
+        let sub = self.config.substeps_log2;
+        let (omega, omega_dot) = match self.board {
+            Some((prev, prev_omega)) => {
+                // Radians per frame → per step; the change per frame → per step².
+                let w = BoardMotion::rotation_between(&prev, &frame).shr(sub);
+                (w, (w - prev_omega).shr(sub))
+            }
+            None => (Vec3::ZERO, Vec3::ZERO),
+        };
+        self.board = Some((frame, omega));
+        self.world.set_board_motion(BoardMotion { omega, omega_dot, pivot });
+    }
+
+    /// Plays one frame (all its substeps) and judges it.
+    pub fn frame(&mut self) -> Phase {
+        if self.phase != Phase::Playing {
+            return self.phase;
+        }
+        for _ in 0..(1u32 << self.config.substeps_log2) {
+            self.world.step();
+        }
+        self.frames = self.frames.saturating_add(1);
+        self.phase = self.judge();
+        self.phase
+    }
+
+    fn judge(&self) -> Phase {
+        let layout = &self.world.params().layout;
+        let marbles = self.world.marbles();
+        if marbles.iter().any(|m| m.out) {
+            return Phase::Fell;
+        }
+        let in_goal = marbles.iter().any(|m| {
+            let (i, k) = (layout.index_xz(m.pos.x), layout.index_xz(m.pos.z));
+            self.level.info.goals().iter().any(|&(gi, gk)| gi as i32 == i && gk as i32 == k)
+        });
+        if in_goal {
+            return Phase::Won;
+        }
+        if self.frames >= self.level.info.time_limit_s.saturating_mul(self.config.frame_hz()) {
+            return Phase::TimeUp;
+        }
+        Phase::Playing
+    }
+}
+
+/// The centre of cell `(i, k)` in pitches.
+pub fn cell_centre<S: Scalar>(p: &Params<S>, i: u8, k: u8) -> (S, S) {
+    let (x0, x1) = p.layout.span_xz(i as i32);
+    let (z0, z1) = p.layout.span_xz(k as i32);
+    (x0 + (x1 - x0).half(), z0 + (z1 - z0).half())
+}
+
+/// `⌊√n⌋` for `n ≥ 0` (Newton on integers; setup-rate code).
+fn isqrt(n: i64) -> i64 {
+    if n <= 0 {
+        return 0;
+    }
+    let mut x = n;
+    let mut y = (x + 1) / 2;
+    while y < x {
+        x = y;
+        y = (x + n / x) / 2;
+    }
+    x
+}
