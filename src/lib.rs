@@ -16,3 +16,10 @@ pub mod sensor;
 pub mod tilt;
 /// Two-button debouncing and the A / B / A+B-hold combinations.
 pub mod buttons;
+
+// Host tools (`tools` feature only): the library stays no_std everywhere else.
+#[cfg(feature = "tools")]
+extern crate std;
+/// Host tools behind the `tools` feature: the simulator and terminal player CLIs.
+#[cfg(feature = "tools")]
+pub mod host;

@@ -317,6 +317,18 @@ const fn decimal(b: &[u8], start: usize, end: usize, decimals: u32) -> Option<u6
 /// Parses a level. `WORDS` must be at least [`words_needed`]`(src)`.
 pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, LevelError> {
     let b = src.as_bytes();
+    if grid_start(b).is_none() {
+        // Without `---` every grid row would read as a bad header line: say what is missing.
+        let mut lines = 1;
+        let mut p = 0;
+        while p < b.len() {
+            if b[p] == b'\n' && p + 1 < b.len() {
+                lines += 1;
+            }
+            p += 1;
+        }
+        return Err(LevelError { line: lines + 1, column: 1, kind: LevelErrorKind::MissingSeparator });
+    }
     let mut spec = PhysicsSpec::DEFAULT;
     let mut effects = Effects { rolling: true, ..Effects::NONE };
     let mut name: &str = "untitled";
@@ -518,4 +530,41 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
         },
         grid,
     })
+}
+
+#[doc(hidden)]
+pub use const_panic as __const_panic;
+
+/// A built-in level, parsed at compile time into a `'static` [`LevelView`]. A
+/// malformed level stops the build with its line, column and what is wrong:
+///
+/// ```compile_fail
+/// static BAD: marble_rolling::game::level::LevelView<'static> =
+///     marble_rolling::builtin_level!("---\n#####\n#SxG#\n#####\n");
+/// // error: built-in level: line 3, column 3: unknown tile (use # . O S G)
+/// ```
+///
+/// ```
+/// static OK: marble_rolling::game::level::LevelView<'static> =
+///     marble_rolling::builtin_level!("---\n#####\n#S.G#\n#####\n");
+/// assert_eq!(OK.info.goals(), &[(3, 1)]);
+/// ```
+#[macro_export]
+macro_rules! builtin_level {
+    ($src:expr) => {{
+        const SRC: &str = $src;
+        const LEVEL: $crate::game::level::Level<'static, { $crate::game::level::words_needed(SRC) }> =
+            match $crate::game::level::parse(SRC) {
+                Ok(l) => l,
+                Err(e) => $crate::game::level::__const_panic::concat_panic!(
+                    "built-in level: line ",
+                    e.line,
+                    ", column ",
+                    e.column,
+                    ": ",
+                    e.kind.message()
+                ),
+            };
+        LEVEL.view()
+    }};
 }

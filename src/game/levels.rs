@@ -2,26 +2,12 @@
 //! they use every effect (rolling everywhere; friction from 3; holes in 4, 7, 8;
 //! several marbles in 5 and 8; board motion in 6 and 8).
 
-use super::level::{parse, words_needed, Level, LevelView};
+use super::level::LevelView;
 
-/// Parses a built-in level at compile time; a malformed one stops the build with its
-/// line, column and what is wrong.
 macro_rules! builtin {
-    ($src:expr) => {{
-        const SRC: &str = $src;
-        const LEVEL: Level<'static, { words_needed(SRC) }> = match parse(SRC) {
-            Ok(l) => l,
-            Err(e) => ::const_panic::concat_panic!(
-                "built-in level: line ",
-                e.line,
-                ", column ",
-                e.column,
-                ": ",
-                e.kind.message()
-            ),
-        };
-        LEVEL.view()
-    }};
+    ($src:expr) => {
+        $crate::builtin_level!($src)
+    };
 }
 
 /// Every built-in level, in playing order.

@@ -4,3 +4,4 @@
 pub mod level;
 pub mod levels;
 pub mod rules;
+pub mod session;

@@ -1,0 +1,167 @@
+//! Marble Rolling firmware for the BBC micro:bit v2 (nRF52833).
+//!
+//! `cargo microbit` builds it and runs it with `probe-rs run --chip nRF52833_xxAA`
+//! (defmt log over RTT). Wiring only: the tasks are the shared ones from
+//! `marble_rolling::app`, fed by the micro:bit input (LSM303AGR + buttons)
+//! and drawing on the 5×5 matrix (see `src/board/microbit/`).
+//!
+//! Executors:
+//! * thread mode: input (accelerometer + buttons, 100 Hz), the game
+//!   (`app::game_task`), and a liveness task for the watchdog;
+//! * EGU0_SWI0 interrupt (priority P6, above thread mode): the display, so
+//!   game computation can never stretch a BCM slice.
+//!
+//! Watchdog (1 s, paused while a debugger halts the CPU): channel 0 is petted
+//! by the input loop every 10 ms (a hung I²C transfer stops it), channel 1 by
+//! a thread-mode task every 100 ms (a task hogging the thread executor, e.g.
+//! a game step stuck in a loop, stops it). A panic halts in panic-probe and
+//! the watchdog restarts the board.
+
+#![no_std]
+#![no_main]
+
+use defmt_rtt as _;
+use panic_probe as _;
+
+#[path = "../board/microbit/hw.rs"]
+mod hw;
+
+use embassy_executor::{InterruptExecutor, Spawner};
+use embassy_nrf::interrupt;
+use embassy_nrf::interrupt::{InterruptExt, Priority};
+use embassy_nrf::twim::{self, Twim};
+use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
+use embassy_nrf::{bind_interrupts, peripherals};
+use embassy_time::{Duration, Ticker};
+use lsm303agr::Lsm303agr;
+
+use marble_rolling::app;
+use marble_rolling::board::microbit as board;
+
+bind_interrupts!(struct Irqs {
+    TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
+});
+
+/// Runs the display above thread mode.
+static EXECUTOR_DISPLAY: InterruptExecutor = InterruptExecutor::new();
+
+#[interrupt]
+unsafe fn EGU0_SWI0() {
+    // SAFETY: called only from this interrupt handler, after `start` below
+    // (the interrupt is unmasked by `start`).
+    unsafe { EXECUTOR_DISPLAY.on_interrupt() }
+}
+
+#[embassy_executor::task]
+async fn display(mut matrix: hw::Matrix) -> ! {
+    app::display_task(&mut matrix).await
+}
+
+#[embassy_executor::task]
+async fn input(mut input: hw::MicrobitInput) -> ! {
+    app::input_task(&mut input).await
+}
+
+#[embassy_executor::task]
+async fn game() {
+    loop {
+        // The micro:bit never sends Quit and has no step limit; restart the
+        // game if it ever returns.
+        let exit = app::game_task(None).await;
+        defmt::warn!("game_task returned: {}", exit);
+    }
+}
+
+#[embassy_executor::task]
+async fn liveness(mut watchdog: WatchdogHandle) -> ! {
+    let mut ticker = Ticker::every(Duration::from_millis(board::WATCHDOG_PET_MS));
+    loop {
+        watchdog.pet();
+        ticker.next().await;
+    }
+}
+
+/// Starts the watchdog with two channels (input loop, liveness task).
+fn start_watchdog(
+    wdt: embassy_nrf::Peri<'static, peripherals::WDT>,
+) -> [Option<WatchdogHandle>; 2] {
+    let mut config = wdt::Config::default();
+    config.timeout_ticks = board::WATCHDOG_TIMEOUT_TICKS;
+    config.action_during_debug_halt = wdt::HaltConfig::Pause;
+    match Watchdog::try_new::<_, 2>(wdt, config) {
+        Ok((_watchdog, [input, live])) => [Some(input), Some(live)],
+        Err(_) => {
+            // Already running with another configuration (it survives some
+            // resets): it will reset us, and the next boot configures it.
+            defmt::error!("watchdog already running with another configuration");
+            [None, None]
+        }
+    }
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let p = embassy_nrf::init(Default::default());
+    defmt::info!("Marble Rolling on micro:bit v2");
+
+    let [wdt_input, wdt_live] = start_watchdog(p.WDT);
+
+    // LED matrix: rows P0.21, P0.22, P0.15, P0.24, P0.19; columns P0.28,
+    // P0.11, P0.31, P1.05, P0.30.
+    let matrix = hw::Matrix::new(
+        [
+            hw::Matrix::row_pin(p.P0_21),
+            hw::Matrix::row_pin(p.P0_22),
+            hw::Matrix::row_pin(p.P0_15),
+            hw::Matrix::row_pin(p.P0_24),
+            hw::Matrix::row_pin(p.P0_19),
+        ],
+        [
+            hw::Matrix::col_pin(p.P0_28),
+            hw::Matrix::col_pin(p.P0_11),
+            hw::Matrix::col_pin(p.P0_31),
+            hw::Matrix::col_pin(p.P1_05),
+            hw::Matrix::col_pin(p.P0_30),
+        ],
+    );
+
+    // Internal I²C: SDA P0.16, SCL P0.08. Every write the driver does comes
+    // from RAM, so no flash-to-RAM copy buffer is needed.
+    let i2c = Twim::new(
+        p.TWISPI0,
+        Irqs,
+        p.P0_16,
+        p.P0_08,
+        hw::twim_config(),
+        &mut [],
+    );
+    let sensor = Lsm303agr::new_with_i2c(i2c);
+    // Buttons A P0.14, B P0.23.
+    let input_dev = hw::MicrobitInput::new(
+        sensor,
+        hw::MicrobitInput::button_pin(p.P0_14),
+        hw::MicrobitInput::button_pin(p.P0_23),
+        wdt_input,
+    );
+
+    interrupt::EGU0_SWI0.set_priority(Priority::P6);
+    let display_spawner = EXECUTOR_DISPLAY.start(interrupt::EGU0_SWI0);
+    match display(matrix) {
+        Ok(token) => display_spawner.spawn(token),
+        Err(_) => defmt::error!("display task already running"),
+    }
+    match input(input_dev) {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => defmt::error!("input task already running"),
+    }
+    match game() {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => defmt::error!("game task already running"),
+    }
+    if let Some(handle) = wdt_live {
+        match liveness(handle) {
+            Ok(token) => spawner.spawn(token),
+            Err(_) => defmt::error!("liveness task already running"),
+        }
+    }
+}

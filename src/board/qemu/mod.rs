@@ -1,0 +1,97 @@
+//! QEMU `mps2-an386` board (Cortex-M4F, 25 MHz): the safe half.
+//!
+//! This part is plain, host-testable code: memory map constants, the
+//! firmware's command-line options, the CPU-load arithmetic
+//! ([`cpu_meter`]) and the virtual LED matrix that shows the scanned frames on
+//! an ANSI terminal (`virtual_matrix`, with feature `board-qemu` only: it
+//! needs embassy). The register-level half (UART and
+//! TIMER0 drivers, the WFI executor, interrupt handlers, the SysTick time
+//! driver, semihosting exit) is `hw.rs` next to this file; it needs `unsafe`,
+//! which this library forbids, so only the firmware binaries compile it
+//! (`#[path = "../board/qemu/hw.rs"] mod hw;` in `src/bin/qemu.rs`).
+//!
+//! How the firmware is run is described in `tools/qemu-run.sh`.
+
+pub mod cpu_meter;
+#[cfg(feature = "board-qemu")]
+pub mod virtual_matrix;
+
+/// Core (and APB peripheral) clock of QEMU's mps2-an386, Hz.
+pub const SYSCLK_HZ: u32 = 25_000_000;
+/// CMSDK APB UART0 base address.
+pub const UART0_BASE: usize = 0x4000_4000;
+/// UART0 receive interrupt number.
+pub const UART0_RX_IRQ: u16 = 0;
+/// UART0 transmit interrupt number.
+pub const UART0_TX_IRQ: u16 = 1;
+/// CMSDK APB TIMER0 base address.
+pub const TIMER0_BASE: usize = 0x4000_0000;
+/// TIMER0 interrupt number.
+pub const TIMER0_IRQ: u16 = 8;
+/// The `-icount shift=N` the runner uses for headless runs: every
+/// instruction advances virtual time by `2^N` ns.
+pub const ICOUNT_SHIFT: u32 = 7;
+
+/// How the firmware was started, from its semihosting command line.
+///
+/// The runner (`tools/qemu-run.sh`) always passes exactly one of
+/// `--interactive` (UART on the user's terminal, real-time clock) or
+/// `--headless` (UART discarded, `-icount shift=7,align=off,sleep=off`,
+/// deterministic), followed by the user's own arguments. When neither is
+/// present (e.g. QEMU started by hand without `-semihosting-config arg=...`)
+/// the firmware assumes headless: the demo needs no input and always ends,
+/// whereas an interactive game with nobody at the UART would never quit.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Options {
+    /// Play on the UART terminal (else run the headless demo).
+    pub interactive: bool,
+    /// Game steps the headless demo runs (`--steps=N`); `None`: the app's
+    /// default (`app::DEMO_STEPS`).
+    pub demo_steps: Option<u32>,
+}
+
+impl Options {
+    /// Parses the command-line words (the first, the program name, included
+    /// or not: unknown words are ignored). `--demo` forces headless.
+    pub fn parse<'a>(args: impl IntoIterator<Item = &'a str>) -> Options {
+        let mut options = Options::default();
+        let mut demo = false;
+        for arg in args {
+            match arg {
+                "--interactive" => options.interactive = true,
+                "--headless" => options.interactive = false,
+                "--demo" => demo = true,
+                _ => {
+                    if let Some(steps) = arg.strip_prefix("--steps=") {
+                        if let Ok(steps) = steps.parse::<u32>() {
+                            options.demo_steps = Some(steps.max(1));
+                        }
+                    }
+                }
+            }
+        }
+        if demo {
+            options.interactive = false;
+        }
+        options
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn options() {
+        assert!(!Options::parse([]).interactive);
+        assert!(Options::parse(["qemu", "--interactive"]).interactive);
+        assert!(!Options::parse(["qemu", "--interactive", "--demo"]).interactive);
+        assert_eq!(
+            Options::parse(["--headless", "--steps=7"]).demo_steps,
+            Some(7)
+        );
+        assert_eq!(Options::parse(["--steps=x"]).demo_steps, None);
+        assert_eq!(Options::parse(["--steps=0"]).demo_steps, Some(1));
+    }
+}

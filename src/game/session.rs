@@ -1,0 +1,98 @@
+//! A playing session: where a reading becomes a frame. Every front end (the host
+//! simulator, the terminal player, both firmwares) drives the game through this one
+//! sequence, which is why their `state_hash`es agree for the same inputs:
+//!
+//! ```text
+//! reading (mg, board frame) ─→ tilt path (filter, dead zone, plausibility)
+//!                           ─→ gravity ─→ Game::set_gravity_mg ─→ Game::frame
+//! ```
+//!
+//! The reading comes from the caller (sensor, keys, trace) or from the autopilot.
+
+use crate::physics::world::SetupError;
+use crate::physics::Scalar;
+use crate::tilt::{TiltConfig, TiltError, TiltFilter};
+
+use super::level::LevelView;
+use super::rules::{Game, GameConfig, Phase};
+
+/// The tilt path's settings for synthetic inputs (keys, traces, autopilot):
+/// identical consecutive readings are normal there, so the stuck-sensor check is off.
+pub const SYNTHETIC_TILT: TiltConfig = TiltConfig { stuck_samples: 0, ..TiltConfig::DEFAULT };
+
+/// A game, its tilt path and (optionally) its autopilot.
+#[derive(Clone, Debug)]
+pub struct Session<'a, S: Scalar> {
+    game: Game<'a, S>,
+    tilt: TiltFilter,
+    tilt_config: TiltConfig,
+    reading: [i32; 3],
+    tilt_errors: u32,
+    last_tilt_error: Option<TiltError>,
+}
+
+impl<'a, S: Scalar> Session<'a, S> {
+    /// A session on `level`.
+    pub fn new(level: LevelView<'a>, config: GameConfig, tilt: TiltConfig) -> Result<Self, SetupError> {
+        Ok(Session {
+            game: Game::new(level, config)?,
+            tilt: TiltFilter::new(tilt),
+            tilt_config: tilt,
+            reading: [0, 1000, 0],
+            tilt_errors: 0,
+            last_tilt_error: None,
+        })
+    }
+
+    /// The game.
+    pub fn game(&self) -> &Game<'a, S> {
+        &self.game
+    }
+    /// The game, mutably (tools and tests).
+    pub fn game_mut(&mut self) -> &mut Game<'a, S> {
+        &mut self.game
+    }
+    /// The last reading fed in (mg, board frame).
+    pub fn reading(&self) -> [i32; 3] {
+        self.reading
+    }
+    /// The tilt path.
+    pub fn tilt(&self) -> &TiltFilter {
+        &self.tilt
+    }
+    /// The tilt path, mutably (calibration).
+    pub fn tilt_mut(&mut self) -> &mut TiltFilter {
+        &mut self.tilt
+    }
+    /// Readings the tilt path rejected so far, and the last reason.
+    pub fn tilt_errors(&self) -> (u32, Option<TiltError>) {
+        (self.tilt_errors, self.last_tilt_error)
+    }
+
+    /// Plays one frame with `reading_mg` from the accelerometer (or a stand-in). A
+    /// rejected reading keeps the last good tilt: the game goes on.
+    pub fn frame(&mut self, reading_mg: [i32; 3]) -> Phase {
+        self.reading = reading_mg;
+        match self.tilt.push(reading_mg) {
+            Ok(g) => self.game.set_gravity_mg(g),
+            Err(e) => {
+                self.tilt_errors = self.tilt_errors.saturating_add(1);
+                self.last_tilt_error = Some(e);
+            }
+        }
+        self.game.frame()
+    }
+
+    /// Starts the level over; the tilt path keeps its calibration.
+    pub fn restart(&mut self) {
+        self.game.restart();
+        let cal = self.tilt.calibration();
+        self.tilt = TiltFilter::new(self.tilt_config);
+        self.tilt.set_calibration(cal);
+    }
+
+    /// The exact state's digest (see `World::state_hash`).
+    pub fn state_hash(&self) -> u64 {
+        self.game.world().state_hash()
+    }
+}

@@ -1,0 +1,403 @@
+//! The tilt input path: a board-frame accelerometer sample (milli-g) → the
+//! apparent gravity the physics consumes ([`crate::physics::world::World::set_gravity_mg`]).
+//!
+//! ```text
+//! reading ─▶ plausibility ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ dead zone (x, z) ─▶ negate ─▶ clamp ±8 g
+//! ```
+//!
+//! # Frames and signs
+//!
+//! Readings are in the **board frame** of [`crate::sensor`] (after its
+//! [`AxisMap`](crate::sensor::AxisMap)): `x` right (grid columns), `y` up out of
+//! the board, `z` towards the player (grid rows downwards). An accelerometer
+//! reads the reaction to gravity, so a flat board reads `(0, +1000, 0)` and the
+//! gravity handed to the physics is its negation, `(0, −1000, 0)` (down = −y).
+//! A reading with `x < 0` gives gravity `x > 0`: the marble rolls towards `+x`;
+//! likewise `z < 0` rolls it towards `+z` (the player).
+//!
+//! # Fit with [`crate::sensor`]
+//!
+//! The plausibility bounds are a [`Plausibility`] and the "level" offset is a
+//! [`Calibration`], with exactly the rules of [`crate::sensor::TiltPipeline`],
+//! so both paths accept the same samples and calibrate the same way. A
+//! [`TiltError`] converts into a [`Fault`] (`Stuck` → [`Fault::NoData`], the
+//! rest → [`Fault::Implausible`]), so a [`SensorSupervisor`](crate::sensor::SensorSupervisor)
+//! over gravity can run the re-init / fault-display policy:
+//! `supervisor.feed(filter.push(raw).map_err(Fault::from))`. Feed it raw
+//! (uncalibrated) board-frame samples: the filter does its own calibration.
+//!
+//! # Cost
+//!
+//! Per sample: three comparisons per axis, three 32-bit multiplications (the
+//! magnitude), shifts and adds. No division, no 64-bit arithmetic, no floats:
+//! cheap on a Cortex-M0. Every operation is saturating or provably in range,
+//! so no `i32` input can overflow or panic.
+
+use crate::physics::world::MAX_MG;
+use crate::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
+
+/// Fractional bits of the low-pass state (the state is mg · 2^12).
+///
+/// With the readings limited to ±[`MAX_FULL_SCALE_MG`], the state and any
+/// difference of two states stay below 2^27, far from `i32` overflow.
+const FRAC_BITS: u32 = 12;
+
+/// The widest full scale believed, mg: the LSM303AGR's largest range (±16 g).
+/// A [`Plausibility::max_axis_mg`] above it is treated as this.
+pub const MAX_FULL_SCALE_MG: u32 = 16_000;
+
+/// The largest low-pass shift accepted ([`TiltConfig::filter_shift`] is
+/// clamped to it): a time constant of about 32 767 samples.
+pub const MAX_FILTER_SHIFT: u8 = 15;
+
+/// Why a sample was not used. The filter's state (and so its gravity) is left
+/// exactly as it was.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TiltError {
+    /// All three components are exactly zero: a sensor that lost its
+    /// configuration, or a dead bus reading zeros.
+    AllZero,
+    /// One component exceeds the sensor's full scale
+    /// ([`Plausibility::max_axis_mg`]); the first offending axis (x, y, z
+    /// order) and its raw value.
+    OutOfRange {
+        /// The offending axis.
+        axis: Axis,
+        /// Its raw value, mg.
+        value: i32,
+    },
+    /// The total magnitude is outside
+    /// [`Plausibility::min_total_mg`]..=[`Plausibility::max_total_mg`]
+    /// (free fall, a knock, or garbage).
+    Magnitude {
+        /// The squared magnitude of the sample, mg².
+        squared_mg2: u32,
+    },
+    /// [`TiltConfig::stuck_samples`] identical raw samples in a row: a frozen
+    /// sensor (real MEMS noise makes such repeats implausible). Reported for
+    /// every further identical sample; the next different one is used again.
+    Stuck,
+}
+
+impl From<TiltError> for Fault {
+    /// `Stuck` is a sensor that stopped producing new data; the rest are
+    /// implausible samples.
+    fn from(e: TiltError) -> Self {
+        match e {
+            TiltError::Stuck => Fault::NoData,
+            _ => Fault::Implausible,
+        }
+    }
+}
+
+/// Tuning of a [`TiltFilter`]. Every field is public; out-of-range values are
+/// clamped (documented per field), never rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TiltConfig {
+    /// Which samples are believed. Default [`Plausibility::DEFAULT`]: per axis
+    /// ±4000 mg (twice the firmware's ±2 g range, whose saturated readings,
+    /// ±2048 at most, are therefore always accepted per axis), total
+    /// 300..=3000 mg (a held toy feels about 1 g; beyond 3 g is a knock, not a
+    /// tilt). `max_axis_mg` is capped at [`MAX_FULL_SCALE_MG`].
+    pub plausibility: Plausibility,
+    /// Low-pass shift `k`: each sample moves the state by 2^−k of the way to
+    /// it. Time constant τ ≈ 2^k − ½ samples (exactly −1 / ln(1 − 2^−k));
+    /// see [`TiltConfig::time_constant_us`]. Default 3: τ ≈ 7.5 samples =
+    /// 75 ms at the firmware's 100 Hz, which smooths the sensor noise (a few
+    /// mg) while the marble still answers a tilt within a tenth of a second.
+    /// 0 disables the filter; clamped to [`MAX_FILTER_SHIFT`].
+    pub filter_shift: u8,
+    /// Dead zone on the in-plane components (`x`, `z`) after filtering and
+    /// calibration, mg: `out = sign(v) · max(|v| − dead_zone, 0)` — exactly 0
+    /// for small tilts, continuous at the edge. Default 20 mg (about 1.1°):
+    /// above the filtered noise and a sloppy calibration, so a board resting
+    /// on a table does not creep, yet small next to the ~100 mg of a
+    /// deliberate tilt. Capped at [`MAX_FULL_SCALE_MG`].
+    pub dead_zone_mg: u32,
+    /// Identical consecutive raw samples after which [`TiltError::Stuck`] is
+    /// reported (that sample and the following identical ones are rejected).
+    /// Default 50 (0.5 s at 100 Hz). Below 2 disables the check.
+    pub stuck_samples: u16,
+    /// The calibration in force at start (e.g. one restored from storage).
+    /// Default [`Calibration::NONE`]. Offsets are clamped to
+    /// ±[`Calibration::MAX_OFFSET_MG`].
+    pub calibration: Calibration,
+}
+
+impl TiltConfig {
+    /// The defaults (see each field).
+    pub const DEFAULT: Self = Self {
+        plausibility: Plausibility::DEFAULT,
+        filter_shift: 3,
+        dead_zone_mg: 20,
+        stuck_samples: 50,
+        calibration: Calibration::NONE,
+    };
+
+    /// The low-pass time constant in µs for samples `sample_period_us`
+    /// apart: (2^k − ½) · period, saturating. This is where the step
+    /// response reaches 63 % (within one sample).
+    pub const fn time_constant_us(&self, sample_period_us: u32) -> u32 {
+        let k = clamp_shift(self.filter_shift);
+        // (2^(k+1) − 1) · period / 2, without a division.
+        let twice = (2u32 << k) - 1;
+        twice.saturating_mul(sample_period_us) >> 1
+    }
+}
+
+impl Default for TiltConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The tilt filter: plausibility and stuck-sensor rejection, a first-order
+/// low-pass, "level" calibration, a dead zone and the output clamp.
+///
+/// Until its first accepted sample its gravity is level, `(0, −1000, 0)`; the
+/// first accepted sample initialises the low-pass (no start-up transient).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TiltFilter {
+    config: TiltConfig,
+    calibration: Calibration,
+    /// Low-pass state: filtered raw board-frame reading, mg · 2^FRAC_BITS.
+    state: [i32; 3],
+    primed: bool,
+    last_raw: [i32; 3],
+    /// How many times `last_raw` came in a row (0: no sample yet).
+    repeats: u16,
+}
+
+impl TiltFilter {
+    /// A filter with `config`, level until its first good sample.
+    pub const fn new(config: TiltConfig) -> Self {
+        Self {
+            config,
+            calibration: clamp_calibration(config.calibration),
+            state: [0, 1000 << FRAC_BITS, 0],
+            primed: false,
+            last_raw: [0; 3],
+            repeats: 0,
+        }
+    }
+
+    /// The configuration given to [`TiltFilter::new`].
+    pub const fn config(&self) -> &TiltConfig {
+        &self.config
+    }
+
+    /// Feeds one raw board-frame reading (mg) and returns the new gravity
+    /// (mg, physics convention: down = −y, each axis within ±[`MAX_MG`]).
+    ///
+    /// A rejected reading returns why and leaves the filter — and so
+    /// [`TiltFilter::gravity_mg`], the last good gravity — unchanged (only the
+    /// stuck detector notes it). Checks, first failure wins:
+    /// [`TiltError::AllZero`], [`TiltError::OutOfRange`],
+    /// [`TiltError::Magnitude`], [`TiltError::Stuck`].
+    pub fn push(&mut self, reading_mg: [i32; 3]) -> Result<[i32; 3], TiltError> {
+        let stuck = self.note_repeat(reading_mg);
+        check(&self.config.plausibility, reading_mg)?;
+        if stuck {
+            return Err(TiltError::Stuck);
+        }
+        if self.primed {
+            let k = clamp_shift(self.config.filter_shift);
+            for (s, &r) in self.state.iter_mut().zip(reading_mg.iter()) {
+                *s = lowpass(*s, r << FRAC_BITS, k);
+            }
+        } else {
+            // |r| ≤ MAX_FULL_SCALE_MG < 2^14 after `check`: the shift fits.
+            self.state = reading_mg.map(|r| r << FRAC_BITS);
+            self.primed = true;
+        }
+        Ok(self.gravity_mg())
+    }
+
+    /// [`TiltFilter::push`] for a [`crate::sensor`] sample.
+    pub fn push_sample(&mut self, s: AccelMg) -> Result<[i32; 3], TiltError> {
+        self.push([s.x, s.y, s.z])
+    }
+
+    /// The gravity to hand to `World::set_gravity_mg` (mg, tile frame,
+    /// down = −y): the negated filtered reading minus the calibration, with
+    /// the dead zone on `x` and `z`, each axis clamped to ±[`MAX_MG`]. Level,
+    /// `(0, −1000, 0)`, until the first good sample.
+    pub fn gravity_mg(&self) -> [i32; 3] {
+        if !self.primed {
+            return [0, -1000, 0];
+        }
+        let dz = (min_u32(self.config.dead_zone_mg, MAX_FULL_SCALE_MG) as i32) << FRAC_BITS;
+        let c = self.calibration;
+        // |state| < 2^26, |offset| ≤ 500 · 2^12: no overflow below.
+        let x = dead_zone(self.state[0] - (c.offset_x << FRAC_BITS), dz);
+        let z = dead_zone(self.state[2] - (c.offset_z << FRAC_BITS), dz);
+        [x, self.state[1], z].map(|v| clamp_mg(-round_fx(v)))
+    }
+
+    /// The low-pass output before calibration, dead zone and negation: the
+    /// filtered raw board-frame reading, rounded to mg (`(0, 1000, 0)` before
+    /// the first good sample). `f.calibrate(f.filtered_reading_mg())` levels
+    /// the current, noise-free orientation.
+    pub fn filtered_reading_mg(&self) -> [i32; 3] {
+        self.state.map(round_fx)
+    }
+
+    /// Whether the last reading was (part of) a stuck run, i.e. whether the
+    /// next identical reading will be rejected with [`TiltError::Stuck`].
+    pub fn is_stuck(&self) -> bool {
+        let n = self.config.stuck_samples;
+        n >= 2 && self.repeats >= n
+    }
+
+    /// Makes the orientation that reads `current_reading_mg` (raw board frame)
+    /// "level": its in-plane components (`x`, `z`), each clamped to
+    /// ±[`Calibration::MAX_OFFSET_MG`] (about 30°), become the offset
+    /// subtracted from later filtered readings — exactly
+    /// [`Calibration::from_reference`]. Afterwards that reading gives gravity
+    /// `(0, −y, 0)`: the in-plane part is zero, `y` is kept (small-angle model;
+    /// `|y|` is `cos(tilt)` · 1 g, e.g. 966 mg at 15°). A tilt beyond the clamp
+    /// is only partly levelled. Replaces (does not stack on) the previous
+    /// calibration and takes effect at once; the low-pass state and the stuck
+    /// detector are untouched.
+    ///
+    /// An implausible reading is refused (the calibration unchanged). Stuck
+    /// runs are not checked here: pass a reading the filter accepted, or
+    /// [`TiltFilter::filtered_reading_mg`].
+    pub fn calibrate(&mut self, current_reading_mg: [i32; 3]) -> Result<Calibration, TiltError> {
+        check(&self.config.plausibility, current_reading_mg)?;
+        let [x, y, z] = current_reading_mg;
+        self.calibration = Calibration::from_reference(AccelMg::new(x, y, z));
+        Ok(self.calibration)
+    }
+
+    /// The calibration in force (e.g. to store it).
+    pub const fn calibration(&self) -> Calibration {
+        self.calibration
+    }
+
+    /// Replaces the calibration (offsets clamped to
+    /// ±[`Calibration::MAX_OFFSET_MG`]).
+    pub fn set_calibration(&mut self, calibration: Calibration) {
+        self.calibration = clamp_calibration(calibration);
+    }
+
+    /// Forgets the filtered state and the stuck detector (e.g. after a sensor
+    /// re-init); keeps the calibration. Level until the next good sample.
+    pub fn reset(&mut self) {
+        *self = Self {
+            calibration: self.calibration,
+            ..Self::new(self.config)
+        };
+    }
+
+    /// Counts `raw` in the run of identical readings; `true` if the run is
+    /// now long enough to call the sensor stuck.
+    fn note_repeat(&mut self, raw: [i32; 3]) -> bool {
+        if self.repeats > 0 && raw == self.last_raw {
+            self.repeats = self.repeats.saturating_add(1);
+        } else {
+            self.last_raw = raw;
+            self.repeats = 1;
+        }
+        self.is_stuck()
+    }
+}
+
+impl Default for TiltFilter {
+    fn default() -> Self {
+        Self::new(TiltConfig::DEFAULT)
+    }
+}
+
+/// The plausibility check of [`TiltFilter::push`], with the reason.
+fn check(p: &Plausibility, r: [i32; 3]) -> Result<(), TiltError> {
+    if r == [0; 3] {
+        return Err(TiltError::AllZero);
+    }
+    let max_axis = min_u32(p.max_axis_mg, MAX_FULL_SCALE_MG);
+    for (axis, value) in [(Axis::X, r[0]), (Axis::Y, r[1]), (Axis::Z, r[2])] {
+        if value.unsigned_abs() > max_axis {
+            return Err(TiltError::OutOfRange { axis, value });
+        }
+    }
+    // Each |component| ≤ 16 000, so the sum of squares is < 7.7·10^8 < 2^32.
+    let sq = r.iter().fold(0u32, |acc, v| {
+        let a = v.unsigned_abs();
+        acc.saturating_add(a.saturating_mul(a))
+    });
+    let lo = p.min_total_mg.saturating_mul(p.min_total_mg);
+    let hi = p.max_total_mg.saturating_mul(p.max_total_mg);
+    if sq < lo || sq > hi {
+        return Err(TiltError::Magnitude { squared_mg2: sq });
+    }
+    Ok(())
+}
+
+/// One step of the first-order IIR `s += (target − s) · 2^−k`, rounding the
+/// step away from zero so that any nonzero difference moves the state: it
+/// reaches `target` exactly (no dead band, no bias), from either side.
+/// Operands are below 2^27 in magnitude, so nothing overflows.
+fn lowpass(s: i32, target: i32, k: u32) -> i32 {
+    let d = target - s;
+    let mut step = d >> k; // floor: towards −∞
+    if step == 0 && d > 0 {
+        step = 1;
+    }
+    // For d < 0 the floor already gives at least −1.
+    s + step
+}
+
+/// `sign(v) · max(|v| − dz, 0)`, for `dz ≥ 0` (fixed point).
+fn dead_zone(v: i32, dz: i32) -> i32 {
+    if v > dz {
+        v - dz
+    } else if v < -dz {
+        v + dz
+    } else {
+        0
+    }
+}
+
+/// Fixed point → mg, rounding half away from zero (symmetric in sign).
+fn round_fx(v: i32) -> i32 {
+    let half = 1u32 << (FRAC_BITS - 1);
+    let m = ((v.unsigned_abs() + half) >> FRAC_BITS) as i32;
+    if v < 0 {
+        -m
+    } else {
+        m
+    }
+}
+
+fn clamp_mg(v: i32) -> i32 {
+    if v > MAX_MG {
+        MAX_MG
+    } else if v < -MAX_MG {
+        -MAX_MG
+    } else {
+        v
+    }
+}
+
+const fn clamp_shift(k: u8) -> u32 {
+    if k > MAX_FILTER_SHIFT {
+        MAX_FILTER_SHIFT as u32
+    } else {
+        k as u32
+    }
+}
+
+const fn min_u32(a: u32, b: u32) -> u32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+const fn clamp_calibration(c: Calibration) -> Calibration {
+    Calibration::from_reference(AccelMg::new(c.offset_x, 0, c.offset_z))
+}
