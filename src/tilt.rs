@@ -323,13 +323,16 @@ fn check(p: &Plausibility, r: [i32; 3]) -> Result<(), TiltError> {
             return Err(TiltError::OutOfRange { axis, value });
         }
     }
-    // Each |component| ≤ 16 000, so the sum of squares is < 7.7·10^8 < 2^32.
+    // Each |component| ≤ 16 000 now, so the sum of squares is < 7.7·10^8,
+    // and bounds capped at 65 535 (> any such magnitude) square below 2^32:
+    // plain 32-bit multiplications, no overflow check, no 64-bit helper.
     let sq = r.iter().fold(0u32, |acc, v| {
         let a = v.unsigned_abs();
-        acc.saturating_add(a.saturating_mul(a))
+        acc + a * a
     });
-    let lo = p.min_total_mg.saturating_mul(p.min_total_mg);
-    let hi = p.max_total_mg.saturating_mul(p.max_total_mg);
+    let lo = min_u32(p.min_total_mg, 65_535);
+    let hi = min_u32(p.max_total_mg, 65_535);
+    let (lo, hi) = (lo * lo, hi * hi);
     if sq < lo || sq > hi {
         return Err(TiltError::Magnitude { squared_mg2: sq });
     }
@@ -373,13 +376,7 @@ fn round_fx(v: i32) -> i32 {
 }
 
 fn clamp_mg(v: i32) -> i32 {
-    if v > MAX_MG {
-        MAX_MG
-    } else if v < -MAX_MG {
-        -MAX_MG
-    } else {
-        v
-    }
+    v.clamp(-MAX_MG, MAX_MG)
 }
 
 const fn clamp_shift(k: u8) -> u32 {

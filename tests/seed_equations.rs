@@ -180,7 +180,7 @@ fn contact_on_features<S: Scalar>() {
         // (centre, expected normal) — on the +x face, on the +x/+z edge, inside.
         (Vec3::new(b.max.x, mid(b.min.y, b.max.y), mid(b.min.z, b.max.z)), [1.0, 0.0, 0.0]),
         (Vec3::new(b.min.x + f(0.01), mid(b.min.y, b.max.y), mid(b.min.z, b.max.z)), [-1.0, 0.0, 0.0]),
-        (Vec3::new(b.max.x + f(0.1), mid(b.min.y, b.max.y), b.max.z + f(0.1)), [0.70710678, 0.0, 0.70710678]),
+        (Vec3::new(b.max.x + f(0.1), mid(b.min.y, b.max.y), b.max.z + f(0.1)), [core::f64::consts::FRAC_1_SQRT_2, 0.0, core::f64::consts::FRAC_1_SQRT_2]),
         (Vec3::new(mid(b.min.x, b.max.x), b.max.y + f(0.01), b.min.z - f(0.05)), [0.0, 0.19611614, -0.98058068]),
     ];
     for (c, want) in cases {

@@ -24,7 +24,11 @@ fn settle(f: &mut TiltFilter, r: [i32; 3], n: usize) -> [i32; 3] {
 /// No dead zone, no stuck check, ±16 g accepted: the bare low-pass.
 fn bare(shift: u8) -> TiltFilter {
     TiltFilter::new(TiltConfig {
-        plausibility: Plausibility { max_axis_mg: 16_000, min_total_mg: 300, max_total_mg: 30_000 },
+        plausibility: Plausibility {
+            max_axis_mg: 16_000,
+            min_total_mg: 300,
+            max_total_mg: 30_000,
+        },
         filter_shift: shift,
         dead_zone_mg: 0,
         stuck_samples: 0,
@@ -79,7 +83,13 @@ fn calibrating_a_tilted_board_makes_it_level() {
     settle(&mut f, tilted, 100);
     assert!(f.gravity_mg()[0] > 200);
     let c = f.calibrate(tilted).expect("plausible");
-    assert_eq!(c, Calibration { offset_x: -259, offset_z: 150 });
+    assert_eq!(
+        c,
+        Calibration {
+            offset_x: -259,
+            offset_z: 150
+        }
+    );
     assert_eq!(f.calibration(), c);
     // Takes effect at once, and stays level while the board stays there.
     assert_eq!(f.gravity_mg(), [0, -966, 0]);
@@ -101,27 +111,50 @@ fn calibration_is_clamped_and_refuses_garbage() {
     let mut f = TiltFilter::default();
     let c = f.calibrate([-900, 400, 0]).unwrap();
     assert_eq!(c.offset_x, -Calibration::MAX_OFFSET_MG);
-    f.set_calibration(Calibration { offset_x: 7, offset_z: -3 });
+    f.set_calibration(Calibration {
+        offset_x: 7,
+        offset_z: -3,
+    });
     for bad in [[0, 0, 0], [i32::MIN, 1000, 0], [0, 100, 0]] {
         assert!(f.calibrate(bad).is_err(), "{bad:?}");
-        assert_eq!(f.calibration(), Calibration { offset_x: 7, offset_z: -3 });
+        assert_eq!(
+            f.calibration(),
+            Calibration {
+                offset_x: 7,
+                offset_z: -3
+            }
+        );
     }
-    f.set_calibration(Calibration { offset_x: i32::MIN, offset_z: i32::MAX });
+    f.set_calibration(Calibration {
+        offset_x: i32::MIN,
+        offset_z: i32::MAX,
+    });
     assert_eq!(
         f.calibration(),
-        Calibration { offset_x: -Calibration::MAX_OFFSET_MG, offset_z: Calibration::MAX_OFFSET_MG }
+        Calibration {
+            offset_x: -Calibration::MAX_OFFSET_MG,
+            offset_z: Calibration::MAX_OFFSET_MG
+        }
     );
 }
 
 #[test]
 fn dead_zone_zeroes_small_tilts_and_is_continuous() {
-    let cfg = TiltConfig { filter_shift: 0, stuck_samples: 0, ..TiltConfig::DEFAULT };
+    let cfg = TiltConfig {
+        filter_shift: 0,
+        stuck_samples: 0,
+        ..TiltConfig::DEFAULT
+    };
     assert_eq!(cfg.dead_zone_mg, 20);
     let mut f = TiltFilter::new(cfg);
     let mut prev: Option<i32> = None;
     for x in -60..=60 {
         let g = f.push([x, 1000, -x]).unwrap();
-        let expect = if x.abs() <= 20 { 0 } else { -(x - 20 * x.signum()) };
+        let expect = if x.abs() <= 20 {
+            0
+        } else {
+            -(x - 20 * x.signum())
+        };
         assert_eq!(g[0], expect, "x = {x}");
         assert_eq!(g[2], -expect, "z = {}", -x);
         if let Some(p) = prev {
@@ -150,12 +183,18 @@ fn samples_to_63_percent(shift: u8, sign: i32) -> usize {
 #[test]
 fn step_response_reaches_63_percent_after_time_constant() {
     for shift in 0..=6u8 {
-        let cfg = TiltConfig { filter_shift: shift, ..TiltConfig::DEFAULT };
+        let cfg = TiltConfig {
+            filter_shift: shift,
+            ..TiltConfig::DEFAULT
+        };
         // The documented τ in samples (period 1 000 000 µs = 1 sample).
         let tau = cfg.time_constant_us(1_000_000) as f64 / 1e6;
         for sign in [1, -1] {
             let n = samples_to_63_percent(shift, sign) as f64;
-            assert!((n - tau).abs() <= 1.0, "shift {shift}: τ {tau}, reached after {n}");
+            assert!(
+                (n - tau).abs() <= 1.0,
+                "shift {shift}: τ {tau}, reached after {n}"
+            );
         }
     }
     // The default: 75 ms at 100 Hz.
@@ -173,10 +212,49 @@ fn low_pass_converges_exactly_without_truncation_error() {
                 for _ in 0..20_000 {
                     g = f.push([target, 1000, -target]).unwrap();
                 }
-                assert_eq!(g, [-target, -1000, target], "shift {shift}, {start} → {target}");
+                assert_eq!(
+                    g,
+                    [-target, -1000, target],
+                    "shift {shift}, {start} → {target}"
+                );
                 assert_eq!(f.filtered_reading_mg(), [target, 1000, -target]);
             }
         }
+    }
+}
+
+#[test]
+fn slow_low_pass_has_no_dead_band() {
+    // With a long time constant, a truncating step (floor of d · 2^-k) would
+    // stall up to 2^k fractional units short of a target approached from
+    // below (≈ 1 mg at shift 12, 8 mg at shift 15).
+    for shift in [12u8, 15] {
+        for target in [1, -1, 333, -333] {
+            for start in [0, 1000, -1000] {
+                let mut f = bare(shift);
+                f.push([start, 1000, 0]).unwrap();
+                for _ in 0..(20usize << shift) {
+                    f.push([target, 1000, 0]).unwrap();
+                }
+                assert_eq!(
+                    f.filtered_reading_mg()[0],
+                    target,
+                    "shift {shift}, {start} → {target}"
+                );
+                assert_eq!(f.gravity_mg()[0], -target);
+            }
+        }
+    }
+}
+
+#[test]
+fn output_rounds_to_nearest_mg_symmetrically() {
+    for sign in [1, -1] {
+        let mut f = bare(1);
+        f.push([0, 1000, 0]).unwrap();
+        // Half way to 1 mg: 0.5 mg rounds away from zero, both signs.
+        assert_eq!(f.push([sign, 1000, 0]).unwrap()[0], -sign);
+        assert_eq!(f.filtered_reading_mg()[0], sign);
     }
 }
 
@@ -186,12 +264,46 @@ fn implausible_samples_are_rejected_and_output_unchanged() {
     let before = settle(&mut f, [-300, 950, 100], 50);
     let cases: [([i32; 3], TiltError); 7] = [
         ([0, 0, 0], TiltError::AllZero),
-        ([4001, 0, 0], TiltError::OutOfRange { axis: Axis::X, value: 4001 }),
-        ([0, -4001, 0], TiltError::OutOfRange { axis: Axis::Y, value: -4001 }),
-        ([0, 1000, i32::MIN], TiltError::OutOfRange { axis: Axis::Z, value: i32::MIN }),
-        ([i32::MAX, i32::MAX, i32::MAX], TiltError::OutOfRange { axis: Axis::X, value: i32::MAX }),
-        ([0, 100, 0], TiltError::Magnitude { squared_mg2: 10_000 }),
-        ([2500, 2500, 0], TiltError::Magnitude { squared_mg2: 12_500_000 }),
+        (
+            [4001, 0, 0],
+            TiltError::OutOfRange {
+                axis: Axis::X,
+                value: 4001,
+            },
+        ),
+        (
+            [0, -4001, 0],
+            TiltError::OutOfRange {
+                axis: Axis::Y,
+                value: -4001,
+            },
+        ),
+        (
+            [0, 1000, i32::MIN],
+            TiltError::OutOfRange {
+                axis: Axis::Z,
+                value: i32::MIN,
+            },
+        ),
+        (
+            [i32::MAX, i32::MAX, i32::MAX],
+            TiltError::OutOfRange {
+                axis: Axis::X,
+                value: i32::MAX,
+            },
+        ),
+        (
+            [0, 100, 0],
+            TiltError::Magnitude {
+                squared_mg2: 10_000,
+            },
+        ),
+        (
+            [2500, 2500, 0],
+            TiltError::Magnitude {
+                squared_mg2: 12_500_000,
+            },
+        ),
     ];
     for (bad, err) in cases {
         let snapshot = f;
@@ -223,7 +335,10 @@ fn stuck_sensor_is_reported_and_last_good_kept() {
     assert!(f.push([-151, 980, 40]).is_ok());
     assert!(!f.is_stuck());
     // Disabled when stuck_samples < 2.
-    let mut f = TiltFilter::new(TiltConfig { stuck_samples: 1, ..TiltConfig::DEFAULT });
+    let mut f = TiltFilter::new(TiltConfig {
+        stuck_samples: 1,
+        ..TiltConfig::DEFAULT
+    });
     for _ in 0..1000 {
         assert!(f.push(frozen).is_ok());
     }
@@ -238,7 +353,11 @@ fn saturated_full_scale_readings_are_consistent() {
     assert_eq!(f.push([2047, 1000, -2048]), Ok([-2047, -1000, 2048]));
     // Exactly at the configured full scale: accepted; one above: rejected,
     // the same on every axis and both signs.
-    let p = Plausibility { max_axis_mg: 2000, min_total_mg: 300, max_total_mg: 3000 };
+    let p = Plausibility {
+        max_axis_mg: 2000,
+        min_total_mg: 300,
+        max_total_mg: 3000,
+    };
     let mut f = TiltFilter::new(TiltConfig {
         plausibility: p,
         filter_shift: 0,
@@ -253,20 +372,33 @@ fn saturated_full_scale_readings_are_consistent() {
             assert_eq!(f.push(r), Ok(r.map(|v| -v)), "{r:?}");
             r[axis] = 2001 * s;
             let ax = [Axis::X, Axis::Y, Axis::Z][axis];
-            assert_eq!(f.push(r), Err(TiltError::OutOfRange { axis: ax, value: 2001 * s }));
+            assert_eq!(
+                f.push(r),
+                Err(TiltError::OutOfRange {
+                    axis: ax,
+                    value: 2001 * s
+                })
+            );
             assert_eq!(f.gravity_mg()[axis], -2000 * s, "last good kept");
         }
     }
     // A full scale beyond the LSM303AGR's ±16 g is capped, and the output is
     // clamped to what the physics accepts.
-    let wide = Plausibility { max_axis_mg: u32::MAX, min_total_mg: 0, max_total_mg: u32::MAX };
+    let wide = Plausibility {
+        max_axis_mg: u32::MAX,
+        min_total_mg: 0,
+        max_total_mg: u32::MAX,
+    };
     let mut f = TiltFilter::new(TiltConfig {
         plausibility: wide,
         filter_shift: 0,
         ..TiltConfig::DEFAULT
     });
     assert_eq!(f.push([-16_000, 0, 0]), Ok([MAX_MG, 0, 0]));
-    assert!(matches!(f.push([16_001, 0, 0]), Err(TiltError::OutOfRange { .. })));
+    assert!(matches!(
+        f.push([16_001, 0, 0]),
+        Err(TiltError::OutOfRange { .. })
+    ));
 }
 
 #[test]
@@ -306,13 +438,29 @@ fn reset_forgets_state_but_keeps_calibration() {
 }
 
 fn any_config() -> impl Strategy<Value = TiltConfig> {
-    (any::<u32>(), any::<u32>(), any::<u32>(), any::<u8>(), any::<u32>(), any::<u16>(), any::<i32>(), any::<i32>())
+    (
+        any::<u32>(),
+        any::<u32>(),
+        any::<u32>(),
+        any::<u8>(),
+        any::<u32>(),
+        any::<u16>(),
+        any::<i32>(),
+        any::<i32>(),
+    )
         .prop_map(|(ax, lo, hi, k, dz, stuck, cx, cz)| TiltConfig {
-            plausibility: Plausibility { max_axis_mg: ax, min_total_mg: lo, max_total_mg: hi },
+            plausibility: Plausibility {
+                max_axis_mg: ax,
+                min_total_mg: lo,
+                max_total_mg: hi,
+            },
             filter_shift: k,
             dead_zone_mg: dz,
             stuck_samples: stuck,
-            calibration: Calibration { offset_x: cx, offset_z: cz },
+            calibration: Calibration {
+                offset_x: cx,
+                offset_z: cz,
+            },
         })
 }
 

@@ -31,11 +31,14 @@ impl<S: Scalar> Vec3<S> {
         Vec3::new(self.x * k, self.y * k, self.z * k)
     }
     /// Every component times `2^-n` (see [`Scalar::shr`]).
+    // A rounding scale by a power of two, not the bit shift `>>` of `core::ops::Shr`.
+    #[allow(clippy::should_implement_trait)]
     #[inline]
     pub fn shr(self, n: u32) -> Self {
         Vec3::new(self.x.shr(n), self.y.shr(n), self.z.shr(n))
     }
     /// Every component times `2^n` (see [`Scalar::shl`]).
+    #[allow(clippy::should_implement_trait)]
     #[inline]
     pub fn shl(self, n: u32) -> Self {
         Vec3::new(self.x.shl(n), self.y.shl(n), self.z.shl(n))

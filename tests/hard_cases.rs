@@ -1,0 +1,317 @@
+//! Named hard cases, in the spirit of Box2D's samples: each a small scene with a
+//! precise pass criterion, run for every scalar backend.
+mod common;
+
+use common::*;
+use marble_rolling::physics::{Effects, PhysicsSpec, Scalar, Vec3, World};
+
+type W4<'a, S> = World<'a, S, 4>;
+
+fn space() -> Effects {
+    Effects { holes: true, rolling: true, ..Effects::NONE }
+}
+
+/// **Ghost bumps, floor.** Rolling fast across the seams of a floor made of 2 × 63
+/// tiles in full 3-D: the marble never leaves the floor (y' stays exactly `r`, v_y
+/// exactly 0) and keeps its speed (no catch).
+fn ghost_bumps_floor<S: Scalar>() {
+    let floor = open_floor(127);
+    let p = params::<S>(spec(space()));
+    let start = cell_centre(&p, 1, 63);
+    let mut w: W4<'_, S> = world(p, &floor, &[start]);
+    let v0 = S::from_int(40);
+    w.marbles_mut()[0].vel = Vec3::new(v0, S::ZERO, S::from_int(1));
+    for _ in 0..1400 {
+        w.step();
+        let m = w.marbles()[0];
+        assert_eq!(m.pos.y, p.radius, "{}: vertical kick at x = {:?}", S::NAME, m.pos.x);
+        assert_eq!(m.vel.y, S::ZERO, "{}", S::NAME);
+        assert_eq!(m.vel.x, v0, "{}: caught at x = {:?}", S::NAME, m.pos.x);
+    }
+    assert!(w.marbles()[0].pos.x.to_f64() > 50.0, "crossed ~100 seams");
+}
+for_each_backend!(ghost_bumps_floor_seams, ghost_bumps_floor);
+
+/// **Ghost bumps, wall.** Pressed against a wall of 60 alternating post and wall
+/// tiles and rolled along it: no bounce away from the wall, no catch on the seams.
+fn ghost_bumps_wall<S: Scalar>() {
+    let g = closed_box(31);
+    let p = params::<S>(spec(Effects::NONE));
+    let start = cell_centre(&p, 1, 1);
+    let mut w: W4<'_, S> = world(p, &g, &[start]);
+    // Push into the top wall (−z) and along it (+x).
+    w.set_gravity_mg([0, -1000, -500]);
+    for _ in 0..200 {
+        w.step();
+    }
+    let z_rest = w.marbles()[0].pos.z;
+    let wall = p.layout.span_xz(0).1;
+    let gap = (z_rest - wall - p.radius).to_f64().abs();
+    assert!(gap < 1e-6, "{} resting {gap} off the wall", S::NAME);
+    // Settling in bounced a few times; rolling along the wall must not bounce at all.
+    let settling_bounces = w.stats.collisions;
+    w.set_gravity_mg([100, -1000, -500]);
+    let mut last_x = w.marbles()[0].pos.x;
+    for _ in 0..4000 {
+        w.step();
+        let m = w.marbles()[0];
+        assert_eq!(m.pos.z, z_rest, "{}: left the wall at x = {:?}", S::NAME, m.pos.x);
+        assert_eq!(m.vel.z, S::ZERO, "{}", S::NAME);
+        assert!(m.pos.x >= last_x, "{}: caught at {:?}", S::NAME, m.pos.x);
+        last_x = m.pos.x;
+        if m.pos.x.to_f64() > 25.0 {
+            break;
+        }
+    }
+    assert!(last_x.to_f64() > 10.0, "{}: rolled only to {:?}", S::NAME, last_x);
+    assert_eq!(w.stats.collisions, settling_bounces, "{}: bounced", S::NAME);
+}
+for_each_backend!(ghost_bumps_along_a_multi_tile_wall, ghost_bumps_wall);
+
+/// **Skinny wall.** A 0.2 mm wall (1/50 of a cell) hit head-on and diagonally at the
+/// speed cap under an 8 g pull, at the lowest and highest step rates the engine
+/// accepts: the centre never gets within `3r/4` of the wall, let alone through it.
+fn skinny_wall<S: Scalar>() {
+    let g = grid(&["#####", "#...#", "#.#.#", "#...#", "#####"]);
+    for step_log2 in [6, 10, 14] {
+        for (gx, gz) in [(8000, 0), (8000, 8000), (-8000, 3000)] {
+            let sp = PhysicsSpec { short_um: 200, long_um: 10_000, step_log2, ..spec(Effects::NONE) };
+            let p = params::<S>(sp);
+            let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
+            w.set_gravity_mg([gx, -1000, gz]);
+            w.marbles_mut()[0].vel = Vec3::new(p.v_max, S::ZERO, p.v_max);
+            for _ in 0..3000 {
+                w.step();
+                assert!(!w.marbles()[0].out, "{}: escaped", S::NAME);
+                let c = min_clearance(&w, 0);
+                assert!(c > 0.75 * p.radius.to_f64() - 1e-6, "{} 2^{step_log2} ({gx},{gz}): {c}", S::NAME);
+            }
+            assert_eq!(w.stats.reverts, 0);
+        }
+    }
+}
+for_each_backend!(skinny_wall_is_never_tunnelled, skinny_wall);
+
+/// **Corner pocket.** Pressed diagonally into a corner under a 2 g pull: comes to
+/// rest within 2 s, then sits bit-for-bit still (no jitter), never penetrating.
+fn corner_pocket<S: Scalar>() {
+    let g = closed_box(3);
+    let p = params::<S>(spec(Effects { rolling: true, ..Effects::NONE }));
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 3)]);
+    w.set_gravity_mg([2000, -1000, 2000]);
+    let mut rest_at = None;
+    for n in 0..(2 << p.k) {
+        w.step();
+        let m = w.marbles()[0];
+        assert!(min_clearance(&w, 0) >= p.radius.to_f64() - 1e-9, "{}: penetrates", S::NAME);
+        if m.vel == Vec3::ZERO && rest_at.is_none() {
+            rest_at = Some(n);
+        }
+    }
+    assert!(rest_at.is_some(), "{}: never came to rest", S::NAME);
+    let still = w.marbles()[0];
+    for _ in 0..10_000 {
+        w.step();
+        assert_eq!(w.marbles()[0], still, "{}: jitter", S::NAME);
+    }
+    let (ex, ez) = w.extent();
+    let wall = p.layout.s;
+    assert!(((ex - wall - still.pos.x) - p.radius).abs().to_f64() < 1e-6, "{} x", S::NAME);
+    assert!(((ez - wall - still.pos.z) - p.radius).abs().to_f64() < 1e-6, "{} z", S::NAME);
+}
+for_each_backend!(corner_pocket_comes_to_rest, corner_pocket);
+
+/// **Wedge.** A corridor barely wider than the marble (a 9.9 mm marble in 10 mm
+/// cells): it rolls through from end to end, touching both sides, never stuck,
+/// never undone, never penetrating more than the resting tolerance.
+fn wedge<S: Scalar>() {
+    let g = grid(&["#########", "#.......#", "#########"]);
+    let sp = PhysicsSpec { radius_um: 4_950, ..spec(Effects { rolling: true, ..Effects::NONE }) };
+    let p = params::<S>(sp);
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
+    // Along the corridor and hard into its side, wobbling between the two sides.
+    for n in 0..(4 << p.k) {
+        if n % 256 == 0 {
+            let side = if (n / 256) % 2 == 0 { 3000 } else { -3000 };
+            w.set_gravity_mg([300, -1000, side]);
+        }
+        w.step();
+        assert!(min_clearance(&w, 0) > p.radius.to_f64() - 1e-6, "{}: penetrates", S::NAME);
+    }
+    let end = cell_centre(&p, 7, 1).0;
+    assert!(w.marbles()[0].pos.x.to_f64() > end.to_f64() - 0.05, "{}: stuck at {:?}", S::NAME, w.marbles()[0].pos.x);
+    assert_eq!(w.stats.reverts, 0, "{}", S::NAME);
+}
+for_each_backend!(wedge_barely_wider_than_the_marble, wedge);
+
+/// **Restitution threshold.** `e = 0`: the first impact is a contact, no bounce at all.
+/// `e = 1`: above the threshold it bounces back to the same height; below it, it
+/// rests (no endless micro-bouncing).
+fn restitution_threshold<S: Scalar>() {
+    let floor = open_floor(15);
+    for e in [0, 1000] {
+        let p = params::<S>(PhysicsSpec { restitution_milli: e, ..spec(space()) });
+        let mut w: W4<'_, S> = world(p, &floor, &[cell_centre(&p, 7, 7)]);
+        w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.3);
+        w.marbles_mut()[0].supported = false;
+        let mut peak_after = 0.0f64;
+        let mut landed = false;
+        for _ in 0..(1 << p.k) {
+            w.step();
+            let m = w.marbles()[0];
+            landed |= w.stats.contacts > 0;
+            if landed {
+                peak_after = peak_after.max(m.pos.y.to_f64() - p.radius.to_f64());
+            }
+        }
+        if e == 0 {
+            assert_eq!(w.stats.collisions, 0, "{}: e = 0 bounced", S::NAME);
+            assert_eq!(peak_after, 0.0, "{}: e = 0 left the floor", S::NAME);
+            assert_eq!(w.marbles()[0].vel.y, S::ZERO);
+        } else {
+            assert!(w.stats.collisions >= 1);
+            assert!((peak_after - 0.3).abs() < 0.3 * loose::<S>() * 5.0, "{}: e = 1 peak {peak_after}", S::NAME);
+        }
+    }
+    // Slower than the threshold (20 mm/s): a contact even with e = 1.
+    let p = params::<S>(PhysicsSpec { restitution_milli: 1000, ..spec(space()) });
+    let mut w: W4<'_, S> = world(p, &floor, &[cell_centre(&p, 7, 7)]);
+    w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.0001);
+    w.marbles_mut()[0].supported = false;
+    for _ in 0..200 {
+        w.step();
+    }
+    assert_eq!(w.stats.collisions, 0, "{}: bounced below the threshold", S::NAME);
+    assert_eq!(w.marbles()[0].pos.y, p.radius);
+}
+for_each_backend!(restitution_threshold_e0_and_e1, restitution_threshold);
+
+/// A small deterministic generator for the shaking and far-from-origin cases.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> u32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 33) as u32
+    }
+    fn range(&mut self, lo: i32, hi: i32) -> i32 {
+        lo + (self.next() % (hi - lo + 1) as u32) as i32
+    }
+}
+
+/// **Shaking.** Random tilt up to ±4 g on every axis, changed every 8 ms, for two
+/// simulated minutes in a closed maze with inner walls: the marble never leaves the
+/// maze, never gets inside a wall, is never undone.
+fn shaking<S: Scalar>() {
+    let g = grid(&[
+        "#########", "#.......#", "#.#.###.#", "#.#...#.#", "#.###.#.#", "#.......#", "#########",
+    ]);
+    let p = params::<S>(spec(Effects { rolling: true, friction: true, ..Effects::NONE }));
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
+    let mut rng = Lcg(42);
+    let minutes = 2;
+    for n in 0..(minutes * 60) << p.k {
+        if n % 8 == 0 {
+            w.set_gravity_mg([rng.range(-4000, 4000), rng.range(-5000, 3000), rng.range(-4000, 4000)]);
+        }
+        w.step();
+        if n % 64 == 0 {
+            assert!(!w.marbles()[0].out, "{}: escaped", S::NAME);
+            assert!(min_clearance(&w, 0) > 0.75 * p.radius.to_f64(), "{}: inside a wall", S::NAME);
+        }
+    }
+    assert_eq!(w.stats.reverts, 0, "{}", S::NAME);
+}
+for_each_backend!(shaking_at_4g_never_escapes, shaking);
+
+/// **Hole edges.** Rolling slowly onto a hole cell drops the marble in; rolling fast
+/// across a one-cell hole, it dips by about `g·t²/2` (t = time over the gap) and rolls
+/// on; a 2 mm gap between cells is crossed at any speed.
+fn hole_edges<S: Scalar>() {
+    // Cells 1, 3, 7, 9 have floor; cell 5 is a hole.
+    let g = grid(&["###########", "#....O....#", "###########"]);
+    let p = params::<S>(spec(space()));
+    // Slow: a gentle tilt from rest, straight into the hole cell (5, 1).
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 1)]);
+    w.set_gravity_mg([30, -1000, 0]);
+    for _ in 0..(4 << p.k) {
+        w.step();
+    }
+    assert!(w.marbles()[0].out, "{}: a slow marble should fall in", S::NAME);
+
+    // Fast: 60 pitch/s (720 mm/s) over the hole cell (5, 1), no tilt.
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 1)]);
+    w.set_gravity_mg([0, -1000, 0]);
+    w.marbles_mut()[0].vel.x = S::from_int(60);
+    let mut lowest = p.radius.to_f64();
+    for _ in 0..60 {
+        w.step();
+        lowest = lowest.min(w.marbles()[0].pos.y.to_f64());
+    }
+    let m = w.marbles()[0];
+    assert!(!m.out, "{}: a fast marble should cross", S::NAME);
+    assert!(m.pos.x.to_f64() > cell_centre(&p, 7, 1).0.to_f64() - 0.5, "{}: stopped at {:?}", S::NAME, m.pos.x);
+    // Free fall while the centre is over the gap: l = 0.833 pitch at 60 pitch/s.
+    let t = p.layout.l.to_f64() / 60.0;
+    let drop = 0.5 * 9806.65 / 12.0 * t * t;
+    let dip = p.radius.to_f64() - lowest;
+    assert!(dip > 0.0 && dip < 2.0 * drop, "{}: dip {dip} vs free fall {drop}", S::NAME);
+
+    // The 2 mm gap (short tile 8 is a hole) at 3 pitch/s.
+    let g2 = grid(&["###########", "#.......O.#", "###########"]);
+    let mut w: W4<'_, S> = world(p, &g2, &[cell_centre(&p, 5, 1)]);
+    w.marbles_mut()[0].vel.x = S::from_int(3);
+    for _ in 0..(1 << p.k) {
+        w.step();
+    }
+    assert!(!w.marbles()[0].out, "{}: fell through a 2 mm gap", S::NAME);
+}
+for_each_backend!(hole_edges_slow_drops_fast_crosses, hole_edges);
+
+/// **Far from origin.** The same roll near the origin and at the far corner of the
+/// largest board: the displacements agree to the backend's resolution there.
+fn far_from_origin<S: Scalar>() {
+    let floor = open_floor(127);
+    let p = params::<S>(spec(Effects { rolling: true, ..Effects::NONE }));
+    let mut moved = Vec::new();
+    for (i, k) in [(3, 3), (95, 95)] {
+        let start = cell_centre(&p, i, k);
+        let mut w: W4<'_, S> = world(p, &floor, &[start]);
+        w.set_gravity_mg([37, -999, 23]);
+        for _ in 0..(1 << p.k) {
+            w.step();
+        }
+        let m = w.marbles()[0];
+        moved.push(((m.pos.x - start.0).to_f64(), (m.pos.z - start.1).to_f64()));
+    }
+    let err = (moved[0].0 - moved[1].0).abs().max((moved[0].1 - moved[1].1).abs());
+    let mm = err * 12.0;
+    println!("{}: displacement mismatch {mm:.2e} mm", S::NAME);
+    let bound_mm = match S::NAME {
+        "f32" | "f32-micromath" => 0.2, // 60 pitches: one ULP is 0.09 µm, ~1000 steps
+        "i16f16" => 0.2,
+        _ => 1e-6,
+    };
+    assert!(mm < bound_mm, "{}: {mm} mm", S::NAME);
+}
+for_each_backend!(far_from_origin_precision_holds, far_from_origin);
+
+/// **Long rest.** Two simulated hours resting in a corner under a constant tilt and
+/// on a flat board with friction: not one bit of drift.
+fn long_rest<S: Scalar>() {
+    let g = closed_box(2);
+    let p = params::<S>(spec(Effects { rolling: true, friction: true, ..Effects::NONE }));
+    for tilt in [[500, -1000, 300], [15, -1000, 8]] {
+        let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
+        w.set_gravity_mg(tilt);
+        for _ in 0..(4 << p.k) {
+            w.step();
+        }
+        let settled = w.marbles()[0];
+        let hours = if S::NAME == "i8f24" { 2 } else { 1 };
+        for _ in 0..(hours * 3600) << p.k {
+            w.step();
+        }
+        assert_eq!(w.marbles()[0], settled, "{} tilt {tilt:?}: drifted", S::NAME);
+    }
+}
+for_each_backend!(long_rest_has_no_drift_or_creep, long_rest);
