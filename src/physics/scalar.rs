@@ -184,10 +184,11 @@ macro_rules! fixed_scalar {
                     return self;
                 }
                 let bits = self.to_bits();
-                // Round half away from zero so that +v and -v move by mirror amounts.
-                let half = 1 << (n - 1);
-                let r = if bits >= 0 { (bits + half) >> n } else { -((-bits + half) >> n) };
-                <$t>::from_bits(r)
+                // Round half away from zero so that +v and -v move by mirror amounts;
+                // on the magnitude, so that neither MAX nor MIN can overflow.
+                let m = bits.unsigned_abs();
+                let q = ((m >> n) + ((m >> (n - 1)) & 1)) as i64;
+                <$t>::from_bits((if bits < 0 { -q } else { q }) as _)
             }
             #[inline]
             fn shl(self, n: u32) -> Self {

@@ -283,7 +283,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             self.step_marbles::<false>();
         }
         if self.params.spec.effects.marbles && self.marbles.len() > 1 {
-            self.collide_marbles();
+            if self.params.spec.effects.holes {
+                self.collide_marbles::<true>();
+            } else {
+                self.collide_marbles::<false>();
+            }
         }
     }
 
@@ -399,7 +403,10 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         }
     }
 
-    fn collide_marbles(&mut self) {
+    /// Marble–marble contacts. A marble pushed by its neighbour gets one more tile
+    /// pass from where it stood, so a pair squeezed against a wall never leaves one
+    /// of them inside it.
+    fn collide_marbles<const SPACE: bool>(&mut self) {
         self.stats.pair_runs = self.stats.pair_runs.wrapping_add(1);
         let p = self.params;
         let r2 = p.radius + p.radius;
@@ -436,6 +443,9 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 };
                 set(&mut na, va);
                 set(&mut nb, vb);
+                let still = Kick::default();
+                na.supported = self.collide_tiles::<SPACE>(&mut na, &still, ma.pos) || na.supported;
+                nb.supported = self.collide_tiles::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
                 self.marbles[a] = na;
                 self.marbles[b] = nb;
             }
