@@ -16,6 +16,10 @@ pub mod sensor;
 pub mod tilt;
 /// Two-button debouncing and the A / B / A+B-hold combinations.
 pub mod buttons;
+/// World → LED-matrix frame: tiles, blinking goal, anti-aliased marbles, a following viewport.
+pub mod render;
+/// The accuracy/cost study's scene suite, shared by `cargo accuracy` and the target benchmarks.
+pub mod study;
 
 // Host tools (`tools` feature only): the library stays no_std everywhere else.
 #[cfg(feature = "tools")]
