@@ -54,7 +54,8 @@ fn bounce_heights<S: Scalar>() {
     let p = params::<S>(space_spec(500));
     let start = cell_centre(&p, 7, 7);
     let mut w: World<'_, S, 4> = world(p, &floor, &[start]);
-    let h0 = 1.0;
+    // Below the lid (the wall tops, l = 0.83 pitch): the centre may rise to l − r.
+    let h0 = 0.25;
     w.marbles_mut()[0].pos.y = p.radius + S::from_f64(h0);
     w.marbles_mut()[0].supported = false;
     let g = g_pitch(p.layout.pitch_um);
@@ -91,7 +92,7 @@ fn bounce_to_rest<S: Scalar>() {
     let p = params::<S>(space_spec(700));
     let start = cell_centre(&p, 7, 7);
     let mut w: World<'_, S, 4> = world(p, &floor, &[start]);
-    w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.5);
+    w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.2);
     w.marbles_mut()[0].supported = false;
     let mut rested_at = None;
     for step in 0..(10 << p.k) {

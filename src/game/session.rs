@@ -13,6 +13,7 @@ use crate::physics::world::SetupError;
 use crate::physics::Scalar;
 use crate::tilt::{TiltConfig, TiltError, TiltFilter};
 
+use super::autopilot::Autopilot;
 use super::level::LevelView;
 use super::rules::{Game, GameConfig, Phase};
 
@@ -81,6 +82,13 @@ impl<'a, S: Scalar> Session<'a, S> {
             }
         }
         self.game.frame()
+    }
+
+    /// Plays one frame with the autopilot's reading: it looks at the game as it is
+    /// and tilts, exactly as [`Session::frame`] would take a human's tilt.
+    pub fn autopilot_frame(&mut self, autopilot: &mut Autopilot) -> Phase {
+        let reading = autopilot.reading_mg(&self.game);
+        self.frame(reading)
     }
 
     /// Starts the level over; the tilt path keeps its calibration.

@@ -21,7 +21,7 @@ use super::dynamics::integrate::{advance, advance_plane, kick_axis, Kick};
 use super::dynamics::respond::{resolve, Impact, Outcome, T_LOG2};
 use super::geometry::broadphase::{candidates, candidates_plane};
 use super::geometry::grid::Tiles;
-use super::geometry::narrowphase::contact;
+use super::geometry::narrowphase::{contact, lid_contact, Contact};
 use super::geometry::tiles::{LayoutError, TileIndex, TileLayout};
 use super::scalar::Scalar;
 use super::vec::Vec3;
@@ -331,23 +331,27 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         self.check_out::<SPACE>(m);
     }
 
-    /// Contact passes against the tiles; returns whether the floor supports the marble.
+    /// Contact passes against the tiles (and, in 3-D, the lid); returns whether the
+    /// floor supports the marble.
     fn collide_tiles<const SPACE: bool>(&mut self, m: &mut Marble<S>, kick: &Kick<S>, start: Vec3<S>) -> bool {
-        let p = &self.params;
-        let (r, k, layout, tiles) = (p.radius, p.k, &p.layout, self.tiles);
+        let p = self.params;
+        let (r, k, layout, tiles) = (p.radius, p.k, p.layout, self.tiles);
         // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
         let acc = if k >= 2 * T_LOG2 { kick.dv.shl(k - 2 * T_LOG2) } else { kick.dv.shr(2 * T_LOG2 - k) };
-        let sub = k - T_LOG2;
-        let step_t = S::ONE.shr(sub);
         let half = S::ONE.half();
         let slop = r.shr(2);
         let mut supported = !SPACE;
         for pass in 0..3 {
-            let range = if SPACE { candidates(layout, m.pos, r) } else { candidates_plane(layout, m.pos, r) };
+            let range = if SPACE { candidates(&layout, m.pos, r) } else { candidates_plane(&layout, m.pos, r) };
             let mut touched = false;
-            for t in range.solid(tiles) {
-                let b = layout.tile_box(t);
-                let Some(c) = contact(m.pos, r, t, &b, tiles) else { continue };
+            // The tiles in reach, then (3-D only) the lid; each asked with the current
+            // position, since earlier contacts in the pass may have moved the marble.
+            for item in range.solid(tiles).map(Some).chain(SPACE.then_some(None)) {
+                let c = match item {
+                    Some(t) => contact(m.pos, r, t, &layout.tile_box(t), tiles),
+                    None => lid_contact(m.pos, r, layout.l),
+                };
+                let Some(c) = c else { continue };
                 touched = true;
                 if pass == 2 {
                     // Still overlapping after two passes: a wedge the passes could not
@@ -360,21 +364,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                     }
                     continue;
                 }
-                self.stats.contacts = self.stats.contacts.wrapping_add(1);
-                let v_board = if p.spec.effects.board_motion {
-                    self.motion.surface_velocity(m.pos - c.normal.scale(r)).shl(sub)
-                } else {
-                    Vec3::ZERO
-                };
-                let imp = Impact { n: c.normal, depth: c.depth, v: m.vel.shr(T_LOG2), v_board, acc, dt: step_t };
-                let res = resolve(&imp, p.restitution, p.threshold);
-                m.pos += c.normal.scale(res.push);
-                let vn_now = m.vel.dot(c.normal);
-                let vn_new = (res.vn + v_board.dot(c.normal)).shl(T_LOG2).clamp(-p.v_max, p.v_max);
-                m.vel = m.vel - c.normal.scale(vn_now) + c.normal.scale(vn_new);
-                if res.outcome == Outcome::Collision {
-                    self.stats.collisions = self.stats.collisions.wrapping_add(1);
-                }
+                self.apply_contact(m, &c, acc);
                 if SPACE && c.normal.y > half {
                     supported = true;
                 }
@@ -384,6 +374,29 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             }
         }
         supported
+    }
+
+    /// Resolves one contact (eq. 1 at the instant of impact, see `respond`).
+    fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, acc: Vec3<S>) {
+        let p = self.params;
+        let sub = p.k - T_LOG2;
+        self.stats.contacts = self.stats.contacts.wrapping_add(1);
+        let v_board = if p.spec.effects.board_motion {
+            self.motion.surface_velocity(m.pos - c.normal.scale(p.radius)).shl(sub)
+        } else {
+            Vec3::ZERO
+        };
+        let imp = Impact { n: c.normal, depth: c.depth, v: m.vel.shr(T_LOG2), v_board, acc, dt: S::ONE.shr(sub) };
+        let res = resolve(&imp, p.restitution, p.threshold);
+        m.pos += c.normal.scale(res.push);
+        let vn_now = m.vel.dot(c.normal);
+        let vn_new = (res.vn + v_board.dot(c.normal)).shl(T_LOG2).clamp(-p.v_max, p.v_max);
+        // A slanted normal can move speed between axes: keep every axis under the cap
+        // (the no-tunnelling bound is per axis).
+        m.vel = (m.vel - c.normal.scale(vn_now) + c.normal.scale(vn_new)).clamp_abs(p.v_max);
+        if res.outcome == Outcome::Collision {
+            self.stats.collisions = self.stats.collisions.wrapping_add(1);
+        }
     }
 
     fn check_out<const SPACE: bool>(&self, m: &mut Marble<S>) {
@@ -439,7 +452,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 let set = |m: &mut Marble<S>, v_step: Vec3<S>| {
                     let old = m.vel.dot(n);
                     let new = v_step.dot(n).shl(T_LOG2).clamp(-p.v_max, p.v_max);
-                    m.vel = m.vel - n.scale(old) + n.scale(new);
+                    m.vel = (m.vel - n.scale(old) + n.scale(new)).clamp_abs(p.v_max);
                 };
                 set(&mut na, va);
                 set(&mut nb, vb);

@@ -160,3 +160,15 @@ fn inside<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Tiles<'
     let (gap, axis, up) = best?;
     Some(Contact { normal: unit(axis, up), depth: r + gap, feature: Feature::Inside })
 }
+
+/// The maze's lid: a plane on top of the walls (`y' = l`), as on the real toy. It
+/// only matters in 3-D scenes (the flat maze keeps the marble on the floor anyway):
+/// shaken upside down, the marble stays in the maze instead of flying out of it.
+#[inline]
+pub fn lid_contact<S: Scalar>(c: Vec3<S>, r: S, top: S) -> Option<Contact<S>> {
+    let depth = c.y + r - top;
+    if depth <= S::ZERO {
+        return None;
+    }
+    Some(Contact { normal: Vec3::new(S::ZERO, -S::ONE, S::ZERO), depth, feature: Feature::Face(1) })
+}
