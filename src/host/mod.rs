@@ -1,0 +1,237 @@
+//! Host tools (`tools` feature, std): the simulator CLI ([`sim`], `cargo sim`) and
+//! the terminal player ([`play`], `cargo play`). The `sim` and `play` binaries are
+//! thin wrappers around [`sim::main`] and [`play::main`], so the logic lives in the
+//! library where it is documented and type-checked with the rest of the crate.
+//!
+//! Nothing in here is used by the firmware: the module (and its dependencies clap,
+//! gif and crossterm) exists only when the `tools` feature is on.
+
+pub mod gif_out;
+pub mod play;
+pub mod sim;
+pub mod trace;
+
+use std::boxed::Box;
+use std::format;
+use std::string::{String, ToString};
+use std::vec::Vec;
+
+use crate::game::level::{parse, LevelView};
+use crate::game::levels::{by_name, LEVELS};
+use crate::physics::geometry::grid::{words_for, MAX_TILES_XZ};
+
+/// Occupancy words of the largest level the format allows (127 × 2 × 127 tiles):
+/// every level read at run time is parsed into a grid of this size.
+pub const MAX_WORDS: usize = words_for(MAX_TILES_XZ, 2, MAX_TILES_XZ);
+
+/// A level chosen on the command line.
+#[derive(Clone, Copy, Debug)]
+pub struct Loaded {
+    /// The level.
+    pub view: LevelView<'static>,
+    /// Its index in [`LEVELS`] when it is a built-in one.
+    pub builtin: Option<usize>,
+}
+
+/// Names of the built-in levels, comma separated (for messages).
+pub fn builtin_names() -> String {
+    LEVELS
+        .iter()
+        .map(|l| l.info.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Parses a level source read at run time. The source and the parsed level are
+/// leaked: a tool loads a handful of levels per process. The error is
+/// `line:column: message`.
+pub fn parse_runtime(src: String) -> Result<LevelView<'static>, crate::game::level::LevelError> {
+    let src: &'static str = Box::leak(src.into_boxed_str());
+    let level = parse::<MAX_WORDS>(src)?;
+    let level: &'static _ = Box::leak(Box::new(level));
+    Ok(level.view())
+}
+
+/// A built-in level by name, or else a level file. The error names the file with
+/// `FILE:line:column: message` for a malformed level.
+pub fn load_level(arg: &str) -> Result<Loaded, String> {
+    if let Some((i, view)) = by_name(arg) {
+        return Ok(Loaded {
+            view,
+            builtin: Some(i),
+        });
+    }
+    let src = match std::fs::read_to_string(arg) {
+        Ok(s) => s,
+        Err(e) => {
+            return Err(format!(
+                "level `{arg}` is neither a built-in level ({}) nor a readable file: {e}",
+                builtin_names()
+            ))
+        }
+    };
+    let view = parse_runtime(src).map_err(|e| format!("{arg}:{e}"))?;
+    Ok(Loaded {
+        view,
+        builtin: None,
+    })
+}
+
+/// A scalar type the physics can run on, chosen by name at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// `fixed::types::I8F24`, the firmware's default (`i8f24`).
+    I8F24,
+    /// `fixed::types::I16F16` (`i16f16`).
+    I16F16,
+    /// `fixed::types::I32F32` (`i32f32`).
+    I32F32,
+    /// `f32`.
+    F32,
+    /// `f32` with micromath's square root (`f32-micromath`).
+    MicroF32,
+    /// `f64`.
+    F64,
+}
+
+impl Backend {
+    /// Every backend, the default first.
+    pub const ALL: [Backend; 6] = [
+        Backend::I8F24,
+        Backend::I16F16,
+        Backend::I32F32,
+        Backend::F32,
+        Backend::MicroF32,
+        Backend::F64,
+    ];
+
+    /// The name used on the command line and in reports (`Scalar::NAME`).
+    pub fn name(self) -> &'static str {
+        use crate::physics::Scalar;
+        match self {
+            Backend::I8F24 => fixed::types::I8F24::NAME,
+            Backend::I16F16 => fixed::types::I16F16::NAME,
+            Backend::I32F32 => fixed::types::I32F32::NAME,
+            Backend::F32 => f32::NAME,
+            Backend::MicroF32 => crate::physics::MicroF32::NAME,
+            Backend::F64 => f64::NAME,
+        }
+    }
+
+    /// The backend called `name`, or a message listing the known ones.
+    pub fn from_name(name: &str) -> Result<Backend, String> {
+        Backend::ALL
+            .iter()
+            .copied()
+            .find(|b| b.name() == name)
+            .ok_or_else(|| {
+                format!(
+                    "unknown backend `{name}` (known: {})",
+                    Backend::ALL
+                        .iter()
+                        .map(|b| b.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
+    }
+
+    /// Runs `job` with this backend's scalar type.
+    pub fn run<J: WithScalar>(self, job: J) -> J::Output {
+        match self {
+            Backend::I8F24 => job.run::<fixed::types::I8F24>(),
+            Backend::I16F16 => job.run::<fixed::types::I16F16>(),
+            Backend::I32F32 => job.run::<fixed::types::I32F32>(),
+            Backend::F32 => job.run::<f32>(),
+            Backend::MicroF32 => job.run::<crate::physics::MicroF32>(),
+            Backend::F64 => job.run::<f64>(),
+        }
+    }
+}
+
+impl core::fmt::Display for Backend {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Work that is generic over the scalar type ([`Backend::run`] picks it).
+pub trait WithScalar {
+    /// What the work returns.
+    type Output;
+    /// Does the work with scalar `S`.
+    fn run<S: crate::physics::Scalar>(self) -> Self::Output;
+}
+
+/// Drops one leading `--` from the arguments: the cargo aliases end in `--`, so
+/// `cargo sim -- --level x` hands the binary `-- --level x`.
+pub fn args_without_separator() -> Vec<std::ffi::OsString> {
+    let mut args: Vec<_> = std::env::args_os().collect();
+    if args.get(1).is_some_and(|a| a == "--") {
+        args.remove(1);
+    }
+    args
+}
+
+/// `s` as a JSON string literal.
+pub fn json_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// A finite `f64` as a JSON number (`null` otherwise).
+pub fn json_number(x: f64) -> String {
+    if x.is_finite() {
+        x.to_string()
+    } else {
+        "null".to_string()
+    }
+}
+
+/// The whole level as an image, one pixel per tile (`nx`×`nz`, row-major
+/// brightness 0..=15), drawn by [`crate::render`] exactly as the LED matrix shows it
+/// (goal blinking with the game's frame counter, marbles anti-aliased).
+pub fn level_picture<S: crate::physics::Scalar>(
+    game: &crate::game::rules::Game<'_, S>,
+) -> (usize, usize, Vec<u8>) {
+    let info = &game.level().info;
+    // The smallest square matrix that holds the level (a level has ≤ 127 tiles a side).
+    match info.nx.max(info.nz) {
+        0..=16 => picture::<S, 16>(game),
+        17..=32 => picture::<S, 32>(game),
+        33..=64 => picture::<S, 64>(game),
+        _ => picture::<S, 128>(game),
+    }
+}
+
+fn picture<S: crate::physics::Scalar, const N: usize>(
+    game: &crate::game::rules::Game<'_, S>,
+) -> (usize, usize, Vec<u8>) {
+    use crate::render::{blink_on, render_world, Viewport};
+    let level = game.level();
+    let (w, h) = (
+        (level.info.nx as usize).min(N),
+        (level.info.nz as usize).min(N),
+    );
+    let blink = blink_on(game.frames(), game.config().frame_log2);
+    let frame: crate::matrix::Frame<N, N> =
+        render_world(level, game.world(), blink, Viewport::new(0, 0));
+    let mut px = Vec::with_capacity(w * h);
+    for row in frame.rows().iter().take(h) {
+        px.extend_from_slice(&row[..w]);
+    }
+    (w, h, px)
+}

@@ -1,0 +1,443 @@
+//! `cargo play`: the game in a terminal.
+//!
+//! ```text
+//! cargo play                      # the built-in levels, from the first
+//! cargo play -- --level cavern    # a built-in level by name, or a level file
+//! ```
+//!
+//! The LED matrix is drawn with two shaded block characters per pixel, coloured by
+//! brightness (the same [`crate::render`] frames the firmware shows: one pixel per
+//! tile, the whole level when it fits the terminal, otherwise the largest window
+//! that fits, following the marble). The keys stand in for the accelerometer: each
+//! press of an arrow key (or W A S D) tilts the held reading 100 mg further that
+//! way, up to ±500 mg per axis; space levels the board. `r` restarts, `n` goes to the next
+//! level, `p` hands the board to the autopilot (and back), `q` / Esc / Ctrl-C quit.
+//!
+//! The game runs at its own frame rate (128 frames/s, [`GameConfig::DEFAULT`]) in
+//! real time, through the same [`Session`] as the firmware, with
+//! [`SYNTHETIC_TILT`] (a held key repeats the same reading, which a real sensor
+//! never does). The terminal is put in raw mode on the alternate screen and
+//! restored on every way out: quitting, an error, or a panic.
+
+use std::boxed::Box;
+use std::io::{self, IsTerminal, Write};
+use std::string::{String, ToString};
+use std::time::{Duration, Instant};
+use std::vec::Vec;
+use std::{eprintln, format};
+
+use clap::Parser;
+use crossterm::event::{self, Event, KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+use crossterm::style::{Color, Print, ResetColor, SetForegroundColor};
+use crossterm::terminal::{self, Clear, ClearType};
+use crossterm::{cursor, execute, queue};
+
+use super::{load_level, Loaded};
+use crate::game::autopilot::Autopilot;
+use crate::game::levels::LEVELS;
+use crate::game::rules::{GameConfig, Phase};
+use crate::game::session::{Session, SYNTHETIC_TILT};
+use crate::matrix::MAX_BRIGHTNESS;
+use crate::physics::Fx;
+use crate::render::{blink_on, follow_axis, render_world, tile_point, Viewport};
+
+/// Milli-g added to the held reading per key press.
+pub const TILT_STEP_MG: i32 = 100;
+/// Largest held tilt per axis (mg).
+pub const TILT_MAX_MG: i32 = 500;
+/// Frames between two screen updates (128 / 4 = 32 updates per second).
+const DRAW_EVERY: u32 = 4;
+/// Lines under the matrix (status, tilt, help).
+const HUD_LINES: u16 = 4;
+
+/// Command-line arguments of `cargo play`.
+#[derive(Parser, Debug)]
+#[command(
+    name = "play",
+    version,
+    about = "Play Marble Rolling in the terminal (arrow keys / WASD tilt the board)"
+)]
+pub struct Args {
+    /// Level to start with: a built-in name or a level file (default: the first
+    /// built-in level).
+    #[arg(long, value_name = "NAME|FILE")]
+    pub level: Option<String>,
+    /// Start with the autopilot at the controls (`p` toggles it).
+    #[arg(long)]
+    pub autopilot: bool,
+}
+
+/// Runs the player with the process arguments; returns the exit status.
+pub fn main() -> i32 {
+    let args = match Args::try_parse_from(super::args_without_separator()) {
+        Ok(a) => a,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    let first = match &args.level {
+        Some(l) => match load_level(l) {
+            Ok(l) => l,
+            Err(e) => {
+                eprintln!("play: error: {e}");
+                return 2;
+            }
+        },
+        None => Loaded {
+            view: LEVELS[0],
+            builtin: Some(0),
+        },
+    };
+    if !io::stdin().is_terminal() || !io::stdout().is_terminal() {
+        eprintln!(
+            "play: error: standard input and output must be a terminal (an interactive game); \
+             for a headless run use `cargo sim -- --level NAME`"
+        );
+        return 2;
+    }
+    let result = {
+        let guard = match TerminalGuard::enter() {
+            Ok(g) => g,
+            Err(e) => {
+                eprintln!("play: error: cannot set up the terminal: {e}");
+                return 1;
+            }
+        };
+        let r = Player::new(first, args.autopilot).and_then(|mut p| p.run());
+        drop(guard);
+        r
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("play: error: {e}");
+            1
+        }
+    }
+}
+
+/// Raw mode + alternate screen + hidden cursor while alive; restored on drop and
+/// by the panic hook.
+struct TerminalGuard;
+
+impl TerminalGuard {
+    fn enter() -> io::Result<TerminalGuard> {
+        terminal::enable_raw_mode()?;
+        // From here on every way out restores the terminal.
+        let guard = TerminalGuard;
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            restore_terminal();
+            previous(info);
+        }));
+        execute!(
+            io::stdout(),
+            terminal::EnterAlternateScreen,
+            cursor::Hide,
+            Clear(ClearType::All)
+        )?;
+        Ok(guard)
+    }
+}
+
+impl Drop for TerminalGuard {
+    fn drop(&mut self) {
+        restore_terminal();
+    }
+}
+
+fn restore_terminal() {
+    let _ = execute!(
+        io::stdout(),
+        ResetColor,
+        cursor::Show,
+        terminal::LeaveAlternateScreen
+    );
+    let _ = terminal::disable_raw_mode();
+}
+
+/// What a key asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Action {
+    /// Tilt by `(dx, dz)` steps (reading components; `ax < 0` rolls towards +x').
+    Tilt(i32, i32),
+    Level,
+    Restart,
+    Next,
+    Autopilot,
+    Quit,
+    None,
+}
+
+fn action(key: KeyEvent) -> Action {
+    if key.kind == KeyEventKind::Release {
+        return Action::None;
+    }
+    if key.modifiers.contains(KeyModifiers::CONTROL) && matches!(key.code, KeyCode::Char('c' | 'C'))
+    {
+        return Action::Quit;
+    }
+    match key.code {
+        // The marble rolls the way the key points: left needs ax > 0.
+        KeyCode::Left | KeyCode::Char('a' | 'A') => Action::Tilt(1, 0),
+        KeyCode::Right | KeyCode::Char('d' | 'D') => Action::Tilt(-1, 0),
+        // Up (away from the player, −z') needs az > 0.
+        KeyCode::Up | KeyCode::Char('w' | 'W') => Action::Tilt(0, 1),
+        KeyCode::Down | KeyCode::Char('s' | 'S') => Action::Tilt(0, -1),
+        KeyCode::Char(' ') => Action::Level,
+        KeyCode::Char('r' | 'R') => Action::Restart,
+        KeyCode::Char('n' | 'N') => Action::Next,
+        KeyCode::Char('p' | 'P') => Action::Autopilot,
+        KeyCode::Char('q' | 'Q') | KeyCode::Esc => Action::Quit,
+        _ => Action::None,
+    }
+}
+
+/// The held reading for an in-plane tilt: `y` makes the total 1 g.
+pub fn held_reading(ax: i32, az: i32) -> [i32; 3] {
+    let y2 = (1_000_000 - ax * ax - az * az).max(0) as f64;
+    [ax, y2.sqrt().round() as i32, az]
+}
+
+struct Player {
+    level: Loaded,
+    session: Session<'static, Fx>,
+    autopilot: Option<Autopilot>,
+    tilt: (i32, i32),
+    /// The viewport's origin (tile shown top left) while the level does not fit.
+    view: Option<(i32, i32)>,
+    out: io::Stdout,
+    buf: Vec<u8>,
+}
+
+impl Player {
+    fn new(level: Loaded, autopilot: bool) -> io::Result<Player> {
+        let session = new_session(level)?;
+        let autopilot = autopilot.then(|| Autopilot::new(&level.view));
+        Ok(Player {
+            level,
+            session,
+            autopilot,
+            tilt: (0, 0),
+            view: None,
+            out: io::stdout(),
+            buf: Vec::with_capacity(1 << 16),
+        })
+    }
+
+    fn switch(&mut self, level: Loaded) -> io::Result<()> {
+        self.session = new_session(level)?;
+        self.level = level;
+        self.restarted()
+    }
+
+    fn restarted(&mut self) -> io::Result<()> {
+        self.tilt = (0, 0);
+        self.view = None;
+        if self.autopilot.is_some() {
+            self.autopilot = Some(Autopilot::new(&self.level.view));
+        }
+        execute!(self.out, Clear(ClearType::All))
+    }
+
+    fn run(&mut self) -> io::Result<()> {
+        let config = self.session.game().config();
+        let period = Duration::from_secs(1) / config.frame_hz();
+        let mut next = Instant::now();
+        let mut frame = 0u32;
+        self.draw()?;
+        loop {
+            let now = Instant::now();
+            if now < next {
+                if event::poll(next - now)? {
+                    match event::read()? {
+                        Event::Key(k) => {
+                            if !self.key(action(k))? {
+                                return Ok(());
+                            }
+                            self.draw()?;
+                        }
+                        Event::Resize(..) => {
+                            self.view = None;
+                            execute!(self.out, Clear(ClearType::All))?;
+                            self.draw()?;
+                        }
+                        _ => {}
+                    }
+                }
+                continue;
+            }
+            if self.session.game().phase() == Phase::Playing {
+                let reading = match &mut self.autopilot {
+                    Some(ap) => ap.reading_mg(self.session.game()),
+                    None => held_reading(self.tilt.0, self.tilt.1),
+                };
+                self.session.frame(reading);
+            }
+            frame = frame.wrapping_add(1);
+            if frame.is_multiple_of(DRAW_EVERY) {
+                self.draw()?;
+            }
+            next += period;
+            // Fell far behind (a suspended terminal): carry on from now, no catching up.
+            if now.saturating_duration_since(next) > Duration::from_millis(250) {
+                next = now;
+            }
+        }
+    }
+
+    /// Applies a key; `false` to quit.
+    fn key(&mut self, a: Action) -> io::Result<bool> {
+        match a {
+            Action::Tilt(dx, dz) => {
+                self.tilt.0 = (self.tilt.0 + dx * TILT_STEP_MG).clamp(-TILT_MAX_MG, TILT_MAX_MG);
+                self.tilt.1 = (self.tilt.1 + dz * TILT_STEP_MG).clamp(-TILT_MAX_MG, TILT_MAX_MG);
+            }
+            Action::Level => self.tilt = (0, 0),
+            Action::Restart => {
+                self.session.restart();
+                self.restarted()?;
+            }
+            Action::Next => {
+                let i = self.level.builtin.map_or(0, |i| (i + 1) % LEVELS.len());
+                self.switch(Loaded {
+                    view: LEVELS[i],
+                    builtin: Some(i),
+                })?;
+            }
+            Action::Autopilot => {
+                self.autopilot = match self.autopilot {
+                    Some(_) => None,
+                    None => Some(Autopilot::new(&self.level.view)),
+                };
+            }
+            Action::Quit => return Ok(false),
+            Action::None => {}
+        }
+        Ok(true)
+    }
+
+    /// The matrix image: the whole level, one pixel per tile, or where it does not
+    /// fit the terminal a window that follows the marble (the renderer's viewport
+    /// rule, sized to the terminal).
+    fn picture(&mut self, cols: u16, rows: u16) -> (usize, usize, Vec<u8>) {
+        const N: usize = 128;
+        let game = self.session.game();
+        let level = game.level();
+        let (nx, nz) = (level.info.nx as i32, level.info.nz as i32);
+        let w = nx.min(cols as i32 / 2).max(1);
+        let h = nz.min(rows as i32 - HUD_LINES as i32).max(1);
+        let layout = &game.world().params().layout;
+        let focus = game
+            .world()
+            .marbles()
+            .iter()
+            .find(|m| !m.out)
+            .map(|m| tile_point(layout, m.pos.x, m.pos.z).tile());
+        let vx = follow_axis(self.view.map(|v| v.0), nx, w, focus.map(|f| f.0));
+        let vz = follow_axis(self.view.map(|v| v.1), nz, h, focus.map(|f| f.1));
+        self.view = Some((vx, vz));
+        let blink = blink_on(game.frames(), game.config().frame_log2);
+        let frame: crate::matrix::Frame<N, N> =
+            render_world(level, game.world(), blink, Viewport::new(vx, vz));
+        let (w, h) = (w as usize, h as usize);
+        let px = frame
+            .rows()
+            .iter()
+            .take(h)
+            .flat_map(|r| r[..w].iter().copied())
+            .collect();
+        (w, h, px)
+    }
+
+    fn draw(&mut self) -> io::Result<()> {
+        let (cols, rows) = terminal::size().unwrap_or((80, 24));
+        let (w, h, px) = self.picture(cols, rows);
+        let b = &mut self.buf;
+        b.clear();
+        let mut last: Option<u8> = None;
+        for y in 0..h {
+            queue!(b, cursor::MoveTo(0, y as u16))?;
+            for x in 0..w.min(cols as usize / 2) {
+                let v = px[y * w + x].min(MAX_BRIGHTNESS);
+                if last != Some(v) {
+                    queue!(b, SetForegroundColor(colour(v)))?;
+                    last = Some(v);
+                }
+                queue!(b, Print(shade(v)))?;
+            }
+        }
+        queue!(b, ResetColor)?;
+        let game = self.session.game();
+        let info = &self.level.view.info;
+        let hz = game.config().frame_hz() as f64;
+        let t = game.frames() as f64 / hz;
+        let which = match self.level.builtin {
+            Some(i) => format!("level {}/{}", i + 1, LEVELS.len()),
+            None => "level file".to_string(),
+        };
+        let status = match game.phase() {
+            Phase::Playing => format!("{:.1} / {} s", t, info.time_limit_s),
+            Phase::Won => format!("WON in {t:.2} s!  n: next level, r: again"),
+            Phase::Fell => "FELL into a hole.  r: try again, n: next level".to_string(),
+            Phase::TimeUp => "TIME'S UP.  r: try again, n: next level".to_string(),
+        };
+        let reading = self.session.reading();
+        let pilot = if self.autopilot.is_some() {
+            "  [autopilot]"
+        } else {
+            ""
+        };
+        let lines = [
+            format!("{} ({which})  {status}", info.name),
+            format!(
+                "tilt  x {:+5} mg  z {:+5} mg{pilot}",
+                -reading[0], -reading[2]
+            ),
+            "arrows/WASD tilt · space level · r restart · n next · p autopilot · q quit"
+                .to_string(),
+        ];
+        for (i, l) in lines.iter().enumerate() {
+            let shown: String = l.chars().take(cols as usize).collect();
+            queue!(
+                b,
+                cursor::MoveTo(0, (h + 1 + i) as u16),
+                Print(shown),
+                Clear(ClearType::UntilNewLine)
+            )?;
+        }
+        self.out.write_all(b)?;
+        self.out.flush()
+    }
+}
+
+fn new_session(level: Loaded) -> io::Result<Session<'static, Fx>> {
+    Session::new(level.view, GameConfig::DEFAULT, SYNTHETIC_TILT).map_err(|e| {
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("level `{}` cannot be set up: {e:?}", level.view.info.name),
+        )
+    })
+}
+
+/// Two characters per pixel, denser for brighter pixels (readable without colour).
+fn shade(v: u8) -> &'static str {
+    match v {
+        0 => "  ",
+        1..=2 => "░░",
+        3..=5 => "▒▒",
+        6..=10 => "▓▓",
+        _ => "██",
+    }
+}
+
+/// Amber, scaled by brightness.
+fn colour(v: u8) -> Color {
+    let f = 0.15 + 0.85 * (v as f64 / MAX_BRIGHTNESS as f64).sqrt();
+    Color::Rgb {
+        r: (255.0 * f) as u8,
+        g: (176.0 * f) as u8,
+        b: (40.0 * f) as u8,
+    }
+}

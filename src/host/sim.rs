@@ -1,0 +1,553 @@
+//! `cargo sim`: runs a level headless and reports how it ended.
+//!
+//! ```text
+//! cargo sim -- --level corner --autopilot --json
+//! cargo sim -- --level my.level --tilt-trace tilt.csv --trace steps.csv
+//! cargo sim -- --level corner --autopilot --gif docs/corner.gif
+//! cargo sim -- --check my.level
+//! ```
+//!
+//! The run goes through [`Session`] exactly like the firmware and the terminal
+//! player: one reading per frame (flat, from a tilt trace, or from the autopilot)
+//! → tilt path → [`crate::game::rules::Game::frame`] (`substeps` physics steps,
+//! then the judging). So the `state_hash` of a run is the firmware's for the same
+//! inputs and backend.
+//!
+//! # The per-step trace
+//!
+//! `--trace FILE` writes one row per physics step although the game steps a whole
+//! frame at a time: before each frame the marbles are saved; after it the frame is
+//! replayed step by step on a copy of the world that has the frame's gravity and
+//! board motion (everything a step reads except the marbles, which the frame
+//! changed, and the counters). The physics is deterministic, so the replay goes
+//! through exactly the frame's states; the tool checks that the replay ends where
+//! the frame did and fails loudly otherwise. The game itself, its judging and its
+//! hash are untouched by tracing.
+//!
+//! # Exit status
+//!
+//! 0 for any outcome (`won`, `fell`, `timeout`); 2 for bad input (level, tilt
+//! trace, backend, substeps, unwritable output) with a message on stderr; for
+//! `--check`, 1 when the level is invalid.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::string::{String, ToString};
+use std::time::Instant;
+use std::vec::Vec;
+use std::{eprintln, format, println};
+
+use clap::Parser;
+
+use super::gif_out::GifRecorder;
+use super::trace::TiltTrace;
+use super::{json_number, json_string, load_level, Backend, WithScalar};
+use crate::game::autopilot::Autopilot;
+use crate::game::level::{LevelError, LevelView};
+use crate::game::rules::{Game, GameConfig, Phase};
+use crate::game::session::{Session, SYNTHETIC_TILT};
+use crate::physics::{Marble, Scalar};
+
+/// Seconds the last GIF image is held before the animation loops.
+const GIF_HOLD_S: f64 = 1.5;
+
+/// Command-line arguments of `cargo sim`.
+#[derive(Parser, Debug)]
+#[command(
+    name = "sim",
+    version,
+    about = "Simulate a Marble Rolling level headless",
+    after_help = "Exit status: 0 for any outcome (won, fell, timeout); 2 for bad input; \
+                  --check: 1 for an invalid level."
+)]
+pub struct Args {
+    /// Level: a built-in name (first-roll, corner, ...) or a level file.
+    #[arg(long, value_name = "FILE|NAME", required_unless_present_any = ["check", "list"])]
+    pub level: Option<String>,
+    /// Tilt readings: CSV `t_s,ax_mg,ay_mg,az_mg` (board frame, flat = 0,1000,0;
+    /// ax < 0 rolls towards +x'), each held until the next. Default: flat board.
+    #[arg(long, value_name = "FILE", conflicts_with = "autopilot")]
+    pub tilt_trace: Option<PathBuf>,
+    /// Let the autopilot tilt the board.
+    #[arg(long)]
+    pub autopilot: bool,
+    /// Stop after S seconds of simulated time (default: the level's time limit);
+    /// a run stopped this way while still playing ends as `timeout`.
+    #[arg(long, value_name = "S", value_parser = parse_seconds)]
+    pub seconds: Option<f64>,
+    /// Number type of the physics.
+    #[arg(long, value_name = "NAME", default_value = "i8f24")]
+    pub backend: String,
+    /// Physics steps per frame: 1, 2, 4, 8 or 16 (the frame rate stays 128 Hz).
+    #[arg(long, value_name = "N", default_value_t = 1 << GameConfig::DEFAULT.substeps_log2, value_parser = parse_substeps)]
+    pub substeps: u32,
+    /// Write one CSV row per physics step (first marble, mm and mm/s) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub trace: Option<PathBuf>,
+    /// Print one JSON line instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Render the run to an animated GIF.
+    #[arg(long, value_name = "FILE")]
+    pub gif: Option<PathBuf>,
+    /// GIF pixels per LED (tile).
+    #[arg(long, value_name = "PX", default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub gif_scale: u32,
+    /// A GIF image every N game frames (128 frames/s).
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub gif_every: u32,
+    /// Validate a level file: print `FILE:line:column: message` or `ok`.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["level", "list"])]
+    pub check: Option<PathBuf>,
+    /// List the built-in levels and backends.
+    #[arg(long)]
+    pub list: bool,
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 && x <= 86_400.0 => Ok(x),
+        _ => Err(format!("`{s}` is not a number of seconds in (0, 86400]")),
+    }
+}
+
+fn parse_substeps(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(n @ (1 | 2 | 4 | 8 | 16)) => Ok(n),
+        _ => Err(format!("`{s}` is not one of 1, 2, 4, 8, 16")),
+    }
+}
+
+/// Where each frame's reading comes from.
+enum Input {
+    Flat,
+    Trace(TiltTrace),
+    Autopilot,
+}
+
+/// What a run produced.
+#[derive(Clone, Debug)]
+pub struct Report {
+    /// The level's name.
+    pub level: String,
+    /// `won`, `fell` or `timeout`.
+    pub outcome: &'static str,
+    /// Frames played.
+    pub frames: u32,
+    /// Physics steps taken.
+    pub steps: u64,
+    /// Simulated seconds.
+    pub sim_seconds: f64,
+    /// Physics step (s).
+    pub dt_s: f64,
+    /// Steps per frame.
+    pub substeps: u32,
+    /// Scalar backend.
+    pub backend: &'static str,
+    /// Short tile width (mm).
+    pub short_mm: f64,
+    /// Long tile width (mm).
+    pub long_mm: f64,
+    /// Marble radius (mm).
+    pub marble_radius_mm: f64,
+    /// Marbles in the level.
+    pub marbles: usize,
+    /// First marble at the start (mm, tile frame).
+    pub start_mm: [f64; 3],
+    /// First marble at the end (mm, tile frame).
+    pub final_mm: [f64; 3],
+    /// `Session::state_hash` at the end.
+    pub state_hash: u64,
+    /// Readings the tilt path rejected.
+    pub tilt_errors: u32,
+    /// Wall-clock seconds of the simulation loop.
+    pub wall_s: f64,
+    /// Rows written by `--trace`.
+    pub trace_rows: u64,
+    /// GIF frames written by `--gif`.
+    pub gif_frames: usize,
+}
+
+impl Report {
+    /// Simulated seconds per wall-clock second (not deterministic).
+    pub fn speed_x(&self) -> f64 {
+        if self.wall_s > 0.0 {
+            self.sim_seconds / self.wall_s
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The `--json` line.
+    pub fn json(&self) -> String {
+        let p = |v: [f64; 3]| {
+            format!(
+                "{{\"x_mm\":{},\"y_mm\":{},\"z_mm\":{}}}",
+                json_number(v[0]),
+                json_number(v[1]),
+                json_number(v[2])
+            )
+        };
+        format!(
+            "{{\"level\":{},\"outcome\":\"{}\",\"steps\":{},\"frames\":{},\"sim_seconds\":{},\"dt_s\":{},\
+             \"substeps\":{},\"backend\":\"{}\",\"short_mm\":{},\"long_mm\":{},\"marble_radius_mm\":{},\
+             \"marbles\":{},\"start\":{},\"final\":{},\"state_hash\":\"{:016x}\",\"tilt_errors\":{},\
+             \"wall_s\":{},\"speed_x\":{}}}",
+            json_string(&self.level),
+            self.outcome,
+            self.steps,
+            self.frames,
+            json_number(self.sim_seconds),
+            json_number(self.dt_s),
+            self.substeps,
+            self.backend,
+            json_number(self.short_mm),
+            json_number(self.long_mm),
+            json_number(self.marble_radius_mm),
+            self.marbles,
+            p(self.start_mm),
+            p(self.final_mm),
+            self.state_hash,
+            self.tilt_errors,
+            json_number(self.wall_s),
+            json_number(self.speed_x().min(1e12)),
+        )
+    }
+
+    /// The human summary.
+    pub fn summary(&self) -> String {
+        let f = self.final_mm;
+        let mut s = format!(
+            "{}: {} after {:.3} s ({} frames, {} steps of 1/{} s, {} substeps, {})\n\
+             marble 0: start ({:.2}, {:.2}, {:.2}) mm → end ({:.2}, {:.2}, {:.2}) mm\n\
+             state_hash {:016x}; {:.0}× real time",
+            self.level,
+            self.outcome,
+            self.sim_seconds,
+            self.frames,
+            self.steps,
+            (1.0 / self.dt_s).round(),
+            self.substeps,
+            self.backend,
+            self.start_mm[0],
+            self.start_mm[1],
+            self.start_mm[2],
+            f[0],
+            f[1],
+            f[2],
+            self.state_hash,
+            self.speed_x(),
+        );
+        if self.tilt_errors > 0 {
+            s.push_str(&format!(
+                "\n{} readings rejected by the tilt path",
+                self.tilt_errors
+            ));
+        }
+        if self.trace_rows > 0 {
+            s.push_str(&format!("\ntrace: {} rows", self.trace_rows));
+        }
+        if self.gif_frames > 0 {
+            s.push_str(&format!("\ngif: {} frames", self.gif_frames));
+        }
+        s
+    }
+}
+
+/// One run, ready to go (everything that could fail on input has been checked).
+struct Job<'o> {
+    level: LevelView<'static>,
+    config: GameConfig,
+    max_frames: u64,
+    input: Input,
+    trace_out: Option<(&'o Path, BufWriter<File>)>,
+    gif: Option<(&'o Path, GifRecorder, u32)>,
+}
+
+fn mm<S: Scalar>(g: &Game<'_, S>, v: crate::physics::Vec3<S>) -> [f64; 3] {
+    let l = &g.world().params().layout;
+    [l.to_mm(v.x), l.to_mm(v.y), l.to_mm(v.z)]
+}
+
+impl WithScalar for Job<'_> {
+    type Output = Result<Report, String>;
+
+    fn run<S: Scalar>(mut self) -> Result<Report, String> {
+        let mut session = Session::<S>::new(self.level, self.config, SYNTHETIC_TILT)
+            .map_err(|e| format!("level `{}` cannot be set up: {e:?}", self.level.info.name))?;
+        let mut autopilot = match self.input {
+            Input::Autopilot => Some(Autopilot::new(&self.level)),
+            _ => None,
+        };
+        let hz = self.config.frame_hz() as f64;
+        let substeps = 1u32 << self.config.substeps_log2;
+        let start_mm = mm(session.game(), session.game().world().marbles()[0].pos);
+        let mut trace_rows = 0u64;
+        let write_err = |p: &Path, e: std::io::Error| format!("cannot write {}: {e}", p.display());
+        if let Some((p, w)) = &mut self.trace_out {
+            writeln!(w, "step,t_s,x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s")
+                .map_err(|e| write_err(p, e))?;
+        }
+        if let Some((p, gif, _)) = &mut self.gif {
+            let (_, _, px) = super::level_picture(session.game());
+            gif.push(&px, 0.0).map_err(|e| write_err(p, e))?;
+        }
+        let dt = session.game().world().params().dt();
+        let started = Instant::now();
+        let mut frames = 0u64;
+        while session.game().phase() == Phase::Playing && frames < self.max_frames {
+            let reading = match &mut self.input {
+                Input::Flat => super::trace::FLAT,
+                Input::Trace(t) => t.reading_at(frames as f64 / hz),
+                Input::Autopilot => autopilot
+                    .as_mut()
+                    .map_or(super::trace::FLAT, |a| a.reading_mg(session.game())),
+            };
+            let before = self.trace_out.is_some().then(|| {
+                let w = session.game().world();
+                (w.marbles().to_vec(), w.stats)
+            });
+            session.frame(reading);
+            frames += 1;
+            if let (Some((p, w)), Some((marbles, stats))) = (&mut self.trace_out, before) {
+                trace_rows += replay_frame(&session, &marbles, stats, substeps, dt, w).map_err(
+                    |e| match e {
+                        ReplayError::Io(e) => write_err(p, e),
+                        ReplayError::Diverged => {
+                            "internal error: the per-step replay diverged from the frame"
+                                .to_string()
+                        }
+                    },
+                )?;
+            }
+            if let Some((p, gif, every)) = &mut self.gif {
+                if frames.is_multiple_of(*every as u64) || session.game().phase() != Phase::Playing
+                {
+                    let (_, _, px) = super::level_picture(session.game());
+                    gif.push(&px, frames as f64 / hz)
+                        .map_err(|e| write_err(p, e))?;
+                }
+            }
+        }
+        if let Some((p, w)) = &mut self.trace_out {
+            w.flush().map_err(|e| write_err(p, e))?;
+        }
+        let wall_s = started.elapsed().as_secs_f64();
+        let gif_frames = match self.gif {
+            Some((p, gif, _)) => gif
+                .finish(frames as f64 / hz, GIF_HOLD_S)
+                .map_err(|e| write_err(p, e))?,
+            None => 0,
+        };
+        let game = session.game();
+        let phase = game.phase();
+        let outcome = match phase {
+            Phase::Playing => Phase::TimeUp.as_str(),
+            p => p.as_str(),
+        };
+        let spec = &self.level.info.spec;
+        Ok(Report {
+            level: self.level.info.name.to_string(),
+            outcome,
+            frames: game.frames(),
+            steps: game.steps(),
+            sim_seconds: game.frames() as f64 / hz,
+            dt_s: dt,
+            substeps,
+            backend: S::NAME,
+            short_mm: spec.short_um as f64 / 1000.0,
+            long_mm: spec.long_um as f64 / 1000.0,
+            marble_radius_mm: spec.radius_um as f64 / 1000.0,
+            marbles: game.world().marbles().len(),
+            start_mm,
+            final_mm: mm(game, game.world().marbles()[0].pos),
+            state_hash: session.state_hash(),
+            tilt_errors: session.tilt_errors().0,
+            wall_s,
+            trace_rows,
+            gif_frames,
+        })
+    }
+}
+
+enum ReplayError {
+    Io(std::io::Error),
+    Diverged,
+}
+
+/// Replays the frame just played step by step (see the module docs) and writes a
+/// row per step; returns the rows written.
+fn replay_frame<S: Scalar>(
+    session: &Session<'_, S>,
+    before: &[Marble<S>],
+    stats: crate::physics::StepStats,
+    substeps: u32,
+    dt: f64,
+    out: &mut impl Write,
+) -> Result<u64, ReplayError> {
+    let game = session.game();
+    let after = game.world();
+    let mut w = after.clone();
+    w.marbles_mut().copy_from_slice(before);
+    w.stats = stats;
+    let layout = after.params().layout;
+    let first_step = game.steps() - substeps as u64;
+    for n in 1..=substeps as u64 {
+        w.step();
+        let m = w.marbles()[0];
+        let step = first_step + n;
+        let c = |v: S| layout.to_mm(v);
+        writeln!(
+            out,
+            "{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            step,
+            json_number(step as f64 * dt),
+            c(m.pos.x),
+            c(m.pos.y),
+            c(m.pos.z),
+            c(m.vel.x),
+            c(m.vel.y),
+            c(m.vel.z)
+        )
+        .map_err(ReplayError::Io)?;
+    }
+    if w.marbles() != after.marbles() {
+        return Err(ReplayError::Diverged);
+    }
+    Ok(substeps as u64)
+}
+
+/// `--check FILE`: 0 and `ok`, or 1 and `FILE:line:column: message`.
+fn check(path: &Path) -> i32 {
+    let shown = path.display();
+    let src = match std::fs::read_to_string(path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{shown}: cannot read: {e}");
+            return 2;
+        }
+    };
+    let view = match super::parse_runtime(src) {
+        Ok(v) => v,
+        Err(LevelError { line, column, kind }) => {
+            eprintln!("{shown}:{line}:{column}: {}", kind.message());
+            return 1;
+        }
+    };
+    // The parser checks the format; the physics checks that the scene can be set up
+    // (e.g. a start the marble does not fit at) with the firmware's scalar.
+    if let Err(e) = Game::<crate::physics::Fx>::new(view, GameConfig::DEFAULT) {
+        eprintln!("{shown}:1:1: the physics cannot set the level up: {e:?}");
+        return 1;
+    }
+    println!("ok");
+    0
+}
+
+fn list() {
+    println!("built-in levels:");
+    for (i, l) in crate::game::levels::LEVELS.iter().enumerate() {
+        println!(
+            "  {}. {:<16} {}×{} tiles, {} s, {} marble(s)",
+            i + 1,
+            l.info.name,
+            l.info.nx,
+            l.info.nz,
+            l.info.time_limit_s,
+            l.info.starts().len()
+        );
+    }
+    let names: Vec<_> = Backend::ALL.iter().map(|b| b.name()).collect();
+    println!(
+        "backends: {} (default {})",
+        names.join(", "),
+        Backend::I8F24
+    );
+}
+
+/// Runs the CLI with the process arguments; returns the exit status.
+pub fn main() -> i32 {
+    let args = match Args::try_parse_from(super::args_without_separator()) {
+        Ok(a) => a,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    run(&args)
+}
+
+/// Runs the CLI with parsed arguments; returns the exit status.
+pub fn run(args: &Args) -> i32 {
+    if let Some(path) = &args.check {
+        return check(path);
+    }
+    if args.list {
+        list();
+        return 0;
+    }
+    match simulate(args) {
+        Ok(report) => {
+            if args.json {
+                println!("{}", report.json());
+            } else {
+                println!("{}", report.summary());
+            }
+            0
+        }
+        Err(msg) => {
+            eprintln!("sim: error: {msg}");
+            2
+        }
+    }
+}
+
+/// Loads the inputs named by `args` and runs the level.
+pub fn simulate(args: &Args) -> Result<Report, String> {
+    let backend = Backend::from_name(&args.backend)?;
+    let level = load_level(args.level.as_deref().unwrap_or_default())?.view;
+    let config = GameConfig {
+        substeps_log2: args.substeps.trailing_zeros(),
+        ..GameConfig::DEFAULT
+    };
+    let input = if let Some(p) = &args.tilt_trace {
+        let text = std::fs::read_to_string(p)
+            .map_err(|e| format!("cannot read tilt trace {}: {e}", p.display()))?;
+        let t = TiltTrace::parse(&text)
+            .map_err(|e| format!("tilt trace {}:{}: {}", p.display(), e.line, e.message))?;
+        Input::Trace(t)
+    } else if args.autopilot {
+        Input::Autopilot
+    } else {
+        Input::Flat
+    };
+    let max_frames = match args.seconds {
+        Some(s) => (s * config.frame_hz() as f64).ceil() as u64,
+        None => u64::MAX,
+    };
+    let trace_out = match &args.trace {
+        Some(p) => {
+            let f = File::create(p).map_err(|e| format!("cannot create {}: {e}", p.display()))?;
+            Some((p.as_path(), BufWriter::with_capacity(1 << 16, f)))
+        }
+        None => None,
+    };
+    let gif = match &args.gif {
+        Some(p) => {
+            let (w, h) = (level.info.nx as usize, level.info.nz as usize);
+            let g = GifRecorder::create(p, w, h, args.gif_scale as usize)
+                .map_err(|e| format!("cannot create {}: {e}", p.display()))?;
+            Some((p.as_path(), g, args.gif_every))
+        }
+        None => None,
+    };
+    backend.run(Job {
+        level,
+        config,
+        max_frames,
+        input,
+        trace_out,
+        gif,
+    })
+}

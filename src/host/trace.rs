@@ -1,0 +1,183 @@
+//! Tilt traces: recorded accelerometer readings for the simulator.
+//!
+//! ```text
+//! t_s,ax_mg,ay_mg,az_mg
+//! 0,0,1000,0
+//! 0.5,-200,980,0        ← from 0.5 s on: tilted so the marble rolls towards +x'
+//! ```
+//!
+//! Readings are in the board frame (x' right, y' up, z' towards the player; a flat
+//! board reads `(0, +1000, 0)`; `ax < 0` rolls the marble towards +x'), exactly what
+//! the accelerometer hands [`crate::game::session::Session::frame`]. Each sample
+//! holds until the next one; before the first one the board lies flat. Times must
+//! not decrease. Blank lines and lines starting with `#` are ignored; numbers may
+//! have decimals (readings are rounded to whole milli-g).
+
+use std::format;
+use std::string::String;
+use std::vec::Vec;
+
+/// The required header.
+pub const HEADER: &str = "t_s,ax_mg,ay_mg,az_mg";
+
+/// Largest reading magnitude accepted per axis (mg): anything beyond the widest
+/// accelerometer range is a typo.
+pub const MAX_READING_MG: f64 = 16_000.0;
+
+/// A flat board's reading.
+pub const FLAT: [i32; 3] = [0, 1000, 0];
+
+/// A parsed trace.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TiltTrace {
+    samples: Vec<(f64, [i32; 3])>,
+    next: usize,
+}
+
+/// A problem with a trace: the 1-based line and what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TraceError {
+    /// 1-based line.
+    pub line: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl core::fmt::Display for TraceError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "line {}: {}", self.line, self.message)
+    }
+}
+
+impl TiltTrace {
+    /// Parses a trace's text.
+    pub fn parse(text: &str) -> Result<TiltTrace, TraceError> {
+        let mut samples = Vec::new();
+        let mut header = false;
+        let names = ["t_s", "ax_mg", "ay_mg", "az_mg"];
+        for (n, raw) in text.lines().enumerate() {
+            let line = n + 1;
+            let l = raw.trim();
+            if l.is_empty() || l.starts_with('#') {
+                continue;
+            }
+            let err = |message: String| TraceError { line, message };
+            if !header {
+                let cols: Vec<&str> = l.split(',').map(str::trim).collect();
+                if cols != names {
+                    return Err(err(format!("expected the header `{HEADER}`, found `{l}`")));
+                }
+                header = true;
+                continue;
+            }
+            let fields: Vec<&str> = l.split(',').map(str::trim).collect();
+            if fields.len() != 4 {
+                return Err(err(format!(
+                    "expected 4 comma-separated fields ({HEADER}), found {}",
+                    fields.len()
+                )));
+            }
+            let mut v = [0f64; 4];
+            for (i, f) in fields.iter().enumerate() {
+                v[i] = match f.parse::<f64>() {
+                    Ok(x) if x.is_finite() => x,
+                    _ => return Err(err(format!("{}: `{f}` is not a number", names[i]))),
+                };
+            }
+            let t = v[0];
+            if t < 0.0 {
+                return Err(err(format!("t_s: {t} is negative")));
+            }
+            if let Some(&(prev, _)) = samples.last() {
+                if t < prev {
+                    return Err(err(format!(
+                        "t_s: {t} is earlier than the previous sample's {prev}"
+                    )));
+                }
+            }
+            let mut mg = [0i32; 3];
+            for i in 0..3 {
+                if v[i + 1].abs() > MAX_READING_MG {
+                    return Err(err(format!(
+                        "{}: {} is beyond ±{MAX_READING_MG} mg",
+                        names[i + 1],
+                        v[i + 1]
+                    )));
+                }
+                mg[i] = v[i + 1].round() as i32;
+            }
+            samples.push((t, mg));
+        }
+        if !header {
+            return Err(TraceError {
+                line: 1,
+                message: format!("empty trace: expected the header `{HEADER}`"),
+            });
+        }
+        Ok(TiltTrace { samples, next: 0 })
+    }
+
+    /// Samples in the trace.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Whether the trace has no samples (the board stays flat).
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// The reading in force at `t` seconds: the last sample at or before `t`, or a
+    /// flat board before the first one. Calls must come with non-decreasing `t`
+    /// (the simulator's frames); an earlier `t` starts the search over.
+    pub fn reading_at(&mut self, t: f64) -> [i32; 3] {
+        if self.next > 0 && self.samples[self.next - 1].0 > t {
+            self.next = 0;
+        }
+        while self.next < self.samples.len() && self.samples[self.next].0 <= t {
+            self.next += 1;
+        }
+        if self.next == 0 {
+            FLAT
+        } else {
+            self.samples[self.next - 1].1
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn holds_samples() {
+        let mut t =
+            TiltTrace::parse("t_s,ax_mg,ay_mg,az_mg\n0.5,-200,980,0\n1,0,1000,10.4\n").unwrap();
+        assert_eq!(t.reading_at(0.0), FLAT);
+        assert_eq!(t.reading_at(0.5), [-200, 980, 0]);
+        assert_eq!(t.reading_at(0.99), [-200, 980, 0]);
+        assert_eq!(t.reading_at(7.0), [0, 1000, 10]);
+        assert_eq!(t.reading_at(0.1), FLAT);
+    }
+
+    #[test]
+    fn reports_lines() {
+        let e =
+            TiltTrace::parse("t_s,ax_mg,ay_mg,az_mg\n\n0,0,1000,0\n0.1,x,1000,0\n").unwrap_err();
+        assert_eq!(e.line, 4);
+        assert!(e.message.contains("ax_mg"), "{e}");
+        assert_eq!(TiltTrace::parse("t,x,y,z\n").unwrap_err().line, 1);
+        assert_eq!(
+            TiltTrace::parse("t_s,ax_mg,ay_mg,az_mg\n1,0,0\n")
+                .unwrap_err()
+                .line,
+            2
+        );
+        assert_eq!(
+            TiltTrace::parse("t_s,ax_mg,ay_mg,az_mg\n1,0,0,0\n0.5,0,0,0")
+                .unwrap_err()
+                .line,
+            3
+        );
+    }
+}

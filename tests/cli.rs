@@ -1,0 +1,341 @@
+//! The `sim` binary's command-line contract (`cargo test --features tools`).
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn sim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sim"))
+        .args(args)
+        .output()
+        .expect("run sim")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs `sim --json ...`, checks the exit status is 0 and parses the one line.
+fn sim_json(args: &[&str]) -> Value {
+    let mut a = args.to_vec();
+    a.push("--json");
+    let o = sim(&a);
+    assert!(o.status.success(), "sim {a:?} failed: {}", stderr(&o));
+    let out = String::from_utf8(o.stdout).expect("utf-8");
+    assert_eq!(out.lines().count(), 1, "one JSON line: {out}");
+    serde_json::from_str(out.trim()).unwrap_or_else(|e| panic!("not JSON ({e}): {out}"))
+}
+
+/// A file under this test target's scratch directory.
+fn scratch(name: &str, content: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+fn s(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Tilted so that the marble rolls towards +x' (`ax < 0`).
+const RIGHT: &str = "t_s,ax_mg,ay_mg,az_mg\n0,-300,954,0\n";
+
+/// A hole right next to the start, on the right.
+const PIT: &str = "name: pit\ntime_limit_s: 5\n---\n#####\n#S.O#\n#.###\n#G..#\n#####\n";
+
+#[test]
+fn json_contract_fields_and_types() {
+    let v = sim_json(&["--level", "corner", "--autopilot"]);
+    assert_eq!(v["outcome"], "won");
+    for key in ["steps", "frames", "substeps", "marbles"] {
+        assert!(v[key].is_u64(), "{key}: {v}");
+    }
+    for key in [
+        "sim_seconds",
+        "dt_s",
+        "short_mm",
+        "long_mm",
+        "marble_radius_mm",
+        "speed_x",
+        "wall_s",
+    ] {
+        assert!(v[key].is_number(), "{key}: {v}");
+    }
+    for key in ["x_mm", "y_mm", "z_mm"] {
+        assert!(v["final"][key].is_number(), "final.{key}: {v}");
+        assert!(v["start"][key].is_number(), "start.{key}: {v}");
+    }
+    assert_eq!(v["backend"], "i8f24");
+    assert_eq!(v["level"], "corner");
+    assert_eq!(v["dt_s"].as_f64(), Some(1.0 / 1024.0));
+    assert_eq!(v["short_mm"].as_f64(), Some(2.0));
+    assert_eq!(v["long_mm"].as_f64(), Some(10.0));
+    assert_eq!(v["marble_radius_mm"].as_f64(), Some(3.5));
+    let steps = v["steps"].as_u64().unwrap();
+    assert_eq!(steps, v["frames"].as_u64().unwrap() * 8);
+    assert!((v["sim_seconds"].as_f64().unwrap() - steps as f64 / 1024.0).abs() < 1e-12);
+    let hash = v["state_hash"].as_str().expect("hash is a string");
+    assert_eq!(hash.len(), 16, "{hash}");
+    assert!(
+        hash.bytes()
+            .all(|b| b.is_ascii_hexdigit() && !b.is_ascii_uppercase()),
+        "{hash}"
+    );
+}
+
+#[test]
+fn same_inputs_same_hash() {
+    for backend in ["i8f24", "f32", "f64"] {
+        let a = sim_json(&["--level", "switchback", "--autopilot", "--backend", backend]);
+        let b = sim_json(&["--level", "switchback", "--autopilot", "--backend", backend]);
+        assert_eq!(a["state_hash"], b["state_hash"], "{backend}");
+        assert_eq!(a["steps"], b["steps"], "{backend}");
+        assert_eq!(a["backend"], backend);
+    }
+}
+
+#[test]
+fn human_summary_without_json() {
+    let o = sim(&["--level", "first-roll", "--seconds", "0.5"]);
+    assert!(o.status.success());
+    let out = String::from_utf8(o.stdout).unwrap();
+    assert!(out.starts_with("first-roll: timeout"), "{out}");
+    assert!(out.contains("state_hash"), "{out}");
+}
+
+#[test]
+fn seconds_stop_a_run_as_timeout() {
+    let v = sim_json(&["--level", "corner", "--seconds", "1"]);
+    assert_eq!(v["outcome"], "timeout");
+    assert_eq!(v["frames"], 128);
+    assert_eq!(v["steps"], 1024);
+    // Flat board: the marble stays put.
+    assert_eq!(v["final"], v["start"]);
+    // Without --seconds the level's time limit (30 s) ends it.
+    let v = sim_json(&["--level", "corner"]);
+    assert_eq!(v["outcome"], "timeout");
+    assert_eq!(v["sim_seconds"].as_f64(), Some(30.0));
+}
+
+#[test]
+fn substeps_keep_the_frame_rate() {
+    for (n, dt) in [(1u64, 1.0 / 128.0), (4, 1.0 / 512.0), (16, 1.0 / 2048.0)] {
+        let v = sim_json(&[
+            "--level",
+            "corner",
+            "--seconds",
+            "0.5",
+            "--substeps",
+            &n.to_string(),
+        ]);
+        assert_eq!(v["frames"], 64);
+        assert_eq!(v["steps"].as_u64(), Some(64 * n));
+        assert_eq!(v["dt_s"].as_f64(), Some(dt));
+        assert_eq!(v["substeps"].as_u64(), Some(n));
+    }
+    for bad in ["3", "0", "32", "x"] {
+        let o = sim(&["--level", "corner", "--substeps", bad]);
+        assert!(!o.status.success(), "{bad}");
+        assert!(stderr(&o).contains("--substeps"), "{}", stderr(&o));
+    }
+}
+
+#[test]
+fn check_reports_line_and_column() {
+    let bad = scratch(
+        "bad.level",
+        "name: bad\ntime_limit_s: 10\n---\n#####\n#S.G#\n##x##\n",
+    );
+    let o = sim(&["--check", s(&bad)]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains(&format!("{}:6:3: ", s(&bad))), "{err}");
+    assert!(err.contains("unknown tile"), "{err}");
+
+    let o = sim(&["--check", s(&scratch("pit.level", PIT))]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
+
+    // The same error when the bad level is simulated.
+    let o = sim(&["--level", s(&bad)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains(":6:3: "), "{}", stderr(&o));
+}
+
+#[test]
+fn unknown_backend_and_level_fail_with_a_message() {
+    let o = sim(&["--level", "corner", "--backend", "q15"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains("unknown backend `q15`") && err.contains("f32-micromath"),
+        "{err}"
+    );
+
+    let o = sim(&["--level", "no-such-level"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no-such-level"), "{}", stderr(&o));
+}
+
+#[test]
+fn bad_tilt_trace_names_the_line() {
+    let t = scratch(
+        "bad-trace.csv",
+        "t_s,ax_mg,ay_mg,az_mg\n0,0,1000,0\n\n0.5,-100,abc,0\n",
+    );
+    let o = sim(&["--level", "corner", "--tilt-trace", s(&t)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains(&format!("{}:4: ", s(&t))) && err.contains("ay_mg"),
+        "{err}"
+    );
+
+    let t = scratch("bad-header.csv", "time,x,y,z\n0,0,1000,0\n");
+    let o = sim(&["--level", "corner", "--tilt-trace", s(&t)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains(":1: expected the header"),
+        "{}",
+        stderr(&o)
+    );
+
+    let t = scratch(
+        "backwards.csv",
+        "t_s,ax_mg,ay_mg,az_mg\n1,0,1000,0\n0.5,0,1000,0\n",
+    );
+    let o = sim(&["--level", "corner", "--tilt-trace", s(&t)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains(":3: "), "{}", stderr(&o));
+}
+
+#[test]
+fn tilt_right_rolls_towards_plus_x() {
+    let t = scratch("right.csv", RIGHT);
+    let v = sim_json(&[
+        "--level",
+        "first-roll",
+        "--tilt-trace",
+        s(&t),
+        "--seconds",
+        "0.1",
+    ]);
+    let (x0, x1) = (
+        v["start"]["x_mm"].as_f64().unwrap(),
+        v["final"]["x_mm"].as_f64().unwrap(),
+    );
+    assert!(x1 > x0 + 1.0, "x {x0} → {x1}");
+    assert_eq!(v["start"]["z_mm"], v["final"]["z_mm"]);
+    // Held long enough, the marble reaches the goal at the right end.
+    let v = sim_json(&["--level", "first-roll", "--tilt-trace", s(&t)]);
+    assert_eq!(v["outcome"], "won");
+
+    // The other way round it stays against the left wall.
+    let t = scratch("left.csv", "t_s,ax_mg,ay_mg,az_mg\n0,300,954,0\n");
+    let v = sim_json(&[
+        "--level",
+        "first-roll",
+        "--tilt-trace",
+        s(&t),
+        "--seconds",
+        "0.5",
+    ]);
+    assert!(v["final"]["x_mm"].as_f64().unwrap() <= v["start"]["x_mm"].as_f64().unwrap());
+}
+
+#[test]
+fn trace_has_one_row_per_physics_step() {
+    let tilt = scratch("right-trace.csv", RIGHT);
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli")
+        .join("steps.csv");
+    for substeps in ["8", "2"] {
+        let plain = sim_json(&[
+            "--level",
+            "first-roll",
+            "--tilt-trace",
+            s(&tilt),
+            "--substeps",
+            substeps,
+        ]);
+        let v = sim_json(&[
+            "--level",
+            "first-roll",
+            "--tilt-trace",
+            s(&tilt),
+            "--substeps",
+            substeps,
+            "--trace",
+            s(&out),
+        ]);
+        // Tracing does not change the run.
+        assert_eq!(v["state_hash"], plain["state_hash"]);
+        let text = std::fs::read_to_string(&out).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(
+            lines.next(),
+            Some("step,t_s,x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s")
+        );
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|f| f.parse::<f64>().expect(l)).collect())
+            .collect();
+        let steps = v["steps"].as_u64().unwrap();
+        assert_eq!(rows.len() as u64, steps);
+        let dt = v["dt_s"].as_f64().unwrap();
+        for (n, r) in rows.iter().enumerate() {
+            assert_eq!(r.len(), 8);
+            assert_eq!(r[0], (n + 1) as f64);
+            assert!((r[1] - (n + 1) as f64 * dt).abs() < 1e-9);
+        }
+        let last = rows.last().unwrap();
+        for (i, key) in ["x_mm", "y_mm", "z_mm"].iter().enumerate() {
+            let end = v["final"][key].as_f64().unwrap();
+            assert!(
+                (last[2 + i] - end).abs() < 1e-5,
+                "{key}: {} vs {end}",
+                last[2 + i]
+            );
+        }
+        // Moving right: x grows, vx positive.
+        assert!(last[2] > rows[0][2] && last[5] > 0.0);
+    }
+}
+
+#[test]
+fn falling_into_a_hole_exits_zero() {
+    let level = scratch("pit.level", PIT);
+    let tilt = scratch("pit-right.csv", RIGHT);
+    let v = sim_json(&["--level", s(&level), "--tilt-trace", s(&tilt)]);
+    assert_eq!(v["outcome"], "fell");
+    assert_eq!(v["level"], "pit");
+    assert!(v["final"]["y_mm"].as_f64().unwrap() < 0.0, "{v}");
+}
+
+#[test]
+fn gif_is_written_and_small() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli")
+        .join("corner.gif");
+    let o = sim(&["--level", "corner", "--autopilot", "--gif", s(&out)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&out).unwrap();
+    assert!(bytes.starts_with(b"GIF89a"), "GIF header");
+    assert!(bytes.len() < 1 << 20, "{} bytes", bytes.len());
+    // 9×5 tiles at 12 px each.
+    assert_eq!(u16::from_le_bytes([bytes[6], bytes[7]]), 9 * 12);
+    assert_eq!(u16::from_le_bytes([bytes[8], bytes[9]]), 5 * 12);
+}
+
+#[test]
+fn play_needs_a_terminal() {
+    let o = Command::new(env!("CARGO_BIN_EXE_play"))
+        .args(["--level", "corner"])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("run play");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("must be a terminal"), "{}", stderr(&o));
+}
