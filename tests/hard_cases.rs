@@ -186,17 +186,6 @@ fn restitution_threshold<S: Scalar>() {
 }
 for_each_backend!(restitution_threshold_e0_and_e1, restitution_threshold);
 
-/// A small deterministic generator for the shaking and far-from-origin cases.
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> u32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 33) as u32
-    }
-    fn range(&mut self, lo: i32, hi: i32) -> i32 {
-        lo + (self.next() % (hi - lo + 1) as u32) as i32
-    }
-}
 
 /// **Shaking.** Random tilt up to ±4 g on every axis, changed every 8 ms, for two
 /// simulated minutes in a closed maze with inner walls: the marble never leaves the

@@ -7,6 +7,9 @@
 //!
 //! (`SOAK_SECONDS` overrides the 24 hours, e.g. for a quick look.)
 
+mod common;
+
+use common::Lcg;
 use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{GameConfig, Phase};
@@ -15,16 +18,6 @@ use marble_rolling::physics::geometry::broadphase::candidates;
 use marble_rolling::physics::geometry::narrowphase::offset;
 use marble_rolling::physics::{Fx, Scalar};
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> u32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 33) as u32
-    }
-    fn range(&mut self, lo: i32, hi: i32) -> i32 {
-        lo + (self.next() % (hi - lo + 1) as u32) as i32
-    }
-}
 
 #[test]
 #[ignore = "minutes in a debug build; CI runs it with --profile soak"]

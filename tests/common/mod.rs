@@ -147,3 +147,16 @@ pub fn loose<S: Scalar>() -> f64 {
         _ => 1e-3,
     }
 }
+
+/// A small deterministic generator (no dependency on a seed crate's version).
+pub struct Lcg(pub u64);
+impl Lcg {
+    pub fn next(&mut self) -> u32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 33) as u32
+    }
+    /// Uniform in `lo ..= hi`.
+    pub fn range(&mut self, lo: i32, hi: i32) -> i32 {
+        lo + (self.next() % (hi - lo + 1) as u32) as i32
+    }
+}
