@@ -1,6 +1,7 @@
 //! The game: levels, the rules that turn physics into won / fell / time-up, and the
 //! autopilot.
 
+pub mod autopilot;
 pub mod level;
 pub mod levels;
 pub mod rules;

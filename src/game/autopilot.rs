@@ -1,0 +1,675 @@
+//! The autopilot: tilts the board to roll a marble along the shortest cell path to
+//! a goal (demos, `cargo sim --autopilot`, the QEMU demo, end-to-end tests).
+//!
+//! It produces what a human produces — an accelerometer **reading** (board frame,
+//! milli-g; a flat board reads `(0, +1000, 0)`) — so the caller runs it through the
+//! same tilt path as a real sensor:
+//!
+//! ```text
+//! let r = autopilot.reading_mg(&game);
+//! if let Ok(g) = tilt_filter.push(r) { game.set_gravity_mg(g); }
+//! game.frame();
+//! ```
+//!
+//! # Path
+//!
+//! A breadth-first search over the long×long cells (odd `i`, odd `k`) from every goal
+//! cell. Two neighbouring cells are connected when the short tile between them has
+//! no wall (`j = 1`); a missing floor there is a 2 mm gap the marble rolls over, so it
+//! is passable. A cell without floor (a hole) or with a wall is never entered.
+//!
+//! # Memory
+//!
+//! The search result is a distance field stored **modulo 3** in 2 bits per cell
+//! (`0` = unreachable, `1..=3` = distance mod 3 + 1): neighbouring cells differ by at
+//! most one step, so the way to the goal is always the connected neighbour whose
+//! code is one less (mod 3). For the largest grid (63×63 cells) that is 993 bytes,
+//! against 3969 for a `u8` field and 7938 for `u16` — see
+//! [`Autopilot::RAM_BYTES`]. The search needs no queue either: it sweeps the grid
+//! once per distance, relaxing the cells of the last wavefront (a cell of distance
+//! `d − 3` has the same code but no unvisited neighbour, so re-visiting it is
+//! harmless). That costs `cells × path length` cell visits once per level — a few
+//! thousand for the built-in levels; a 63×63 serpentine would take about a second
+//! on a Cortex-M0, at level start only.
+//!
+//! # Control
+//!
+//! All arithmetic after reading the marble's state is integer: positions and
+//! velocities are converted exactly (through the [`Scalar`]'s own floor and shifts,
+//! never through a float) to 1/4096 pitch, so every backend runs the same integer
+//! controller, and a given backend is bit-for-bit deterministic.
+//!
+//! Per axis, a velocity loop `tilt = KV·(v_want − v)` plus a step over the tilt
+//! path's dead zone and the rolling resistance. Along the straight run the marble is
+//! on, `v_want` is `K_POS·d` (capped at a top speed) for the distance `d` to the run's
+//! end, a corner where it must stop; when the run ends in a goal it is the top speed
+//! (the goal only has to be entered). Across the run the same loop keeps the marble on
+//! the corridor's centre line; a new run starts only once the marble is nearly on it
+//! (no cutting into corner posts). Around that:
+//!
+//! * **Gaps.** A marble that reaches a 2 mm gap slower than about 4 pitch/s drops into
+//!   the slot and cannot climb out below ~300 mg, so runs over a gap are taken at
+//!   6 pitch/s at least, and a marble that stopped in one anyway is tilted out with
+//!   [`Autopilot::ESCAPE_TILT_MG`] towards the side nearer the goal.
+//! * **Stalls.** A marble asked to move that does not move (a larger dead zone or
+//!   resistance than planned for) gets 1 mg more tilt per frame, up to 120 mg.
+//! * **Patience.** No step nearer the goal for 3 s (a tilt path with more lag than
+//!   planned for makes the marble overshoot and oscillate): the gains go down in
+//!   turn to ¾·KV and ½·K_POS, then ½·KV and ¼·K_POS, with the top speed.
+//! * **Smoothness.** The tilt is limited to ±[`Autopilot::TILT_LIMIT_MG`] and changes
+//!   by at most 10 mg a frame, like a brisk hand: with `board_motion`, faster tilting
+//!   makes the board itself throw the marbles.
+//!
+//! **Several marbles** share the tilt. The autopilot steers the one whose start is
+//! nearest a goal (any marble in a goal wins), and guards every marble against
+//! holes: whenever a marble's cell opens onto a hole (or off the board) on the side
+//! the tilt pulls it to, that tilt component is limited to what holds the marble in
+//! its cell's centre.
+
+use crate::physics::geometry::grid::{Tiles, MAX_TILES_XZ};
+use crate::physics::geometry::tiles::TileIndex;
+use crate::physics::Scalar;
+
+use super::level::LevelView;
+use super::rules::Game;
+
+/// The most cells along x' or z' (63 for 127 tiles).
+pub const MAX_CELLS_XZ: usize = MAX_TILES_XZ / 2;
+const FIELD_BYTES: usize = (MAX_CELLS_XZ * MAX_CELLS_XZ).div_ceil(4);
+
+/// Fraction bits of the controller's fixed-point lengths (pitch) and speeds (pitch/s).
+const Q: u32 = 12;
+const ONE: i64 = 1 << Q;
+
+// Tuning. Tried on every built-in level and backend through the default tilt path,
+// and also without a filter, with filter shifts 1–5 and dead zones 0–40 mg.
+
+/// Tilt gain: milli-g per pitch/s of speed error.
+const KV: i64 = 12;
+/// Position gain of an approach, 1/s: the speed wanted `d` before a stop is `K_POS·d`.
+const K_POS: i64 = 5;
+/// Top speed along a straight run, pitch/s (q12): 6 pitch/s = 72 mm/s.
+const V_MAX: i64 = 6 * ONE;
+/// Least speed over a gap (a short tile without floor), pitch/s (q12): a marble
+/// much slower than about 4 pitch/s drops into the 2 mm slot and stays there.
+const V_GAP: i64 = 6 * ONE;
+/// Added to a non-zero tilt: the tilt path's 20 mg dead zone plus rolling resistance.
+const COMP_MG: i64 = 30;
+/// The tilt over which [`COMP_MG`] ramps in (avoids chatter around zero).
+const COMP_RAMP_MG: i64 = 4;
+/// Below this speed (pitch/s, q12) a marble asked to move counts as stalled…
+const V_STALL: i64 = ONE / 4;
+/// …and gets up to this much extra tilt, 1 mg more per frame, mg.
+const BOOST_MAX_MG: i64 = 120;
+/// Frames without getting nearer the goal before the gains change (3 s).
+const PATIENCE_FRAMES: u16 = 384;
+/// The most the tilt changes from one frame to the next, mg: a brisk hand (1.3 g/s
+/// at 128 frames/s). With `board_motion`, much faster tilting makes the board itself
+/// throw the marbles (without a tilt filter, 16 mg per frame already does).
+const SLEW_MG: i32 = 10;
+/// A new straight run starts once the marble is this close to its centre line…
+const ALIGN_POS: i64 = ONE * 15 / 100;
+/// …and moves across it slower than this (pitch/s, q12).
+const ALIGN_VEL: i64 = ONE * 6 / 10;
+
+/// One of the four moves between cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Dir {
+    /// −x'.
+    Left,
+    /// +x'.
+    Right,
+    /// −z'.
+    Up,
+    /// +z'.
+    Down,
+}
+
+impl Dir {
+    const ALL: [Dir; 4] = [Dir::Left, Dir::Right, Dir::Up, Dir::Down];
+
+    /// `(dx, dz)` in cells.
+    const fn delta(self) -> (i32, i32) {
+        match self {
+            Dir::Left => (-1, 0),
+            Dir::Right => (1, 0),
+            Dir::Up => (0, -1),
+            Dir::Down => (0, 1),
+        }
+    }
+}
+
+/// The autopilot for one level (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Autopilot {
+    /// Distance to the nearest goal mod 3, plus 1, 2 bits per cell (0: unreachable).
+    field: [u8; FIELD_BYTES],
+    /// Cells along x' and z'.
+    ncx: u8,
+    ncz: u8,
+    /// The marble steered.
+    marble: u8,
+    /// Its start's distance to a goal in cells (`u16::MAX`: no way).
+    start_cells: u16,
+    /// The in-plane gravity asked for last frame, mg.
+    last: [i16; 2],
+    /// Extra tilt for a marble that does not move although asked to, mg.
+    boost: [i16; 2],
+    /// The steered marble's position last frame (q12 pitch).
+    last_pos: [i32; 2],
+    /// The steered marble's cell last frame (`u8::MAX`: not seen yet) and its
+    /// distance to the goal (cells).
+    cell: [u8; 2],
+    dist: u16,
+    /// The least distance reached so far, and the frames since it was reached.
+    best: u16,
+    stalled: u16,
+}
+
+impl Autopilot {
+    /// The largest tilt the autopilot asks for (per in-plane axis), milli-g.
+    pub const TILT_LIMIT_MG: i32 = 250;
+    /// The tilt used only to lift a marble out of a gap it has stopped in (the slot's
+    /// edges need about 300 mg after the dead zone).
+    pub const ESCAPE_TILT_MG: i32 = 450;
+    /// Its size in RAM, bytes.
+    pub const RAM_BYTES: usize = core::mem::size_of::<Autopilot>();
+
+    /// Plans the paths of `level` (once; see the module documentation for the cost).
+    pub fn new(level: &LevelView) -> Self {
+        let tiles = &level.tiles;
+        let ncx = (tiles.nx() / 2).min(MAX_CELLS_XZ) as u8;
+        let ncz = (tiles.nz() / 2).min(MAX_CELLS_XZ) as u8;
+        let mut ap = Autopilot {
+            field: [0; FIELD_BYTES],
+            ncx,
+            ncz,
+            marble: 0,
+            start_cells: u16::MAX,
+            last: [0; 2],
+            boost: [0; 2],
+            last_pos: [0; 2],
+            cell: [u8::MAX; 2],
+            dist: 0,
+            best: 0,
+            stalled: 0,
+        };
+        for &(i, k) in level.info.goals() {
+            let (cx, cz) = ((i / 2) as i32, (k / 2) as i32);
+            if ap.inside(cx, cz) && enterable(tiles, cx, cz) {
+                ap.set_code(cx, cz, 1);
+            }
+        }
+        // Wavefront sweeps: cells at distance d (code d % 3 + 1) label their unvisited
+        // connected neighbours d + 1.
+        let mut d: u32 = 0;
+        loop {
+            let (from, to) = ((d % 3 + 1) as u8, ((d + 1) % 3 + 1) as u8);
+            let mut grew = false;
+            for cz in 0..ncz as i32 {
+                for cx in 0..ncx as i32 {
+                    if ap.code(cx, cz) != from {
+                        continue;
+                    }
+                    for dir in Dir::ALL {
+                        let (dx, dz) = dir.delta();
+                        let (nx, nz) = (cx + dx, cz + dz);
+                        if ap.inside(nx, nz)
+                            && ap.code(nx, nz) == 0
+                            && connected(tiles, cx, cz, dir)
+                            && enterable(tiles, nx, nz)
+                        {
+                            ap.set_code(nx, nz, to);
+                            grew = true;
+                        }
+                    }
+                }
+            }
+            if !grew {
+                break;
+            }
+            d += 1;
+        }
+        // Steer the marble whose start is nearest a goal (the first on a tie).
+        for (n, &(i, k)) in level.info.starts().iter().enumerate() {
+            if let Some(len) = ap.cells_to_goal(level, (i / 2) as i32, (k / 2) as i32) {
+                if len < ap.start_cells {
+                    ap.start_cells = len;
+                    ap.marble = n as u8;
+                }
+            }
+        }
+        ap
+    }
+
+    /// The marble the autopilot steers (index into the level's starts).
+    pub fn marble(&self) -> usize {
+        self.marble as usize
+    }
+
+    /// Cells from the steered marble's start to a goal, or `None` when no goal can be
+    /// reached from any start.
+    pub fn path_cells(&self) -> Option<u16> {
+        (self.start_cells != u16::MAX).then_some(self.start_cells)
+    }
+
+    /// The next cell `(i, k)` (tile indices) on the way from cell `(i, k)` to a goal;
+    /// `None` at a goal, and from a cell with no way to one.
+    pub fn next_cell(&self, level: &LevelView, i: u8, k: u8) -> Option<(u8, u8)> {
+        let (cx, cz) = ((i / 2) as i32, (k / 2) as i32);
+        if is_goal(level, cx, cz) {
+            return None;
+        }
+        self.step_towards_goal(&level.tiles, cx, cz)
+            .map(|d| d.delta())
+            .map(|(dx, dz)| ((2 * (cx + dx) + 1) as u8, (2 * (cz + dz) + 1) as u8))
+    }
+
+    /// The accelerometer reading (board frame, milli-g) the autopilot wants for the
+    /// next frame: a tilt of magnitude 1 g, `x` and `z` within
+    /// ±[`Autopilot::TILT_LIMIT_MG`] (±[`Autopilot::ESCAPE_TILT_MG`] while lifting
+    /// the marble out of a gap), changing by at most 10 mg a frame. A reading with
+    /// `x < 0` rolls the marble towards +x'. Feed it through the tilt path.
+    ///
+    /// Call it once per frame (it keeps the last tilt and follows the marble's
+    /// progress), with an attempt at the level the autopilot was made for.
+    pub fn reading_mg<S: Scalar>(&mut self, game: &Game<'_, S>) -> [i32; 3] {
+        let [gx, gz] = self.gravity_in_plane(game);
+        let gx = gx.clamp(self.last[0] as i32 - SLEW_MG, self.last[0] as i32 + SLEW_MG);
+        let gz = gz.clamp(self.last[1] as i32 - SLEW_MG, self.last[1] as i32 + SLEW_MG);
+        self.last = [gx as i16, gz as i16];
+        let (x, z) = (-gx as i64, -gz as i64);
+        // The rest of 1 g on the board's normal (|x|, |z| ≤ 450 mg: positive).
+        let y = isqrt(1_000_000 - x * x - z * z);
+        [x as i32, y as i32, z as i32]
+    }
+
+    /// The in-plane gravity `[x', z']` (milli-g) the autopilot wants.
+    fn gravity_in_plane<S: Scalar>(&mut self, game: &Game<'_, S>) -> [i32; 2] {
+        let level = game.level();
+        let tiles = &level.tiles;
+        let s = to_q(game.world().params().layout.s);
+        let marbles = game.world().marbles();
+        let Some(m) = marbles.get(self.marble as usize).filter(|m| !m.out) else {
+            return [0, 0];
+        };
+        let me = MarbleQ::new(m.pos.x, m.pos.z, m.vel.x, m.vel.z, s, self);
+        // How fast it really moved since the last frame (q12 pitch/s): a marble
+        // pressed into a wall or a post may keep a velocity it cannot follow.
+        let frame_log2 = game.config().frame_log2;
+        let moved = [0, 1].map(|a| (me.pos[a] - self.last_pos[a] as i64).abs() << frame_log2);
+        self.last_pos = me.pos.map(|p| p as i32);
+        let k = self.progress(level, me.cell);
+        let mut limit = Self::TILT_LIMIT_MG as i64;
+        let mut cmd = [0i64; 2];
+        if let Some((a, sign)) = self
+            .in_gap(tiles, &me, s)
+            .filter(|&(a, _)| moved[a] < V_GAP / 4)
+        {
+            // Stopped in a gap: only a steep tilt lifts the marble out.
+            limit = Self::ESCAPE_TILT_MG as i64;
+            cmd[a] = sign * limit;
+            cmd[1 - a] = k.hold(me.centre[1 - a] - me.pos[1 - a], me.vel[1 - a]);
+        } else if let Some(dir) = self.step_towards_goal(tiles, me.cell[0], me.cell[1]) {
+            let along = if matches!(dir, Dir::Left | Dir::Right) {
+                0
+            } else {
+                1
+            };
+            let across = 1 - along;
+            // The end of the straight run (a corner or a goal), and whether it crosses
+            // a gap the marble has not crossed yet.
+            let (dx, dz) = dir.delta();
+            let sign: i64 = if dx + dz > 0 { 1 } else { -1 };
+            let (mut ex, mut ez) = (me.cell[0], me.cell[1]);
+            let mut gap = self.gap_ahead(tiles, ex - dx, ez - dz, dir, s, me.pos[along]);
+            loop {
+                gap = gap || self.gap_ahead(tiles, ex, ez, dir, s, me.pos[along]);
+                ex += dx;
+                ez += dz;
+                if is_goal(level, ex, ez) || self.step_towards_goal(tiles, ex, ez) != Some(dir) {
+                    break;
+                }
+            }
+            // Across: onto the corridor's centre line.
+            let e_across = me.centre[across] - me.pos[across];
+            cmd[across] = k.hold(e_across, me.vel[across]);
+            let aligned = e_across.abs() <= ALIGN_POS && me.vel[across].abs() <= ALIGN_VEL;
+            let (pos, vel) = (me.pos[along], me.vel[along]);
+            cmd[along] = if !aligned {
+                k.hold(me.centre[along] - pos, vel)
+            } else {
+                let mut want = if is_goal(level, ex, ez) {
+                    sign * k.v_max
+                } else {
+                    k.approach_speed([centre(ex, s), centre(ez, s)][along] - pos)
+                };
+                // Cross a gap briskly: a slow marble drops into the slot and stays.
+                if gap && sign * want < V_GAP {
+                    want = sign * V_GAP;
+                }
+                tilt(k.kv * (want - vel))
+            };
+        } else {
+            // In a goal already, or nowhere to go: stay in the cell.
+            cmd = [0, 1].map(|a| k.hold(me.centre[a] - me.pos[a], me.vel[a]));
+        }
+        // A marble asked to move that does not (more dead zone or resistance than
+        // planned for): lean in a little more each frame.
+        for a in 0..2 {
+            let sign: i64 = if cmd[a] > 0 { 1 } else { -1 };
+            let b = self.boost[a] as i64;
+            self.boost[a] = if cmd[a].abs() >= COMP_MG + COMP_RAMP_MG && moved[a] < V_STALL {
+                (b + 1).min(BOOST_MAX_MG)
+            } else {
+                b - (b + 7) / 8
+            } as i16;
+            cmd[a] += sign * self.boost[a] as i64;
+        }
+        // Guard every marble against a hole (or an open edge) next to it: towards
+        // one, tilt no more than what brings that marble to rest in its cell's centre
+        // (which brakes one already rolling that way).
+        for m in marbles.iter().filter(|m| !m.out) {
+            let q = MarbleQ::new(m.pos.x, m.pos.z, m.vel.x, m.vel.z, s, self);
+            for dir in Dir::ALL {
+                let (dx, dz) = dir.delta();
+                if connected(tiles, q.cell[0], q.cell[1], dir)
+                    && is_pit(tiles, q.cell[0] + dx, q.cell[1] + dz)
+                {
+                    let (a, toward) = if dx != 0 {
+                        (0, dx as i64)
+                    } else {
+                        (1, dz as i64)
+                    };
+                    let h = Gains::at(0).hold(q.centre[a] - q.pos[a], q.vel[a]);
+                    if toward * cmd[a] > toward * h {
+                        cmd[a] = h;
+                    }
+                }
+            }
+        }
+        cmd.map(|c| c.clamp(-limit, limit) as i32)
+    }
+
+    /// Whether the marble's centre is over a gap (a short tile without floor between
+    /// two cells): the axis across the gap and the way out, towards the side nearer
+    /// the goal.
+    fn in_gap(&self, tiles: &Tiles, me: &MarbleQ, s: i64) -> Option<(usize, i64)> {
+        // The tile under the centre (eq. 6 in q12).
+        let tile = |p: i64| (2 * (p >> Q) + ((p & (ONE - 1)) >= s) as i64) as i32;
+        let (i, k) = (tile(me.pos[0]), tile(me.pos[1]));
+        if solid(tiles, i, 0, k) || solid(tiles, i, 1, k) || (i % 2 == 1) == (k % 2 == 1) {
+            return None;
+        }
+        // The two cells the gap joins: along x' for an even column, else along z'.
+        let a = if i % 2 == 0 { 0 } else { 1 };
+        let lo = [(i - 1).div_euclid(2), (k - 1).div_euclid(2)];
+        let hi = if a == 0 {
+            [lo[0] + 1, lo[1]]
+        } else {
+            [lo[0], lo[1] + 1]
+        };
+        let (cl, ch) = (self.code(lo[0], lo[1]), self.code(hi[0], hi[1]));
+        // Towards the cell one step nearer the goal; towards the reachable one when
+        // only one is.
+        let up = if cl == 0 || ch == 0 {
+            ch != 0
+        } else {
+            cl == ch % 3 + 1
+        };
+        Some((a, if up { 1 } else { -1 }))
+    }
+
+    /// Follows the steered marble's distance to the goal from cell to cell and
+    /// returns the gains to use: gentler ones, in turn, while it makes no progress
+    /// (a tilt path with more lag than planned for makes the marble overshoot and
+    /// oscillate; slower approaches settle).
+    fn progress(&mut self, level: &LevelView, cell: [i32; 2]) -> Gains {
+        let new = [cell[0] as u8, cell[1] as u8];
+        if self.cell == [u8::MAX; 2] {
+            // The first frame (the autopilot may take over a game in progress).
+            self.dist = self
+                .cells_to_goal(level, cell[0], cell[1])
+                .unwrap_or(u16::MAX);
+            self.best = self.dist;
+            self.cell = new;
+        } else if new != self.cell {
+            let (a, b) = (
+                self.code(self.cell[0] as i32, self.cell[1] as i32),
+                self.code(cell[0], cell[1]),
+            );
+            if a == 0 || self.dist == u16::MAX {
+                // From a cell off the planned ways: count afresh.
+                self.dist = self
+                    .cells_to_goal(level, cell[0], cell[1])
+                    .unwrap_or(u16::MAX);
+            } else if b != 0 {
+                if b == a % 3 + 1 {
+                    self.dist = self.dist.saturating_add(1);
+                } else if a == b % 3 + 1 {
+                    self.dist = self.dist.saturating_sub(1);
+                }
+            }
+            self.cell = new;
+        }
+        if self.dist < self.best {
+            self.best = self.dist;
+            self.stalled = 0;
+        } else {
+            self.stalled = self.stalled.saturating_add(1);
+        }
+        Gains::at((self.stalled / PATIENCE_FRAMES) % 3)
+    }
+
+    /// Whether there is a gap between cell `(cx, cz)` and its neighbour `dir` whose
+    /// far edge the marble at `pos` (along `dir`'s axis, q12) has not passed.
+    fn gap_ahead(&self, tiles: &Tiles, cx: i32, cz: i32, dir: Dir, s: i64, pos: i64) -> bool {
+        let (dx, dz) = dir.delta();
+        let (i, k) = (2 * cx + 1 + dx, 2 * cz + 1 + dz);
+        if !self.inside(cx, cz) || solid(tiles, i, 0, k) || solid(tiles, i, 1, k) {
+            return false;
+        }
+        let lo = ((if dx != 0 { i } else { k } / 2) as i64) << Q;
+        if dx + dz > 0 {
+            pos < lo + s
+        } else {
+            pos >= lo
+        }
+    }
+
+    /// The move from cell `(cx, cz)` towards a goal (`None` at a goal or with no way).
+    fn step_towards_goal(&self, tiles: &Tiles, cx: i32, cz: i32) -> Option<Dir> {
+        let here = self.code(cx, cz);
+        if here == 0 {
+            return None;
+        }
+        let want = (here + 1) % 3 + 1; // (d − 1) mod 3 + 1
+        Dir::ALL.into_iter().find(|&dir| {
+            let (dx, dz) = dir.delta();
+            self.code(cx + dx, cz + dz) == want && connected(tiles, cx, cz, dir)
+        })
+    }
+
+    /// Cells from cell `(cx, cz)` to a goal by the planned way.
+    fn cells_to_goal(&self, level: &LevelView, mut cx: i32, mut cz: i32) -> Option<u16> {
+        if self.code(cx, cz) == 0 {
+            return None;
+        }
+        let mut n: u16 = 0;
+        while !is_goal(level, cx, cz) {
+            let (dx, dz) = self.step_towards_goal(&level.tiles, cx, cz)?.delta();
+            cx += dx;
+            cz += dz;
+            n += 1;
+            if n as usize > MAX_CELLS_XZ * MAX_CELLS_XZ {
+                return None;
+            }
+        }
+        Some(n)
+    }
+
+    fn inside(&self, cx: i32, cz: i32) -> bool {
+        cx >= 0 && cz >= 0 && cx < self.ncx as i32 && cz < self.ncz as i32
+    }
+
+    fn code(&self, cx: i32, cz: i32) -> u8 {
+        if !self.inside(cx, cz) {
+            return 0;
+        }
+        let n = cz as usize * MAX_CELLS_XZ + cx as usize;
+        (self.field[n / 4] >> (2 * (n % 4))) & 3
+    }
+
+    fn set_code(&mut self, cx: i32, cz: i32, code: u8) {
+        let n = cz as usize * MAX_CELLS_XZ + cx as usize;
+        let shift = 2 * (n % 4);
+        self.field[n / 4] = (self.field[n / 4] & !(3 << shift)) | (code << shift);
+    }
+}
+
+/// A marble's state in the controller's integers.
+struct MarbleQ {
+    /// Position `[x', z']`, pitch (q12).
+    pos: [i64; 2],
+    /// Velocity, pitch/s (q12).
+    vel: [i64; 2],
+    /// The cell nearest the centre (cell coordinates, clamped to the grid).
+    cell: [i32; 2],
+    /// That cell's centre (q12).
+    centre: [i64; 2],
+}
+
+impl MarbleQ {
+    fn new<S: Scalar>(x: S, z: S, vx: S, vz: S, s: i64, ap: &Autopilot) -> Self {
+        let pos = [to_q(x), to_q(z)];
+        let vel = [to_q(vx), to_q(vz)];
+        // Cell n's centre is n + (1 + s)/2; the boundary between n and n + 1 lies at
+        // n + 1 + s/2, halfway between the centres.
+        let cell_of = |p: i64, n: u8| (((p - s / 2) >> Q) as i32).clamp(0, n as i32 - 1);
+        let cell = [cell_of(pos[0], ap.ncx), cell_of(pos[1], ap.ncz)];
+        MarbleQ {
+            pos,
+            vel,
+            cell,
+            centre: [centre(cell[0], s), centre(cell[1], s)],
+        }
+    }
+}
+
+/// The centre of cell `n` along an axis (q12), for a short width `s` (q12).
+fn centre(n: i32, s: i64) -> i64 {
+    ((n as i64) << Q) + (ONE + s) / 2
+}
+
+/// The loop gains at one patience level (see [`Autopilot::progress`]).
+struct Gains {
+    /// mg per pitch/s (q12 input).
+    kv: i64,
+    /// Approach speed per distance, 1/s, ×4.
+    k_pos4: i64,
+    /// Top speed (q12).
+    v_max: i64,
+}
+
+impl Gains {
+    fn at(level: u16) -> Gains {
+        let (kv, kp, vm) = match level {
+            0 => (4, 4, 4),
+            1 => (3, 2, 2),
+            _ => (2, 1, 1),
+        };
+        Gains {
+            kv: KV * kv / 4,
+            k_pos4: K_POS * kp,
+            v_max: V_MAX * vm / 4,
+        }
+    }
+
+    /// The tilt that brings the marble to rest `e` ahead (q12 pitch) at speed `v`.
+    fn hold(&self, e: i64, v: i64) -> i64 {
+        tilt(self.kv * (self.approach_speed(e) - v))
+    }
+
+    /// The speed wanted `e` before a stop (signed like `e`): `K_POS·e`, at most
+    /// the top speed.
+    fn approach_speed(&self, e: i64) -> i64 {
+        let v = (self.k_pos4 * e.abs() / 4).min(self.v_max);
+        if e < 0 {
+            -v
+        } else {
+            v
+        }
+    }
+}
+
+/// A raw tilt `KV·Δv` (mg · 2^Q) → mg, with the dead-zone / rolling-resistance step
+/// ramped in over the first [`COMP_RAMP_MG`].
+fn tilt(raw_q: i64) -> i64 {
+    let raw = raw_q >> Q;
+    let step = (raw.abs() * COMP_MG / COMP_RAMP_MG).min(COMP_MG);
+    if raw < 0 {
+        raw - step
+    } else {
+        raw + step
+    }
+}
+
+/// A [`Scalar`] as a q12 integer, exactly rounded down: the integer part by the
+/// scalar's own floor, the fraction six bits at a time (no float, no overflow in
+/// the narrowest format).
+fn to_q<S: Scalar>(v: S) -> i64 {
+    let n = v.floor_int();
+    let mut f = v - S::from_int(n);
+    let mut q = n as i64;
+    for _ in 0..Q / 6 {
+        f = f.shl(6);
+        let b = f.floor_int().clamp(0, 63);
+        f -= S::from_int(b);
+        q = (q << 6) + b as i64;
+    }
+    q
+}
+
+/// `⌊√n⌋` (0 for `n ≤ 0`).
+fn isqrt(n: i64) -> i64 {
+    if n <= 0 {
+        return 0;
+    }
+    let mut x = n;
+    let mut y = (x + 1) / 2;
+    while y < x {
+        x = y;
+        y = (x + n / x) / 2;
+    }
+    x
+}
+
+fn solid(tiles: &Tiles, i: i32, j: i32, k: i32) -> bool {
+    tiles.is_solid(TileIndex::new(i, j, k))
+}
+
+/// A cell the marble may roll into: floor, no wall.
+fn enterable(tiles: &Tiles, cx: i32, cz: i32) -> bool {
+    let (i, k) = (2 * cx + 1, 2 * cz + 1);
+    solid(tiles, i, 0, k) && !solid(tiles, i, 1, k)
+}
+
+/// A cell the marble falls through: no floor and no wall (also off the grid).
+fn is_pit(tiles: &Tiles, cx: i32, cz: i32) -> bool {
+    let (i, k) = (2 * cx + 1, 2 * cz + 1);
+    !solid(tiles, i, 0, k) && !solid(tiles, i, 1, k)
+}
+
+/// No wall on the short tile between cell `(cx, cz)` and its neighbour `dir`.
+fn connected(tiles: &Tiles, cx: i32, cz: i32, dir: Dir) -> bool {
+    let (dx, dz) = dir.delta();
+    !solid(tiles, 2 * cx + 1 + dx, 1, 2 * cz + 1 + dz)
+}
+
+fn is_goal(level: &LevelView, cx: i32, cz: i32) -> bool {
+    level
+        .info
+        .goals()
+        .iter()
+        .any(|&(i, k)| (i / 2) as i32 == cx && (k / 2) as i32 == cz)
+}
