@@ -83,6 +83,21 @@ pub trait Scalar:
             x
         }
     }
+    /// `n·2^-shift`, rounded to nearest, or away from zero when `away` (the integer
+    /// path of the per-sample kick: a multiply and a shift, no division).
+    fn from_scaled(n: i128, shift: u32, away: bool) -> Self {
+        let exact = n as f64 / (1u128 << shift.min(127)) as f64;
+        let x = Self::from_f64(exact);
+        if away && x.to_f64().abs() < exact.abs() {
+            if exact > 0.0 {
+                -((-x).next_down())
+            } else {
+                x.next_down()
+            }
+        } else {
+            x
+        }
+    }
     /// The value as `f64` (exact for every implemented type except `f64` itself,
     /// which is the identity).
     fn to_f64(self) -> f64;
@@ -97,6 +112,16 @@ pub trait Scalar:
     fn sqrt(self) -> Self;
     /// `self / rhs` for `rhs != 0` (contact path only); zero when `rhs == 0`.
     fn div(self, rhs: Self) -> Self;
+    /// `1/√self` for `self > 0` (zero otherwise): what normalising a vector takes.
+    /// Fixed point computes it with integer Newton steps and no division (see
+    /// [`rsqrt_bits`]); floating point with a root and a division.
+    fn rsqrt(self) -> Self {
+        if self <= Self::ZERO {
+            Self::ZERO
+        } else {
+            Self::ONE.div(self.sqrt())
+        }
+    }
     /// The next representable value below `self` (tests probe tile boundaries with it).
     fn next_down(self) -> Self;
     /// Bits of the exact value, for state hashing.
@@ -144,7 +169,16 @@ macro_rules! fixed_scalar {
             const LIMIT: f64 = $limit;
             #[inline]
             fn from_int(n: i32) -> Self {
-                <$t>::saturating_from_num(n)
+                // A shift with a range check: the generic conversion costs far more.
+                let int_bits = <$t>::INT_NBITS as i64 - 1;
+                let n64 = n as i64;
+                if n64 < (1i64 << int_bits) && n64 >= -(1i64 << int_bits) {
+                    <$t>::from_bits(((n as i64) << <$t>::FRAC_NBITS) as _)
+                } else if n < 0 {
+                    <$t>::MIN
+                } else {
+                    <$t>::MAX
+                }
             }
             fn from_f64(x: f64) -> Self {
                 <$t>::saturating_from_num(x)
@@ -207,6 +241,29 @@ macro_rules! fixed_scalar {
                 } else {
                     self.saturating_div(rhs)
                 }
+            }
+            fn from_scaled(n: i128, shift: u32, away: bool) -> Self {
+                let frac = <$t>::FRAC_NBITS;
+                let lo = <$t>::MIN.to_bits() as i64;
+                let hi = <$t>::MAX.to_bits() as i64;
+                let bits = if shift <= frac {
+                    n.saturating_mul(1i128 << (frac - shift))
+                } else {
+                    let s = shift - frac;
+                    let m = n.unsigned_abs() as u128;
+                    let q = if away { (m + (1u128 << s) - 1) >> s } else { (m + (1u128 << (s - 1))) >> s };
+                    if n < 0 { -(q as i128) } else { q as i128 }
+                };
+                <$t>::from_bits(bits.clamp(lo as i128, hi as i128) as _)
+            }
+            fn rsqrt(self) -> Self {
+                let bits = self.to_bits();
+                if bits <= 0 {
+                    return <$t>::ZERO;
+                }
+                let r = rsqrt_bits(bits as u64, <$t>::FRAC_NBITS);
+                let max = <$t>::MAX.to_bits() as u64;
+                <$t>::from_bits(r.min(max) as _)
             }
             fn next_down(self) -> Self {
                 <$t>::from_bits(self.to_bits().saturating_sub(1))
@@ -310,6 +367,76 @@ impl Scalar for f64 {
     }
     fn hash_bits(self) -> u64 {
         self.to_bits()
+    }
+}
+
+/// `1/√x` for a fixed-point `x = bits·2^-frac > 0`, as bits of the same format,
+/// rounded to nearest (within 1 LSB).
+///
+/// Written by hand because no crate offers a division-free fixed-point inverse
+/// root: Cortex-M has no 64-bit divide and Cortex-M0 no divide at all, and this is
+/// on the per-step path of rolling resistance and of every edge contact. `x` is
+/// scaled by a power of four into `m ∈ [1, 4)`, a 24-entry table seeds `1/√m` to
+/// within 3 %, and three Newton steps `y ← y·(3 − m·y²)/2` in Q30 take it to full
+/// precision (3 % → 0.14 % → 3·10⁻⁶ → 10⁻¹¹).
+pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
+    if bits == 0 {
+        return 0;
+    }
+    // x = bits·2^-frac = m·4^k with m ∈ [1, 4).
+    let b = 64 - bits.leading_zeros() as i32; // bit length
+    let k = (b - 1 - frac as i32).div_euclid(2);
+    // m in Q30: bits·2^(30 − frac − 2k).
+    let sh = 30 - frac as i32 - 2 * k;
+    let m: u64 = if sh >= 0 { bits << sh } else { bits >> (-sh) };
+    // Seed: 1/√m at the middle of the 24 slices of width 1/8 in [1, 4), Q30,
+    // picked by m's top bits (no division).
+    const SEED: [u64; 24] = [
+        1_041_682_578, // 1/√1.0625
+        985_333_074, // 1/√1.1875
+        937_238_702, // 1/√1.3125
+        895_562_589, // 1/√1.4375
+        858_993_459, // 1/√1.5625
+        826_566_842, // 1/√1.6875
+        797_555_404, // 1/√1.8125
+        771_398_898, // 1/√1.9375
+        747_657_839, // 1/√2.0625
+        725_981_977, // 1/√2.1875
+        706_088_274, // 1/√2.3125
+        687_745_184, // 1/√2.4375
+        670_761_200, // 1/√2.5625
+        654_976_372, // 1/√2.6875
+        640_255_922, // 1/√2.8125
+        626_485_368, // 1/√2.9375
+        613_566_757, // 1/√3.0625
+        601_415_717, // 1/√3.1875
+        589_959_130, // 1/√3.3125
+        579_133_272, // 1/√3.4375
+        568_882_316, // 1/√3.5625
+        559_157_115, // 1/√3.6875
+        549_914_212, // 1/√3.8125
+        541_115_017, // 1/√3.9375
+    ];
+    let slice = ((m >> 27) as usize).saturating_sub(8).min(23);
+    let mut y = SEED[slice];
+    for _ in 0..3 {
+        // y·(3 − m·y²)/2, all in Q30.
+        let y2 = (y * y) >> 30;
+        let my2 = (m * y2) >> 30;
+        let t = (3u64 << 30).saturating_sub(my2);
+        y = (y * t) >> 31;
+    }
+    // 1/√x = y·2^-k: from Q30 to `frac` bits.
+    let out = frac as i32 - 30 - k;
+    if out >= 0 {
+        y << out
+    } else {
+        let s = -out as u32;
+        if s >= 64 {
+            0
+        } else {
+            (y + (1 << (s - 1))) >> s
+        }
     }
 }
 
@@ -426,6 +553,30 @@ mod tests {
         assert_eq!(I8F24::from_bits(5).shr(2).to_bits(), 1);
         assert_eq!(1.5f32.shr(1), 0.75);
         assert_eq!(3.0f64.shr(10), 3.0 / 1024.0);
+    }
+
+    #[test]
+    fn fixed_rsqrt_is_within_an_lsb() {
+        for x in [1e-6, 3e-5, 0.001, 0.0123, 0.25, 0.5, 1.0, 2.0, 3.99, 7.0, 100.0, 127.9] {
+            let got = I8F24::from_f64(x).rsqrt().to_f64();
+            let q = I8F24::from_f64(x).to_f64();
+            let want = 1.0 / q.sqrt();
+            if want < 127.0 {
+                let lsb = 1.0 / (1u64 << 24) as f64;
+                assert!((got - want).abs() <= (want * 2e-7).max(lsb), "rsqrt {x}: {got} vs {want}");
+            }
+            let got = I32F32::from_f64(x).rsqrt().to_f64();
+            let want = 1.0 / I32F32::from_f64(x).to_f64().sqrt();
+            assert!((got - want).abs() <= want * 1e-8 + 1.0 / (1u64 << 32) as f64, "i32f32 rsqrt {x}: {got} vs {want}");
+            let got = I16F16::from_f64(x).rsqrt().to_f64();
+            let q = I16F16::from_f64(x).to_f64();
+            if q > 0.0 {
+                let want = 1.0 / q.sqrt();
+                assert!((got - want).abs() <= want * 1e-6 + 1.0 / 65536.0, "i16f16 rsqrt {x}: {got} vs {want}");
+            }
+        }
+        assert_eq!(I8F24::ZERO.rsqrt(), I8F24::ZERO);
+        assert_eq!(I8F24::from_f64(4.0).rsqrt(), I8F24::from_f64(0.5));
     }
 
     #[test]

@@ -17,11 +17,11 @@
 use heapless::Vec as HVec;
 
 use super::dynamics::effects::{marble_pair, rolling_resistance, BoardMotion, Effects};
-use super::dynamics::integrate::{advance, advance_plane, kick_axis, Kick};
+use super::dynamics::integrate::{advance, advance_plane, Kick, PullScale};
 use super::dynamics::respond::{resolve, Impact, Outcome, T_LOG2};
 use super::geometry::broadphase::{candidates, candidates_plane};
 use super::geometry::grid::Tiles;
-use super::geometry::narrowphase::{contact, lid_contact, Contact};
+use super::geometry::narrowphase::{contact, lid_contact, Contact, Feature};
 use super::geometry::tiles::{LayoutError, TileIndex, TileLayout};
 use super::scalar::Scalar;
 use super::vec::Vec3;
@@ -136,8 +136,9 @@ impl<S: Scalar> Params<S> {
     }
 }
 
-/// One marble.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One marble. Equality compares the physical state (`asleep` is a cache of
+/// "nothing will change", not state).
+#[derive(Clone, Copy, Debug)]
 pub struct Marble<S> {
     /// Centre in the tile frame (pitch).
     pub pos: Vec3<S>,
@@ -147,6 +148,22 @@ pub struct Marble<S> {
     pub supported: bool,
     /// Fallen through a hole or off the board: no longer simulated.
     pub out: bool,
+    /// The last step left this marble exactly as it was and nothing has changed
+    /// since (same pull, board still, no neighbour touched it): every further step
+    /// would too, so it is skipped — bit-for-bit the same result, at no cost.
+    pub asleep: bool,
+    /// Faces the marble rests on (bit `2·axis + up`) and their planes: while the pull
+    /// still presses it there, the step holds it on them instead of letting it sink
+    /// in and pushing it back — the same motion (a resting contact zeroes the normal
+    /// motion either way), at a fraction of the cost.
+    rest_mask: u8,
+    rest_plane: [S; 3],
+}
+
+impl<S: PartialEq> PartialEq for Marble<S> {
+    fn eq(&self, o: &Self) -> bool {
+        self.pos == o.pos && self.vel == o.vel && self.supported == o.supported && self.out == o.out
+    }
 }
 
 /// Counters of what the step did. Each effect's counter moves only when that
@@ -184,6 +201,11 @@ pub struct World<'a, S: Scalar, const M: usize> {
     decel: S,
     motion: BoardMotion<S>,
     extent: (S, S),
+    kicks_ready: bool,
+    sleeping: bool,
+    /// Per-milli-g scales: full gravity, the rolling (tangential) share, and the
+    /// rolling-resistance deceleration per unit load.
+    pulls: [PullScale; 3],
     /// What the steps did so far.
     pub stats: StepStats,
 }
@@ -208,7 +230,15 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             if !inside || overlaps_any(&layout, tiles, pos, params.radius) {
                 return Err(SetupError::BadStart(n));
             }
-            let m = Marble { pos, vel: Vec3::ZERO, supported: true, out: false };
+            let m = Marble {
+                pos,
+                vel: Vec3::ZERO,
+                supported: true,
+                out: false,
+                asleep: false,
+                rest_mask: 0,
+                rest_plane: [S::ZERO; 3],
+            };
             marbles.push(m).map_err(|_| SetupError::MarbleCount)?;
         }
         let mut w = World {
@@ -221,6 +251,18 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             decel: S::ZERO,
             motion: BoardMotion::default(),
             extent,
+            kicks_ready: false,
+            sleeping: true,
+            pulls: {
+                let pitch = params.layout.pitch_um;
+                let roll: (i64, i64) = if params.spec.effects.rolling { (5, 7) } else { (1, 1) };
+                let ppm = params.spec.rolling_resistance_ppm as i64;
+                [
+                    PullScale::new(1, 1, pitch),
+                    PullScale::new(roll.0, roll.1, pitch),
+                    PullScale::new(ppm * roll.0, 1_000_000 * roll.1, pitch),
+                ]
+            },
             stats: StepStats::default(),
         };
         w.set_gravity_mg([0, -1000, 0]);
@@ -239,8 +281,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     pub fn marbles(&self) -> &[Marble<S>] {
         &self.marbles
     }
-    /// Mutable marbles (tests, tools and game rules place them).
+    /// Mutable marbles (tests, tools and game rules place them). Wakes them all:
+    /// the caller may move one.
     pub fn marbles_mut(&mut self) -> &mut [Marble<S>] {
+        for m in self.marbles.iter_mut() {
+            m.asleep = false;
+        }
         &mut self.marbles
     }
     /// The gravity last set (milli-g, tile frame).
@@ -257,21 +303,41 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// once, so the steps that follow only add.
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
         let g = g.map(|v| v.clamp(-MAX_MG, MAX_MG));
+        if g == self.gravity_mg && self.kicks_ready {
+            return;
+        }
+        self.kicks_ready = true;
         self.gravity_mg = g;
-        let (pitch, k) = (self.params.layout.pitch_um, self.params.k);
-        let roll = if self.params.spec.effects.rolling { (5, 7) } else { (1, 1) };
+        // A new pull can move a resting marble.
+        for m in self.marbles.iter_mut() {
+            m.asleep = false;
+        }
+        let k = self.params.k;
         let reach = self.params.radius.shr(3);
-        self.kick_free = Kick::from_mg(g, (1, 1), pitch, k).clamped(reach);
-        self.kick_roll = if roll == (1, 1) { self.kick_free } else { Kick::from_mg(g, roll, pitch, k).clamped(reach) };
+        let [full, roll, drag] = self.pulls;
+        self.kick_free = Kick::from_mg(g, full, full, k).clamped(reach);
+        self.kick_roll = if roll == full { self.kick_free } else { Kick::from_mg(g, full, roll, k).clamped(reach) };
         // Rolling resistance decelerates by c_rr·g_n (·5/7 when rolling), g_n = −g_y.
-        let load = (-g[1]).max(0);
-        let ppm = self.params.spec.rolling_resistance_ppm as i64;
-        self.decel = kick_axis::<S>(load, ppm * roll.0, 1_000_000 * roll.1, pitch, k).0;
+        self.decel = drag.kick::<S>((-g[1]).max(0), k).0;
+    }
+
+    /// Turns skipping of resting marbles on (the default) or off. Off, every marble
+    /// is stepped every time: the tests use it to check that skipping changes nothing.
+    pub fn set_sleeping(&mut self, on: bool) {
+        self.sleeping = on;
+        for m in self.marbles.iter_mut() {
+            m.asleep = false;
+        }
     }
 
     /// Sets the board's rotation (used with the `board_motion` effect).
     pub fn set_board_motion(&mut self, motion: BoardMotion<S>) {
         self.motion = motion;
+        if motion.omega != Vec3::ZERO || motion.omega_dot != Vec3::ZERO {
+            for m in self.marbles.iter_mut() {
+                m.asleep = false;
+            }
+        }
     }
 
     /// Advances the world by one step `dt`.
@@ -294,8 +360,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     fn step_marbles<const SPACE: bool>(&mut self) {
         for n in 0..self.marbles.len() {
             let mut m = self.marbles[n];
-            if !m.out {
+            if !m.out && !m.asleep {
+                let before = m;
                 self.step_marble::<SPACE>(&mut m);
+                // Asleep only when the step changed nothing at all and the board
+                // is not turning (its pull then changes every step).
+                m.asleep = self.sleeping && m == before && !self.params.spec.effects.board_motion;
                 self.marbles[n] = m;
             }
         }
@@ -319,6 +389,10 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             }
             kick = kick.plus(extra).clamped(self.params.radius.shr(3));
         }
+        let mut held_on_floor = false;
+        if m.rest_mask != 0 {
+            held_on_floor = self.hold::<SPACE>(m, &mut kick);
+        }
         let start = m.pos;
         if SPACE {
             self.stats.space_runs = self.stats.space_runs.wrapping_add(1);
@@ -327,76 +401,179 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             advance_plane(&mut m.pos, &mut m.vel, &kick, k);
         }
         m.vel = m.vel.clamp_abs(self.params.v_max);
-        m.supported = self.collide_tiles::<SPACE>(m, &kick, start);
+        m.supported = self.collide_tiles::<SPACE>(m, &kick, start) || held_on_floor;
         self.check_out::<SPACE>(m);
     }
 
     /// Contact passes against the tiles (and, in 3-D, the lid); returns whether the
     /// floor supports the marble.
     fn collide_tiles<const SPACE: bool>(&mut self, m: &mut Marble<S>, kick: &Kick<S>, start: Vec3<S>) -> bool {
-        let p = self.params;
-        let (r, k, layout, tiles) = (p.radius, p.k, p.layout, self.tiles);
+        let (r, tiles) = (self.params.radius, self.tiles);
+        let layout = self.params.layout;
         // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
-        let acc = if k >= 2 * T_LOG2 { kick.dv.shl(k - 2 * T_LOG2) } else { kick.dv.shr(2 * T_LOG2 - k) };
-        let half = S::ONE.half();
-        let slop = r.shr(2);
         let mut supported = !SPACE;
         for pass in 0..3 {
             let range = if SPACE { candidates(&layout, m.pos, r) } else { candidates_plane(&layout, m.pos, r) };
             let mut touched = false;
-            // The tiles in reach, then (3-D only) the lid; each asked with the current
-            // position, since earlier contacts in the pass may have moved the marble.
-            for item in range.solid(tiles).map(Some).chain(SPACE.then_some(None)) {
-                let c = match item {
-                    Some(t) => contact(m.pos, r, t, &layout.tile_box(t), tiles),
-                    None => lid_contact(m.pos, r, layout.l),
-                };
-                let Some(c) = c else { continue };
-                touched = true;
-                if pass == 2 {
-                    // Still overlapping after two passes: a wedge the passes could not
-                    // settle. Anything deeper than the slop undoes the step.
-                    if c.depth > slop {
-                        m.pos = start;
-                        m.vel = Vec3::ZERO;
-                        self.stats.reverts = self.stats.reverts.wrapping_add(1);
+            // Face contacts on distinct axes push the marble straight back into the
+            // free part of its own cell, where nothing else can be in reach (2r < l):
+            // then no further pass is needed. Edges, or two faces on one axis, get one.
+            let mut faces = 0u8;
+            let mut settled = true;
+            // The tiles in reach, then (3-D only) the lid, each asked with the current
+            // position (earlier contacts in the pass may have moved the marble). Plain
+            // loops: iterator adapters here cost more than the geometry.
+            let mut k = range.lo.k;
+            while k <= range.hi.k {
+                let mut j = range.lo.j;
+                while j <= range.hi.j {
+                    let mut i = range.lo.i;
+                    while i <= range.hi.i {
+                        let t = TileIndex::new(i, j, k);
+                        if tiles.is_solid(t) {
+                            if let Some(c) = contact(m.pos, r, t, &layout.tile_box(t), tiles) {
+                                touched = true;
+                                settled &= face_once(&mut faces, &c);
+                                if self.take_contact::<SPACE>(m, &c, kick, pass, start, &mut supported) {
+                                    return supported;
+                                }
+                            }
+                        }
+                        i += 1;
+                    }
+                    j += 1;
+                }
+                k += 1;
+            }
+            if SPACE {
+                if let Some(c) = lid_contact(m.pos, r, layout.l) {
+                    touched = true;
+                    settled &= face_once(&mut faces, &c);
+                    if self.take_contact::<SPACE>(m, &c, kick, pass, start, &mut supported) {
                         return supported;
                     }
-                    continue;
-                }
-                self.apply_contact(m, &c, acc);
-                if SPACE && c.normal.y > half {
-                    supported = true;
                 }
             }
-            if !touched {
+            if !touched || (pass == 0 && settled) {
                 break;
             }
         }
         supported
     }
 
+    /// One contact of a pass: resolved in passes 0 and 1; in pass 2, anything still
+    /// deeper than the slop (a wedge the passes could not settle) undoes the step.
+    /// Returns `true` when the step was undone.
+    fn take_contact<const SPACE: bool>(
+        &mut self,
+        m: &mut Marble<S>,
+        c: &Contact<S>,
+        kick: &Kick<S>,
+        pass: u32,
+        start: Vec3<S>,
+        supported: &mut bool,
+    ) -> bool {
+        if pass == 2 {
+            if c.depth > self.params.radius.shr(2) {
+                m.pos = start;
+                m.vel = Vec3::ZERO;
+                self.stats.reverts = self.stats.reverts.wrapping_add(1);
+                return true;
+            }
+            return false;
+        }
+        let outcome = self.apply_contact(m, c, kick);
+        if let (Feature::Face(axis), Outcome::Contact) = (c.feature, outcome) {
+            let up = c.normal.axis(axis as usize) > S::ZERO;
+            m.rest_mask |= 1 << (2 * axis + up as u8);
+            m.rest_plane[axis as usize] = c.plane;
+        }
+        if SPACE && c.normal.y > S::ONE.half() {
+            *supported = true;
+        }
+        false
+    }
+
+    /// Keeps a resting marble on the faces it rests on: while it sits exactly on the
+    /// face, does not move along its normal, the pull presses it in and the tile is
+    /// still there under the contact point, the kick's normal part is dropped. Any of
+    /// these failing releases the face (the contact passes take over again). Returns
+    /// whether it is held on the floor.
+    fn hold<const SPACE: bool>(&self, m: &mut Marble<S>, kick: &mut Kick<S>) -> bool {
+        let (r, layout) = (self.params.radius, &self.params.layout);
+        let mut on_floor = false;
+        for bit in 0..6u8 {
+            if m.rest_mask & (1 << bit) == 0 {
+                continue;
+            }
+            let (axis, up) = ((bit / 2) as usize, bit % 2 == 1);
+            let plane = m.rest_plane[axis];
+            let at = if up { plane + r } else { plane - r };
+            let pull = kick.dv.axis(axis);
+            let presses = if up { pull < S::ZERO } else { pull > S::ZERO };
+            let mut keep = m.pos.axis(axis) == at && m.vel.axis(axis) == S::ZERO && presses;
+            if keep && !(axis == 1 && !up) {
+                // The tile behind the contact point (the lid, −y, is always there).
+                let across = if up { layout_index(layout, axis, plane.next_down()) } else { layout_index(layout, axis, plane) };
+                let mut t = layout.index_of(m.pos);
+                if !SPACE {
+                    t.j = 1;
+                }
+                match axis {
+                    0 => t.i = across,
+                    1 => t.j = across,
+                    _ => t.k = across,
+                }
+                keep = self.tiles.is_solid(t);
+            }
+            if keep {
+                set_axis(&mut kick.dv, axis, S::ZERO);
+                set_axis(&mut kick.dp, axis, S::ZERO);
+                on_floor |= axis == 1 && up;
+            } else {
+                m.rest_mask &= !(1 << bit);
+            }
+        }
+        on_floor
+    }
+
     /// Resolves one contact (eq. 1 at the instant of impact, see `respond`).
-    fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, acc: Vec3<S>) {
-        let p = self.params;
+    fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, kick: &Kick<S>) -> Outcome {
+        let p = &self.params;
         let sub = p.k - T_LOG2;
-        self.stats.contacts = self.stats.contacts.wrapping_add(1);
         let v_board = if p.spec.effects.board_motion {
             self.motion.surface_velocity(m.pos - c.normal.scale(p.radius)).shl(sub)
         } else {
             Vec3::ZERO
         };
+        // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
+        let k = p.k;
+        let acc = if k >= 2 * T_LOG2 { kick.dv.shl(k - 2 * T_LOG2) } else { kick.dv.shr(2 * T_LOG2 - k) };
         let imp = Impact { n: c.normal, depth: c.depth, v: m.vel.shr(T_LOG2), v_board, acc, dt: S::ONE.shr(sub) };
         let res = resolve(&imp, p.restitution, p.threshold);
-        m.pos += c.normal.scale(res.push);
+        match c.feature {
+            // Axis-aligned: put the centre exactly at `plane ± (r + lift)`.
+            Feature::Face(_) | Feature::Inside => {
+                let (axis, up) = axis_of(c.normal);
+                let at = if up { c.plane + p.radius + res.lift } else { c.plane - p.radius - res.lift };
+                match axis {
+                    0 => m.pos.x = at,
+                    1 => m.pos.y = at,
+                    _ => m.pos.z = at,
+                }
+            }
+            Feature::Edge => m.pos += c.normal.scale(res.push),
+        }
         let vn_now = m.vel.dot(c.normal);
         let vn_new = (res.vn + v_board.dot(c.normal)).shl(T_LOG2).clamp(-p.v_max, p.v_max);
         // A slanted normal can move speed between axes: keep every axis under the cap
         // (the no-tunnelling bound is per axis).
         m.vel = (m.vel - c.normal.scale(vn_now) + c.normal.scale(vn_new)).clamp_abs(p.v_max);
+        self.stats.contacts = self.stats.contacts.wrapping_add(1);
         if res.outcome == Outcome::Collision {
             self.stats.collisions = self.stats.collisions.wrapping_add(1);
         }
+        res.outcome
     }
 
     fn check_out<const SPACE: bool>(&self, m: &mut Marble<S>) {
@@ -437,16 +614,16 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 if len2 >= r2 * r2 {
                     continue;
                 }
-                let len = len2.sqrt();
-                let n = if len == S::ZERO {
-                    Vec3::new(S::ONE, S::ZERO, S::ZERO)
+                let inv = len2.rsqrt();
+                let (n, len) = if inv == S::ZERO {
+                    (Vec3::new(S::ONE, S::ZERO, S::ZERO), S::ZERO)
                 } else {
-                    Vec3::new(d.x.div(len), d.y.div(len), d.z.div(len))
+                    (d.scale(inv), len2 * inv)
                 };
                 let push = (r2 - len).half();
                 let (va, vb) = marble_pair(ma.vel.shr(T_LOG2), mb.vel.shr(T_LOG2), n, p.restitution, p.threshold);
-                let mut na = ma;
-                let mut nb = mb;
+                let mut na = Marble { asleep: false, ..ma };
+                let mut nb = Marble { asleep: false, ..mb };
                 na.pos -= n.scale(push);
                 nb.pos += n.scale(push);
                 let set = |m: &mut Marble<S>, v_step: Vec3<S>| {
@@ -482,6 +659,48 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             eat(m.supported as u64 | (m.out as u64) << 1);
         }
         h
+    }
+}
+
+/// Eq. 6 along one axis.
+fn layout_index<S: Scalar>(layout: &TileLayout<S>, axis: usize, v: S) -> i32 {
+    if axis == 1 {
+        layout.index_y(v)
+    } else {
+        layout.index_xz(v)
+    }
+}
+
+fn set_axis<S: Scalar>(v: &mut Vec3<S>, axis: usize, value: S) {
+    match axis {
+        0 => v.x = value,
+        1 => v.y = value,
+        _ => v.z = value,
+    }
+}
+
+/// The axis of an axis-aligned unit normal and whether it points up that axis.
+fn axis_of<S: Scalar>(n: Vec3<S>) -> (usize, bool) {
+    if n.x != S::ZERO {
+        (0, n.x > S::ZERO)
+    } else if n.y != S::ZERO {
+        (1, n.y > S::ZERO)
+    } else {
+        (2, n.z > S::ZERO)
+    }
+}
+
+/// Records a face contact's axis in `faces`; `false` for an edge or inside contact,
+/// or a second contact on an axis already seen (those need another pass).
+fn face_once<S: Scalar>(faces: &mut u8, c: &Contact<S>) -> bool {
+    match c.feature {
+        Feature::Face(axis) => {
+            let bit = 1u8 << axis;
+            let fresh = *faces & bit == 0;
+            *faces |= bit;
+            fresh
+        }
+        _ => false,
     }
 }
 

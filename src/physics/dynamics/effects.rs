@@ -48,14 +48,15 @@ impl Effects {
 pub fn rolling_resistance<S: Scalar>(v: &mut Vec3<S>, kick: &mut Kick<S>, decel: S, k: u32) {
     const SCALE: u32 = 4;
     let (vx, vz) = (v.x.shr(SCALE), v.z.shr(SCALE));
-    let speed = (vx * vx + vz * vz).sqrt();
+    let speed2 = vx * vx + vz * vz;
     let limit = decel.shr(SCALE);
-    let (dx, dz, len) = if speed > limit {
-        (vx, vz, speed)
+    // Squares compared, and the direction from an inverse root: no root, no division.
+    let (dx, dz, len2) = if speed2 > limit * limit {
+        (vx, vz, speed2)
     } else {
         let (ax, az) = (kick.dv.x.shr(SCALE), kick.dv.z.shr(SCALE));
-        let pull = (ax * ax + az * az).sqrt();
-        if pull <= limit {
+        let pull2 = ax * ax + az * az;
+        if pull2 <= limit * limit {
             v.x = S::ZERO;
             v.z = S::ZERO;
             kick.dv.x = S::ZERO;
@@ -64,9 +65,10 @@ pub fn rolling_resistance<S: Scalar>(v: &mut Vec3<S>, kick: &mut Kick<S>, decel:
             kick.dp.z = S::ZERO;
             return;
         }
-        (ax, az, pull)
+        (ax, az, pull2)
     };
-    let (ux, uz) = (dx.div(len), dz.div(len));
+    let inv = len2.rsqrt();
+    let (ux, uz) = (dx * inv, dz * inv);
     let half_step = decel.shr(k + 1);
     kick.dv.x -= decel * ux;
     kick.dv.z -= decel * uz;

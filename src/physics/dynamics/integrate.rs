@@ -25,27 +25,42 @@ pub struct Kick<S> {
 }
 
 /// Standard gravity in µm/s² per milli-g ×100 (9.80665 m/s² = 980 665 ×10⁻⁵).
-const G_UM_PER_MG_X100: i64 = 980_665;
+const G_UM_PER_MG_X100: i128 = 980_665;
+/// Fraction bits of a [`PullScale`].
+const SCALE_SHIFT: u32 = 56;
 
-/// `a·dt` and `½·a·dt²` for an acceleration of `mg` milli-g, scaled by `num/den`,
-/// in a layout of `pitch_um`, at `dt = 2^-k` s. Exact integers, one rounding each:
-/// to nearest for `a·dt`; away from zero for `½·a·dt²`, because a displacement
-/// rounded short of the pull would add `a·ε` of energy every step (measured: +4·10⁻⁴
-/// over 10⁴ elastic bounces in I32F32), while one rounded past it only loses it.
-pub fn kick_axis<S: Scalar>(mg: i32, num: i64, den: i64, pitch_um: u32, k: u32) -> (S, S) {
-    // a [pitch/s²] = mg · 9.80665 mm/s² / pitch_mm = mg · 980 665 / (100 · pitch_µm).
-    let n = mg as i64 * G_UM_PER_MG_X100 * num;
-    let d = 100 * pitch_um as i64 * den;
-    (S::ratio(n, d << k), S::ratio_away(n, d << (2 * k + 1)))
+/// Pitches/s² per milli-g (times a ratio such as rolling's 5/7), as an integer with
+/// 56 fraction bits (10⁻¹⁸ relative: exact even for the `f64` reference): computed once per level with one division, after which a
+/// tilt sample's kick is a multiply and a shift per axis — no division on the
+/// per-sample path (a 64-bit division is a library call on Cortex-M).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PullScale(i64);
+
+impl PullScale {
+    /// The scale for `a = mg · 9.80665 mm/s² · num/den` in a layout of `pitch_um`.
+    pub fn new(num: i64, den: i64, pitch_um: u32) -> Self {
+        let n = (G_UM_PER_MG_X100 * num as i128) << SCALE_SHIFT;
+        let d = 100 * pitch_um as i128 * den as i128;
+        PullScale(((n + d / 2) / d).min(i64::MAX as i128) as i64)
+    }
+
+    /// `a·dt` (to nearest) and `½·a·dt²` (away from zero) for `mg` milli-g at
+    /// `dt = 2^-k` s. The displacement is rounded away from zero because one rounded
+    /// short of the pull would add `a·ε` of energy every step (measured: +4·10⁻⁴ over
+    /// 10⁴ elastic bounces in I32F32), while one rounded past it only loses it.
+    pub fn kick<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
+        let n = mg as i128 * self.0 as i128;
+        (S::from_scaled(n, SCALE_SHIFT + k, false), S::from_scaled(n, SCALE_SHIFT + 2 * k + 1, true))
+    }
 }
 
 impl<S: Scalar> Kick<S> {
-    /// The kick of a `g_mg` (milli-g, tile frame) acceleration whose tangential part
-    /// (x', z') is scaled by `tangential = (num, den)`.
-    pub fn from_mg(g_mg: [i32; 3], tangential: (i64, i64), pitch_um: u32, k: u32) -> Self {
-        let (tx, px) = kick_axis(g_mg[0], tangential.0, tangential.1, pitch_um, k);
-        let (ty, py) = kick_axis(g_mg[1], 1, 1, pitch_um, k);
-        let (tz, pz) = kick_axis(g_mg[2], tangential.0, tangential.1, pitch_um, k);
+    /// The kick of a `g_mg` (milli-g, tile frame) acceleration, the tangential part
+    /// (x', z') scaled by `tangential`, the normal part (y') by `full`.
+    pub fn from_mg(g_mg: [i32; 3], full: PullScale, tangential: PullScale, k: u32) -> Self {
+        let (tx, px) = tangential.kick(g_mg[0], k);
+        let (ty, py) = full.kick(g_mg[1], k);
+        let (tz, pz) = tangential.kick(g_mg[2], k);
         Kick { dv: Vec3::new(tx, ty, tz), dp: Vec3::new(px, py, pz) }
     }
 

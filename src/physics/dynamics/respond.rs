@@ -70,8 +70,10 @@ pub struct Impact<S> {
 /// relative to the board becomes `vn` (pitch/T).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolution<S> {
-    /// Distance to move along the normal.
+    /// Distance to move along the normal (`depth + lift`).
     pub push: S,
+    /// How far off the surface the marble ends (0 unless it bounced).
+    pub lift: S,
     /// New normal velocity relative to the board (pitch/T).
     pub vn: S,
     /// Which case applied.
@@ -94,11 +96,11 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
             let e2 = vn * vn - two * b * delta;
             out = if e2 > S::ZERO { e2.sqrt() } else { S::ZERO };
         }
-        return Resolution { push: delta, vn: out, outcome: Outcome::Separating };
+        return Resolution { push: delta, lift: S::ZERO, vn: out, outcome: Outcome::Separating };
     }
     let wc2 = w * w - two * b * delta;
     if wc2 <= threshold * threshold {
-        return Resolution { push: delta, vn: S::ZERO, outcome: Outcome::Contact };
+        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact };
     }
     let wc = wc2.sqrt();
     let tau = (two * delta).div(w + wc).min(c.dt);
@@ -107,7 +109,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     let out = (restitution(v_c, c.v_board, c.n, e) - c.v_board).dot(c.n);
     let u = out * tau - b * tau * tau.half();
     if u <= S::ZERO {
-        return Resolution { push: delta, vn: S::ZERO, outcome: Outcome::Contact };
+        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact };
     }
     // Rounding must not add energy: the normal energy after (½vn² + b·u) may not
     // exceed the energy before (½w² − b·δ, the state at the end of the step).
@@ -128,5 +130,5 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         }
         vn = if vn < S::ZERO { -mag } else { mag };
     }
-    Resolution { push: delta + u, vn, outcome: Outcome::Collision }
+    Resolution { push: delta + u, lift: u, vn, outcome: Outcome::Collision }
 }

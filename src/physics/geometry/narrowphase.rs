@@ -74,6 +74,10 @@ pub struct Contact<S> {
     pub depth: S,
     /// The touched feature.
     pub feature: Feature,
+    /// For an axis-aligned normal (a face, or leaving the box through one): the
+    /// face's coordinate on that axis, so the marble can be put exactly at `plane ± r`
+    /// (in floating point `p + (r − (p − plane))` is not always `plane + r`).
+    pub plane: S,
 }
 
 fn neighbour(t: TileIndex, axis: usize, up: bool) -> TileIndex {
@@ -118,10 +122,12 @@ pub fn contact<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Ti
         0 => inside(c, r, t, b, tiles),
         1 => {
             let v = d.axis(face_axis);
+            let plane = if v > S::ZERO { b.max.axis(face_axis) } else { b.min.axis(face_axis) };
             Some(Contact {
                 normal: unit(face_axis, v > S::ZERO),
                 depth: r - v.abs(),
                 feature: Feature::Face(face_axis as u8),
+                plane,
             })
         }
         _ => {
@@ -129,14 +135,16 @@ pub fn contact<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Ti
             if len2 >= r * r {
                 return None;
             }
-            let len = len2.sqrt();
-            if len == S::ZERO {
+            // The normal from an inverse root: no root, no division.
+            let inv = len2.rsqrt();
+            if inv == S::ZERO {
                 return inside(c, r, t, b, tiles);
             }
             Some(Contact {
-                normal: Vec3::new(d.x.div(len), d.y.div(len), d.z.div(len)),
-                depth: r - len,
+                normal: d.scale(inv),
+                depth: r - len2 * inv,
                 feature: Feature::Edge,
+                plane: S::ZERO,
             })
         }
     }
@@ -158,7 +166,8 @@ fn inside<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Tiles<'
     }
     // A tile buried on all six sides cannot be reached from outside: no contact.
     let (gap, axis, up) = best?;
-    Some(Contact { normal: unit(axis, up), depth: r + gap, feature: Feature::Inside })
+    let plane = if up { b.max.axis(axis) } else { b.min.axis(axis) };
+    Some(Contact { normal: unit(axis, up), depth: r + gap, feature: Feature::Inside, plane })
 }
 
 /// The maze's lid: a plane on top of the walls (`y' = l`), as on the real toy. It
@@ -170,5 +179,5 @@ pub fn lid_contact<S: Scalar>(c: Vec3<S>, r: S, top: S) -> Option<Contact<S>> {
     if depth <= S::ZERO {
         return None;
     }
-    Some(Contact { normal: Vec3::new(S::ZERO, -S::ONE, S::ZERO), depth, feature: Feature::Face(1) })
+    Some(Contact { normal: Vec3::new(S::ZERO, -S::ONE, S::ZERO), depth, feature: Feature::Face(1), plane: top })
 }
