@@ -7,24 +7,31 @@
 //! ```text
 //!  input_task(TiltInput) ──TILT (latest)──┐
 //!                       └─COMMANDS (queue)┴─> game_task ──FRAMES (latest)──> display_task(MatrixOutput)
-//!                                              │ fixed-rate Ticker, calls
-//!                                              └ game_tick(&mut GameState, Tilt) -> DisplayFrame
+//!                                              │ Ticker at FRAME_HZ (128 Hz), each tick:
+//!                                              └ Player::frame(reading) → Session::frame → render
 //! ```
 //!
 //! * [`TiltInput`]: where tilt and commands come from (accelerometer and
-//!   buttons, a terminal via [`TerminalInput`], or the scripted [`DemoInput`]).
-//! * [`game_task`] runs the game at [`PHYSICS_HZ`] on an embassy `Ticker`
-//!   (not `Timer::after`, which rounds up to the time driver's tick and drifts).
+//!   buttons, or a terminal via [`TerminalInput`]).
+//! * [`game_task`] runs the game ([`Player`]: a [`Session`] on a built-in
+//!   level, a [`Renderer`] and optionally the [`Autopilot`]) at the game's
+//!   frame rate [`FRAME_HZ`] on an embassy `Ticker` (not `Timer::after`,
+//!   which rounds up to the time driver's tick and drifts). In
+//!   [`GameMode::Demo`] the autopilot plays every built-in level once, exactly
+//!   as `cargo sim -- --level <name> --autopilot` does, and each level's
+//!   outcome, physics steps and `state_hash` are logged.
 //! * [`MatrixOutput`]: how one BCM scan step of [`crate::matrix::Scanner`]
 //!   reaches LEDs (real pins, or QEMU's virtual matrix).
 //! * [`Console`]: a blocking byte sink for an interactive terminal.
 //!
-//! **The seam for the real game** is [`GameState`] + [`game_tick`] (a
-//! placeholder dot that rolls with the tilt), plus [`DemoInput`] (to be
-//! replaced by the autopilot). Everything else here is plumbing.
+//! The display size is per board ([`WIDTH`] × [`HEIGHT`]): the micro:bit's
+//! 5×5 matrix, whose view scrolls with the marble, or for QEMU a 19×9 virtual
+//! matrix that shows every built-in maze whole. Everything below the tasks
+//! ([`Player`], [`fault_frame`], [`win_frame`]) is generic over the size.
 
 use core::cell::Cell;
 use core::future::Future;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
@@ -32,21 +39,50 @@ use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use embassy_time::{Duration, Ticker};
 
-use crate::matrix::{Brightness, Frame, ScanStep, Scanner, MAX_BRIGHTNESS};
+use crate::game::autopilot::Autopilot;
+use crate::game::levels::LEVELS;
+use crate::game::rules::{Game, GameConfig, Phase};
+use crate::game::session::{Session, SYNTHETIC_TILT};
+use crate::matrix::{Frame, ScanStep, Scanner, MAX_BRIGHTNESS};
+use crate::physics::world::SetupError;
+use crate::physics::Fx;
+use crate::render::Renderer;
+use crate::tilt::TiltConfig;
 
-/// Display width in pixels (the micro:bit's 5×5 matrix).
+/// Display width in pixels: the micro:bit's 5×5 matrix.
+#[cfg(feature = "board-microbit")]
 pub const WIDTH: usize = 5;
 /// Display height in pixels.
+#[cfg(feature = "board-microbit")]
 pub const HEIGHT: usize = 5;
+/// Display width in pixels: QEMU's virtual matrix, as wide as the widest
+/// built-in maze (`grand-tour`, 19 tiles), so no built-in level scrolls.
+#[cfg(not(feature = "board-microbit"))]
+pub const WIDTH: usize = 19;
+/// Display height in pixels (the tallest built-in maze has 9 rows).
+#[cfg(not(feature = "board-microbit"))]
+pub const HEIGHT: usize = 9;
 /// One image for the LED matrix.
 pub type DisplayFrame = Frame<WIDTH, HEIGHT>;
 
-/// Game (physics) steps per second.
-pub const PHYSICS_HZ: u32 = 50;
+/// The game's configuration: 128 frames/s × 8 physics steps (the same as the
+/// host tools, so that `state_hash`es agree).
+pub const GAME_CONFIG: GameConfig = GameConfig::DEFAULT;
+/// Game frames per second (each one is `2^substeps_log2` physics steps).
+pub const FRAME_HZ: u32 = GAME_CONFIG.frame_hz();
 /// Full LED-matrix refreshes per second.
 pub const REFRESH_HZ: u32 = 100;
-/// Length of the headless demo, in game steps (2 s of firmware time).
-pub const DEMO_STEPS: u32 = 2 * PHYSICS_HZ;
+/// How long a won level is shown (flashing) before the next one, in frames.
+pub const WIN_PAUSE_FRAMES: u32 = FRAME_HZ;
+/// How long a lost attempt (fell, time up) is shown before the restart.
+pub const LOSS_PAUSE_FRAMES: u32 = FRAME_HZ / 2;
+/// Flash period of the win display, frames (on and off for this long each).
+const WIN_FLASH_FRAMES: u32 = FRAME_HZ / 8;
+
+/// Whether this board has the autopilot ([`Command::ToggleAutopilot`],
+/// [`GameMode::Demo`]). The micro:bit leaves it out: no button combination
+/// is left for it, and it saves 1.3 KiB of flash.
+pub const AUTOPILOT: bool = !cfg!(feature = "board-microbit");
 
 /// One g in milli-g.
 pub const ONE_G_MG: i32 = 1000;
@@ -94,6 +130,11 @@ impl Tilt {
             z: z as i16,
         }
     }
+
+    /// As the `[x, y, z]` reading the game's tilt path takes.
+    pub const fn reading_mg(self) -> [i32; 3] {
+        [self.x as i32, self.y as i32, self.z as i32]
+    }
 }
 
 /// A discrete user command.
@@ -104,6 +145,10 @@ pub enum Command {
     Restart,
     /// Skip to the next level.
     NextLevel,
+    /// Take the current (filtered) tilt as level.
+    Calibrate,
+    /// Hand the board to the autopilot, or take it back.
+    ToggleAutopilot,
     /// Leave the game (QEMU exits with status 0).
     Quit,
 }
@@ -164,14 +209,47 @@ impl<T: Copy> Latest<T> {
     }
 }
 
-/// Latest tilt, written by [`input_task`], read by [`game_task`] each step.
+/// What the game is doing, for status displays (QEMU's terminal).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// Index of the level in [`LEVELS`].
+    pub level: u8,
+    /// Where the attempt stands.
+    pub phase: Phase,
+    /// Frames played in this attempt.
+    pub frames: u32,
+    /// The reading fed to the game last (milli-g, board frame).
+    pub reading: [i32; 3],
+    /// Whether the autopilot is playing.
+    pub autopilot: bool,
+}
+
+impl Status {
+    /// Before the first frame.
+    pub const START: Status = Status {
+        level: 0,
+        phase: Phase::Playing,
+        frames: 0,
+        reading: [0, ONE_G_MG, 0],
+        autopilot: false,
+    };
+}
+
+/// Latest tilt, written by [`input_task`], read by [`game_task`] each frame.
 pub static TILT: Latest<Tilt> = Latest::new(Tilt::FLAT);
 /// Commands from [`input_task`] to [`game_task`].
 pub static COMMANDS: Channel<CriticalSectionRawMutex, Command, 8> = Channel::new();
 /// Latest frame from [`game_task`] to [`display_task`] (older ones are dropped).
 pub static FRAMES: Signal<CriticalSectionRawMutex, DisplayFrame> = Signal::new();
-/// Current level number, for status displays.
-pub static LEVEL: Latest<u8> = Latest::new(1);
+/// The game's status after its latest frame.
+pub static STATUS: Latest<Status> = Latest::new(Status::START);
+/// Ticks of [`game_task`]'s frame loop so far (wrapping): a watchdog can
+/// check that it keeps moving.
+pub static GAME_FRAMES: AtomicU32 = AtomicU32::new(0);
+/// Set by the board while its accelerometer is down: the game pauses and
+/// shows [`fault_frame`] until it is cleared.
+pub static SENSOR_FAULT: AtomicBool = AtomicBool::new(false);
 
 // ---------------------------------------------------------------------------
 // Tasks
@@ -187,53 +265,222 @@ pub async fn input_task<I: TiltInput>(input: &mut I) -> ! {
     }
 }
 
+/// How [`game_task`] plays.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GameMode {
+    /// A player with a tilt input: endless, levels in order, [`COMMANDS`]
+    /// obeyed. `tilt` configures the game's tilt path:
+    /// [`TiltConfig::DEFAULT`] for a real accelerometer, [`SYNTHETIC_TILT`]
+    /// for keys.
+    Play {
+        /// The tilt path's configuration.
+        tilt: TiltConfig,
+    },
+    /// The headless demo: the autopilot plays each built-in level once, in
+    /// order, then [`game_task`] returns.
+    Demo,
+}
+
 /// Why [`game_task`] returned.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum GameExit {
     /// The player quit.
     Quit,
-    /// The step limit given to [`game_task`] was reached (headless demo).
-    StepLimit,
+    /// The demo played every level.
+    DemoDone(DemoSummary),
+    /// No level could be set up (a bug in the built-in levels).
+    SetupFailed(SetupError),
 }
 
-/// Runs the game at [`PHYSICS_HZ`]: each step applies pending commands, calls
-/// [`game_tick`] with the latest tilt and publishes the frame on [`FRAMES`].
-/// Returns on [`Command::Quit`] or after `step_limit` steps.
-pub async fn game_task(step_limit: Option<u32>) -> GameExit {
-    let mut state = GameState::new();
-    let mut ticker = Ticker::every(Duration::from_hz(u64::from(PHYSICS_HZ)));
-    let mut steps: u32 = 0;
+/// The demo's totals.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DemoSummary {
+    /// Levels played.
+    pub levels: u8,
+    /// Levels won.
+    pub won: u8,
+    /// Physics steps over all levels.
+    pub steps: u64,
+    /// Game frames over all levels.
+    pub frames: u64,
+}
+
+impl DemoSummary {
+    /// Every level played was won (and there was at least one).
+    pub const fn all_won(&self) -> bool {
+        self.levels > 0 && self.won == self.levels
+    }
+}
+
+/// Runs the game at [`FRAME_HZ`] in `mode` (see [`GameMode`]), publishing a
+/// frame on [`FRAMES`] and the [`STATUS`] every tick, and bumping
+/// [`GAME_FRAMES`]. Returns on [`Command::Quit`] or at the end of the demo.
+pub async fn game_task(mode: GameMode) -> GameExit {
+    let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
+    match mode {
+        GameMode::Play { tilt } => play(&mut ticker, tilt).await,
+        GameMode::Demo => demo(&mut ticker).await,
+    }
+}
+
+/// One tick of the frame loop.
+async fn tick(ticker: &mut Ticker) {
+    ticker.next().await;
+    GAME_FRAMES.fetch_add(1, Ordering::Relaxed);
+}
+
+/// [`GameMode::Play`].
+async fn play(ticker: &mut Ticker, tilt: TiltConfig) -> GameExit {
+    let mut player = match Player::<WIDTH, HEIGHT>::new(0, tilt, false) {
+        Ok(player) => player,
+        Err(e) => return GameExit::SetupFailed(e),
+    };
+    #[cfg(feature = "defmt")]
+    defmt::info!("level 1: {=str}", player.level_name());
+    // The finished attempt on show, and frames left to show it.
+    let mut pause: Option<(Phase, u32)> = None;
     loop {
-        ticker.next().await;
+        tick(ticker).await;
         while let Ok(command) = COMMANDS.try_receive() {
             #[cfg(feature = "defmt")]
             defmt::info!("command {}", command);
             match command {
-                Command::Restart => state.restart(),
-                Command::NextLevel => state.next_level(),
+                Command::Restart => player.restart(),
+                Command::NextLevel => player.next_level(),
+                Command::Calibrate => player.calibrate(),
+                Command::ToggleAutopilot => player.set_autopilot(!player.autopilot()),
                 Command::Quit => return GameExit::Quit,
             }
+            if matches!(command, Command::Restart | Command::NextLevel) {
+                pause = None;
+            }
         }
-        let frame = game_tick(&mut state, TILT.get());
-        LEVEL.set(state.level);
-        FRAMES.signal(frame);
-        steps = steps.wrapping_add(1);
-        #[cfg(feature = "defmt")]
-        if steps.is_multiple_of(PHYSICS_HZ) {
-            defmt::info!(
-                "step {}: level {} dot ({}, {})/65536 px, tilt {}",
-                steps,
-                state.level,
-                state.x,
-                state.z,
-                TILT.get()
-            );
+        if SENSOR_FAULT.load(Ordering::Relaxed) {
+            if !FRAMES.signaled() {
+                FRAMES.signal(fault_frame());
+            }
+            continue;
         }
-        if step_limit.is_some_and(|limit| steps >= limit) {
-            return GameExit::StepLimit;
+        // Draw only once the display has taken the previous frame (it
+        // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
+        let draw = !FRAMES.signaled();
+        let frame = match pause {
+            None => {
+                let phase = player.frame(TILT.get().reading_mg());
+                if phase != Phase::Playing {
+                    #[cfg(feature = "defmt")]
+                    defmt::info!(
+                        "level {=usize} {=str}: {=str} after {=u64} steps",
+                        player.level_index() + 1,
+                        player.level_name(),
+                        phase.as_str(),
+                        player.game().steps()
+                    );
+                    let frames = if phase == Phase::Won {
+                        WIN_PAUSE_FRAMES
+                    } else {
+                        LOSS_PAUSE_FRAMES
+                    };
+                    pause = Some((phase, frames));
+                }
+                draw.then(|| player.render())
+            }
+            Some((phase, 0)) => {
+                pause = None;
+                if phase == Phase::Won {
+                    player.next_level();
+                } else {
+                    player.restart();
+                }
+                draw.then(|| player.render())
+            }
+            Some((phase, left)) => {
+                pause = Some((phase, left - 1));
+                draw.then(|| {
+                    let frame = player.render();
+                    if phase == Phase::Won {
+                        win_frame(&frame, left)
+                    } else {
+                        frame
+                    }
+                })
+            }
+        };
+        STATUS.set(player.status());
+        if let Some(frame) = frame {
+            FRAMES.signal(frame);
         }
     }
+}
+
+/// [`GameMode::Demo`]: each level exactly as the host simulator plays it
+/// with `--autopilot` (a fresh [`Session`] with [`GAME_CONFIG`] and
+/// [`SYNTHETIC_TILT`], the autopilot's reading taken from the game before
+/// each frame, stopping at the first phase that is not
+/// [`Phase::Playing`]), one frame per tick; then the outcome is shown for
+/// [`WIN_PAUSE_FRAMES`].
+async fn demo(ticker: &mut Ticker) -> GameExit {
+    let mut summary = DemoSummary::default();
+    for index in 0..LEVELS.len() {
+        summary.levels = summary.levels.saturating_add(1);
+        let mut player = match Player::<WIDTH, HEIGHT>::new(index, SYNTHETIC_TILT, true) {
+            Ok(player) => player,
+            Err(e) => {
+                #[cfg(feature = "defmt")]
+                defmt::error!(
+                    "demo {=usize}/{=usize} level={=str} outcome=setup-error ({})",
+                    index + 1,
+                    LEVELS.len(),
+                    level_name(index),
+                    e
+                );
+                let _ = e;
+                continue;
+            }
+        };
+        let phase = loop {
+            tick(ticker).await;
+            let phase = player.frame(Tilt::FLAT.reading_mg());
+            STATUS.set(player.status());
+            if !FRAMES.signaled() || phase != Phase::Playing {
+                FRAMES.signal(player.render());
+            }
+            if phase != Phase::Playing {
+                break phase;
+            }
+        };
+        let game = player.game();
+        summary.steps = summary.steps.saturating_add(game.steps());
+        summary.frames = summary.frames.saturating_add(u64::from(game.frames()));
+        if phase == Phase::Won {
+            summary.won = summary.won.saturating_add(1);
+        }
+        #[cfg(feature = "defmt")]
+        defmt::info!(
+            "demo {=usize}/{=usize} level={=str} outcome={=str} steps={=u64} state_hash={=u64:016x}",
+            index + 1,
+            LEVELS.len(),
+            player.level_name(),
+            phase.as_str(),
+            game.steps(),
+            player.session().state_hash()
+        );
+        let last = player.render();
+        for left in (1..=WIN_PAUSE_FRAMES).rev() {
+            tick(ticker).await;
+            if !FRAMES.signaled() {
+                FRAMES.signal(if phase == Phase::Won {
+                    win_frame(&last, left)
+                } else {
+                    last
+                });
+            }
+        }
+    }
+    GameExit::DemoDone(summary)
 }
 
 /// Something that can show one BCM scan step on an LED matrix.
@@ -259,102 +506,160 @@ pub async fn display_task<O: MatrixOutput>(output: &mut O) -> ! {
 }
 
 // ---------------------------------------------------------------------------
-// The game (placeholder: the lead replaces GameState and game_tick)
+// The game
 // ---------------------------------------------------------------------------
 
-/// Fixed-point scale of [`GameState`] positions: 1 pixel = 65536 units.
-const PX: i32 = 1 << 16;
-
-/// PLACEHOLDER game state: a dot that rolls with the tilt.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct GameState {
-    /// Level number, from 1.
-    pub level: u8,
-    /// Dot column, 1/65536 px.
-    pub x: i32,
-    /// Dot row, 1/65536 px.
-    pub z: i32,
-    /// Column velocity, 1/65536 px per step.
-    pub vx: i32,
-    /// Row velocity, 1/65536 px per step.
-    pub vz: i32,
+/// The name of built-in level `index` (`"?"` past the end).
+pub fn level_name(index: usize) -> &'static str {
+    LEVELS.get(index).map_or("?", |level| level.info.name)
 }
 
-impl Default for GameState {
-    fn default() -> Self {
-        Self::new()
-    }
+/// One player's game on a `W`×`H` display: a [`Session`] on a built-in level
+/// (fixed-point [`Fx`] physics), the [`Renderer`] that follows the marble,
+/// and, when it plays, the [`Autopilot`]. Synchronous and board-agnostic:
+/// [`game_task`] drives it from its ticker.
+#[derive(Clone, Debug)]
+pub struct Player<const W: usize, const H: usize> {
+    level: usize,
+    session: Session<'static, Fx>,
+    renderer: Renderer<W, H>,
+    tilt: TiltConfig,
+    autopilot: Option<Autopilot>,
 }
 
-impl GameState {
-    /// Level 1, dot at rest in the centre.
-    pub const fn new() -> Self {
-        Self::at_level(1)
-    }
-
-    const fn at_level(level: u8) -> Self {
-        Self {
+impl<const W: usize, const H: usize> Player<W, H> {
+    /// Built-in level `level` (wrapped into range) with the tilt path `tilt`;
+    /// the autopilot plays if `autopilot` (and the board has [`AUTOPILOT`]).
+    pub fn new(level: usize, tilt: TiltConfig, autopilot: bool) -> Result<Self, SetupError> {
+        let level = level % LEVELS.len();
+        let view = LEVELS[level];
+        Ok(Player {
             level,
-            x: (WIDTH as i32 - 1) * PX / 2,
-            z: (HEIGHT as i32 - 1) * PX / 2,
-            vx: 0,
-            vz: 0,
+            session: Session::new(view, GAME_CONFIG, tilt)?,
+            renderer: Renderer::new(),
+            tilt,
+            autopilot: (AUTOPILOT && autopilot).then(|| Autopilot::new(&view)),
+        })
+    }
+
+    /// Index of the level in [`LEVELS`].
+    pub fn level_index(&self) -> usize {
+        self.level
+    }
+    /// The level's name.
+    pub fn level_name(&self) -> &'static str {
+        level_name(self.level)
+    }
+    /// The session.
+    pub fn session(&self) -> &Session<'static, Fx> {
+        &self.session
+    }
+    /// The session, mutably (profiling, tools).
+    pub fn session_mut(&mut self) -> &mut Session<'static, Fx> {
+        &mut self.session
+    }
+    /// The game.
+    pub fn game(&self) -> &Game<'static, Fx> {
+        self.session.game()
+    }
+    /// Whether the autopilot plays.
+    pub fn autopilot(&self) -> bool {
+        self.autopilot.is_some()
+    }
+
+    /// Hands the board to the autopilot (planned afresh for the level), or
+    /// takes it back. Without [`AUTOPILOT`] it stays off.
+    pub fn set_autopilot(&mut self, on: bool) {
+        self.autopilot = (AUTOPILOT && on).then(|| Autopilot::new(&LEVELS[self.level]));
+    }
+
+    /// The reading for the next frame: the autopilot's when it plays, else
+    /// `tilt_mg` (the accelerometer's or the keys').
+    pub fn reading(&mut self, tilt_mg: [i32; 3]) -> [i32; 3] {
+        match &mut self.autopilot {
+            Some(pilot) => pilot.reading_mg(self.session.game()),
+            None => tilt_mg,
         }
     }
 
-    /// Restarts the current level.
+    /// Plays one frame (`2^substeps_log2` physics steps) with
+    /// [`Player::reading`]`(tilt_mg)` and returns where the attempt stands. A
+    /// finished attempt stays finished (the game does not step any more).
+    pub fn frame(&mut self, tilt_mg: [i32; 3]) -> Phase {
+        let reading = self.reading(tilt_mg);
+        self.session.frame(reading)
+    }
+
+    /// The current picture.
+    pub fn render(&mut self) -> Frame<W, H> {
+        self.renderer.render(self.session.game())
+    }
+
+    /// For status displays.
+    pub fn status(&self) -> Status {
+        let game = self.session.game();
+        Status {
+            level: self.level.min(usize::from(u8::MAX)) as u8,
+            phase: game.phase(),
+            frames: game.frames(),
+            reading: self.session.reading(),
+            autopilot: self.autopilot(),
+        }
+    }
+
+    /// Starts the level over (the tilt calibration is kept).
     pub fn restart(&mut self) {
-        *self = Self::at_level(self.level);
+        self.session.restart();
+        self.renderer.reset();
+        if self.autopilot.is_some() {
+            self.set_autopilot(true);
+        }
     }
 
-    /// Moves on to the next level.
+    /// Moves on to the next built-in level (after the last: the first),
+    /// keeping the tilt calibration and the autopilot setting. A level that
+    /// cannot be set up (never for the tested built-in ones) is skipped.
     pub fn next_level(&mut self) {
-        *self = Self::at_level(self.level.wrapping_add(1).max(1));
-    }
-}
-
-/// One axis of the placeholder physics: accelerate against the reading,
-/// damp, move, bounce off the edges at half speed.
-fn roll(pos: &mut i32, vel: &mut i32, reading_mg: i16, max: i32) {
-    // 300 mg crosses the 5-pixel screen in about a second at 50 Hz.
-    *vel -= i32::from(reading_mg) * 7 / 10;
-    *vel -= *vel / 64;
-    *pos += *vel;
-    if *pos < 0 {
-        *pos = 0;
-        *vel = -*vel / 2;
-    } else if *pos > max {
-        *pos = max;
-        *vel = -*vel / 2;
-    }
-}
-
-/// PLACEHOLDER game step: rolls the dot with `tilt` and draws it
-/// anti-aliased (its brightness shared between the up to four pixels it
-/// overlaps, which exercises the BCM grey levels).
-pub fn game_tick(state: &mut GameState, tilt: Tilt) -> DisplayFrame {
-    roll(&mut state.x, &mut state.vx, tilt.x, (WIDTH as i32 - 1) * PX);
-    roll(
-        &mut state.z,
-        &mut state.vz,
-        tilt.z,
-        (HEIGHT as i32 - 1) * PX,
-    );
-
-    let mut frame = DisplayFrame::new();
-    let (cx, fx) = (state.x / PX, state.x % PX);
-    let (cz, fz) = (state.z / PX, state.z % PX);
-    let full = i64::from(MAX_BRIGHTNESS);
-    for (dx, wx) in [(0, PX - fx), (1, fx)] {
-        for (dz, wz) in [(0, PX - fz), (1, fz)] {
-            let weight = i64::from(wx) * i64::from(wz);
-            let level = (full * weight + (1i64 << 31)) >> 32;
-            let (x, z) = (cx + dx, cz + dz);
-            if level > 0 && x >= 0 && z >= 0 {
-                frame.set(x as usize, z as usize, level as Brightness);
+        let calibration = self.session.tilt().calibration();
+        for offset in 1..=LEVELS.len() {
+            if let Ok(mut next) = Self::new(self.level + offset, self.tilt, self.autopilot()) {
+                next.session.tilt_mut().set_calibration(calibration);
+                *self = next;
+                #[cfg(feature = "defmt")]
+                defmt::info!("level {=usize}: {=str}", self.level + 1, self.level_name());
+                return;
             }
         }
+    }
+
+    /// Takes the current filtered tilt as level (an implausible one is
+    /// refused).
+    pub fn calibrate(&mut self) {
+        let reading = self.session.tilt().filtered_reading_mg();
+        let result = self.session.tilt_mut().calibrate(reading);
+        #[cfg(feature = "defmt")]
+        defmt::info!("calibrate: {}", result);
+        let _ = result;
+    }
+}
+
+/// The won level's display: the final picture flashing with a full-on
+/// screen, [`WIN_FLASH_FRAMES`] each; `left` counts the frames down.
+pub fn win_frame<const W: usize, const H: usize>(last: &Frame<W, H>, left: u32) -> Frame<W, H> {
+    if (left / WIN_FLASH_FRAMES.max(1)).is_multiple_of(2) {
+        Frame::filled(MAX_BRIGHTNESS)
+    } else {
+        *last
+    }
+}
+
+/// Shown while the accelerometer is down: a cross from corner to corner.
+pub fn fault_frame<const W: usize, const H: usize>() -> Frame<W, H> {
+    let mut frame = Frame::new();
+    for y in 0..H {
+        let x = if H > 1 { y * (W - 1) / (H - 1) } else { 0 };
+        frame.set(x, y, MAX_BRIGHTNESS);
+        frame.set(W - 1 - x, y, MAX_BRIGHTNESS);
     }
     frame
 }
@@ -386,6 +691,10 @@ pub enum Key {
     Restart,
     /// `n`.
     Next,
+    /// `c`: take the current tilt as level.
+    Calibrate,
+    /// `p`: autopilot on / off.
+    Autopilot,
     /// `q` or Ctrl-C.
     Quit,
 }
@@ -403,7 +712,7 @@ enum Escape {
 
 /// Decodes terminal bytes (raw mode) into [`Key`]s: arrow keys (`ESC [ A`,
 /// `ESC O A`, with or without modifiers like `ESC [ 1 ; 5 A`), WASD, space,
-/// `r`, `n`, `q`, Ctrl-C. Other bytes are ignored.
+/// `r`, `n`, `c`, `p`, `q`, Ctrl-C. Other bytes are ignored.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct KeyDecoder {
     state: Escape,
@@ -460,6 +769,8 @@ impl KeyDecoder {
             b' ' => Some(Key::Level),
             b'r' | b'R' => Some(Key::Restart),
             b'n' | b'N' => Some(Key::Next),
+            b'c' | b'C' => Some(Key::Calibrate),
+            b'p' | b'P' => Some(Key::Autopilot),
             b'q' | b'Q' | 0x03 => Some(Key::Quit),
             _ => None,
         }
@@ -500,6 +811,8 @@ impl KeyTilt {
             Key::Level => (-self.x, -self.z),
             Key::Restart => return Some(InputEvent::Command(Command::Restart)),
             Key::Next => return Some(InputEvent::Command(Command::NextLevel)),
+            Key::Calibrate => return Some(InputEvent::Command(Command::Calibrate)),
+            Key::Autopilot => return Some(InputEvent::Command(Command::ToggleAutopilot)),
             Key::Quit => return Some(InputEvent::Command(Command::Quit)),
         };
         let max = KEY_TILT_MAX_MG;
@@ -533,45 +846,5 @@ impl<S: ByteSource> TiltInput for TerminalInput<S> {
                 return event;
             }
         }
-    }
-}
-
-/// PLACEHOLDER for the autopilot: a scripted tilt sequence for the headless
-/// demo (right, towards the player, left, away), one phase every 400 ms.
-pub struct DemoInput {
-    ticker: Option<Ticker>,
-    phase: usize,
-}
-
-impl Default for DemoInput {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl DemoInput {
-    /// Tilts `(x, z)` in milli-g, cycled through.
-    const SCRIPT: [(i32, i32); 4] = [(-300, 0), (0, -300), (300, 0), (0, 300)];
-    /// Time per phase.
-    const PHASE: Duration = Duration::from_millis(400);
-
-    /// Starts at the first phase.
-    pub const fn new() -> Self {
-        Self {
-            ticker: None,
-            phase: 0,
-        }
-    }
-}
-
-impl TiltInput for DemoInput {
-    async fn next_event(&mut self) -> InputEvent {
-        match &mut self.ticker {
-            Some(ticker) => ticker.next().await,
-            None => self.ticker = Some(Ticker::every(Self::PHASE)),
-        }
-        let (x, z) = Self::SCRIPT[self.phase % Self::SCRIPT.len()];
-        self.phase = self.phase.wrapping_add(1);
-        InputEvent::Tilt(Tilt::from_xz(x, z))
     }
 }

@@ -24,9 +24,12 @@
 #   which the raw terminal hands to the game as a key); should the firmware
 #   hang, kill qemu-system-arm from another terminal.
 #
-# Examples:  cargo qemu                 # play
+# The headless demo: the autopilot plays every built-in level; the firmware
+# exits 0 when all were won (tools/check-demo.sh compares its per-level
+# results with the host simulator's).
+#
+# Examples:  cargo qemu                 # play (arrows/WASD tilt, p autopilot, q quit)
 #            cargo qemu -- --demo       # headless demo (also: cargo qemu --demo)
-#            cargo qemu -- --demo --steps=500
 set -euo pipefail
 
 if [[ $# -lt 1 ]]; then

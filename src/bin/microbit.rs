@@ -37,6 +37,7 @@ use lsm303agr::Lsm303agr;
 
 use marble_rolling::app;
 use marble_rolling::board::microbit as board;
+use marble_rolling::tilt::TiltConfig;
 
 bind_interrupts!(struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
@@ -65,9 +66,11 @@ async fn input(mut input: hw::MicrobitInput) -> ! {
 #[embassy_executor::task]
 async fn game() {
     loop {
-        // The micro:bit never sends Quit and has no step limit; restart the
-        // game if it ever returns.
-        let exit = app::game_task(None).await;
+        // The micro:bit never sends Quit; restart the game if it ever returns.
+        let exit = app::game_task(app::GameMode::Play {
+            tilt: TiltConfig::DEFAULT,
+        })
+        .await;
         defmt::warn!("game_task returned: {}", exit);
     }
 }

@@ -1,9 +1,14 @@
 //! Marble Rolling firmware for QEMU's `mps2-an386` (Cortex-M4F).
 //!
-//! `cargo qemu` plays on the terminal (UART0); `cargo qemu -- --demo` runs the
-//! deterministic headless demo, reports the CPU load and exits 0. The runner
-//! is `tools/qemu-run.sh`; it tells the firmware its mode on the semihosting
-//! command line (see `marble_rolling::board::qemu::Options`).
+//! `cargo qemu` plays on the terminal (UART0); `cargo qemu -- --demo` (or any
+//! run without a terminal on stdin) runs the deterministic headless demo: the
+//! autopilot plays every built-in level, one log line per level (outcome,
+//! physics steps, `state_hash`, as `cargo sim -- --level <name> --autopilot
+//! --json` reports them; `tools/check-demo.sh` compares the two), then the
+//! CPU load, the stack high-water mark, the instruction count of a game frame,
+//! and a summary. QEMU exits 0 when every level was won, 1 otherwise, 101 on
+//! a panic. The runner is `tools/qemu-run.sh`; it tells the firmware its mode
+//! on the semihosting command line (see `marble_rolling::board::qemu::Options`).
 //!
 //! The tasks below are thin wrappers: the logic is in `marble_rolling::app`.
 #![no_std]
@@ -12,28 +17,41 @@
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use defmt_semihosting as _;
-use marble_rolling::app::{self, DemoInput, GameExit, TerminalInput};
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Player, TerminalInput};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
 use marble_rolling::board::qemu::Options;
+use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::rules::Phase;
+use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::matrix::{OnTimeIntegrator, Scanner};
 
 #[path = "../board/qemu/hw.rs"]
 mod hw;
 
 use hw::uart::{UartConsole, UartRx};
 
-/// Headless runs log the perceived matrix every this many refreshes (4 Hz).
-const LOG_MATRIX_EVERY: u32 = app::REFRESH_HZ / 4;
+/// Headless runs log the perceived matrix (when it changed) every this many
+/// refreshes (5 s).
+const LOG_MATRIX_EVERY: u32 = app::REFRESH_HZ * 5;
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
+    // Before anything else uses the stack.
+    hw::stack::paint();
     let Some(mut core) = cortex_m::Peripherals::take() else {
         hw::fatal("core peripherals already taken");
     };
     // First, so that log timestamps start at 0.
     hw::start_time(&mut core.SYST);
     let options = hw::options();
-    defmt::info!("Marble Rolling on QEMU mps2-an386: {}", options);
+    defmt::info!(
+        "Marble Rolling on QEMU mps2-an386: {}, {=usize}x{=usize} virtual matrix, {=u32} frames/s",
+        options,
+        app::WIDTH,
+        app::HEIGHT,
+        app::FRAME_HZ
+    );
 
     let calibration = hw::cpu_meter::calibrate();
     defmt::info!(
@@ -58,13 +76,11 @@ fn main() -> ! {
             }
             _ => hw::fatal("cannot spawn tasks"),
         }
-        let input = if options.interactive {
-            terminal_input().map(|token| spawner.spawn(token))
-        } else {
-            demo_input().map(|token| spawner.spawn(token))
-        };
-        if input.is_err() {
-            hw::fatal("cannot spawn the input task");
+        if options.interactive {
+            match terminal_input() {
+                Ok(token) => spawner.spawn(token),
+                Err(_) => hw::fatal("cannot spawn the input task"),
+            }
         }
     })
 }
@@ -72,11 +88,6 @@ fn main() -> ! {
 #[embassy_executor::task]
 async fn terminal_input() -> ! {
     app::input_task(&mut TerminalInput::new(UartRx)).await
-}
-
-#[embassy_executor::task]
-async fn demo_input() -> ! {
-    app::input_task(&mut DemoInput::new()).await
 }
 
 #[embassy_executor::task]
@@ -94,46 +105,181 @@ async fn display(interactive: bool) -> ! {
 
 #[embassy_executor::task]
 async fn game(options: Options) {
+    let mode = if options.interactive {
+        GameMode::Play {
+            tilt: SYNTHETIC_TILT,
+        }
+    } else {
+        GameMode::Demo
+    };
+    if !options.interactive {
+        // The baseline: the display scanning a blank frame, the timers and
+        // the executor, before the game starts.
+        let before = hw::cpu_meter::sample();
+        embassy_time::Timer::after_secs(1).await;
+        let after = hw::cpu_meter::sample();
+        if let Some(load) = LoadReport::between(&hw::cpu_meter::calibration(), before, after) {
+            defmt::info!(
+                "baseline load (display scanning, timers, no game): {=u64} instructions/s = {=u64}.{=u64:02} % of 64 MHz",
+                load.instructions_per_second,
+                load.centipercent_of_64mhz / 100,
+                load.centipercent_of_64mhz % 100
+            );
+        }
+    }
     let start = hw::cpu_meter::sample();
-    let demo_steps = options.demo_steps.unwrap_or(app::DEMO_STEPS);
-    let limit = (!options.interactive).then_some(demo_steps);
-    let exit = app::game_task(limit).await;
+    let exit = app::game_task(mode).await;
     let end = hw::cpu_meter::sample();
-    match exit {
+    let summary = match exit {
         GameExit::Quit => {
             restore_terminal(&mut UartConsole);
             defmt::info!("quit");
+            DemoSummary::default()
         }
-        GameExit::StepLimit => {
-            defmt::info!("demo finished after {=u32} steps", demo_steps);
+        GameExit::DemoDone(summary) => summary,
+        GameExit::SetupFailed(e) => {
+            defmt::error!("cannot set up a level: {}", e);
+            hw::exit(1)
         }
-    }
+    };
+    let stack = hw::stack::high_water();
+    defmt::info!(
+        "stack high-water mark: {=usize} of {=usize} bytes",
+        stack.used,
+        stack.size
+    );
     if options.interactive {
         // No -icount: the CPU meter's figures would mean nothing.
         hw::exit(0)
     }
-    let calibration = hw::cpu_meter::calibration();
-    let mut state = app::GameState::new();
-    let tilt = app::Tilt::from_xz(-300, 0);
-    let (_, instructions) = hw::cpu_meter::count_instructions(|| app::game_tick(&mut state, tilt));
-    defmt::info!(
-        "one placeholder game_tick: {=u64} instructions",
-        instructions
-    );
-    match LoadReport::between(&calibration, start, end) {
+    match LoadReport::between(&hw::cpu_meter::calibration(), start, end) {
         Some(load) => {
             defmt::info!(
-                "cpu load: {=u64} busy instructions in {=u64} us of firmware time = {=u64} instructions/s = {=u64}.{=u64:02} % of a 64 MHz Cortex-M4",
+                "cpu load: {=u64} busy instructions in {=u64} us of firmware time = {=u64} instructions/s = {=u64}.{=u64:02} % of a 64 MHz Cortex-M4 ({=u32} frames/s, {=u32} refreshes/s)",
                 load.busy_instructions,
                 load.firmware_us,
                 load.instructions_per_second,
                 load.centipercent_of_64mhz / 100,
                 load.centipercent_of_64mhz % 100,
+                app::FRAME_HZ,
+                app::REFRESH_HZ,
             );
         }
         None => defmt::warn!("cpu load: no time elapsed"),
     }
-    hw::exit(0)
+    profile();
+    defmt::info!(
+        "demo summary: {=u8}/{=u8} levels won, {=u64} physics steps in {=u64} frames: {=str}",
+        summary.won,
+        summary.levels,
+        summary.steps,
+        summary.frames,
+        if summary.all_won() { "PASS" } else { "FAIL" }
+    );
+    hw::exit(if summary.all_won() { 0 } else { 1 })
+}
+
+/// Instructions of one game frame, replaying up to this many frames of each
+/// level with the autopilot.
+const PROFILE_FRAMES: u32 = 1024;
+
+/// Counts the instructions of the game's per-frame work (autopilot reading,
+/// `Session::frame` = 8 physics steps, rendering) frame by frame, replaying
+/// the start of every level, and logs the averages and maxima.
+fn profile() {
+    use hw::cpu_meter::count_instructions;
+    let mut total = Costs::default();
+    let mut picture = app::DisplayFrame::new();
+    for index in 0..LEVELS.len() {
+        let Ok(mut player) =
+            Player::<{ app::WIDTH }, { app::HEIGHT }>::new(index, SYNTHETIC_TILT, true)
+        else {
+            continue;
+        };
+        let mut costs = Costs::default();
+        while costs.frames < PROFILE_FRAMES {
+            let (reading, pilot) = count_instructions(|| player.reading([0, 1000, 0]));
+            let (phase, frame) = count_instructions(|| player.session_mut().frame(reading));
+            let (_, render) = count_instructions(|| player.render());
+            costs.add(pilot, frame, render);
+            if phase != Phase::Playing {
+                break;
+            }
+        }
+        costs.log(player.level_name());
+        picture = player.render();
+        total.merge(&costs);
+    }
+    total.log("all levels");
+    let substeps = 1u64 << app::GAME_CONFIG.substeps_log2;
+    defmt::info!(
+        "one game frame = {=u64} physics steps: {=u64} instructions on average (max {=u64}), {=u64} per physics step; autopilot {=u64}, render {=u64} per frame",
+        substeps,
+        total.average(total.frame),
+        total.frame_max,
+        total.average(total.frame) / substeps,
+        total.average(total.pilot),
+        total.average(total.render)
+    );
+    // The display's share, without its async plumbing: converting a frame
+    // into bit planes, then one refresh of scan steps into the integrator.
+    let mut scanner = Scanner::<{ app::WIDTH }, { app::HEIGHT }>::new();
+    let mut integrator = OnTimeIntegrator::<{ app::WIDTH }, { app::HEIGHT }>::new();
+    let (_, load) = count_instructions(|| scanner.load(&picture));
+    let (_, scan) = count_instructions(|| {
+        for _ in 0..Scanner::<{ app::WIDTH }, { app::HEIGHT }>::STEPS_PER_REFRESH {
+            integrator.feed(scanner.next_step());
+        }
+    });
+    defmt::info!(
+        "display: {=u64} instructions to load a frame, {=u64} to scan one refresh into the virtual matrix",
+        load,
+        scan
+    );
+}
+
+/// Instruction totals of [`profile`].
+#[derive(Default)]
+struct Costs {
+    frames: u32,
+    pilot: u64,
+    frame: u64,
+    frame_max: u64,
+    render: u64,
+}
+
+impl Costs {
+    fn add(&mut self, pilot: u64, frame: u64, render: u64) {
+        self.frames += 1;
+        self.pilot += pilot;
+        self.frame += frame;
+        self.frame_max = self.frame_max.max(frame);
+        self.render += render;
+    }
+
+    fn merge(&mut self, other: &Costs) {
+        self.frames += other.frames;
+        self.pilot += other.pilot;
+        self.frame += other.frame;
+        self.frame_max = self.frame_max.max(other.frame_max);
+        self.render += other.render;
+    }
+
+    fn average(&self, sum: u64) -> u64 {
+        sum / u64::from(self.frames.max(1))
+    }
+
+    fn log(&self, what: &str) {
+        defmt::info!(
+            "profile {=str}: {=u32} frames, instructions per frame: physics {=u64} (max {=u64}), autopilot {=u64}, render {=u64}",
+            what,
+            self.frames,
+            self.average(self.frame),
+            self.frame_max,
+            self.average(self.pilot),
+            self.average(self.render)
+        );
+    }
 }
 
 #[panic_handler]

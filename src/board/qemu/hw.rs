@@ -8,7 +8,8 @@
 //! Contents: [`clock`] (TIMER0 as a free-running 64-bit clock), the embassy
 //! time driver (that clock + SysTick wake-ups), [`uart`] (CMSDK APB UART0
 //! driver), [`cpu_meter`] (idle accounting, calibration, instruction
-//! counting), [`executor`] (an embassy raw executor that sleeps with WFI),
+//! counting), [`stack`] (painting, high-water mark), [`executor`] (an embassy
+//! raw executor that sleeps with WFI),
 //! interrupt/fault handlers, and semihosting [`options`] / [`exit`].
 #![allow(dead_code)] // each binary uses its own subset
 
@@ -416,6 +417,77 @@ pub mod cpu_meter {
             let net = ticks.saturating_sub(calibration.overhead_ticks);
             (result, calibration.instructions(u64::from(net)))
         })
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Stack high-water mark
+// ---------------------------------------------------------------------------
+
+/// Stack painting: [`paint`](stack::paint) fills the free stack with
+/// [`STACK_PAINT`](marble_rolling::board::qemu::STACK_PAINT) at boot;
+/// [`high_water`](stack::high_water) later finds the lowest word that was
+/// overwritten. With flip-link the stack starts just below `.data`/`.bss`
+/// (`_stack_start`, the initial SP) and grows down towards
+/// [`RAM_BASE`](marble_rolling::board::qemu::RAM_BASE).
+pub mod stack {
+    use marble_rolling::board::qemu::{RAM_BASE, STACK_PAINT};
+
+    /// Bytes below the current SP left unpainted by [`paint`]: room for
+    /// anything below the stack pointer at the time (none is expected:
+    /// interrupts are off and the loop calls nothing).
+    const RED_ZONE: usize = 64;
+
+    extern "C" {
+        /// The initial stack pointer (cortex-m-rt's `link.x`, set by flip-link).
+        static _stack_start: u32;
+    }
+
+    /// The top of the stack (initial SP).
+    fn top() -> usize {
+        // Only the symbol's address is taken, never its value.
+        core::ptr::addr_of!(_stack_start) as usize
+    }
+
+    /// Paints the stack from [`RAM_BASE`] up to a little below the current
+    /// SP. Call first thing in `main`.
+    #[inline(never)]
+    pub fn paint() {
+        cortex_m::interrupt::free(|_| {
+            let sp = cortex_m::register::msp::read() as usize;
+            let end = sp.saturating_sub(RED_ZONE) & !3;
+            let mut addr = RAM_BASE;
+            while addr < end {
+                // SAFETY: [RAM_BASE, SP - RED_ZONE) is free stack: RAM that
+                // nothing uses yet (flip-link puts every static above it).
+                unsafe { core::ptr::write_volatile(addr as *mut u32, STACK_PAINT) };
+                addr += 4;
+            }
+        });
+    }
+
+    /// Stack use so far.
+    #[derive(Clone, Copy, defmt::Format)]
+    pub struct StackUse {
+        /// Deepest use, bytes (from the top down to the lowest overwritten word).
+        pub used: usize,
+        /// The whole stack region, bytes.
+        pub size: usize,
+    }
+
+    /// The high-water mark since [`paint`].
+    pub fn high_water() -> StackUse {
+        let top = top();
+        let mut addr = RAM_BASE;
+        // SAFETY: reads of stack RAM below the current SP (still painted, or
+        // left by finished calls), word-aligned.
+        while addr < top && unsafe { core::ptr::read_volatile(addr as *const u32) } == STACK_PAINT {
+            addr += 4;
+        }
+        StackUse {
+            used: top.saturating_sub(addr),
+            size: top.saturating_sub(RAM_BASE),
+        }
     }
 }
 

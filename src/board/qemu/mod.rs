@@ -32,6 +32,12 @@ pub const TIMER0_IRQ: u16 = 8;
 /// instruction advances virtual time by `2^N` ns.
 pub const ICOUNT_SHIFT: u32 = 7;
 
+/// Start of RAM (memory.x): with flip-link the stack grows down towards it.
+pub const RAM_BASE: usize = 0x2000_0000;
+/// The word the firmware paints its free stack with at boot, to measure the
+/// stack's high-water mark at the end of the demo.
+pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
+
 /// How the firmware was started, from its semihosting command line.
 ///
 /// The runner (`tools/qemu-run.sh`) always passes exactly one of
@@ -46,9 +52,6 @@ pub const ICOUNT_SHIFT: u32 = 7;
 pub struct Options {
     /// Play on the UART terminal (else run the headless demo).
     pub interactive: bool,
-    /// Game steps the headless demo runs (`--steps=N`); `None`: the app's
-    /// default (`app::DEMO_STEPS`).
-    pub demo_steps: Option<u32>,
 }
 
 impl Options {
@@ -62,13 +65,7 @@ impl Options {
                 "--interactive" => options.interactive = true,
                 "--headless" => options.interactive = false,
                 "--demo" => demo = true,
-                _ => {
-                    if let Some(steps) = arg.strip_prefix("--steps=") {
-                        if let Ok(steps) = steps.parse::<u32>() {
-                            options.demo_steps = Some(steps.max(1));
-                        }
-                    }
-                }
+                _ => {}
             }
         }
         if demo {
@@ -87,11 +84,6 @@ mod tests {
         assert!(!Options::parse([]).interactive);
         assert!(Options::parse(["qemu", "--interactive"]).interactive);
         assert!(!Options::parse(["qemu", "--interactive", "--demo"]).interactive);
-        assert_eq!(
-            Options::parse(["--headless", "--steps=7"]).demo_steps,
-            Some(7)
-        );
-        assert_eq!(Options::parse(["--steps=x"]).demo_steps, None);
-        assert_eq!(Options::parse(["--steps=0"]).demo_steps, Some(1));
+        assert!(!Options::parse(["--headless", "--whatever"]).interactive);
     }
 }

@@ -13,8 +13,10 @@ use core::fmt::Write as _;
 use embassy_time::{Duration, Ticker};
 
 use crate::app::{
-    Console, DisplayFrame, MatrixOutput, Tilt, HEIGHT, LEVEL, REFRESH_HZ, TILT, WIDTH,
+    level_name, Console, DisplayFrame, MatrixOutput, Status, FRAME_HZ, HEIGHT, REFRESH_HZ, STATUS,
+    WIDTH,
 };
+use crate::game::levels::LEVELS;
 use crate::matrix::{Brightness, OnTimeIntegrator, ScanStep, Scanner};
 
 /// Terminal redraws per second (at most; only changes are drawn).
@@ -31,7 +33,7 @@ pub struct VirtualMatrix<C: Console> {
     ticker: Option<Ticker>,
     console: Option<C>,
     log_every: u32,
-    drawn: Option<(DisplayFrame, Tilt, u8)>,
+    drawn: Option<(DisplayFrame, Status)>,
     last_logged: Option<DisplayFrame>,
 }
 
@@ -68,11 +70,13 @@ impl<C: Console> VirtualMatrix<C> {
             defmt::info!("matrix {}", frame.rows());
         }
         if let (true, Some(console)) = (draw_due, self.console.as_mut()) {
-            let status = (frame, TILT.get(), LEVEL.get());
+            let mut status = STATUS.get();
+            // Redraw for whole tenths of a second only.
+            status.frames -= status.frames % (FRAME_HZ / 10).max(1);
             let first = self.drawn.is_none();
-            if self.drawn != Some(status) {
-                draw(console, &status.0, status.1, status.2, first);
-                self.drawn = Some(status);
+            if self.drawn != Some((frame, status)) {
+                draw(console, &frame, &status, first);
+                self.drawn = Some((frame, status));
             }
         }
     }
@@ -112,20 +116,22 @@ pub fn grey(level: Brightness) -> u8 {
     }
 }
 
-/// Shading character for a brightness (so plain-text captures show it too).
+/// Shading character for a brightness (so plain-text captures show it too):
+/// with the renderer's levels, floor (1) `░`, wall (3) `▒`, lit goal (8)
+/// `▓`, marble `█`.
 pub fn shade(level: Brightness) -> &'static str {
     match level {
         0 => "\u{b7}",
-        1..=3 => "\u{2591}",
-        4..=7 => "\u{2592}",
-        8..=11 => "\u{2593}",
+        1..=2 => "\u{2591}",
+        3..=5 => "\u{2592}",
+        6..=10 => "\u{2593}",
         _ => "\u{2588}",
     }
 }
 
 /// Draws `frame` and a status line at the top left of the terminal; `clear`
 /// first clears the screen and hides the cursor.
-pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, tilt: Tilt, level: u8, clear: bool) {
+pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, clear: bool) {
     let mut out = Out(console);
     if clear {
         out.0.write(b"\x1b[2J\x1b[?25l");
@@ -140,10 +146,28 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, tilt: Tilt, level
         }
         out.0.write(b"\x1b[0m\x1b[K\r\n");
     }
+    let tenths = status.frames * 10 / FRAME_HZ.max(1);
+    let [x, _, z] = status.reading;
     let _ = write!(
         out,
-        "\r\n  level {}   tilt x {} z {} mg\x1b[K\r\n  arrows/WASD tilt, space level, r restart, n next level, q quit\x1b[K\r\n",
-        level, tilt.x, tilt.z
+        "\r\n  level {}/{} {}: {} {}.{} s{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
+        usize::from(status.level) + 1,
+        LEVELS.len(),
+        level_name(usize::from(status.level)),
+        status.phase.as_str(),
+        tenths / 10,
+        tenths % 10,
+        if status.autopilot {
+            "  (autopilot)"
+        } else {
+            ""
+        },
+        x,
+        z
+    );
+    let _ = write!(
+        out,
+        "  arrows/WASD tilt, space level, c calibrate, r restart, n next level,\x1b[K\r\n  p autopilot, q quit\x1b[K\r\n"
     );
 }
 

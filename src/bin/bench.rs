@@ -1,0 +1,98 @@
+//! Physics cost on the target ISA: QEMU `mps2-an386` (Cortex-M4F), counted
+//! instruction by instruction under `-icount shift=7,align=off,sleep=off`.
+//!
+//! Runs the study's scene suite ([`marble_rolling::study`]) for every scene ×
+//! backend × step rate, plus the per-effect variants, and prints one defmt line
+//! per run:
+//!
+//! ```text
+//! BENCH <scene> <backend> <variant> <step_log2> <steps> <instructions> <hash> <contacts> <collisions>
+//! ```
+//!
+//! `cargo accuracy` runs it (through the runner, `tools/qemu-run.sh`, which
+//! decodes the defmt log) and parses those lines; by hand:
+//!
+//! ```text
+//! cargo run --release --target thumbv7em-none-eabihf --features board-qemu --bin bench -- --demo
+//! ```
+//!
+//! Options on the semihosting command line: `--backends=MASK` (bit n selects
+//! `study::BACKENDS[n]`), `--rates=MASK` (bit k selects 2^k steps/s).
+//!
+//! The instruction counter is the board's TIMER0 (25 MHz, 3.2 ticks per
+//! instruction at shift=7), calibrated against a NOP loop of known length
+//! (`hw::cpu_meter`); each count covers a whole 10 s scene run (all steps and
+//! the per-frame tilt updates), interrupts off.
+#![no_std]
+#![no_main]
+
+use core::sync::atomic::{AtomicBool, Ordering};
+
+use defmt_semihosting as _;
+use marble_rolling::study::{bench_one, bench_plan, Scene, BACKENDS};
+
+#[path = "../board/qemu/hw.rs"]
+mod hw;
+
+fn mask_option(name: &str, default: u32) -> u32 {
+    let Ok(args) = semihosting::experimental::env::args::<256>() else {
+        return default;
+    };
+    for arg in (&args).filter_map(Result::ok) {
+        if let Some(v) = arg.strip_prefix(name).and_then(|v| v.strip_prefix('=')) {
+            if let Ok(m) = v.parse::<u32>() {
+                return m;
+            }
+        }
+    }
+    default
+}
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    hw::clock::start();
+    let cal = hw::cpu_meter::calibrate();
+    defmt::info!(
+        "CALIBRATION {=u32} {=u32} {=u64} {=bool} {=u32}",
+        cal.instructions,
+        cal.ticks,
+        cal.milliticks_per_instruction(),
+        cal.matches_icount(),
+        cal.overhead_ticks
+    );
+    // Self-check of the counter: an empty closure costs (almost) nothing.
+    let (_, empty) = hw::cpu_meter::count_instructions(|| core::hint::black_box(0u32));
+    defmt::info!("EMPTY {=u64}", empty);
+    let backends = mask_option("--backends", (1 << BACKENDS.len()) - 1);
+    let rates = mask_option("--rates", u32::MAX);
+    bench_plan(backends, rates, |item| {
+        let result = bench_one(&item, &mut |f| hw::cpu_meter::count_instructions(f).1);
+        match result {
+            Some(r) => defmt::info!(
+                "BENCH {=str} {=str} {=str} {=u32} {=u32} {=u64} {=u64} {=u32} {=u32}",
+                Scene::get(item.scene).name,
+                BACKENDS[item.backend],
+                item.variant_name(),
+                item.step_log2,
+                r.steps,
+                r.instructions,
+                r.hash,
+                r.contacts,
+                r.collisions
+            ),
+            None => defmt::error!("setup failed: {} {=str}", item.scene, BACKENDS[item.backend]),
+        }
+    });
+    defmt::info!("DONE");
+    hw::exit(0)
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    static PANICKED: AtomicBool = AtomicBool::new(false);
+    cortex_m::interrupt::disable();
+    if !PANICKED.swap(true, Ordering::SeqCst) {
+        defmt::error!("panic: {}", defmt::Display2Format(info));
+    }
+    hw::exit(101)
+}
