@@ -512,7 +512,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             let pull = kick.dv.axis(axis);
             let presses = if up { pull < S::ZERO } else { pull > S::ZERO };
             let mut keep = m.pos.axis(axis) == at && m.vel.axis(axis) == S::ZERO && presses;
-            if keep && !(axis == 1 && !up) {
+            let lid = axis == 1 && !up;
+            if keep && !lid {
                 // The tile behind the contact point (the lid, −y, is always there).
                 let across = if up { layout_index(layout, axis, plane.next_down()) } else { layout_index(layout, axis, plane) };
                 let mut t = layout.index_of(m.pos);
