@@ -16,7 +16,9 @@
 use crate::game::levels::by_name;
 use crate::game::rules::cell_centre;
 use crate::physics::geometry::grid::{words_for, TileGrid, Tiles, MAX_TILES_XZ};
-use crate::physics::{BoardMotion, Effects, MicroF32, Params, PhysicsSpec, Scalar, SetupError, Vec3, World};
+use crate::physics::{
+    BoardMotion, Effects, MicroF32, Params, PhysicsSpec, Scalar, SetupError, Vec3, World,
+};
 
 /// `log2` of the frame rate at which the tilt trace changes (128 Hz).
 pub const FRAME_LOG2: u32 = 7;
@@ -122,7 +124,11 @@ impl Trace {
     pub fn gravity_mg(&self, frame: u32) -> [i32; 3] {
         let (gx, gz) = match *self {
             Trace::Constant { gx, gz } => (gx, gz),
-            Trace::Alternate { gx, gz, half_period } => {
+            Trace::Alternate {
+                gx,
+                gz,
+                half_period,
+            } => {
                 if (frame / half_period.max(1)).is_multiple_of(2) {
                     (gx, gz)
                 } else {
@@ -191,8 +197,14 @@ pub struct Scene {
 impl Scene {
     /// The scene `id`.
     pub fn get(id: SceneId) -> Scene {
-        let rolling = Effects { rolling: true, ..Effects::NONE };
-        let spec = PhysicsSpec { effects: rolling, ..PhysicsSpec::DEFAULT };
+        let rolling = Effects {
+            rolling: true,
+            ..Effects::NONE
+        };
+        let spec = PhysicsSpec {
+            effects: rolling,
+            ..PhysicsSpec::DEFAULT
+        };
         match id {
             SceneId::Incline => Scene {
                 id,
@@ -208,12 +220,25 @@ impl Scene {
                 tiles: CORRIDOR.view(),
                 spec,
                 start: (1, 1),
-                trace: Trace::Alternate { gx: 20, gz: 10, half_period: 320 },
+                trace: Trace::Alternate {
+                    gx: 20,
+                    gz: 10,
+                    half_period: 320,
+                },
             },
             SceneId::Maze => {
-                let level = by_name("switchback").map(|(_, l)| l).unwrap_or(crate::game::levels::LEVELS[0]);
+                let level = by_name("switchback")
+                    .map(|(_, l)| l)
+                    .unwrap_or(crate::game::levels::LEVELS[0]);
                 let start = level.info.starts().first().copied().unwrap_or((1, 1));
-                Scene { id, name: "maze", tiles: level.tiles, spec: level.info.spec, start, trace: Trace::Switchback }
+                Scene {
+                    id,
+                    name: "maze",
+                    tiles: level.tiles,
+                    spec: level.info.spec,
+                    start,
+                    trace: Trace::Switchback,
+                }
             }
             SceneId::Corner => Scene {
                 id,
@@ -228,16 +253,30 @@ impl Scene {
 
     /// The whole suite, in report order.
     pub fn all() -> [Scene; 4] {
-        [SceneId::Incline, SceneId::Bounce, SceneId::Maze, SceneId::Corner].map(Scene::get)
+        [
+            SceneId::Incline,
+            SceneId::Bounce,
+            SceneId::Maze,
+            SceneId::Corner,
+        ]
+        .map(Scene::get)
     }
 
     /// The spec at `2^step_log2` steps/s with `effects`.
     pub fn spec_at(&self, step_log2: u32, effects: Effects) -> PhysicsSpec {
-        PhysicsSpec { step_log2, effects, ..self.spec }
+        PhysicsSpec {
+            step_log2,
+            effects,
+            ..self.spec
+        }
     }
 
     /// A fresh world for this scene.
-    pub fn world<S: Scalar>(&self, step_log2: u32, effects: Effects) -> Result<World<'static, S, 1>, SetupError> {
+    pub fn world<S: Scalar>(
+        &self,
+        step_log2: u32,
+        effects: Effects,
+    ) -> Result<World<'static, S, 1>, SetupError> {
         let params = Params::<S>::new(self.spec_at(step_log2, effects))?;
         let start = cell_centre(&params, self.start.0, self.start.1);
         let mut w = World::new(params, self.tiles, &[start])?;
@@ -247,7 +286,11 @@ impl Scene {
             // that the trajectory stays comparable (its cost, not its physics, is
             // what the study measures with it).
             let (ex, ez) = w.extent();
-            w.set_board_motion(BoardMotion { omega: Vec3::ZERO, omega_dot: Vec3::ZERO, pivot: Vec3::new(ex.half(), S::ZERO, ez.half()) });
+            w.set_board_motion(BoardMotion {
+                omega: Vec3::ZERO,
+                omega_dot: Vec3::ZERO,
+                pivot: Vec3::new(ex.half(), S::ZERO, ez.half()),
+            });
         }
         Ok(w)
     }
@@ -257,10 +300,39 @@ impl Scene {
 /// to the maze's own (rolling + friction), then all.
 pub const EFFECT_VARIANTS: [(&str, Effects); 6] = [
     ("none", Effects::NONE),
-    ("rolling", Effects { rolling: true, ..Effects::NONE }),
-    ("rolling+friction", Effects { rolling: true, friction: true, ..Effects::NONE }),
-    ("+board_motion", Effects { rolling: true, friction: true, board_motion: true, ..Effects::NONE }),
-    ("+holes", Effects { rolling: true, friction: true, holes: true, ..Effects::NONE }),
+    (
+        "rolling",
+        Effects {
+            rolling: true,
+            ..Effects::NONE
+        },
+    ),
+    (
+        "rolling+friction",
+        Effects {
+            rolling: true,
+            friction: true,
+            ..Effects::NONE
+        },
+    ),
+    (
+        "+board_motion",
+        Effects {
+            rolling: true,
+            friction: true,
+            board_motion: true,
+            ..Effects::NONE
+        },
+    ),
+    (
+        "+holes",
+        Effects {
+            rolling: true,
+            friction: true,
+            holes: true,
+            ..Effects::NONE
+        },
+    ),
     ("all", Effects::ALL),
 ];
 
@@ -337,21 +409,36 @@ impl BenchItem {
 /// bounce corridor at the default backend and rate. `backends` selects backends by index
 /// (bit `n` for [`BACKENDS`]`[n]`), `rates` step rates by `log2` (bit `k`).
 pub fn bench_plan(backends: u32, rates: u32, mut f: impl FnMut(BenchItem)) {
-    for scene in [SceneId::Incline, SceneId::Bounce, SceneId::Maze, SceneId::Corner] {
+    for scene in [
+        SceneId::Incline,
+        SceneId::Bounce,
+        SceneId::Maze,
+        SceneId::Corner,
+    ] {
         for backend in 0..BACKENDS.len() {
             if backends & (1 << backend) == 0 {
                 continue;
             }
             for k in STEP_LOG2 {
                 if rates & (1 << k) != 0 {
-                    f(BenchItem { scene, backend, step_log2: k, variant: None });
+                    f(BenchItem {
+                        scene,
+                        backend,
+                        step_log2: k,
+                        variant: None,
+                    });
                 }
             }
         }
     }
     for scene in [SceneId::Maze, SceneId::Bounce] {
         for v in 0..EFFECT_VARIANTS.len() {
-            f(BenchItem { scene, backend: 0, step_log2: DEFAULT_STEP_LOG2, variant: Some(v) });
+            f(BenchItem {
+                scene,
+                backend: 0,
+                step_log2: DEFAULT_STEP_LOG2,
+                variant: Some(v),
+            });
         }
     }
 }
@@ -373,7 +460,10 @@ pub struct BenchResult {
 
 /// Runs `item` once, with `count` timing the stepping (it runs the closure it is
 /// given and returns its instruction count).
-pub fn bench_one(item: &BenchItem, count: &mut dyn FnMut(&mut dyn FnMut()) -> u64) -> Option<BenchResult> {
+pub fn bench_one(
+    item: &BenchItem,
+    count: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
+) -> Option<BenchResult> {
     struct One<'a> {
         item: BenchItem,
         count: &'a mut dyn FnMut(&mut dyn FnMut()) -> u64,
@@ -382,7 +472,9 @@ pub fn bench_one(item: &BenchItem, count: &mut dyn FnMut(&mut dyn FnMut()) -> u6
         type Output = Option<BenchResult>;
         fn run<S: Scalar>(self) -> Option<BenchResult> {
             let scene = Scene::get(self.item.scene);
-            let mut w = scene.world::<S>(self.item.step_log2, self.item.effects()).ok()?;
+            let mut w = scene
+                .world::<S>(self.item.step_log2, self.item.effects())
+                .ok()?;
             let trace = scene.trace;
             let instructions = (self.count)(&mut || run_plain(&mut w, &trace));
             Some(BenchResult {
@@ -406,7 +498,9 @@ mod tests {
         type Output = (u32, u32, bool);
         fn run<S: Scalar>(self) -> (u32, u32, bool) {
             let scene = Scene::get(self.0);
-            let mut w = scene.world::<S>(self.1, scene.spec.effects).expect("scene sets up");
+            let mut w = scene
+                .world::<S>(self.1, scene.spec.effects)
+                .expect("scene sets up");
             drive(&mut w, &scene.trace, 0, 1 << self.1, |_, _| {});
             (w.stats.steps, w.stats.reverts, w.marbles()[0].out)
         }
@@ -415,11 +509,12 @@ mod tests {
     #[test]
     fn every_scene_sets_up_and_runs_a_second_in_every_backend() {
         for scene in Scene::all() {
-            for b in 0..BACKENDS.len() {
-                let (steps, reverts, out) = with_backend(b, Smoke(scene.id, DEFAULT_STEP_LOG2)).unwrap();
-                assert_eq!(steps, 1 << DEFAULT_STEP_LOG2, "{} {}", scene.name, BACKENDS[b]);
-                assert_eq!(reverts, 0, "{} {}", scene.name, BACKENDS[b]);
-                assert!(!out, "{} {}", scene.name, BACKENDS[b]);
+            for (b, name) in BACKENDS.iter().enumerate() {
+                let (steps, reverts, out) =
+                    with_backend(b, Smoke(scene.id, DEFAULT_STEP_LOG2)).unwrap();
+                assert_eq!(steps, 1 << DEFAULT_STEP_LOG2, "{} {name}", scene.name);
+                assert_eq!(reverts, 0, "{} {name}", scene.name);
+                assert!(!out, "{} {name}", scene.name);
             }
         }
     }
@@ -430,12 +525,19 @@ mod tests {
             for frame in 0..(SECONDS << FRAME_LOG2) {
                 let g = scene.trace.gravity_mg(frame);
                 assert_eq!(g[1], -1000);
-                assert!(g[0].abs() <= 300 && g[2].abs() <= 300, "{} frame {frame}: {g:?}", scene.name);
+                assert!(
+                    g[0].abs() <= 300 && g[2].abs() <= 300,
+                    "{} frame {frame}: {g:?}",
+                    scene.name
+                );
             }
         }
         // The bench plan covers every scene × backend × rate once, then the variants.
         let mut n = 0;
         bench_plan(u32::MAX, u32::MAX, |_| n += 1);
-        assert_eq!(n, 4 * BACKENDS.len() * STEP_LOG2.len() + 2 * EFFECT_VARIANTS.len());
+        assert_eq!(
+            n,
+            4 * BACKENDS.len() * STEP_LOG2.len() + 2 * EFFECT_VARIANTS.len()
+        );
     }
 }

@@ -34,7 +34,9 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use marble_rolling::study::{Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2, EFFECT_VARIANTS, REFERENCE_STEP_LOG2, STEP_LOG2};
+use marble_rolling::study::{
+    Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2, EFFECT_VARIANTS, REFERENCE_STEP_LOG2, STEP_LOG2,
+};
 
 use host::{Outcome, Timing};
 use target::{Count, Cpu, TargetRun};
@@ -122,7 +124,10 @@ fn analytic(id: SceneId, t: f64) -> Option<[f64; 2]> {
             let (x0, x1) = params.layout.span_xz(scene.start.0 as i32);
             let (z0, z1) = params.layout.span_xz(scene.start.1 as i32);
             let a = |mg: i32| 0.5 * 5.0 / 7.0 * mg as f64 * host::MM_S2_PER_MG * t * t;
-            Some([(x0 + x1) / 2.0 * pitch + a(g[0]), (z0 + z1) / 2.0 * pitch + a(g[2])])
+            Some([
+                (x0 + x1) / 2.0 * pitch + a(g[0]),
+                (z0 + z1) / 2.0 * pitch + a(g[2]),
+            ])
         }
         SceneId::Corner if t >= 10.0 => {
             // Pressed into the far corner of the 3 × 3-cell box: the wall tiles at
@@ -142,14 +147,22 @@ fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 fn host_cpu() -> String {
     let model = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
         .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
     format!("{model}, {cores} cores")
 }
 
 fn usage() -> ! {
-    eprintln!("usage: cargo accuracy [-- [--quick] [--no-target] [--no-m0] [--no-callgrind] [--out DIR]]");
+    eprintln!(
+        "usage: cargo accuracy [-- [--quick] [--no-target] [--no-m0] [--no-callgrind] [--out DIR]]"
+    );
     std::process::exit(2)
 }
 
@@ -168,12 +181,23 @@ fn main() {
     let mut no_callgrind = false;
     if args.first().map(String::as_str) == Some("--trace") {
         // Debugging aid: the f64 reference's track, every quarter second.
-        let id = args.get(1).and_then(|n| callgrind::scene_by_name(n)).unwrap_or_else(|| usage());
+        let id = args
+            .get(1)
+            .and_then(|n| callgrind::scene_by_name(n))
+            .unwrap_or_else(|| usage());
         let r = host::measure(id, 5, REFERENCE_STEP_LOG2, None).expect("reference run");
         for (n, p) in r.track.iter().enumerate().step_by(32) {
-            println!("{:6.2} s  x {:8.3} mm  z {:8.3} mm", n as f64 / 128.0, p[0], p[1]);
+            println!(
+                "{:6.2} s  x {:8.3} mm  z {:8.3} mm",
+                n as f64 / 128.0,
+                p[0],
+                p[1]
+            );
         }
-        println!("contacts {} bounces {} max overlap {:.3} µm", r.contacts, r.collisions, r.max_pen_um);
+        println!(
+            "contacts {} bounces {} max overlap {:.3} µm",
+            r.contacts, r.collisions, r.max_pen_um
+        );
         return;
     }
     let mut out_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("docs");
@@ -193,7 +217,11 @@ fn main() {
         }
     }
     let started = Instant::now();
-    let mut study = Study { quick, host_cpu: host_cpu(), ..Study::default() };
+    let mut study = Study {
+        quick,
+        host_cpu: host_cpu(),
+        ..Study::default()
+    };
     let scenes = Scene::all();
     let mut engines: Vec<Engine> = (0..BACKENDS.len()).map(Engine::Ours).collect();
     engines.push(Engine::Rapier);
@@ -205,7 +233,12 @@ fn main() {
         let r = host::measure(s.id, 5, REFERENCE_STEP_LOG2, None).expect("reference run");
         study.reference.insert(s.id, r);
     }
-    eprintln!("accuracy: {} scenes × {} engines × {} rates", scenes.len(), engines.len(), STEP_LOG2.len());
+    eprintln!(
+        "accuracy: {} scenes × {} engines × {} rates",
+        scenes.len(),
+        engines.len(),
+        STEP_LOG2.len()
+    );
     for s in &scenes {
         let reference = study.reference[&s.id].clone();
         let ana1 = analytic(s.id, 1.0);
@@ -219,10 +252,17 @@ fn main() {
                 let cell = Cell {
                     err1: dist(out.pos1, reference.pos1),
                     err10: dist(out.pos10, reference.pos10),
-                    err_max: out.track.iter().zip(&reference.track).map(|(a, b)| dist(*a, *b)).fold(0.0, f64::max),
+                    err_max: out
+                        .track
+                        .iter()
+                        .zip(&reference.track)
+                        .map(|(a, b)| dist(*a, *b))
+                        .fold(0.0, f64::max),
                     ana1: ana1.map(|a| dist(out.pos1, a)),
                     ana10: ana10.map(|a| dist(out.pos10, a)),
-                    energy_pct: (out.energy_end - reference.energy_end) / reference.ke_max.max(1e-9) * 100.0,
+                    energy_pct: (out.energy_end - reference.energy_end)
+                        / reference.ke_max.max(1e-9)
+                        * 100.0,
                     out,
                     ..Cell::default()
                 };
@@ -230,7 +270,9 @@ fn main() {
             }
         }
     }
-    study.phases.push(("accuracy runs (host)".into(), t.elapsed().as_secs_f64()));
+    study
+        .phases
+        .push(("accuracy runs (host)".into(), t.elapsed().as_secs_f64()));
 
     // 3. Host time.
     let t = Instant::now();
@@ -252,11 +294,14 @@ fn main() {
     for scene in [SceneId::Maze, SceneId::Bounce] {
         for (v, (_, fx)) in EFFECT_VARIANTS.iter().enumerate() {
             let out = host::measure(scene, 0, DEFAULT_STEP_LOG2, Some(*fx)).expect("setup");
-            let timing = host::time(scene, 0, DEFAULT_STEP_LOG2, Some(*fx), reps, min_s).expect("setup");
+            let timing =
+                host::time(scene, 0, DEFAULT_STEP_LOG2, Some(*fx), reps, min_s).expect("setup");
             study.variants.insert((scene, v), (out, timing));
         }
     }
-    study.phases.push(("host timing".into(), t.elapsed().as_secs_f64()));
+    study
+        .phases
+        .push(("host timing".into(), t.elapsed().as_secs_f64()));
 
     // 3b. Callgrind at the default rate.
     let t = Instant::now();
@@ -269,10 +314,16 @@ fn main() {
         let exe = std::env::current_exe().expect("own path");
         let work = std::env::temp_dir().join(format!("accuracy-callgrind-{}", std::process::id()));
         let _ = std::fs::create_dir_all(&work);
-        let jobs: Vec<(SceneId, Engine)> = scenes.iter().flat_map(|s| engines.iter().map(move |&e| (s.id, e))).collect();
+        let jobs: Vec<(SceneId, Engine)> = scenes
+            .iter()
+            .flat_map(|s| engines.iter().map(move |&e| (s.id, e)))
+            .collect();
         let results = std::sync::Mutex::new(Vec::new());
         let next = std::sync::atomic::AtomicUsize::new(0);
-        let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1).clamp(1, 4);
+        let threads = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .clamp(1, 4);
         std::thread::scope(|sc| {
             for _ in 0..threads {
                 sc.spawn(|| loop {
@@ -285,7 +336,12 @@ fn main() {
         });
         let mut failures = Vec::new();
         for id in [SceneId::Maze, SceneId::Incline] {
-            let title = format!("{} {} @ {}", Scene::get(id).name, BACKENDS[0], 1u32 << DEFAULT_STEP_LOG2);
+            let title = format!(
+                "{} {} @ {}",
+                Scene::get(id).name,
+                BACKENDS[0],
+                1u32 << DEFAULT_STEP_LOG2
+            );
             match callgrind::profile(&exe, id, BACKENDS[0], DEFAULT_STEP_LOG2, &work, 12) {
                 Ok(rows) => study.profiles.push((title, rows)),
                 Err(e) => failures.push(format!("profile {title}: {e}")),
@@ -306,17 +362,35 @@ fn main() {
             study.callgrind_note = Some(failures.join("; "));
         }
     }
-    study.phases.push(("callgrind (host instructions)".into(), t.elapsed().as_secs_f64()));
+    study.phases.push((
+        "callgrind (host instructions)".into(),
+        t.elapsed().as_secs_f64(),
+    ));
 
     // 4. Target.
     let rates: u32 = STEP_LOG2.iter().map(|k| 1u32 << k).sum();
     if !no_target {
         // Both QEMU runs at once (one core each); cargo serialises their builds.
-        let cpus: Vec<Cpu> = [Cpu::M4, Cpu::M0].into_iter().filter(|&c| c == Cpu::M4 || !no_m0).collect();
-        eprintln!("target: {} (build, then run in QEMU)", cpus.iter().map(|c| c.name()).collect::<Vec<_>>().join(" and "));
+        let cpus: Vec<Cpu> = [Cpu::M4, Cpu::M0]
+            .into_iter()
+            .filter(|&c| c == Cpu::M4 || !no_m0)
+            .collect();
+        eprintln!(
+            "target: {} (build, then run in QEMU)",
+            cpus.iter()
+                .map(|c| c.name())
+                .collect::<Vec<_>>()
+                .join(" and ")
+        );
         let runs: Vec<(Cpu, TargetRun)> = std::thread::scope(|sc| {
-            let handles: Vec<_> = cpus.iter().map(|&cpu| sc.spawn(move || (cpu, target::run(cpu, rates)))).collect();
-            handles.into_iter().map(|h| h.join().expect("target thread")).collect()
+            let handles: Vec<_> = cpus
+                .iter()
+                .map(|&cpu| sc.spawn(move || (cpu, target::run(cpu, rates))))
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("target thread"))
+                .collect()
         });
         for (cpu, run) in runs {
             if let Some(e) = &run.error {
@@ -325,8 +399,16 @@ fn main() {
             for s in &scenes {
                 for (b, backend) in BACKENDS.iter().enumerate() {
                     for k in STEP_LOG2 {
-                        let key = (s.name.to_string(), backend.to_string(), "scene".to_string(), k);
-                        if let (Some(c), Some(n)) = (study.cells.get_mut(&(s.id, Engine::Ours(b), k)), run.counts.get(&key)) {
+                        let key = (
+                            s.name.to_string(),
+                            backend.to_string(),
+                            "scene".to_string(),
+                            k,
+                        );
+                        if let (Some(c), Some(n)) = (
+                            study.cells.get_mut(&(s.id, Engine::Ours(b), k)),
+                            run.counts.get(&key),
+                        ) {
                             match cpu {
                                 Cpu::M4 => c.m4 = Some(n.clone()),
                                 Cpu::M0 => c.m0 = Some(n.clone()),
@@ -335,7 +417,9 @@ fn main() {
                     }
                 }
             }
-            study.phases.push((format!("target {}", cpu.name()), run.seconds));
+            study
+                .phases
+                .push((format!("target {}", cpu.name()), run.seconds));
             match cpu {
                 Cpu::M4 => study.m4 = Some(run),
                 Cpu::M0 => study.m0 = Some(run),
@@ -344,7 +428,9 @@ fn main() {
     }
 
     // 5. Report.
-    study.phases.push(("total".into(), started.elapsed().as_secs_f64()));
+    study
+        .phases
+        .push(("total".into(), started.elapsed().as_secs_f64()));
     let _ = std::fs::create_dir_all(&out_dir);
     let md = report::markdown(&study);
     let md_path = out_dir.join("accuracy.md");
@@ -354,6 +440,11 @@ fn main() {
         eprintln!("chart: {e}");
         std::process::exit(1);
     }
-    eprintln!("wrote {} and {} in {:.0} s", md_path.display(), png_path.display(), started.elapsed().as_secs_f64());
+    eprintln!(
+        "wrote {} and {} in {:.0} s",
+        md_path.display(),
+        png_path.display(),
+        started.elapsed().as_secs_f64()
+    );
     print!("{}", report::summary(&study));
 }

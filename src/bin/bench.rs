@@ -80,7 +80,11 @@ fn main() -> ! {
                 r.contacts,
                 r.collisions
             ),
-            None => defmt::error!("setup failed: {} {=str}", item.scene, BACKENDS[item.backend]),
+            None => defmt::error!(
+                "setup failed: {} {=str}",
+                item.scene,
+                BACKENDS[item.backend]
+            ),
         }
     });
     defmt::info!("DONE");

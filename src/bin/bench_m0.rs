@@ -52,7 +52,8 @@ unsafe extern "C" {
 #[unsafe(no_mangle)]
 #[used]
 pub static M0_VECTORS: [unsafe extern "C" fn() -> !; 15] = [
-    m0_reset, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault,
+    m0_reset, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault, fault,
+    fault, fault,
 ];
 
 /// Reset: initialise `.data` and `.bss`, then run the benchmark.
@@ -115,7 +116,11 @@ mod semihosting {
 
     /// Ends QEMU: exit status 0 for `ok`, 1 otherwise.
     pub fn exit(ok: bool) -> ! {
-        let reason = if ok { ADP_STOPPED_APPLICATION_EXIT } else { ADP_STOPPED_RUN_TIME_ERROR };
+        let reason = if ok {
+            ADP_STOPPED_APPLICATION_EXIT
+        } else {
+            ADP_STOPPED_RUN_TIME_ERROR
+        };
         loop {
             call(SYS_EXIT, reason);
         }
@@ -139,7 +144,10 @@ struct Line {
 
 impl Line {
     fn new() -> Self {
-        Line { buf: [0; 200], len: 0 }
+        Line {
+            buf: [0; 200],
+            len: 0,
+        }
     }
     fn flush(&mut self) {
         let n = self.len.min(self.buf.len() - 2);
@@ -257,7 +265,13 @@ fn mask_option(cmdline: &str, name: &str, default: u32) -> u32 {
 fn main() -> ! {
     timer::start();
     let (cal_instr, cal_ticks, overhead) = calibrate();
-    println!("CALIBRATION {} {} {} {}", cal_instr, cal_ticks, cal_ticks as u64 * 1000 / cal_instr as u64, overhead);
+    println!(
+        "CALIBRATION {} {} {} {}",
+        cal_instr,
+        cal_ticks,
+        cal_ticks as u64 * 1000 / cal_instr as u64,
+        overhead
+    );
     let to_instructions = |ticks: u32| -> u64 {
         let net = ticks.saturating_sub(overhead) as u64;
         (net * cal_instr as u64 + cal_ticks as u64 / 2) / (cal_ticks as u64).max(1)
@@ -286,7 +300,11 @@ fn main() -> ! {
                 r.contacts,
                 r.collisions
             ),
-            None => println!("ERROR setup failed: {} {}", Scene::get(item.scene).name, BACKENDS[item.backend]),
+            None => println!(
+                "ERROR setup failed: {} {}",
+                Scene::get(item.scene).name,
+                BACKENDS[item.backend]
+            ),
         }
     });
     println!("DONE");

@@ -15,7 +15,12 @@ pub const RAPIER: &str = "rapier2d";
 
 /// Whether valgrind is there.
 pub fn available() -> bool {
-    Command::new("valgrind").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status().is_ok_and(|s| s.success())
+    Command::new("valgrind")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
 }
 
 /// The child: one plain run. Prints the end state so that nothing is optimised out.
@@ -28,7 +33,10 @@ pub fn child(args: &[String]) -> Result<(), String> {
     if engine == RAPIER {
         println!("{:?}", peer::plain(id, k));
     } else {
-        let b = BACKENDS.iter().position(|b| b == engine).ok_or("unknown backend")?;
+        let b = BACKENDS
+            .iter()
+            .position(|b| b == engine)
+            .ok_or("unknown backend")?;
         println!("{:?}", host::plain(id, b, k, None));
     }
     Ok(())
@@ -36,7 +44,10 @@ pub fn child(args: &[String]) -> Result<(), String> {
 
 /// The scene called `name`.
 pub fn scene_by_name(name: &str) -> Option<SceneId> {
-    Scene::all().into_iter().find(|s| s.name == name).map(|s| s.id)
+    Scene::all()
+        .into_iter()
+        .find(|s| s.name == name)
+        .map(|s| s.id)
 }
 
 /// Instructions per step of one configuration, counted by callgrind.
@@ -60,7 +71,10 @@ pub fn count(exe: &Path, scene: SceneId, engine: &str, k: u32, work: &Path) -> R
     let _ = std::fs::remove_file(&out);
     let total = text
         .lines()
-        .find_map(|l| l.strip_prefix("summary:").or_else(|| l.strip_prefix("totals:")))
+        .find_map(|l| {
+            l.strip_prefix("summary:")
+                .or_else(|| l.strip_prefix("totals:"))
+        })
         .and_then(|v| v.split_whitespace().next())
         .and_then(|v| v.parse::<u64>().ok())
         .ok_or("no totals in the callgrind output")?;
@@ -71,7 +85,14 @@ pub fn count(exe: &Path, scene: SceneId, engine: &str, k: u32, work: &Path) -> R
 }
 
 /// The hottest functions (self cost) of one configuration's run: `(share %, name)`.
-pub fn profile(exe: &Path, scene: SceneId, engine: &str, k: u32, work: &Path, top: usize) -> Result<Vec<(f64, String)>, String> {
+pub fn profile(
+    exe: &Path,
+    scene: SceneId,
+    engine: &str,
+    k: u32,
+    work: &Path,
+    top: usize,
+) -> Result<Vec<(f64, String)>, String> {
     let name = Scene::get(scene).name;
     let out = work.join(format!("profile.{name}.{engine}.{k}.out"));
     let status = Command::new("valgrind")
@@ -87,7 +108,11 @@ pub fn profile(exe: &Path, scene: SceneId, engine: &str, k: u32, work: &Path, to
     if !status.success() {
         return Err(format!("valgrind exited with {status}"));
     }
-    let ann = Command::new("callgrind_annotate").arg("--auto=no").arg(&out).output().map_err(|e| format!("callgrind_annotate: {e}"))?;
+    let ann = Command::new("callgrind_annotate")
+        .arg("--auto=no")
+        .arg(&out)
+        .output()
+        .map_err(|e| format!("callgrind_annotate: {e}"))?;
     let _ = std::fs::remove_file(&out);
     let text = String::from_utf8_lossy(&ann.stdout);
     let mut rows = Vec::new();
@@ -108,15 +133,22 @@ pub fn profile(exe: &Path, scene: SceneId, engine: &str, k: u32, work: &Path, to
         }
         let l = line.trim_start();
         let Some(open) = l.find('(') else { continue };
-        let Some(close) = l[open..].find("%)") else { continue };
-        let Ok(pct) = l[open + 1..open + close].trim().parse::<f64>() else { continue };
+        let Some(close) = l[open..].find("%)") else {
+            continue;
+        };
+        let Ok(pct) = l[open + 1..open + close].trim().parse::<f64>() else {
+            continue;
+        };
         let rest = l[open + close + 2..].trim();
         let func = rest.split_once(':').map(|(_, f)| f).unwrap_or(rest);
         let func = func.split(" [").next().unwrap_or(func);
         let func = func.split(" (").next().unwrap_or(func);
         // Inlined code is listed under its own source file: sum by function.
         let name = shorten(func);
-        match rows.iter_mut().find(|(_, n): &&mut (f64, String)| *n == name) {
+        match rows
+            .iter_mut()
+            .find(|(_, n): &&mut (f64, String)| *n == name)
+        {
             Some(row) => row.0 += pct,
             None => rows.push((pct, name)),
         }

@@ -3,7 +3,9 @@
 use std::time::Instant;
 
 use marble_rolling::physics::{Effects, Scalar, StepStats, TileIndex, World};
-use marble_rolling::study::{drive, run_plain, steps, with_backend, Job, Scene, SceneId, Trace, FRAME_LOG2};
+use marble_rolling::study::{
+    drive, run_plain, steps, with_backend, Job, Scene, SceneId, Trace, FRAME_LOG2,
+};
 
 /// Standard gravity per milli-g, mm/s².
 pub const MM_S2_PER_MG: f64 = 9.806_65;
@@ -58,8 +60,14 @@ pub fn overlap<S: Scalar>(w: &World<'static, S, 1>) -> f64 {
     let p = w.params();
     let r = p.radius.to_f64();
     let c = m.pos.to_f64();
-    let (i0, i1) = (p.layout.index_xz(m.pos.x - p.radius) - 1, p.layout.index_xz(m.pos.x + p.radius) + 1);
-    let (k0, k1) = (p.layout.index_xz(m.pos.z - p.radius) - 1, p.layout.index_xz(m.pos.z + p.radius) + 1);
+    let (i0, i1) = (
+        p.layout.index_xz(m.pos.x - p.radius) - 1,
+        p.layout.index_xz(m.pos.x + p.radius) + 1,
+    );
+    let (k0, k1) = (
+        p.layout.index_xz(m.pos.z - p.radius) - 1,
+        p.layout.index_xz(m.pos.z + p.radius) + 1,
+    );
     let layers: &[i32] = if p.spec.effects.holes { &[0, 1] } else { &[1] };
     let mut best = f64::INFINITY;
     for &j in layers {
@@ -134,7 +142,13 @@ impl Job for Measure {
         });
         let m = w.marbles()[0];
         out.pos10 = [mm(m.pos.x), mm(m.pos.z)];
-        out.energy_end = energy(rolling, w.gravity_mg(), out.pos10, [mm(m.vel.x), mm(m.vel.z)]).0;
+        out.energy_end = energy(
+            rolling,
+            w.gravity_mg(),
+            out.pos10,
+            [mm(m.vel.x), mm(m.vel.z)],
+        )
+        .0;
         out.max_pen_um = (-min_gap).max(0.0) * pitch_mm * 1000.0;
         out.contacts = w.stats.contacts as u64;
         out.collisions = w.stats.collisions as u64;
@@ -149,10 +163,22 @@ impl Job for Measure {
 }
 
 /// An instrumented run of `scene` with backend `backend` at `2^step_log2` steps/s.
-pub fn measure(scene: SceneId, backend: usize, step_log2: u32, effects: Option<Effects>) -> Option<Outcome> {
+pub fn measure(
+    scene: SceneId,
+    backend: usize,
+    step_log2: u32,
+    effects: Option<Effects>,
+) -> Option<Outcome> {
     let scene = Scene::get(scene);
     let effects = effects.unwrap_or(scene.spec.effects);
-    with_backend(backend, Measure { scene, step_log2, effects })?
+    with_backend(
+        backend,
+        Measure {
+            scene,
+            step_log2,
+            effects,
+        },
+    )?
 }
 
 /// Host time per step: the minimum and the median over repeated whole runs.
@@ -168,12 +194,20 @@ pub struct Timing {
 
 /// Times `run` (one whole scene run of `steps` steps, set up by `prepare`): one
 /// warm-up, then repeats until `reps` runs and at least `min_total_s` seconds.
-pub fn time_runs<W>(steps: u32, reps: usize, min_total_s: f64, mut prepare: impl FnMut() -> W, mut run: impl FnMut(&mut W)) -> Timing {
+pub fn time_runs<W>(
+    steps: u32,
+    reps: usize,
+    min_total_s: f64,
+    mut prepare: impl FnMut() -> W,
+    mut run: impl FnMut(&mut W),
+) -> Timing {
     let mut w = prepare();
     run(&mut w);
     let mut samples = Vec::new();
     let start = Instant::now();
-    while samples.len() < reps || (start.elapsed().as_secs_f64() < min_total_s && samples.len() < 200) {
+    while samples.len() < reps
+        || (start.elapsed().as_secs_f64() < min_total_s && samples.len() < 200)
+    {
         let mut w = prepare();
         let t = Instant::now();
         run(&mut w);
@@ -182,7 +216,11 @@ pub fn time_runs<W>(steps: u32, reps: usize, min_total_s: f64, mut prepare: impl
         samples.push(dt * 1e9 / steps as f64);
     }
     samples.sort_by(|a, b| a.total_cmp(b));
-    Timing { min_ns: samples[0], median_ns: samples[samples.len() / 2], runs: samples.len() }
+    Timing {
+        min_ns: samples[0],
+        median_ns: samples[samples.len() / 2],
+        runs: samples.len(),
+    }
 }
 
 struct Time {
@@ -198,15 +236,37 @@ impl Job for Time {
     fn run<S: Scalar>(self) -> Option<Timing> {
         let w0 = self.scene.world::<S>(self.step_log2, self.effects).ok()?;
         let trace = self.scene.trace;
-        Some(time_runs(steps(self.step_log2), self.reps, self.min_total_s, || w0.clone(), |w| run_plain(w, &trace)))
+        Some(time_runs(
+            steps(self.step_log2),
+            self.reps,
+            self.min_total_s,
+            || w0.clone(),
+            |w| run_plain(w, &trace),
+        ))
     }
 }
 
 /// Host time per step of a plain (unobserved) run.
-pub fn time(scene: SceneId, backend: usize, step_log2: u32, effects: Option<Effects>, reps: usize, min_total_s: f64) -> Option<Timing> {
+pub fn time(
+    scene: SceneId,
+    backend: usize,
+    step_log2: u32,
+    effects: Option<Effects>,
+    reps: usize,
+    min_total_s: f64,
+) -> Option<Timing> {
     let scene = Scene::get(scene);
     let effects = effects.unwrap_or(scene.spec.effects);
-    with_backend(backend, Time { scene, step_log2, effects, reps, min_total_s })?
+    with_backend(
+        backend,
+        Time {
+            scene,
+            step_log2,
+            effects,
+            reps,
+            min_total_s,
+        },
+    )?
 }
 
 struct Plain {
@@ -225,8 +285,20 @@ impl Job for Plain {
 }
 
 /// One plain run (what callgrind counts): returns the end state's hash.
-pub fn plain(scene: SceneId, backend: usize, step_log2: u32, effects: Option<Effects>) -> Option<u64> {
+pub fn plain(
+    scene: SceneId,
+    backend: usize,
+    step_log2: u32,
+    effects: Option<Effects>,
+) -> Option<u64> {
     let scene = Scene::get(scene);
     let effects = effects.unwrap_or(scene.spec.effects);
-    with_backend(backend, Plain { scene, step_log2, effects })?
+    with_backend(
+        backend,
+        Plain {
+            scene,
+            step_log2,
+            effects,
+        },
+    )?
 }

@@ -84,7 +84,11 @@ fn wall_boxes(tiles: Tiles<'_>, params: &Params<f64>) -> Vec<(f64, f64, f64, f64
 impl Peer {
     /// The scene at `2^step_log2` steps/s.
     pub fn new(scene: &Scene, step_log2: u32, effects: Effects) -> Peer {
-        let spec = PhysicsSpec { step_log2, effects, ..scene.spec };
+        let spec = PhysicsSpec {
+            step_log2,
+            effects,
+            ..scene.spec
+        };
         let params = Params::<f64>::new(spec).expect("valid spec");
         let pitch = params.layout.pitch_um as f64 / 1000.0;
         let e = spec.restitution_milli as f32 / 1000.0;
@@ -93,25 +97,52 @@ impl Peer {
         world.integration_parameters.dt = 1.0 / (1u32 << step_log2) as f32;
         world.integration_parameters.length_unit = LENGTH_UNIT;
         for (x0, z0, x1, z1) in wall_boxes(scene.tiles, &params) {
-            let (hx, hz) = (((x1 - x0) * pitch / 2.0) as f32, ((z1 - z0) * pitch / 2.0) as f32);
-            let c = Vector::new(((x0 + x1) * pitch / 2.0) as f32, ((z0 + z1) * pitch / 2.0) as f32);
-            world.colliders.insert(ColliderBuilder::cuboid(hx, hz).translation(c).restitution(e).friction(0.0));
+            let (hx, hz) = (
+                ((x1 - x0) * pitch / 2.0) as f32,
+                ((z1 - z0) * pitch / 2.0) as f32,
+            );
+            let c = Vector::new(
+                ((x0 + x1) * pitch / 2.0) as f32,
+                ((z0 + z1) * pitch / 2.0) as f32,
+            );
+            world.colliders.insert(
+                ColliderBuilder::cuboid(hx, hz)
+                    .translation(c)
+                    .restitution(e)
+                    .friction(0.0),
+            );
         }
         let (sx, sz) = {
             let (x0, x1) = params.layout.span_xz(scene.start.0 as i32);
             let (z0, z1) = params.layout.span_xz(scene.start.1 as i32);
             ((x0 + x1) / 2.0 * pitch, (z0 + z1) / 2.0 * pitch)
         };
-        let body = RigidBodyBuilder::dynamic().translation(Vector::new(sx as f32, sz as f32)).lock_rotations();
-        let collider = ColliderBuilder::ball(r).restitution(e).friction(0.0).density(1.0);
+        let body = RigidBodyBuilder::dynamic()
+            .translation(Vector::new(sx as f32, sz as f32))
+            .lock_rotations();
+        let collider = ColliderBuilder::ball(r)
+            .restitution(e)
+            .friction(0.0)
+            .density(1.0);
         let (ball, _) = world.insert(body, collider);
         let mass = world.bodies[ball].mass();
         let decel = if effects.friction {
-            (spec.rolling_resistance_ppm as f64 / 1e6 * 1000.0 * MM_S2_PER_MG * if effects.rolling { 5.0 / 7.0 } else { 1.0 }) as f32
+            (spec.rolling_resistance_ppm as f64 / 1e6
+                * 1000.0
+                * MM_S2_PER_MG
+                * if effects.rolling { 5.0 / 7.0 } else { 1.0 }) as f32
         } else {
             0.0
         };
-        let mut p = Peer { world, ball, g_mg: [0, -1000, 0], rolling: effects.rolling, decel, dt: world_dt(step_log2), mass };
+        let mut p = Peer {
+            world,
+            ball,
+            g_mg: [0, -1000, 0],
+            rolling: effects.rolling,
+            decel,
+            dt: world_dt(step_log2),
+            mass,
+        };
         p.set_gravity(scene.trace.gravity_mg(0));
         p
     }
@@ -151,7 +182,10 @@ impl Peer {
     }
 
     fn touching(&self) -> bool {
-        self.world.narrow_phase.contact_pairs().any(|p| p.has_any_active_contact())
+        self.world
+            .narrow_phase
+            .contact_pairs()
+            .any(|p| p.has_any_active_contact())
     }
 }
 
@@ -160,7 +194,14 @@ fn world_dt(step_log2: u32) -> f32 {
 }
 
 /// Steps `peer` from step `from` to `to` with the scene's tilt trace.
-fn drive(peer: &mut Peer, scene: &Scene, step_log2: u32, from: u32, to: u32, mut each: impl FnMut(&Peer, u32)) {
+fn drive(
+    peer: &mut Peer,
+    scene: &Scene,
+    step_log2: u32,
+    from: u32,
+    to: u32,
+    mut each: impl FnMut(&Peer, u32),
+) {
     let sub = step_log2.saturating_sub(FRAME_LOG2);
     let mask = (1u32 << sub) - 1;
     for n in from..to {
@@ -188,8 +229,14 @@ fn overlap_mm(scene: &Scene, params: &Params<f64>, c: [f64; 2]) -> f64 {
     let r = params.radius * pitch;
     let (x, z) = (c[0] / pitch, c[1] / pitch);
     let rr = params.radius;
-    let (i0, i1) = (params.layout.index_xz(x - rr) - 1, params.layout.index_xz(x + rr) + 1);
-    let (k0, k1) = (params.layout.index_xz(z - rr) - 1, params.layout.index_xz(z + rr) + 1);
+    let (i0, i1) = (
+        params.layout.index_xz(x - rr) - 1,
+        params.layout.index_xz(x + rr) + 1,
+    );
+    let (k0, k1) = (
+        params.layout.index_xz(z - rr) - 1,
+        params.layout.index_xz(z + rr) + 1,
+    );
     let mut best = f64::INFINITY;
     for k in k0..=k1 {
         for i in i0..=i1 {
@@ -198,8 +245,20 @@ fn overlap_mm(scene: &Scene, params: &Params<f64>, c: [f64; 2]) -> f64 {
                 continue;
             }
             let b = params.layout.tile_box(t);
-            let dx = if x < b.min.x { b.min.x - x } else if x > b.max.x { x - b.max.x } else { 0.0 };
-            let dz = if z < b.min.z { b.min.z - z } else if z > b.max.z { z - b.max.z } else { 0.0 };
+            let dx = if x < b.min.x {
+                b.min.x - x
+            } else if x > b.max.x {
+                x - b.max.x
+            } else {
+                0.0
+            };
+            let dz = if z < b.min.z {
+                b.min.z - z
+            } else if z > b.max.z {
+                z - b.max.z
+            } else {
+                0.0
+            };
             best = best.min((dx * dx + dz * dz).sqrt() * pitch);
         }
     }
@@ -210,7 +269,11 @@ fn overlap_mm(scene: &Scene, params: &Params<f64>, c: [f64; 2]) -> f64 {
 pub fn measure(id: SceneId, step_log2: u32) -> Outcome {
     let scene = Scene::get(id);
     let effects = scene.spec.effects;
-    let params = Params::<f64>::new(PhysicsSpec { step_log2, ..scene.spec }).expect("valid spec");
+    let params = Params::<f64>::new(PhysicsSpec {
+        step_log2,
+        ..scene.spec
+    })
+    .expect("valid spec");
     let mut peer = Peer::new(&scene, step_log2, effects);
     let one = 1u32 << step_log2;
     let mut out = Outcome::default();
@@ -222,7 +285,10 @@ pub fn measure(id: SceneId, step_log2: u32) -> Outcome {
     let (ex, ez) = {
         let (nx, nz) = (scene.tiles.nx() as i32, scene.tiles.nz() as i32);
         let pitch = params.layout.pitch_um as f64 / 1000.0;
-        (params.layout.span_xz(nx - 1).1 * pitch, params.layout.span_xz(nz - 1).1 * pitch)
+        (
+            params.layout.span_xz(nx - 1).1 * pitch,
+            params.layout.span_xz(nz - 1).1 * pitch,
+        )
     };
     let frame_mask = (1u32 << (step_log2 - FRAME_LOG2)) - 1;
     out.track.push(peer.state().0);
@@ -263,7 +329,13 @@ pub fn measure(id: SceneId, step_log2: u32) -> Outcome {
 pub fn time(id: SceneId, step_log2: u32, reps: usize, min_total_s: f64) -> Timing {
     let scene = Scene::get(id);
     let effects = scene.spec.effects;
-    time_runs(steps(step_log2), reps, min_total_s, || Peer::new(&scene, step_log2, effects), |p| run_plain(p, &scene, step_log2))
+    time_runs(
+        steps(step_log2),
+        reps,
+        min_total_s,
+        || Peer::new(&scene, step_log2, effects),
+        |p| run_plain(p, &scene, step_log2),
+    )
 }
 
 /// One plain rapier run (for callgrind).

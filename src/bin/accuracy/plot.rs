@@ -73,40 +73,94 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         .axis_desc_style(("sans-serif", 15))
         .draw()
         .map_err(|e| e.to_string())?;
-    let dash = ShapeStyle { color: BLACK.mix(0.5), filled: false, stroke_width: 1 };
-    ch.draw_series(DashedLineSeries::new([(x0, TARGET_MM), (x1, TARGET_MM)], 6, 4, dash)).map_err(|e| e.to_string())?;
+    let dash = ShapeStyle {
+        color: BLACK.mix(0.5),
+        filled: false,
+        stroke_width: 1,
+    };
+    ch.draw_series(DashedLineSeries::new(
+        [(x0, TARGET_MM), (x1, TARGET_MM)],
+        6,
+        4,
+        dash,
+    ))
+    .map_err(|e| e.to_string())?;
     if have_m4 {
-        ch.draw_series(DashedLineSeries::new([(BUDGET_PER_MS, y0), (BUDGET_PER_MS, y1)], 6, 4, dash)).map_err(|e| e.to_string())?;
+        ch.draw_series(DashedLineSeries::new(
+            [(BUDGET_PER_MS, y0), (BUDGET_PER_MS, y1)],
+            6,
+            4,
+            dash,
+        ))
+        .map_err(|e| e.to_string())?;
     }
-    ch.draw_series([Text::new(format!("target {TARGET_MM} mm"), (x0 * 1.1, TARGET_MM * 1.15), ("sans-serif", 13).into_font())])
-        .map_err(|e| e.to_string())?;
-    ch.draw_series([Text::new(format!("errors below {FLOOR:e} mm drawn at {FLOOR:e}"), (x0 * 1.1, y0 * 1.3), ("sans-serif", 12).into_font())])
-        .map_err(|e| e.to_string())?;
+    ch.draw_series([Text::new(
+        format!("target {TARGET_MM} mm"),
+        (x0 * 1.1, TARGET_MM * 1.15),
+        ("sans-serif", 13).into_font(),
+    )])
+    .map_err(|e| e.to_string())?;
+    ch.draw_series([Text::new(
+        format!("errors below {FLOOR:e} mm drawn at {FLOOR:e}"),
+        (x0 * 1.1, y0 * 1.3),
+        ("sans-serif", 12).into_font(),
+    )])
+    .map_err(|e| e.to_string())?;
     if have_m4 {
-        ch.draw_series([Text::new(format!("budget {BUDGET_PER_MS}"), (BUDGET_PER_MS * 1.05, y1 / 1.6), ("sans-serif", 13).into_font())])
-            .map_err(|e| e.to_string())?;
+        ch.draw_series([Text::new(
+            format!("budget {BUDGET_PER_MS}"),
+            (BUDGET_PER_MS * 1.05, y1 / 1.6),
+            ("sans-serif", 13).into_font(),
+        )])
+        .map_err(|e| e.to_string())?;
     }
-    let mut front: Vec<(f64, f64)> = configs.iter().filter(|c| c.pareto).map(|c| (c.cost(), err(c.suite))).collect();
+    let mut front: Vec<(f64, f64)> = configs
+        .iter()
+        .filter(|c| c.pareto)
+        .map(|c| (c.cost(), err(c.suite)))
+        .collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    ch.draw_series(LineSeries::new(front.clone(), ShapeStyle { color: BLACK.mix(0.8), filled: false, stroke_width: 2 }))
-        .map_err(|e| e.to_string())?
-        .label("Pareto front")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
+    ch.draw_series(LineSeries::new(
+        front.clone(),
+        ShapeStyle {
+            color: BLACK.mix(0.8),
+            filled: false,
+            stroke_width: 2,
+        },
+    ))
+    .map_err(|e| e.to_string())?
+    .label("Pareto front")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
     for (b, name) in BACKENDS.iter().enumerate() {
-        let pts: Vec<(f64, f64, u32, bool)> = configs.iter().filter(|c| c.backend == b).map(|c| (c.cost(), err(c.suite), c.k, c.pareto)).collect();
+        let pts: Vec<(f64, f64, u32, bool)> = configs
+            .iter()
+            .filter(|c| c.backend == b)
+            .map(|c| (c.cost(), err(c.suite), c.k, c.pareto))
+            .collect();
         let col = color(b);
-        ch.draw_series(pts.iter().map(|&(x, y, _, p)| Circle::new((x, y), if p { 6 } else { 4 }, col.filled())))
-            .map_err(|e| e.to_string())?
-            .label(*name)
-            .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
+        ch.draw_series(
+            pts.iter()
+                .map(|&(x, y, _, p)| Circle::new((x, y), if p { 6 } else { 4 }, col.filled())),
+        )
+        .map_err(|e| e.to_string())?
+        .label(*name)
+        .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
         ch.draw_series(pts.iter().map(|&(x, y, k, _)| {
-            Text::new(format!("{}", 1u32 << k), (x * 1.06, y * 1.08), ("sans-serif", 11).into_font().color(&col))
+            Text::new(
+                format!("{}", 1u32 << k),
+                (x * 1.06, y * 1.08),
+                ("sans-serif", 11).into_font().color(&col),
+            )
         }))
         .map_err(|e| e.to_string())?;
         // Ring around the current default.
         if b == 0 {
-            ch.draw_series(pts.iter().filter(|p| p.2 == DEFAULT_STEP_LOG2).map(|&(x, y, _, _)| Circle::new((x, y), 10, BLACK.stroke_width(1))))
-                .map_err(|e| e.to_string())?;
+            ch.draw_series(
+                pts.iter()
+                    .filter(|p| p.2 == DEFAULT_STEP_LOG2)
+                    .map(|&(x, y, _, _)| Circle::new((x, y), 10, BLACK.stroke_width(1))),
+            )
+            .map_err(|e| e.to_string())?;
         }
     }
     ch.configure_series_labels()
@@ -118,10 +172,18 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
 
     // Right: host time, with rapier2d (same suite error, maze time).
-    let mut pts: Vec<(Engine, u32, f64, f64)> = configs.iter().map(|c| (Engine::Ours(c.backend), c.k, c.host_ns, err(c.suite))).collect();
+    let mut pts: Vec<(Engine, u32, f64, f64)> = configs
+        .iter()
+        .map(|c| (Engine::Ours(c.backend), c.k, c.host_ns, err(c.suite)))
+        .collect();
     for k in STEP_LOG2 {
         let cell = |id: SceneId| study.cells.get(&(id, Engine::Rapier, k));
-        if let (Some(i), Some(b), Some(c), Some(m)) = (cell(SceneId::Incline), cell(SceneId::Bounce), cell(SceneId::Corner), cell(SceneId::Maze)) {
+        if let (Some(i), Some(b), Some(c), Some(m)) = (
+            cell(SceneId::Incline),
+            cell(SceneId::Bounce),
+            cell(SceneId::Corner),
+            cell(SceneId::Maze),
+        ) {
             let suite = i.err10.max(b.err_max).max(c.ana10.unwrap_or(0.0));
             pts.push((Engine::Rapier, k, m.host.min_ns, err(suite)));
         }
@@ -129,7 +191,10 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
     let (x0, x1) = bounds(pts.iter().map(|p| p.2));
     let (y0, y1) = bounds(pts.iter().map(|p| p.3).chain([TARGET_MM]));
     let mut ch = ChartBuilder::on(&right)
-        .caption("Suite error vs host time, with rapier2d", ("sans-serif", 22))
+        .caption(
+            "Suite error vs host time, with rapier2d",
+            ("sans-serif", 22),
+        )
         .margin(14)
         .x_label_area_size(44)
         .y_label_area_size(70)
@@ -144,19 +209,39 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         .axis_desc_style(("sans-serif", 15))
         .draw()
         .map_err(|e| e.to_string())?;
-    ch.draw_series(DashedLineSeries::new([(x0, TARGET_MM), (x1, TARGET_MM)], 6, 4, dash)).map_err(|e| e.to_string())?;
-    for (b, name) in BACKENDS.iter().enumerate().map(|(b, n)| (Engine::Ours(b), *n)).chain([(Engine::Rapier, "rapier2d (f32)")]) {
+    ch.draw_series(DashedLineSeries::new(
+        [(x0, TARGET_MM), (x1, TARGET_MM)],
+        6,
+        4,
+        dash,
+    ))
+    .map_err(|e| e.to_string())?;
+    for (b, name) in BACKENDS
+        .iter()
+        .enumerate()
+        .map(|(b, n)| (Engine::Ours(b), *n))
+        .chain([(Engine::Rapier, "rapier2d (f32)")])
+    {
         let col = match b {
             Engine::Ours(i) => color(i),
             Engine::Rapier => RAPIER,
         };
         let mine: Vec<_> = pts.iter().filter(|p| p.0 == b).collect();
-        ch.draw_series(mine.iter().map(|p| Circle::new((p.2, p.3), 5, col.filled())))
-            .map_err(|e| e.to_string())?
-            .label(name)
-            .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
-        ch.draw_series(mine.iter().map(|p| Text::new(format!("{}", 1u32 << p.1), (p.2 * 1.05, p.3 * 1.08), ("sans-serif", 11).into_font().color(&col))))
-            .map_err(|e| e.to_string())?;
+        ch.draw_series(
+            mine.iter()
+                .map(|p| Circle::new((p.2, p.3), 5, col.filled())),
+        )
+        .map_err(|e| e.to_string())?
+        .label(name)
+        .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
+        ch.draw_series(mine.iter().map(|p| {
+            Text::new(
+                format!("{}", 1u32 << p.1),
+                (p.2 * 1.05, p.3 * 1.08),
+                ("sans-serif", 11).into_font().color(&col),
+            )
+        }))
+        .map_err(|e| e.to_string())?;
     }
     ch.configure_series_labels()
         .background_style(WHITE.mix(0.85))

@@ -3,7 +3,10 @@
 use std::fmt::Write;
 
 use marble_rolling::physics::PhysicsSpec;
-use marble_rolling::study::{Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2, EFFECT_VARIANTS, REFERENCE_STEP_LOG2, SECONDS, STEP_LOG2};
+use marble_rolling::study::{
+    Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2, EFFECT_VARIANTS, REFERENCE_STEP_LOG2, SECONDS,
+    STEP_LOG2,
+};
 
 use super::target::TargetRun;
 use super::{Engine, Study};
@@ -113,7 +116,8 @@ impl Config {
     /// The cost the Pareto front and the recommendation use: M4 instructions per
     /// simulated ms, or host ns per simulated ms without a target run.
     pub fn cost(&self) -> f64 {
-        self.m4_ms.unwrap_or(self.host_ns * (1u64 << self.k) as f64 / 1000.0)
+        self.m4_ms
+            .unwrap_or(self.host_ns * (1u64 << self.k) as f64 / 1000.0)
     }
 }
 
@@ -123,9 +127,12 @@ pub fn configs(study: &Study) -> Vec<Config> {
     for b in 0..BACKENDS.len() {
         for k in STEP_LOG2 {
             let cell = |s: SceneId| study.cells.get(&(s, Engine::Ours(b), k));
-            let (Some(inc), Some(bo), Some(mz), Some(co)) =
-                (cell(SceneId::Incline), cell(SceneId::Bounce), cell(SceneId::Maze), cell(SceneId::Corner))
-            else {
+            let (Some(inc), Some(bo), Some(mz), Some(co)) = (
+                cell(SceneId::Incline),
+                cell(SceneId::Bounce),
+                cell(SceneId::Maze),
+                cell(SceneId::Corner),
+            ) else {
                 continue;
             };
             let all = [inc, bo, mz, co];
@@ -166,7 +173,12 @@ pub fn configs(study: &Study) -> Vec<Config> {
 
 /// The speed cap at `2^k` steps/s, pitch/s.
 pub fn speed_cap(k: u32) -> f64 {
-    marble_rolling::physics::Params::<f64>::new(PhysicsSpec { step_log2: k, ..PhysicsSpec::DEFAULT }).map(|p| p.v_max).unwrap_or(0.0)
+    marble_rolling::physics::Params::<f64>::new(PhysicsSpec {
+        step_log2: k,
+        ..PhysicsSpec::DEFAULT
+    })
+    .map(|p| p.v_max)
+    .unwrap_or(0.0)
 }
 
 /// Whether the rate keeps the full 64 pitch/s cap.
@@ -190,7 +202,9 @@ pub fn recommended(configs: &[Config]) -> Option<&Config> {
 }
 
 fn current_default(configs: &[Config]) -> Option<&Config> {
-    configs.iter().find(|c| c.backend == 0 && c.k == DEFAULT_STEP_LOG2)
+    configs
+        .iter()
+        .find(|c| c.backend == 0 && c.k == DEFAULT_STEP_LOG2)
 }
 
 /// The backends compared with rapier2d: the recommended one and the firmware's
@@ -222,7 +236,10 @@ fn versus(study: &Study, id: SceneId, b: usize, k: u32) -> Option<(f64, Option<f
 /// The recommended backend against rapier2d at the default rate, over the
 /// scenes: (smallest time ratio and its scene, smallest instruction ratio, as
 /// accurate everywhere).
-fn peer_verdict(study: &Study, configs: &[Config]) -> Option<(usize, f64, SceneId, Option<f64>, bool)> {
+fn peer_verdict(
+    study: &Study,
+    configs: &[Config],
+) -> Option<(usize, f64, SceneId, Option<f64>, bool)> {
     let b = *peer_backends(configs).first()?;
     let mut worst: Option<(f64, SceneId)> = None;
     let mut ir_worst: Option<f64> = None;
@@ -254,8 +271,17 @@ fn target_status(run: &Option<TargetRun>) -> String {
     match run {
         None => "not run (`--no-target` / `--no-m0`)".into(),
         Some(r) => match &r.error {
-            None => format!("{} runs counted in {:.0} s; calibration `{}`", r.counts.len(), r.seconds, r.calibration),
-            Some(e) => format!("**failed** after {:.0} s ({} runs counted): {e}", r.seconds, r.counts.len()),
+            None => format!(
+                "{} runs counted in {:.0} s; calibration `{}`",
+                r.counts.len(),
+                r.seconds,
+                r.calibration
+            ),
+            Some(e) => format!(
+                "**failed** after {:.0} s ({} runs counted): {e}",
+                r.seconds,
+                r.counts.len()
+            ),
         },
     }
 }
@@ -316,9 +342,24 @@ pub fn markdown(study: &Study) -> String {
         w,
         "Host: {}. Total {:.0} s ({}).{}\n",
         study.host_cpu,
-        study.phases.iter().find(|p| p.0 == "total").map(|p| p.1).unwrap_or(0.0),
-        study.phases.iter().filter(|p| p.0 != "total").map(|(n, t)| format!("{n} {t:.0} s")).collect::<Vec<_>>().join(", "),
-        if study.quick { " **Quick mode: fewer timing repetitions.**" } else { "" }
+        study
+            .phases
+            .iter()
+            .find(|p| p.0 == "total")
+            .map(|p| p.1)
+            .unwrap_or(0.0),
+        study
+            .phases
+            .iter()
+            .filter(|p| p.0 != "total")
+            .map(|(n, t)| format!("{n} {t:.0} s"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        if study.quick {
+            " **Quick mode: fewer timing repetitions.**"
+        } else {
+            ""
+        }
     );
 
     // Verdicts.
@@ -412,11 +453,20 @@ pub fn markdown(study: &Study) -> String {
     );
     let _ = writeln!(w, "| steps/s | speed cap pitch/s | mm/s |\n|---|---|---|");
     for k in STEP_LOG2 {
-        let _ = writeln!(w, "| {} | {} | {} |", rate(k), sig(speed_cap(k)), sig(speed_cap(k) * 12.0));
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} |",
+            rate(k),
+            sig(speed_cap(k)),
+            sig(speed_cap(k) * 12.0)
+        );
     }
     let _ = writeln!(w, "\nThe incline reaches 11.7 pitch/s and the bounce 24 pitch/s, so 128 steps/s caps both and 256 steps/s the bounce: the \"steps at cap\" column.\n");
     let _ = writeln!(w, "**Scenes** (src/study.rs; 12 mm pitch, 3.5 mm marble, e = 0.5; the tilt is set once per 128 Hz frame, as the firmware does; {SECONDS} s each):\n");
-    let _ = writeln!(w, "| scene | board | tilt | effects | analytic |\n|---|---|---|---|---|");
+    let _ = writeln!(
+        w,
+        "| scene | board | tilt | effects | analytic |\n|---|---|---|---|---|"
+    );
     let _ = writeln!(w, "| incline | 127 × 127-tile open floor | constant 2 mg along x' and z' | rolling | x₀ + ½·(5/7)·g·sinθ·t² (58 pitches in 10 s, 11.7 pitch/s, under the 64 pitch/s cap) |");
     let _ = writeln!(w, "| bounce | closed corridor, 1 × 25 cells (300 mm) | ±20 mg along it, flipping every 2.5 s; 10 mg into a side wall (always moving, up to 24 pitch/s) | rolling | – |");
     let _ = writeln!(w, "| maze | built-in level `switchback` (flat) | scripted: 30 mg along each row in turn (+x', −x', +x'), about 20 mg across so the marble drops through each row's opening, a ±45 mg triangle wobble (1.25 s) that rocks it back and forth; no autopilot | rolling, friction | – |");
@@ -444,7 +494,12 @@ pub fn markdown(study: &Study) -> String {
                 if n.hash == c.out.hash {
                     same += 1;
                 } else {
-                    diff.push(format!("{} {} @ {}", Scene::get(*id).name, e.name(), 1u32 << k));
+                    diff.push(format!(
+                        "{} {} @ {}",
+                        Scene::get(*id).name,
+                        e.name(),
+                        1u32 << k
+                    ));
                 }
             }
         }
@@ -455,7 +510,11 @@ pub fn markdown(study: &Study) -> String {
         if diff.is_empty() {
             format!("all {same} end-state hashes equal the host's")
         } else {
-            format!("{same} end-state hashes equal the host's, {} differ: {}", diff.len(), diff.join(", "))
+            format!(
+                "{same} end-state hashes equal the host's, {} differ: {}",
+                diff.len(),
+                diff.join(", ")
+            )
         }
     };
     if study.m4.is_some() {
@@ -510,7 +569,11 @@ pub fn markdown(study: &Study) -> String {
     let _ = writeln!(
         w,
         "**Pareto front** (cheapest first; suite error, M4 instructions per simulated ms): {}.\n",
-        front.iter().map(|c| format!("{} ({} mm, {})", c.name(), sig(c.suite), sig(c.cost()))).collect::<Vec<_>>().join(" → ")
+        front
+            .iter()
+            .map(|c| format!("{} ({} mm, {})", c.name(), sig(c.suite), sig(c.cost())))
+            .collect::<Vec<_>>()
+            .join(" → ")
     );
     let _ = writeln!(w, "![suite error vs cost](accuracy.png)\n");
 
@@ -522,19 +585,35 @@ pub fn markdown(study: &Study) -> String {
         super::peer::LENGTH_UNIT
     );
     let backs = peer_backends(&configs);
-    let mut head = String::from("| steps/s | scene | rapier2d: max error mm | ns/step | instr/step |");
+    let mut head =
+        String::from("| steps/s | scene | rapier2d: max error mm | ns/step | instr/step |");
     let mut rule = String::from("|---|---|---|---|---|");
     for &b in &backs {
-        let _ = write!(head, " {0}: max error mm | ns/step | instr/step | time ratio | instr ratio |", BACKENDS[b]);
+        let _ = write!(
+            head,
+            " {0}: max error mm | ns/step | instr/step | time ratio | instr ratio |",
+            BACKENDS[b]
+        );
         rule.push_str("---|---|---|---|---|");
     }
     let _ = writeln!(w, "{head}\n{rule}");
     for k in STEP_LOG2 {
         for s in Scene::all() {
-            let Some(r) = study.cells.get(&(s.id, Engine::Rapier, k)) else { continue };
-            let mut row = format!("| {} | {} | {} | {} | {} |", 1u32 << k, s.name, sig(r.err_max), sig(r.host.min_ns), opt(r.host_ir));
+            let Some(r) = study.cells.get(&(s.id, Engine::Rapier, k)) else {
+                continue;
+            };
+            let mut row = format!(
+                "| {} | {} | {} | {} | {} |",
+                1u32 << k,
+                s.name,
+                sig(r.err_max),
+                sig(r.host.min_ns),
+                opt(r.host_ir)
+            );
             for &b in &backs {
-                let Some(o) = study.cells.get(&(s.id, Engine::Ours(b), k)) else { continue };
+                let Some(o) = study.cells.get(&(s.id, Engine::Ours(b), k)) else {
+                    continue;
+                };
                 let (t, ir, good) = versus(study, s.id, b, k).unwrap_or((f64::NAN, None, false));
                 let mark = if good { "" } else { " ✗" };
                 let _ = write!(
@@ -544,16 +623,23 @@ pub fn markdown(study: &Study) -> String {
                     sig(o.host.min_ns),
                     opt(o.host_ir),
                     sig(t),
-                    ir.map(|i| format!("{}×", sig(i))).unwrap_or_else(|| "–".into())
+                    ir.map(|i| format!("{}×", sig(i)))
+                        .unwrap_or_else(|| "–".into())
                 );
             }
             let _ = writeln!(w, "{row}");
         }
     }
-    let _ = writeln!(w, "\n✗: our error is larger than rapier2d's there (or our run reached the speed cap).\n");
+    let _ = writeln!(
+        w,
+        "\n✗: our error is larger than rapier2d's there (or our run reached the speed cap).\n"
+    );
 
     // Effects.
-    let _ = writeln!(w, "## What each effect costs (and that a scene without it does not pay)\n");
+    let _ = writeln!(
+        w,
+        "## What each effect costs (and that a scene without it does not pay)\n"
+    );
     let _ = writeln!(
         w,
         "`i8f24` at {} steps/s, the maze (`switchback`) and the bounce corridor with effect sets switched on one by one. `World::stats` counts every run of an effect's code: a switched-off effect's counter stays 0, and its cost is one predictable branch per step. `board_motion` runs with the board held still (its code runs, its physics is idle); `marbles` with one marble only costs its branch (the pair code needs two). Where an effect changes the physics (rolling, friction, holes) the marble takes a different path, so part of a difference is the path (e.g. more or fewer wall contacts); `board_motion` with a still board keeps the path, so its row is its code alone.\n",
@@ -563,10 +649,25 @@ pub fn markdown(study: &Study) -> String {
     for scene in [SceneId::Maze, SceneId::Bounce] {
         let name = Scene::get(scene).name;
         for (v, (vn, _)) in EFFECT_VARIANTS.iter().enumerate() {
-            let Some((out, t)) = study.variants.get(&(scene, v)) else { continue };
-            let key = (name.to_string(), BACKENDS[0].to_string(), vn.to_string(), DEFAULT_STEP_LOG2);
-            let m4 = study.m4.as_ref().and_then(|r| r.counts.get(&key)).map(|c| c.per_step());
-            let m0 = study.m0.as_ref().and_then(|r| r.counts.get(&key)).map(|c| c.per_step());
+            let Some((out, t)) = study.variants.get(&(scene, v)) else {
+                continue;
+            };
+            let key = (
+                name.to_string(),
+                BACKENDS[0].to_string(),
+                vn.to_string(),
+                DEFAULT_STEP_LOG2,
+            );
+            let m4 = study
+                .m4
+                .as_ref()
+                .and_then(|r| r.counts.get(&key))
+                .map(|c| c.per_step());
+            let m0 = study
+                .m0
+                .as_ref()
+                .and_then(|r| r.counts.get(&key))
+                .map(|c| c.per_step());
             let s = out.stats;
             let _ = writeln!(
                 w,
@@ -620,7 +721,9 @@ pub fn markdown(study: &Study) -> String {
         engines.push(Engine::Rapier);
         for e in engines {
             for k in STEP_LOG2 {
-                let Some(c) = study.cells.get(&(s.id, e, k)) else { continue };
+                let Some(c) = study.cells.get(&(s.id, e, k)) else {
+                    continue;
+                };
                 let _ = writeln!(
                     w,
                     "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {}{} | {} | {} / {} | {} | {} |",

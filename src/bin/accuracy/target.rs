@@ -68,12 +68,22 @@ fn parse(text: &str, run: &mut TargetRun) {
             if f.len() < 9 {
                 continue;
             }
-            let (Ok(k), Ok(steps), Ok(instructions), Ok(hash)) =
-                (f[3].parse::<u32>(), f[4].parse::<u32>(), f[5].parse::<u64>(), f[6].parse::<u64>())
-            else {
+            let (Ok(k), Ok(steps), Ok(instructions), Ok(hash)) = (
+                f[3].parse::<u32>(),
+                f[4].parse::<u32>(),
+                f[5].parse::<u64>(),
+                f[6].parse::<u64>(),
+            ) else {
                 continue;
             };
-            run.counts.insert((f[0].into(), f[1].into(), f[2].into(), k), Count { steps, instructions, hash });
+            run.counts.insert(
+                (f[0].into(), f[1].into(), f[2].into(), k),
+                Count {
+                    steps,
+                    instructions,
+                    hash,
+                },
+            );
         } else if let Some(i) = line.find("CALIBRATION ") {
             run.calibration = line[i + 12..].trim().to_string();
         } else if let Some(i) = line.find("EMPTY ") {
@@ -88,24 +98,67 @@ pub fn run(cpu: Cpu, rates: u32) -> TargetRun {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
     match cpu {
-        Cpu::M4 => cmd.args(["run", "--release", "--target", "thumbv7em-none-eabihf", "--features", "board-qemu", "--bin", "bench", "--"]),
-        Cpu::M0 => cmd.args(["run", "--release", "--target", "thumbv6m-none-eabi", "--features", "bench-m0", "--bin", "bench_m0", "--"]),
+        Cpu::M4 => cmd.args([
+            "run",
+            "--release",
+            "--target",
+            "thumbv7em-none-eabihf",
+            "--features",
+            "board-qemu",
+            "--bin",
+            "bench",
+            "--",
+        ]),
+        Cpu::M0 => cmd.args([
+            "run",
+            "--release",
+            "--target",
+            "thumbv6m-none-eabi",
+            "--features",
+            "bench-m0",
+            "--bin",
+            "bench_m0",
+            "--",
+        ]),
     };
     cmd.arg(format!("--rates={rates}"));
     cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
-    cmd.stdin(Stdio::null()).stderr(Stdio::piped()).stdout(Stdio::piped());
+    cmd.stdin(Stdio::null())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::piped());
     let mut run = TargetRun::default();
     match cmd.output() {
         Ok(out) => {
             // defmt (M4) arrives on stdout through defmt-print; QEMU writes the
             // M0's SYS_WRITE0 console to stderr: read both.
-            let stdout = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+            let stdout = String::from_utf8_lossy(&out.stdout).into_owned()
+                + &String::from_utf8_lossy(&out.stderr);
             parse(&stdout, &mut run);
             if !out.status.success() || !stdout.contains("DONE") {
                 let stderr = String::from_utf8_lossy(&out.stderr);
-                let tail: Vec<&str> = stderr.lines().rev().take(6).collect::<Vec<_>>().into_iter().rev().collect();
-                let so: Vec<&str> = stdout.lines().rev().take(3).collect::<Vec<_>>().into_iter().rev().collect();
-                run.error = Some(format!("{} exited with {}: {} | {}", cpu.name(), out.status, tail.join(" / "), so.join(" / ")));
+                let tail: Vec<&str> = stderr
+                    .lines()
+                    .rev()
+                    .take(6)
+                    .collect::<Vec<_>>()
+                    .into_iter()
+                    .rev()
+                    .collect();
+                let so: Vec<&str> = stdout
+                    .lines()
+                    .rev()
+                    .take(3)
+                    .collect::<Vec<_>>()
+                    .into_iter()
+                    .rev()
+                    .collect();
+                run.error = Some(format!(
+                    "{} exited with {}: {} | {}",
+                    cpu.name(),
+                    out.status,
+                    tail.join(" / "),
+                    so.join(" / ")
+                ));
             }
         }
         Err(e) => run.error = Some(format!("could not run cargo for {}: {e}", cpu.name())),
