@@ -495,10 +495,16 @@ pub trait MatrixOutput {
 /// is taken only at the start of a refresh, so a refresh never mixes frames.
 pub async fn display_task<O: MatrixOutput>(output: &mut O) -> ! {
     let mut scanner = Scanner::<WIDTH, HEIGHT>::new();
+    let mut shown: Option<DisplayFrame> = None;
     loop {
         if scanner.at_refresh_start() {
             if let Some(frame) = FRAMES.try_take() {
-                scanner.load(&frame);
+                // A marble at rest renders the same frame over and over: only a
+                // changed one needs its bit planes rebuilt.
+                if shown != Some(frame) {
+                    scanner.load(&frame);
+                    shown = Some(frame);
+                }
             }
         }
         output.show(scanner.next_step()).await;

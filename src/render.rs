@@ -305,11 +305,20 @@ pub fn render_world<S: Scalar, const M: usize, const W: usize, const H: usize>(
     viewport: Viewport,
 ) -> Frame<W, H> {
     let mut frame = render_background(level, blink_on, viewport);
+    draw_marbles(&mut frame, world, viewport);
+    frame
+}
+
+/// Every marble still in play, at full brightness, on top of `frame`.
+fn draw_marbles<S: Scalar, const M: usize, const W: usize, const H: usize>(
+    frame: &mut Frame<W, H>,
+    world: &World<'_, S, M>,
+    viewport: Viewport,
+) {
     let layout = &world.params().layout;
     for m in world.marbles().iter().filter(|m| !m.out) {
-        draw_marble(&mut frame, tile_point(layout, m.pos.x, m.pos.z), viewport, MARBLE);
+        draw_marble(frame, tile_point(layout, m.pos.x, m.pos.z), viewport, MARBLE);
     }
-    frame
 }
 
 /// Renders a game on a `W`×`H` matrix, keeping a viewport that follows the
@@ -318,19 +327,31 @@ pub fn render_world<S: Scalar, const M: usize, const W: usize, const H: usize>(
 pub struct Renderer<const W: usize, const H: usize> {
     /// The current viewport and the `(nx, nz)` of the level it was made for.
     state: Option<(Viewport, u8, u8)>,
+    /// The last background and what it was drawn for (level identity, viewport,
+    /// goal lit): the tiles only change when one of those does, so most frames
+    /// copy it and draw the marbles on top instead of looking up every tile.
+    background: Option<(BackgroundKey, Frame<W, H>)>,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct BackgroundKey {
+    level: (usize, usize, u8, u8),
+    viewport: Viewport,
+    blink: bool,
 }
 
 impl<const W: usize, const H: usize> Renderer<W, H> {
     /// A renderer without a viewport yet: the first frame centres the view on
     /// the marble (clamped to the maze).
     pub const fn new() -> Self {
-        Renderer { state: None }
+        Renderer { state: None, background: None }
     }
 
     /// Forgets the viewport (a new level or a restart): the next frame
     /// re-centres on the marble. A level of different size does this by itself.
     pub fn reset(&mut self) {
         self.state = None;
+        self.background = None;
     }
 
     /// The viewport last used (the origin before the first frame).
@@ -364,6 +385,21 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
     pub fn render<S: Scalar>(&mut self, game: &Game<'_, S>) -> Frame<W, H> {
         let viewport = self.follow(game.level(), game.world());
         let blink = blink_on(game.frames(), game.config().frame_log2);
-        render_world(game.level(), game.world(), blink, viewport)
+        let level = game.level();
+        let key = BackgroundKey {
+            level: (level.info.name.as_ptr() as usize, level.info.name.len(), level.info.nx, level.info.nz),
+            viewport,
+            blink,
+        };
+        let mut frame = match self.background {
+            Some((k, bg)) if k == key => bg,
+            _ => {
+                let bg = render_background(level, blink, viewport);
+                self.background = Some((key, bg));
+                bg
+            }
+        };
+        draw_marbles(&mut frame, game.world(), viewport);
+        frame
     }
 }

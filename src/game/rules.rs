@@ -6,6 +6,7 @@
 use crate::physics::dynamics::effects::BoardMotion;
 use crate::physics::geometry::frame::Frame;
 use crate::physics::world::{Params, SetupError, World};
+use crate::physics::scalar::rsqrt_bits;
 use crate::physics::{Scalar, Vec3};
 
 use super::level::{LevelView, MAX_MARBLES};
@@ -141,9 +142,16 @@ impl<'a, S: Scalar> Game<'a, S> {
     fn track_board(&mut self, g: [i32; 3]) {
         let (ex, ez) = self.world.extent();
         let pivot = Vec3::new(ex.half(), S::ZERO, ez.half());
-        let norm = isqrt((g[0] as i64).pow(2) + (g[1] as i64).pow(2) + (g[2] as i64).pow(2)).max(1);
-        // A board turned by the small angle θ sees gravity (−θz, −1, θx)·g.
-        let angle = Vec3::new(S::ratio(g[2] as i64, norm), S::ZERO, S::ratio(-(g[0] as i64), norm));
+        // A board turned by the small angle θ sees gravity (−θz, −1, θx)·|g|: the
+        // angle is g/|g|, with 1/|g| from the division-free inverse root
+        // (2^60/|g| as an integer: |g|² read as a number with 40 fraction bits).
+        let norm2 = (g[0] as i64).pow(2) + (g[1] as i64).pow(2) + (g[2] as i64).pow(2);
+        let inv = rsqrt_bits(norm2.max(1) as u64, 40) as i128;
+        let angle = Vec3::new(
+            S::from_scaled(g[2] as i128 * inv, 60, false),
+            S::ZERO,
+            S::from_scaled(-(g[0] as i128) * inv, 60, false),
+        );
         let frame = Frame::rotated(angle, pivot);
         let sub = self.config.substeps_log2;
         let (omega, omega_dot) = match self.board {
@@ -198,16 +206,3 @@ pub fn cell_centre<S: Scalar>(p: &Params<S>, i: u8, k: u8) -> (S, S) {
     (x0 + (x1 - x0).half(), z0 + (z1 - z0).half())
 }
 
-/// `⌊√n⌋` for `n ≥ 0` (Newton on integers; setup-rate code).
-fn isqrt(n: i64) -> i64 {
-    if n <= 0 {
-        return 0;
-    }
-    let mut x = n;
-    let mut y = (x + 1) / 2;
-    while y < x {
-        x = y;
-        y = (x + n / x) / 2;
-    }
-    x
-}

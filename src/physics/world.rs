@@ -567,9 +567,18 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         }
         let vn_now = m.vel.dot(c.normal);
         let vn_new = (res.vn + v_board.dot(c.normal)).shl(T_LOG2).clamp(-p.v_max, p.v_max);
+        let mut tangential = m.vel - c.normal.scale(vn_now);
+        if res.deficit > S::ZERO {
+            // Pay the rest of the push-out's energy from the tangential speed (rare:
+            // a fast marble grazing an edge under a strong pull). In T units: ½|v_t|².
+            let vt = tangential.shr(T_LOG2);
+            let s2 = vt.length_sq();
+            let keep = if s2 > res.deficit + res.deficit { S::ONE - (res.deficit + res.deficit).div(s2) } else { S::ZERO };
+            tangential = tangential.scale(keep.sqrt());
+        }
         // A slanted normal can move speed between axes: keep every axis under the cap
         // (the no-tunnelling bound is per axis).
-        m.vel = (m.vel - c.normal.scale(vn_now) + c.normal.scale(vn_new)).clamp_abs(p.v_max);
+        m.vel = (tangential + c.normal.scale(vn_new)).clamp_abs(p.v_max);
         self.stats.contacts = self.stats.contacts.wrapping_add(1);
         if res.outcome == Outcome::Collision {
             self.stats.collisions = self.stats.collisions.wrapping_add(1);

@@ -74,6 +74,9 @@ pub struct Resolution<S> {
     pub push: S,
     /// How far off the surface the marble ends (0 unless it bounced).
     pub lift: S,
+    /// Energy per unit mass (pitch²/T²) the push-out costs beyond what the normal
+    /// speed could pay: the caller takes it from the tangential speed.
+    pub deficit: S,
     /// New normal velocity relative to the board (pitch/T).
     pub vn: S,
     /// Which case applied.
@@ -90,17 +93,24 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     let delta = c.depth;
     if w <= S::ZERO {
         // Moving away but overlapping (an edge came into reach sideways). Lifting it
-        // by δ against b costs b·δ of energy: take it from the normal speed.
+        // by δ against b costs b·δ of energy: take it from the normal speed, and what
+        // that cannot pay from the tangential speed (the caller's `deficit`).
         let mut out = vn;
+        let mut deficit = S::ZERO;
         if b > S::ZERO {
             let e2 = vn * vn - two * b * delta;
-            out = if e2 > S::ZERO { e2.sqrt() } else { S::ZERO };
+            if e2 > S::ZERO {
+                out = e2.sqrt();
+            } else {
+                out = S::ZERO;
+                deficit = (-e2).half();
+            }
         }
-        return Resolution { push: delta, lift: S::ZERO, vn: out, outcome: Outcome::Separating };
+        return Resolution { push: delta, lift: S::ZERO, vn: out, outcome: Outcome::Separating, deficit };
     }
     let wc2 = w * w - two * b * delta;
     if wc2 <= threshold * threshold {
-        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact };
+        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact, deficit: S::ZERO };
     }
     let wc = wc2.sqrt();
     let tau = (two * delta).div(w + wc).min(c.dt);
@@ -109,7 +119,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     let out = (restitution(v_c, c.v_board, c.n, e) - c.v_board).dot(c.n);
     let u = out * tau - b * tau * tau.half();
     if u <= S::ZERO {
-        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact };
+        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact, deficit: S::ZERO };
     }
     // Rounding must not add energy: the normal energy after (½vn² + b·u) may not
     // exceed the energy before (½w² − b·δ, the state at the end of the step).
@@ -130,5 +140,5 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         }
         vn = if vn < S::ZERO { -mag } else { mag };
     }
-    Resolution { push: delta + u, lift: u, vn, outcome: Outcome::Collision }
+    Resolution { push: delta + u, lift: u, vn, outcome: Outcome::Collision, deficit: S::ZERO }
 }

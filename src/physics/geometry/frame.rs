@@ -54,7 +54,7 @@ impl<S: Scalar> Frame<S> {
     /// The board's frame for a board rotated by the small rotation vector `angle`
     /// (radians, world axes) about `pivot` (world): `B = I + [angle]×`, then
     /// re-orthonormalised (Gram–Schmidt) so eq. 4's transpose stays the inverse.
-    /// Setup-rate code (once per tilt sample): it divides and takes roots.
+    /// Once per tilt sample; normalising takes two inverse roots and no division.
     pub fn rotated(angle: Vec3<S>, pivot: Vec3<S>) -> Self {
         let i = Frame::<S>::identity();
         let col = |e: Vec3<S>| e + angle.cross(e);
@@ -70,11 +70,11 @@ impl<S: Scalar> Frame<S> {
     }
 }
 
-/// `v / |v|` (zero stays zero). Contact/setup path only.
+/// `v / |v|` (zero stays zero), through the inverse root: no division.
 pub fn normalize<S: Scalar>(v: Vec3<S>) -> Vec3<S> {
-    let len = v.length_sq().sqrt();
-    if len == S::ZERO {
+    let inv = v.length_sq().rsqrt();
+    if inv == S::ZERO {
         return v;
     }
-    Vec3::new(v.x.div(len), v.y.div(len), v.z.div(len))
+    v.scale(inv)
 }
