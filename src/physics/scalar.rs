@@ -226,7 +226,16 @@ macro_rules! fixed_scalar {
             }
             #[inline]
             fn shl(self, n: u32) -> Self {
-                self.saturating_mul_int(1 << n)
+                // A range check and a shift (the generic saturating multiply is a call).
+                let bits = self.to_bits();
+                let limit = <$t>::MAX.to_bits() >> n;
+                if bits > limit {
+                    <$t>::MAX
+                } else if bits < -limit {
+                    <$t>::MIN
+                } else {
+                    <$t>::from_bits(bits << n)
+                }
             }
             fn sqrt(self) -> Self {
                 if self <= <$t>::ZERO {
