@@ -110,7 +110,20 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     }
     let wc2 = w * w - two * b * delta;
     if wc2 <= threshold * threshold {
-        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact, deficit: S::ZERO };
+        // Put on the surface with no normal speed. When the normal energy ½w² does
+        // not cover lifting it by δ against b (a marble grazing an edge sideways),
+        // the rest is the caller's to take from the tangential speed.
+        // The unpaid part of the lift, `δ − w²/2b`: a few ULPs of it are the
+        // integrator's own rounding of ½·a·dt² away from zero (already paid for in
+        // free flight), not a deficit.
+        let mut deficit = S::ZERO;
+        if wc2 < S::ZERO && b > S::ZERO {
+            let unpaid = delta - (w * w).div(b + b);
+            if unpaid > (delta - delta.next_down()) * S::from_int(8) {
+                deficit = b * unpaid;
+            }
+        }
+        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact, deficit };
     }
     let wc = wc2.sqrt();
     let tau = (two * delta).div(w + wc).min(c.dt);
