@@ -173,6 +173,20 @@ pub fn args_without_separator() -> Vec<std::ffi::OsString> {
     args
 }
 
+/// The process arguments (without the aliases' `--`) parsed into `A`; on failure,
+/// clap's message is printed and the exit status returned (2 for an error, 0 for
+/// `--help` and `--version`).
+pub fn parse_args<A: clap::Parser>() -> Result<A, i32> {
+    A::try_parse_from(args_without_separator()).map_err(|e| {
+        let _ = e.print();
+        if e.use_stderr() {
+            2
+        } else {
+            0
+        }
+    })
+}
+
 /// `s` as a JSON string literal.
 pub fn json_string(s: &str) -> String {
     let mut out = String::with_capacity(s.len() + 2);

@@ -69,12 +69,9 @@ pub struct Args {
 
 /// Runs the player with the process arguments; returns the exit status.
 pub fn main() -> i32 {
-    let args = match Args::try_parse_from(super::args_without_separator()) {
+    let args = match super::parse_args::<Args>() {
         Ok(a) => a,
-        Err(e) => {
-            let _ = e.print();
-            return if e.use_stderr() { 2 } else { 0 };
-        }
+        Err(status) => return status,
     };
     let first = match &args.level {
         Some(l) => match load_level(l) {
