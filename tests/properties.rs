@@ -302,16 +302,21 @@ proptest! {
         pos in (-1000i32..=9000, -500i32..=3000, -1000i32..=9000),
         vel in (-200i32..=200, -200i32..=200, -200i32..=200),
         g in (any::<i32>(), any::<i32>(), any::<i32>()),
+        spin in (-100i32..=100, -100i32..=100, -100i32..=100, any::<bool>()),
     ) {
         type S = fixed::types::I8F24;
         let rows: Vec<&str> = s.maze.rows.iter().map(String::as_str).collect();
         let grid = grid(&rows);
-        let p = params::<S>(PhysicsSpec { effects: s.effects, ..PhysicsSpec::DEFAULT });
+        let effects = Effects { board_motion: spin.3, ..s.effects };
+        let p = params::<S>(PhysicsSpec { effects, ..PhysicsSpec::DEFAULT });
         let mut w: World<'_, S, 4> = World::new(p, grid.view(), &[cell_centre(&p, 1, 1)]).unwrap();
         let m = &mut w.marbles_mut()[0];
         m.pos = Vec3::new(S::from_int(pos.0) / S::from_int(100), S::from_int(pos.1) / S::from_int(1000), S::from_int(pos.2) / S::from_int(100));
         m.vel = Vec3::new(S::from_int(vel.0).shr(1), S::from_int(vel.1).shr(1), S::from_int(vel.2).shr(1));
         w.set_gravity_mg([g.0, g.1, g.2]);
+        // Any spin at all (radians per step, wildly out of range included): clamped.
+        let spin_v = Vec3::new(S::from_int(spin.0).shr(4), S::from_int(spin.1).shr(4), S::from_int(spin.2).shr(4));
+        w.set_board_motion(marble_rolling::physics::BoardMotion { omega: spin_v, omega_dot: spin_v, pivot: Vec3::new(S::from_int(3), S::ZERO, S::from_int(3)) });
         for _ in 0..64 {
             w.step();
         }

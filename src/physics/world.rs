@@ -332,6 +332,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
 
     /// Sets the board's rotation (used with the `board_motion` effect).
     pub fn set_board_motion(&mut self, motion: BoardMotion<S>) {
+        // At most 16 rad/s and 1024 rad/s² (a hand shaking the toy hard): a sensor
+        // glitch must not turn into an absurd spin of the board.
+        let k = self.params.k;
+        let w_max = S::ONE.shr(k - 4);
+        let a_max = S::ONE.shr(2 * k - 10);
+        let motion = BoardMotion { omega: motion.omega.clamp_abs(w_max), omega_dot: motion.omega_dot.clamp_abs(a_max), ..motion };
         self.motion = motion;
         if motion.omega != Vec3::ZERO || motion.omega_dot != Vec3::ZERO {
             for m in self.marbles.iter_mut() {
@@ -383,6 +389,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         if effects.board_motion {
             self.stats.board_motion_runs = self.stats.board_motion_runs.wrapping_add(1);
             let mut extra = self.motion.kick(m.pos, m.vel.shr(k), k);
+            // A violently jerked board can ask for more than the speed range holds.
+            extra.dv = extra.dv.clamp_abs(self.params.v_max);
             if !SPACE {
                 extra.dv.y = S::ZERO;
                 extra.dp.y = S::ZERO;
@@ -543,7 +551,9 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let p = &self.params;
         let sub = p.k - T_LOG2;
         let v_board = if p.spec.effects.board_motion {
-            self.motion.surface_velocity(m.pos - c.normal.scale(p.radius)).shl(sub)
+            // The board's surface is held to the marble's speed range (64 pitch/s):
+            // faster is no toy, and it keeps the solver's squares in range.
+            self.motion.surface_velocity(m.pos - c.normal.scale(p.radius)).shl(sub).clamp_abs(p.v_max.shr(T_LOG2))
         } else {
             Vec3::ZERO
         };
@@ -591,7 +601,9 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let p = m.pos;
         if SPACE {
             let margin = S::from_int(2);
-            let depth = self.params.layout.s + self.params.radius + self.params.radius;
+            // Through a hole once entirely below the floor slab (top below −s): there
+            // is nothing down there to hold it, not even under the neighbouring tiles.
+            let depth = self.params.layout.s + self.params.radius;
             if p.y < -depth || p.y > S::from_int(4) || p.x < -margin || p.z < -margin || p.x > ex + margin || p.z > ez + margin {
                 m.out = true;
             }
