@@ -210,6 +210,8 @@ fn main() {
             "--no-callgrind" => no_callgrind = true,
             "--out" => out_dir = PathBuf::from(it.next().unwrap_or_else(|| usage())),
             "-h" | "--help" => usage(),
+            // The cargo alias ends in `--`, so `cargo accuracy -- --quick` passes one.
+            "--" => {}
             other => {
                 eprintln!("unknown option {other}");
                 usage()
