@@ -266,15 +266,18 @@ impl<const W: usize, const H: usize> Scanner<W, H> {
     pub fn load(&mut self, frame: &Frame<W, H>) {
         let back = (self.front ^ 1) & 1;
         if let Some(planes) = self.buffers.get_mut(back) {
+            // One pass over each row, four plane accumulators in registers.
+            const _: () = assert!(BCM_BITS == 4, "load() builds exactly four planes");
             for (masks, levels) in planes.iter_mut().zip(frame.rows.iter()) {
-                for (bit, mask) in masks.iter_mut().enumerate() {
-                    *mask = levels
-                        .iter()
-                        .take(MAX_WIDTH)
-                        .enumerate()
-                        .filter(|&(_, &level)| (level >> bit) & 1 != 0)
-                        .fold(0, |acc, (x, _)| acc | (1u32 << x));
+                let (mut b0, mut b1, mut b2, mut b3) = (0u32, 0u32, 0u32, 0u32);
+                for (x, &level) in levels.iter().take(MAX_WIDTH).enumerate() {
+                    let l = u32::from(level);
+                    b0 |= (l & 1) << x;
+                    b1 |= ((l >> 1) & 1) << x;
+                    b2 |= ((l >> 2) & 1) << x;
+                    b3 |= ((l >> 3) & 1) << x;
                 }
+                *masks = [b0, b1, b2, b3];
             }
         }
         self.pending = true;
@@ -384,10 +387,14 @@ impl<const W: usize, const H: usize> OnTimeIntegrator<W, H> {
             return;
         };
         *row_total = row_total.saturating_add(step.ticks);
-        for (x, on) in pixels.iter_mut().enumerate() {
-            if x < MAX_WIDTH && (step.columns >> x) & 1 != 0 {
+        // Visit only the lit columns (lowest set bit first): a dark pixel costs nothing.
+        let mut lit = step.columns;
+        while lit != 0 {
+            let x = lit.trailing_zeros() as usize;
+            if let Some(on) = pixels.get_mut(x) {
                 *on = on.saturating_add(step.ticks);
             }
+            lit &= lit - 1;
         }
     }
 
