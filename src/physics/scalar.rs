@@ -55,9 +55,6 @@ pub trait Scalar:
     const ONE: Self;
     /// A short stable name, used by tools and reports.
     const NAME: &'static str;
-    /// The largest magnitude the physics may hold safely in this type (positions,
-    /// velocities): inputs are clamped below it.
-    const LIMIT: f64;
     /// The integer `n`, exactly (`|n| < 128` for the narrowest format).
     fn from_int(n: i32) -> Self;
     /// The nearest value to `x` (setup and tests; not used inside the step).
@@ -65,23 +62,6 @@ pub trait Scalar:
     /// `num / den`, rounded to nearest; setup only (`den != 0`).
     fn ratio(num: i64, den: i64) -> Self {
         Self::from_f64(num as f64 / den as f64)
-    }
-    /// `num / den` rounded away from zero (setup only). The integrator rounds the
-    /// per-step displacement `½·a·dt²` this way so that rounding can only ever make
-    /// the marble fall *further* along the pull: energy may leak, never appear.
-    fn ratio_away(num: i64, den: i64) -> Self {
-        let x = Self::ratio(num, den);
-        let exact = num as f64 / den as f64;
-        if x.to_f64().abs() < exact.abs() {
-            if exact > 0.0 {
-                // The next representable value up: the negation of next_down of −x.
-                -((-x).next_down())
-            } else {
-                x.next_down()
-            }
-        } else {
-            x
-        }
     }
     /// `n·2^-shift`, rounded to nearest, or away from zero when `away` (the integer
     /// path of the per-sample kick: a multiply and a shift, no division).
@@ -161,12 +141,11 @@ pub trait Scalar:
 }
 
 macro_rules! fixed_scalar {
-    ($t:ty, $name:literal, $limit:expr) => {
+    ($t:ty, $name:literal) => {
         impl Scalar for $t {
             const ZERO: Self = <$t>::ZERO;
             const ONE: Self = <$t>::ONE;
             const NAME: &'static str = $name;
-            const LIMIT: f64 = $limit;
             #[inline]
             fn from_int(n: i32) -> Self {
                 // A shift with a range check: the generic conversion costs far more.
@@ -285,15 +264,14 @@ macro_rules! fixed_scalar {
     };
 }
 
-fixed_scalar!(I8F24, "i8f24", 120.0);
-fixed_scalar!(I16F16, "i16f16", 30000.0);
-fixed_scalar!(I32F32, "i32f32", 2.0e9);
+fixed_scalar!(I8F24, "i8f24");
+fixed_scalar!(I16F16, "i16f16");
+fixed_scalar!(I32F32, "i32f32");
 
 impl Scalar for f32 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
     const NAME: &'static str = "f32";
-    const LIMIT: f64 = 1.0e30;
     fn from_int(n: i32) -> Self {
         n as f32
     }
@@ -338,7 +316,6 @@ impl Scalar for f64 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
     const NAME: &'static str = "f64";
-    const LIMIT: f64 = 1.0e300;
     fn from_int(n: i32) -> Self {
         n as f64
     }
@@ -496,7 +473,6 @@ impl Scalar for MicroF32 {
     const ZERO: Self = MicroF32(0.0);
     const ONE: Self = MicroF32(1.0);
     const NAME: &'static str = "f32-micromath";
-    const LIMIT: f64 = 1.0e30;
     fn from_int(n: i32) -> Self {
         MicroF32(n as f32)
     }

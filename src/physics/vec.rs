@@ -80,10 +80,6 @@ impl<S: Scalar> Vec3<S> {
             self.z.clamp(-limit, limit),
         )
     }
-    /// Converts every component through `f64` (tests and tools).
-    pub fn cast<T: Scalar>(self) -> Vec3<T> {
-        Vec3::new(T::from_f64(self.x.to_f64()), T::from_f64(self.y.to_f64()), T::from_f64(self.z.to_f64()))
-    }
     /// The components as `f64`.
     pub fn to_f64(self) -> [f64; 3] {
         [self.x.to_f64(), self.y.to_f64(), self.z.to_f64()]

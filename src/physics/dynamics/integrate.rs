@@ -74,11 +74,6 @@ impl<S: Scalar> Kick<S> {
     pub fn clamped(self, reach: S) -> Self {
         Kick { dv: self.dv, dp: self.dp.clamp_abs(reach) }
     }
-
-    /// This kick with its components along the unit normal `n` removed.
-    pub fn without_normal(self, n: Vec3<S>) -> Self {
-        Kick { dv: self.dv - n.scale(self.dv.dot(n)), dp: self.dp - n.scale(self.dp.dot(n)) }
-    }
 }
 
 /// One step of exact constant-acceleration motion: `p += v·dt + ½a·dt²`, `v += a·dt`.
