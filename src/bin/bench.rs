@@ -26,7 +26,6 @@
 #![no_std]
 #![no_main]
 
-use core::sync::atomic::{AtomicBool, Ordering};
 
 use defmt_semihosting as _;
 use marble_rolling::study::{bench_one, bench_plan, Scene, BACKENDS};
@@ -89,14 +88,4 @@ fn main() -> ! {
     });
     defmt::info!("DONE");
     hw::exit(0)
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    static PANICKED: AtomicBool = AtomicBool::new(false);
-    cortex_m::interrupt::disable();
-    if !PANICKED.swap(true, Ordering::SeqCst) {
-        defmt::error!("panic: {}", defmt::Display2Format(info));
-    }
-    hw::exit(101)
 }

@@ -14,7 +14,6 @@
 #![no_std]
 #![no_main]
 
-use core::sync::atomic::{AtomicBool, Ordering};
 
 use defmt_semihosting as _;
 use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Player, TerminalInput};
@@ -280,15 +279,4 @@ impl Costs {
             self.average(self.render)
         );
     }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    static PANICKED: AtomicBool = AtomicBool::new(false);
-    cortex_m::interrupt::disable();
-    // A panic inside the logger (or a second panic) must not recurse.
-    if !PANICKED.swap(true, Ordering::SeqCst) {
-        defmt::error!("panic: {}", defmt::Display2Format(info));
-    }
-    hw::exit(101)
 }

@@ -49,6 +49,19 @@ unsafe impl InterruptNumber for Irq {
     }
 }
 
+/// Logs the panic once (a panic inside the logger, or a second one, must not
+/// recurse) and exits QEMU with status 101. Shared by every binary built on this
+/// board module.
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    static PANICKED: AtomicBool = AtomicBool::new(false);
+    cortex_m::interrupt::disable();
+    if !PANICKED.swap(true, Ordering::SeqCst) {
+        defmt::error!("panic: {}", defmt::Display2Format(info));
+    }
+    exit(101)
+}
+
 /// Ends the QEMU process with `code` as its exit status (semihosting
 /// SYS_EXIT_EXTENDED): 0 = success.
 pub fn exit(code: i32) -> ! {
