@@ -131,9 +131,8 @@ impl<'a, S: Scalar> Game<'a, S> {
     /// as the tilt path delivers it. With `board_motion`, the change from the last
     /// call also sets the board's rotation (eq. 4 frames of the tilted board).
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
-        if g != self.world.gravity_mg() {
-            self.world.set_gravity_mg(g);
-        }
+        // World::set_gravity_mg returns at once when the pull is unchanged.
+        self.world.set_gravity_mg(g);
         if self.level.info.spec.effects.board_motion {
             self.track_board(g);
         }
