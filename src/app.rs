@@ -469,11 +469,16 @@ async fn demo(ticker: &mut Ticker) -> GameExit {
             player.session().state_hash()
         );
         let last = player.render();
+        // The pause's picture changes only when the flash does: each one is
+        // sent once (the display keeps showing it), not once a refresh.
+        let mut sent = None;
         for left in (1..=WIN_PAUSE_FRAMES).rev() {
             tick(ticker).await;
-            if !FRAMES.signaled() {
-                FRAMES.signal(if phase == Phase::Won {
-                    win_frame(&last, left)
+            let flash = phase == Phase::Won && win_flash(left);
+            if sent != Some(flash) {
+                sent = Some(flash);
+                FRAMES.signal(if flash {
+                    Frame::filled(MAX_BRIGHTNESS)
                 } else {
                     last
                 });
@@ -483,31 +488,38 @@ async fn demo(ticker: &mut Ticker) -> GameExit {
     GameExit::DemoDone(summary)
 }
 
-/// Something that can show one BCM scan step on an LED matrix.
+/// Something that can show BCM scan steps on an LED matrix.
 pub trait MatrixOutput {
     /// Lights row `step.row` with the columns set in `step.columns`, holds it
     /// for `step.ticks` base ticks of the board's scan clock, then returns
     /// (the caller immediately shows the next step).
     fn show(&mut self, step: ScanStep) -> impl Future<Output = ()>;
+
+    /// Shows one full refresh: the next [`Scanner::STEPS_PER_REFRESH`] steps
+    /// of `scanner` (which is at the start of a refresh), in order, and
+    /// returns when the refresh is over. By default, step by step with
+    /// [`show`](Self::show); an output with nothing to wait for between steps
+    /// (the virtual matrix) takes the whole refresh at once and saves an
+    /// await per step.
+    fn show_refresh(&mut self, scanner: &mut Scanner<WIDTH, HEIGHT>) -> impl Future<Output = ()> {
+        async move {
+            for _ in 0..Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH {
+                self.show(scanner.next_step()).await;
+            }
+        }
+    }
 }
 
 /// Scans the latest frame from [`FRAMES`] onto `output`, forever. A new frame
-/// is taken only at the start of a refresh, so a refresh never mixes frames.
+/// is taken only at the start of a refresh, so a refresh never mixes frames
+/// (the scanner skips a frame equal to the one on show).
 pub async fn display_task<O: MatrixOutput>(output: &mut O) -> ! {
     let mut scanner = Scanner::<WIDTH, HEIGHT>::new();
-    let mut shown: Option<DisplayFrame> = None;
     loop {
-        if scanner.at_refresh_start() {
-            if let Some(frame) = FRAMES.try_take() {
-                // A marble at rest renders the same frame over and over: only a
-                // changed one needs its bit planes rebuilt.
-                if shown != Some(frame) {
-                    scanner.load(&frame);
-                    shown = Some(frame);
-                }
-            }
+        if let Some(frame) = FRAMES.try_take() {
+            scanner.load(&frame);
         }
-        output.show(scanner.next_step()).await;
+        output.show_refresh(&mut scanner).await;
     }
 }
 
@@ -652,11 +664,16 @@ impl<const W: usize, const H: usize> Player<W, H> {
 /// The won level's display: the final picture flashing with a full-on
 /// screen, [`WIN_FLASH_FRAMES`] each; `left` counts the frames down.
 pub fn win_frame<const W: usize, const H: usize>(last: &Frame<W, H>, left: u32) -> Frame<W, H> {
-    if (left / WIN_FLASH_FRAMES.max(1)).is_multiple_of(2) {
+    if win_flash(left) {
         Frame::filled(MAX_BRIGHTNESS)
     } else {
         *last
     }
+}
+
+/// Whether [`win_frame`] shows the full-on screen with `left` frames to go.
+fn win_flash(left: u32) -> bool {
+    (left / WIN_FLASH_FRAMES.max(1)).is_multiple_of(2)
 }
 
 /// Shown while the accelerometer is down: a cross from corner to corner.

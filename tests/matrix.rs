@@ -264,6 +264,25 @@ fn sizes_from_1x1_to_32_wide() {
     assert_round_trip(&wide);
 }
 
+#[test]
+fn loading_the_frame_on_show_queues_nothing_and_cancels_a_queued_one() {
+    let shown = Frame::<19, 9>::filled(3);
+    let mut other = shown;
+    other.set(18, 8, 4);
+    let mut scanner = Scanner::with_frame(&shown);
+    let mut integrator = OnTimeIntegrator::new();
+    integrator.feed_all(one_refresh(&mut scanner));
+    scanner.load(&shown);
+    assert!(!scanner.has_pending(), "the frame on show is not queued again");
+    scanner.load(&other);
+    assert!(scanner.has_pending(), "a frame differing in its last pixel is queued");
+    scanner.load(&shown);
+    assert!(!scanner.has_pending(), "back to the frame on show: nothing to swap");
+    integrator.reset();
+    integrator.feed_all(one_refresh(&mut scanner));
+    assert_eq!(integrator.perceived(), shown);
+}
+
 // ---------------------------------------------------------------- Integrator
 
 #[test]
@@ -298,6 +317,20 @@ fn integrator_ignores_out_of_range_and_resets() {
     assert!(integrator.perceived().is_blank());
 }
 
+#[test]
+fn integrator_counters_saturate_per_pixel() {
+    let mut integrator = OnTimeIntegrator::<3, 1>::new();
+    integrator.feed(ScanStep { row: 0, columns: 0b001, ticks: u32::MAX - 5 });
+    integrator.feed(ScanStep { row: 0, columns: 0b011, ticks: 8 });
+    assert_eq!(integrator.on_ticks(0, 0), u32::MAX, "saturated");
+    assert_eq!(integrator.on_ticks(1, 0), 8, "its neighbour counts on");
+    assert_eq!(integrator.on_ticks(2, 0), 0);
+    integrator.feed(ScanStep { row: 0, columns: 0b011, ticks: 1 });
+    assert_eq!(integrator.on_ticks(0, 0), u32::MAX, "stays saturated");
+    assert_eq!(integrator.on_ticks(1, 0), 9);
+    assert_eq!(integrator.row_ticks(0), u32::MAX);
+}
+
 // ---------------------------------------------------------------- Properties
 
 proptest! {
@@ -321,6 +354,37 @@ proptest! {
     #[test]
     fn random_1x1_frames_integrate_exactly(frame in frame_strategy::<1, 1>()) {
         assert_round_trip(&frame);
+    }
+
+    /// The bit-sliced counters against plain saturating per-pixel counters,
+    /// for any steps (ticks not only powers of two, columns past the width).
+    #[test]
+    fn integrator_matches_plain_counters(
+        steps in proptest::collection::vec(
+            (0usize..5, any::<u32>(), prop_oneof![1u32..=8, any::<u32>()]),
+            0..40,
+        ),
+    ) {
+        let mut integrator = OnTimeIntegrator::<7, 4>::new();
+        let mut on = [[0u32; 7]; 4];
+        let mut rows = [0u32; 4];
+        for &(row, columns, ticks) in &steps {
+            integrator.feed(ScanStep { row, columns, ticks });
+            if row < 4 {
+                rows[row] = rows[row].saturating_add(ticks);
+                for (x, pixel) in on[row].iter_mut().enumerate() {
+                    if columns >> x & 1 != 0 {
+                        *pixel = pixel.saturating_add(ticks);
+                    }
+                }
+            }
+        }
+        for (y, (pixels, &row_ticks)) in on.iter().zip(&rows).enumerate() {
+            prop_assert_eq!(integrator.row_ticks(y), row_ticks);
+            for (x, &pixel) in pixels.iter().enumerate() {
+                prop_assert_eq!(integrator.on_ticks(x, y), pixel, "pixel ({}, {})", x, y);
+            }
+        }
     }
 
     #[test]

@@ -279,8 +279,9 @@ impl Autopilot {
         let gz = gz.clamp(self.last[1] as i32 - SLEW_MG, self.last[1] as i32 + SLEW_MG);
         self.last = [gx as i16, gz as i16];
         let (x, z) = (-gx as i64, -gz as i64);
-        // The rest of 1 g on the board's normal (|x|, |z| ≤ 450 mg: positive).
-        let y = isqrt(1_000_000 - x * x - z * z);
+        // The rest of 1 g on the board's normal (|x|, |z| ≤ 450 mg: positive, and
+        // below 2^20, so u32 holds it: core's exact root, no 64-bit division).
+        let y = ((1_000_000 - x * x - z * z).clamp(0, 1_000_000) as u32).isqrt();
         [x as i32, y as i32, z as i32]
     }
 
@@ -628,20 +629,6 @@ fn to_q<S: Scalar>(v: S) -> i64 {
         q = (q << 6) + b as i64;
     }
     q
-}
-
-/// `⌊√n⌋` (0 for `n ≤ 0`).
-fn isqrt(n: i64) -> i64 {
-    if n <= 0 {
-        return 0;
-    }
-    let mut x = n;
-    let mut y = (x + 1) / 2;
-    while y < x {
-        x = y;
-        y = (x + n / x) / 2;
-    }
-    x
 }
 
 fn solid(tiles: &Tiles, i: i32, j: i32, k: i32) -> bool {

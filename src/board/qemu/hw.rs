@@ -125,7 +125,7 @@ unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
 pub mod clock {
     use core::cell::Cell;
 
-    use marble_rolling::board::qemu::TIMER0_BASE;
+    use marble_rolling::board::qemu::{SYSCLK_HZ, TIMER0_BASE};
 
     use super::{read, write, Mutex};
 
@@ -134,8 +134,34 @@ pub mod clock {
     const RELOAD: usize = TIMER0_BASE + 0x08;
     const CTRL_ENABLE: u32 = 1 << 0;
 
-    /// (last raw value, ticks counted up to it)
-    static STATE: Mutex<Cell<(u32, u64)>> = Mutex::new(Cell::new((u32::MAX, 0)));
+    /// Clock ticks per embassy tick (`TICK_HZ`, 1 MHz by default).
+    pub const PER_EMBASSY_TICK: u32 = {
+        let per = SYSCLK_HZ as u64 / embassy_time_driver::TICK_HZ;
+        assert!(
+            per * embassy_time_driver::TICK_HZ == SYSCLK_HZ as u64 && per <= u32::MAX as u64,
+            "embassy's TICK_HZ must divide the 25 MHz clock"
+        );
+        per as u32
+    };
+
+    /// What has been counted up to the last raw value read.
+    #[derive(Clone, Copy)]
+    struct Count {
+        /// The last raw value.
+        raw: u32,
+        /// Clock ticks up to it.
+        ticks: u64,
+        /// Embassy ticks up to it, and the clock ticks left over (`< PER_EMBASSY_TICK`).
+        embassy: u64,
+        rest: u32,
+    }
+
+    static STATE: Mutex<Cell<Count>> = Mutex::new(Cell::new(Count {
+        raw: u32::MAX,
+        ticks: 0,
+        embassy: 0,
+        rest: 0,
+    }));
 
     /// Starts TIMER0 counting down from `u32::MAX`, no interrupt. Call once,
     /// before anything reads the time.
@@ -152,16 +178,37 @@ pub mod clock {
         read(VALUE)
     }
 
+    /// Counts up to `raw`, a value read just before with interrupts disabled
+    /// (so that no newer value was seen meanwhile).
+    fn count_to(raw: u32) -> Count {
+        cortex_m::interrupt::free(|cs| {
+            let cell = STATE.borrow(cs);
+            let mut count = cell.get();
+            let delta = count.raw.wrapping_sub(raw);
+            count.raw = raw;
+            count.ticks += u64::from(delta);
+            // Embassy time advances by whole ticks of the delta: a 32-bit divide
+            // by a constant (a multiply), where `ticks / 25` on the 64-bit total
+            // was a library division on every `now()` — 1 000 SysTicks a second
+            // plus every Ticker. The SysTick reads the clock each millisecond,
+            // so `delta + rest` cannot overflow (it would take 171 s).
+            let pending = delta.saturating_add(count.rest);
+            count.embassy += u64::from(pending / PER_EMBASSY_TICK);
+            count.rest = pending % PER_EMBASSY_TICK;
+            cell.set(count);
+            count
+        })
+    }
+
     /// 25 MHz ticks since [`start`], up to `raw`, a value read just before
     /// with interrupts disabled (so that no newer value was seen meanwhile).
     pub fn ticks_at(raw: u32) -> u64 {
-        cortex_m::interrupt::free(|cs| {
-            let cell = STATE.borrow(cs);
-            let (last, ticks) = cell.get();
-            let ticks = ticks + u64::from(last.wrapping_sub(raw));
-            cell.set((raw, ticks));
-            ticks
-        })
+        count_to(raw).ticks
+    }
+
+    /// Embassy ticks (`TICK_HZ`) since [`start`].
+    pub fn embassy_ticks() -> u64 {
+        cortex_m::interrupt::free(|_| count_to(raw()).embassy)
     }
 
     /// 25 MHz ticks since [`start`].
@@ -188,16 +235,9 @@ struct Driver {
     queue: Mutex<RefCell<(Queue, u64)>>,
 }
 
-/// Clock ticks (25 MHz) per embassy tick (`TICK_HZ`, 1 MHz by default).
-const CLOCK_TICKS_PER_EMBASSY_TICK: u64 = SYSCLK_HZ as u64 / embassy_time_driver::TICK_HZ;
-const _: () = assert!(
-    CLOCK_TICKS_PER_EMBASSY_TICK * embassy_time_driver::TICK_HZ == SYSCLK_HZ as u64,
-    "embassy's TICK_HZ must divide the 25 MHz clock"
-);
-
 impl embassy_time_driver::Driver for Driver {
     fn now(&self) -> u64 {
-        clock::ticks() / CLOCK_TICKS_PER_EMBASSY_TICK
+        clock::embassy_ticks()
     }
 
     fn schedule_wake(&self, at: u64, waker: &Waker) {

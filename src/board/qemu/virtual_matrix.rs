@@ -82,6 +82,17 @@ impl<C: Console> VirtualMatrix<C> {
     }
 }
 
+impl<C: Console> VirtualMatrix<C> {
+    /// Waits for the next refresh slot (at [`REFRESH_HZ`]).
+    async fn next_refresh(&mut self) {
+        self.refreshed();
+        let ticker = self
+            .ticker
+            .get_or_insert_with(|| Ticker::every(Duration::from_hz(u64::from(REFRESH_HZ))));
+        ticker.next().await;
+    }
+}
+
 impl<C: Console> MatrixOutput for VirtualMatrix<C> {
     async fn show(&mut self, step: ScanStep) {
         self.integrator.feed(step);
@@ -90,11 +101,17 @@ impl<C: Console> MatrixOutput for VirtualMatrix<C> {
             return;
         }
         self.ticks_in_refresh = 0;
-        self.refreshed();
-        let ticker = self
-            .ticker
-            .get_or_insert_with(|| Ticker::every(Duration::from_hz(u64::from(REFRESH_HZ))));
-        ticker.next().await;
+        self.next_refresh().await;
+    }
+
+    /// The whole refresh into the integrator at once: no scan clock to wait
+    /// for between steps.
+    async fn show_refresh(&mut self, scanner: &mut Scanner<WIDTH, HEIGHT>) {
+        for _ in 0..Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH {
+            self.integrator.feed(scanner.next_step());
+        }
+        self.ticks_in_refresh = 0;
+        self.next_refresh().await;
     }
 }
 
