@@ -346,6 +346,7 @@ impl<const W: usize, const H: usize> Scanner<W, H> {
     }
 
     /// The next step in display order. Never panics, allocates or divides.
+    #[inline]
     pub fn next_step(&mut self) -> ScanStep {
         if self.at_refresh_start() && self.pending {
             self.front = (self.front ^ 1) & 1;
@@ -460,6 +461,7 @@ impl<const W: usize, const H: usize> OnTimeIntegrator<W, H> {
     /// Adds one step: its row is driven for `ticks`, and each lit column of
     /// it is on for `ticks`. Rows `≥ H` and column bits `≥ W` are ignored;
     /// counters saturate.
+    #[inline]
     pub fn feed(&mut self, step: ScanStep) {
         let (Some(row_total), Some(counters)) =
             (self.row_ticks.get_mut(step.row), self.on.get_mut(step.row))
