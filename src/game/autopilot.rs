@@ -370,8 +370,13 @@ impl Autopilot {
         // Guard every marble against a hole (or an open edge) next to it: towards
         // one, tilt no more than what brings that marble to rest in its cell's centre
         // (which brakes one already rolling that way).
-        for m in marbles.iter().filter(|m| !m.out) {
-            let q = MarbleQ::new(m.pos.x, m.pos.z, m.vel.x, m.vel.z, s, self);
+        for (n, m) in marbles.iter().enumerate().filter(|(_, m)| !m.out) {
+            // The steered marble's was made above.
+            let q = if n == self.marble as usize {
+                me
+            } else {
+                MarbleQ::new(m.pos.x, m.pos.z, m.vel.x, m.vel.z, s, self)
+            };
             for dir in Dir::ALL {
                 let (dx, dz) = dir.delta();
                 if connected(tiles, q.cell[0], q.cell[1], dir)
@@ -529,6 +534,7 @@ impl Autopilot {
 }
 
 /// A marble's state in the controller's integers.
+#[derive(Clone, Copy)]
 struct MarbleQ {
     /// Position `[x', z']`, pitch (q12).
     pos: [i64; 2],
