@@ -57,6 +57,15 @@ pub trait Scalar:
     const NAME: &'static str;
     /// The integer `n`, exactly (`|n| < 128` for the narrowest format).
     fn from_int(n: i32) -> Self;
+    /// `self · rhs`: the value of `*`, bit for bit, and its overflow check in debug
+    /// builds. Fixed point forms it with one widening multiply and a shift, where
+    /// the `fixed` operator multiplies by an operand shifted up first, which takes a
+    /// double-width multiply (three multiplies and the shifts on a Cortex-M): the
+    /// per-step products (vectors, rolling resistance, the board's motion) use this.
+    #[inline(always)]
+    fn times(self, rhs: Self) -> Self {
+        self * rhs
+    }
     /// The nearest value to `x` (setup and tests; not used inside the step).
     fn from_f64(x: f64) -> Self;
     /// `num / den`, rounded to nearest; setup only (`den != 0`).
@@ -141,11 +150,21 @@ pub trait Scalar:
 }
 
 macro_rules! fixed_scalar {
-    ($t:ty, $name:literal) => {
+    ($t:ty, $wide:ty, $name:literal) => {
         impl Scalar for $t {
             const ZERO: Self = <$t>::ZERO;
             const ONE: Self = <$t>::ONE;
             const NAME: &'static str = $name;
+            #[inline(always)]
+            fn times(self, rhs: Self) -> Self {
+                // The operator keeps bits NBITS..2·NBITS of `a · (b << INT_NBITS)`,
+                // wrapping; those are bits FRAC..FRAC+NBITS of the exact `a · b`
+                // (it fits the wide type), which is what this keeps.
+                let (a, b) = (self.to_bits() as $wide, rhs.to_bits() as $wide);
+                // The operator's own check: that shifted product must not wrap.
+                debug_assert!(!a.overflowing_mul(b << <$t>::INT_NBITS).1, "overflow");
+                <$t>::from_bits(((a * b) >> <$t>::FRAC_NBITS) as _)
+            }
             #[inline]
             fn from_int(n: i32) -> Self {
                 // A shift with a range check: the generic conversion costs far more.
@@ -230,19 +249,31 @@ macro_rules! fixed_scalar {
                     self.saturating_div(rhs)
                 }
             }
+            // Inlined: at its callers the product (i32 × i64) is known to be narrow,
+            // which leaves a few 32×32 multiplies and word moves.
+            #[inline(always)]
             fn from_scaled(n: i128, shift: u32, away: bool) -> Self {
                 let frac = <$t>::FRAC_NBITS;
                 let lo = <$t>::MIN.to_bits() as i64;
                 let hi = <$t>::MAX.to_bits() as i64;
-                let bits = if shift <= frac {
-                    n.saturating_mul(1i128 << (frac - shift))
-                } else {
+                // The per-sample kicks (|n| < 2^94, a right shift by 32..=63): the same
+                // rounding as `scaled_bits` with 64-bit words, exact. `m + bias` is split
+                // at bit 32: the low words' sum (< 2^33) carries into the high one
+                // (< 2^62 + 2^32), and for s ≥ 32 shifting the high sum by s − 32 is
+                // shifting the whole by s. i128 shifts, adds and compares are a loop of
+                // library code on Cortex-M, several times the cost.
+                let m = n.unsigned_abs();
+                if shift > frac && (32..64).contains(&(shift - frac)) && m >> 94 == 0 {
                     let s = shift - frac;
-                    let m = n.unsigned_abs() as u128;
-                    let q = if away { (m + (1u128 << s) - 1) >> s } else { (m + (1u128 << (s - 1))) >> s };
-                    if n < 0 { -(q as i128) } else { q as i128 }
-                };
-                <$t>::from_bits(bits.clamp(lo as i128, hi as i128) as _)
+                    let bias = if away { (1u64 << s) - 1 } else { 1u64 << (s - 1) };
+                    let low = (m as u32) as u64 + (bias as u32) as u64;
+                    let high = (m >> 32) as u64 + (bias >> 32) + (low >> 32);
+                    // high < 2^63, so the quotient fits i64 and its negation too.
+                    let q = (high >> (s - 32)) as i64;
+                    let bits = if n < 0 { -q } else { q };
+                    return <$t>::from_bits(bits.clamp(lo, hi) as _);
+                }
+                <$t>::from_bits(scaled_bits(n, shift, away, frac, lo, hi) as _)
             }
             fn rsqrt(self) -> Self {
                 let bits = self.to_bits();
@@ -264,9 +295,9 @@ macro_rules! fixed_scalar {
     };
 }
 
-fixed_scalar!(I8F24, "i8f24");
-fixed_scalar!(I16F16, "i16f16");
-fixed_scalar!(I32F32, "i32f32");
+fixed_scalar!(I8F24, i64, "i8f24");
+fixed_scalar!(I16F16, i64, "i16f16");
+fixed_scalar!(I32F32, i128, "i32f32");
 
 impl Scalar for f32 {
     const ZERO: Self = 0.0;
@@ -356,6 +387,22 @@ impl Scalar for f64 {
     }
 }
 
+/// `n·2^-shift` as the bits of a fixed-point number with `frac` fraction bits,
+/// rounded to nearest (away from zero when `away`) and clamped to `[lo, hi]`: the
+/// general case of the fixed-point `from_scaled`, in i128.
+#[inline(never)]
+fn scaled_bits(n: i128, shift: u32, away: bool, frac: u32, lo: i64, hi: i64) -> i64 {
+    let bits = if shift <= frac {
+        n.saturating_mul(1i128 << (frac - shift))
+    } else {
+        let s = shift - frac;
+        let m = n.unsigned_abs();
+        let q = if away { (m + (1u128 << s) - 1) >> s } else { (m + (1u128 << (s - 1))) >> s };
+        if n < 0 { -(q as i128) } else { q as i128 }
+    };
+    bits.clamp(lo as i128, hi as i128) as i64
+}
+
 /// `1/√x` for a fixed-point `x = bits·2^-frac > 0`, as bits of the same format,
 /// rounded to nearest (within 1 LSB).
 ///
@@ -371,12 +418,21 @@ pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
     if bits == 0 {
         return 0;
     }
-    // x = bits·2^-frac = m·4^k with m ∈ [1, 4).
-    let b = 64 - bits.leading_zeros() as i32; // bit length
-    let k = (b - 1 - frac as i32).div_euclid(2);
-    // m in Q30 (fits 32 bits: m < 4): bits·2^(30 − frac − 2k).
-    let sh = 30 - frac as i32 - 2 * k;
-    let m = if sh >= 0 { bits << sh } else { bits >> (-sh) } as u32;
+    // x = bits·2^-frac = m·4^k with m ∈ [1, 4), m in Q30 (fits 32 bits: m < 4):
+    // bits·2^(30 − frac − 2k). With b the bit length of `bits` that shift is
+    // 31 − b or 32 − b, so a value that fits 32 bits (every 32-bit format) needs
+    // no 64-bit shift: the same k and m on one word.
+    let (k, m) = if let Ok(x) = u32::try_from(bits) {
+        let b = 32 - x.leading_zeros() as i32;
+        let k = (b - 1 - frac as i32).div_euclid(2);
+        let sh = 30 - frac as i32 - 2 * k; // −1 ..= 31
+        (k, if sh >= 0 { x << sh } else { x >> (-sh) })
+    } else {
+        let b = 64 - bits.leading_zeros() as i32;
+        let k = (b - 1 - frac as i32).div_euclid(2);
+        let sh = 30 - frac as i32 - 2 * k;
+        (k, if sh >= 0 { bits << sh } else { bits >> (-sh) } as u32)
+    };
     let slice = ((m >> 25) as usize).saturating_sub(32).min(95);
     let mut y: u32 = RSQRT_SEED[slice]; // Q31
     let steps = if frac <= 24 { 2 } else { 3 };
@@ -390,15 +446,17 @@ pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
     }
     // 1/√x = y·2^-k: from Q31 to `frac` bits.
     let out = frac as i32 - 31 - k;
-    let y = y as u64;
     if out >= 0 {
-        y << out
+        (y as u64) << out
     } else {
+        // Rounded to nearest, (y + 2^(s−1)) >> s, on one word: adding 2^(s−1)
+        // carries into bit s exactly when bit s − 1 is set; for s ≥ 33 the sum is
+        // below 2^s (y < 2^32).
         let s = -out as u32;
-        if s >= 64 {
-            0
-        } else {
-            (y + (1 << (s - 1))) >> s
+        match s {
+            1..=31 => ((y >> s) + ((y >> (s - 1)) & 1)) as u64,
+            32 => (y >> 31) as u64,
+            _ => 0,
         }
     }
 }
@@ -559,6 +617,138 @@ mod tests {
         }
         assert_eq!(I8F24::ZERO.rsqrt(), I8F24::ZERO);
         assert_eq!(I8F24::from_f64(4.0).rsqrt(), I8F24::from_f64(0.5));
+    }
+
+    /// A small deterministic generator (xorshift64*) for the equivalence sweeps.
+    fn rng(state: &mut u64) -> u64 {
+        *state ^= *state >> 12;
+        *state ^= *state << 25;
+        *state ^= *state >> 27;
+        state.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+
+    #[test]
+    /// The word-sized fast path against the general i128 code (`scaled_bits`,
+    /// the original arithmetic), on edge and random inputs.
+    fn from_scaled_matches_the_i128_reference() {
+        let check = |n: i128| {
+            for shift in 0..=100 {
+                for away in [false, true] {
+                    let got = I8F24::from_scaled(n, shift, away).to_bits() as i128;
+                    let want = scaled_bits(n, shift, away, 24, i32::MIN.into(), i32::MAX.into()) as i128;
+                    assert_eq!(got, want, "i8f24 {n} >> {shift} away {away}");
+                    let got = I16F16::from_scaled(n, shift, away).to_bits() as i128;
+                    let want = scaled_bits(n, shift, away, 16, i32::MIN.into(), i32::MAX.into()) as i128;
+                    assert_eq!(got, want, "i16f16 {n} >> {shift} away {away}");
+                    let got = I32F32::from_scaled(n, shift, away).to_bits() as i128;
+                    let want = scaled_bits(n, shift, away, 32, i64::MIN, i64::MAX) as i128;
+                    assert_eq!(got, want, "i32f32 {n} >> {shift} away {away}");
+                }
+            }
+        };
+        for n in [0, 1, -1, i128::MAX, i128::MIN, i128::MIN + 1] {
+            check(n);
+        }
+        for p in [31, 32, 33, 62, 63, 64, 93, 94, 95, 96, 126] {
+            let v = 1i128 << p;
+            for n in [v, v - 1, v + 1, -v, -v + 1, -v - 1] {
+                check(n);
+            }
+        }
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..4000 {
+            // Products as the kicks form them (i32 × i64), and wider values.
+            let a = rng(&mut state) as i32 as i128;
+            let b = rng(&mut state) as i64 as i128;
+            let w = (rng(&mut state) as i128) << (rng(&mut state) % 64);
+            for n in [a * b, (a >> (rng(&mut state) % 31)) * b, w, -w] {
+                check(n);
+            }
+        }
+    }
+
+    #[test]
+    fn times_is_the_operator() {
+        // Wrapping products too: `overflowing_mul` gives the operator's bits without
+        // its debug check, which `times` shares (so overflowing pairs are skipped).
+        fn check<T: Scalar + fixed::traits::Fixed>(a: T, b: T) {
+            let (want, overflow) = a.overflowing_mul(b);
+            if !overflow {
+                assert_eq!(a.times(b), want, "{a:?} · {b:?}");
+                assert_eq!(a.times(b), a * b, "{a:?} · {b:?}");
+            }
+        }
+        let mut state = 0x5851_f42d_4c95_7f2du64;
+        for _ in 0..200_000 {
+            let (x, y) = (rng(&mut state), rng(&mut state));
+            let (sx, sy) = ((rng(&mut state) % 40) as u32, (rng(&mut state) % 40) as u32);
+            check(I8F24::from_bits((x as i32) >> (sx % 32)), I8F24::from_bits((y as i32) >> (sy % 32)));
+            check(I16F16::from_bits((x as i32) >> (sx % 32)), I16F16::from_bits((y as i32) >> (sy % 32)));
+            check(I32F32::from_bits((x as i64) >> sx), I32F32::from_bits((y as i64) >> sy));
+        }
+        for v in [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX] {
+            for w in [i32::MIN, -(1 << 24), -1, 0, 1, 1 << 24, i32::MAX] {
+                check(I8F24::from_bits(v), I8F24::from_bits(w));
+                check(I16F16::from_bits(v), I16F16::from_bits(w));
+            }
+        }
+    }
+
+    /// `rsqrt_bits` as first written, all in u64: the one-word paths must give the
+    /// same bits.
+    fn rsqrt_bits_u64(bits: u64, frac: u32) -> u64 {
+        if bits == 0 {
+            return 0;
+        }
+        let b = 64 - bits.leading_zeros() as i32;
+        let k = (b - 1 - frac as i32).div_euclid(2);
+        let sh = 30 - frac as i32 - 2 * k;
+        let m = if sh >= 0 { bits << sh } else { bits >> (-sh) } as u32;
+        let slice = ((m >> 25) as usize).saturating_sub(32).min(95);
+        let mut y: u32 = RSQRT_SEED[slice];
+        let steps = if frac <= 24 { 2 } else { 3 };
+        for _ in 0..steps {
+            let y2 = ((y as u64 * y as u64) >> 31) as u32;
+            let my2 = ((m as u64 * y2 as u64) >> 30) as u32;
+            let t = (3u32 << 30).wrapping_sub(my2 >> 1);
+            y = ((y as u64 * t as u64) >> 31) as u32;
+        }
+        let out = frac as i32 - 31 - k;
+        let y = y as u64;
+        if out >= 0 {
+            y << out
+        } else {
+            let s = -out as u32;
+            if s >= 64 {
+                0
+            } else {
+                (y + (1 << (s - 1))) >> s
+            }
+        }
+    }
+
+    #[test]
+    fn rsqrt_bits_matches_the_u64_reference() {
+        let check = |x: u64| {
+            for frac in [0, 1, 16, 23, 24, 25, 31, 32, 40, 48, 60] {
+                assert_eq!(rsqrt_bits(x, frac), rsqrt_bits_u64(x, frac), "rsqrt_bits({x}, {frac})");
+            }
+        };
+        for x in [0, 1, 2, 3, u32::MAX as u64, u32::MAX as u64 + 1, u64::MAX] {
+            check(x);
+        }
+        for p in 0..64 {
+            for x in [1u64 << p, (1u64 << p) - 1, (1u64 << p) + 1] {
+                check(x);
+            }
+        }
+        let mut state = 0x0123_4567_89ab_cdefu64;
+        for _ in 0..20_000 {
+            let x = rng(&mut state);
+            for x in [x, x >> (rng(&mut state) % 64), x as u32 as u64] {
+                check(x);
+            }
+        }
     }
 
     #[test]

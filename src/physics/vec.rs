@@ -28,7 +28,7 @@ impl<S: Scalar> Vec3<S> {
     /// Every component times `k`.
     #[inline]
     pub fn scale(self, k: S) -> Self {
-        Vec3::new(self.x * k, self.y * k, self.z * k)
+        Vec3::new(self.x.times(k), self.y.times(k), self.z.times(k))
     }
     /// Every component times `2^-n` (see [`Scalar::shr`]).
     // A rounding scale by a power of two, not the bit shift `>>` of `core::ops::Shr`.
@@ -46,15 +46,15 @@ impl<S: Scalar> Vec3<S> {
     /// Dot product.
     #[inline]
     pub fn dot(self, o: Self) -> S {
-        self.x * o.x + self.y * o.y + self.z * o.z
+        self.x.times(o.x) + self.y.times(o.y) + self.z.times(o.z)
     }
     /// Cross product.
     #[inline]
     pub fn cross(self, o: Self) -> Self {
         Vec3::new(
-            self.y * o.z - self.z * o.y,
-            self.z * o.x - self.x * o.z,
-            self.x * o.y - self.y * o.x,
+            self.y.times(o.z) - self.z.times(o.y),
+            self.z.times(o.x) - self.x.times(o.z),
+            self.x.times(o.y) - self.y.times(o.x),
         )
     }
     /// `|v|²`. Callers keep `v` small (per-step units) so this cannot overflow.

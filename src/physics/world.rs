@@ -16,10 +16,10 @@
 
 use heapless::Vec as HVec;
 
-use super::dynamics::effects::{marble_pair, rolling_resistance, BoardMotion, Effects};
+use super::dynamics::effects::{marble_pair, BoardMotion, Drag, Effects};
 use super::dynamics::integrate::{advance, advance_plane, Kick, PullScale};
 use super::dynamics::respond::{resolve, Impact, Outcome, T_LOG2};
-use super::geometry::broadphase::{candidates, candidates_plane};
+use super::geometry::broadphase::{candidates, candidates_plane, TileRange};
 use super::geometry::grid::Tiles;
 use super::geometry::narrowphase::{contact, lid_contact, Contact, Feature};
 use super::geometry::tiles::{LayoutError, TileIndex, TileLayout};
@@ -198,7 +198,7 @@ pub struct World<'a, S: Scalar, const M: usize> {
     gravity_mg: [i32; 3],
     kick_roll: Kick<S>,
     kick_free: Kick<S>,
-    decel: S,
+    drag: Drag<S>,
     motion: BoardMotion<S>,
     extent: (S, S),
     kicks_ready: bool,
@@ -206,6 +206,9 @@ pub struct World<'a, S: Scalar, const M: usize> {
     /// Per-milli-g scales: full gravity, the rolling (tangential) share, and the
     /// rolling-resistance deceleration per unit load.
     pulls: [PullScale; 3],
+    /// Per marble, the last candidate range found free of solid tiles (the tiles
+    /// never change, so it stays free): the next step usually has the same one.
+    clear: [TileRange; M],
     /// What the steps did so far.
     pub stats: StepStats,
 }
@@ -248,7 +251,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             gravity_mg: [0; 3],
             kick_roll: Kick::default(),
             kick_free: Kick::default(),
-            decel: S::ZERO,
+            drag: Drag::default(),
             motion: BoardMotion::default(),
             extent,
             kicks_ready: false,
@@ -263,6 +266,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                     PullScale::new(ppm * roll.0, 1_000_000 * roll.1, pitch),
                 ]
             },
+            clear: [TileRange::EMPTY; M],
             stats: StepStats::default(),
         };
         w.set_gravity_mg([0, -1000, 0]);
@@ -303,7 +307,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// once, so the steps that follow only add.
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
         let g = g.map(|v| v.clamp(-MAX_MG, MAX_MG));
-        if g == self.gravity_mg && self.kicks_ready {
+        // Per axis: each axis of the kicks depends on that axis of the pull alone
+        // (the displacement clamp is per axis too), and a tilt usually moves one
+        // axis at a time — the others keep their kicks, bit for bit.
+        let fresh = !self.kicks_ready;
+        let changed = [0, 1, 2].map(|a| fresh || g[a] != self.gravity_mg[a]);
+        if !(changed[0] || changed[1] || changed[2]) {
             return;
         }
         self.kicks_ready = true;
@@ -314,11 +323,30 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         }
         let k = self.params.k;
         let reach = self.params.radius.shr(3);
-        let [full, roll, drag] = self.pulls;
-        self.kick_free = Kick::from_mg(g, full, full, k).clamped(reach);
-        self.kick_roll = if roll == full { self.kick_free } else { Kick::from_mg(g, full, roll, k).clamped(reach) };
+        let [full, roll, resist] = self.pulls;
+        for axis in 0..3 {
+            if !changed[axis] {
+                continue;
+            }
+            // The same values as `Kick::from_mg(g, full, ·, k).clamped(reach)`.
+            let (dv, dp) = full.kick::<S>(g[axis], k);
+            let dp = dp.clamp(-reach, reach);
+            set_axis(&mut self.kick_free.dv, axis, dv);
+            set_axis(&mut self.kick_free.dp, axis, dp);
+            // Rolling scales the tangential axes only (x', z'): the normal is full.
+            let (dv, dp) = if axis == 1 || roll == full {
+                (dv, dp)
+            } else {
+                let (dv, dp) = roll.kick::<S>(g[axis], k);
+                (dv, dp.clamp(-reach, reach))
+            };
+            set_axis(&mut self.kick_roll.dv, axis, dv);
+            set_axis(&mut self.kick_roll.dp, axis, dp);
+        }
         // Rolling resistance decelerates by c_rr·g_n (·5/7 when rolling), g_n = −g_y.
-        self.decel = drag.kick::<S>((-g[1]).max(0), k).0;
+        if changed[1] && self.params.spec.effects.friction {
+            self.drag = Drag::new(resist.kick::<S>((-g[1]).max(0), k).0, k);
+        }
     }
 
     /// Turns skipping of resting marbles on (the default) or off. Off, every marble
@@ -367,24 +395,24 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         for n in 0..self.marbles.len() {
             let mut m = self.marbles[n];
             if !m.out && !m.asleep {
-                let before = m;
-                self.step_marble::<SPACE>(&mut m);
+                self.step_marble::<SPACE>(n, &mut m);
                 // Asleep only when the step changed nothing at all and the board
-                // is not turning (its pull then changes every step).
-                m.asleep = self.sleeping && m == before && !self.params.spec.effects.board_motion;
+                // is not turning (its pull then changes every step). The step
+                // works on the copy: the stored marble is still the one before it.
+                m.asleep = self.sleeping && m == self.marbles[n] && !self.params.spec.effects.board_motion;
                 self.marbles[n] = m;
             }
         }
     }
 
-    fn step_marble<const SPACE: bool>(&mut self, m: &mut Marble<S>) {
+    fn step_marble<const SPACE: bool>(&mut self, n: usize, m: &mut Marble<S>) {
         let k = self.params.k;
         let effects = self.params.spec.effects;
         let supported = !SPACE || m.supported;
         let mut kick = if supported { self.kick_roll } else { self.kick_free };
         if effects.friction && supported {
             self.stats.friction_runs = self.stats.friction_runs.wrapping_add(1);
-            rolling_resistance(&mut m.vel, &mut kick, self.decel, k);
+            self.drag.apply(&mut m.vel, &mut kick);
         }
         if effects.board_motion {
             self.stats.board_motion_runs = self.stats.board_motion_runs.wrapping_add(1);
@@ -409,13 +437,54 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             advance_plane(&mut m.pos, &mut m.vel, &kick, k);
         }
         m.vel = m.vel.clamp_abs(self.params.v_max);
-        m.supported = self.collide_tiles::<SPACE>(m, &kick, start) || held_on_floor;
+        m.supported = self.collide_tiles::<SPACE>(n, m, &kick, start) || held_on_floor;
         self.check_out::<SPACE>(m);
     }
 
-    /// Contact passes against the tiles (and, in 3-D, the lid); returns whether the
-    /// floor supports the marble.
-    fn collide_tiles<const SPACE: bool>(&mut self, m: &mut Marble<S>, kick: &Kick<S>, start: Vec3<S>) -> bool {
+    /// Contact passes against the tiles (and, in 3-D, the lid) for marble number
+    /// `n`; returns whether the floor supports the marble.
+    ///
+    /// Nearly every step has no solid tile in reach at all (a marble on the floor
+    /// reaches only the wall layer; one held on a floor or on a face it rests
+    /// against from +x'/+z' has that tile just outside its reach), and then the
+    /// passes end after the first with nothing touched: what they return is known
+    /// without them. That case is checked here, inline and with no contact code (and
+    /// without even the tile lookups when the candidates are the ones last found
+    /// free); the passes run only when a solid tile (or the lid) is in reach.
+    #[inline(always)]
+    fn collide_tiles<const SPACE: bool>(&mut self, n: usize, m: &mut Marble<S>, kick: &Kick<S>, start: Vec3<S>) -> bool {
+        let (r, tiles, layout) = (self.params.radius, self.tiles, &self.params.layout);
+        let range = if SPACE { candidates(layout, m.pos, r) } else { candidates_plane(layout, m.pos, r) };
+        let mut clear = range == self.clear[n];
+        if !clear {
+            clear = true;
+            let mut k = range.lo.k;
+            while clear && k <= range.hi.k {
+                let mut j = range.lo.j;
+                while clear && j <= range.hi.j {
+                    let mut i = range.lo.i;
+                    while clear && i <= range.hi.i {
+                        clear = !tiles.is_solid(TileIndex::new(i, j, k));
+                        i += 1;
+                    }
+                    j += 1;
+                }
+                k += 1;
+            }
+            if clear {
+                self.clear[n] = range;
+            }
+        }
+        if clear && (!SPACE || lid_contact(m.pos, r, layout.l).is_none()) {
+            // What the passes return when the first touches nothing.
+            return !SPACE;
+        }
+        self.contact_passes::<SPACE>(m, kick, start)
+    }
+
+    /// The contact passes of [`World::collide_tiles`].
+    #[inline(never)]
+    fn contact_passes<const SPACE: bool>(&mut self, m: &mut Marble<S>, kick: &Kick<S>, start: Vec3<S>) -> bool {
         let (r, tiles) = (self.params.radius, self.tiles);
         let layout = self.params.layout;
         // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
@@ -510,10 +579,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     fn hold<const SPACE: bool>(&self, m: &mut Marble<S>, kick: &mut Kick<S>) -> bool {
         let (r, layout) = (self.params.radius, &self.params.layout);
         let mut on_floor = false;
-        for bit in 0..6u8 {
-            if m.rest_mask & (1 << bit) == 0 {
-                continue;
-            }
+        // The set bits only, lowest first (the same order as a scan of all six: the
+        // body clears no bit but its own).
+        let mut bits = m.rest_mask;
+        while bits != 0 {
+            let bit = bits.trailing_zeros() as u8;
+            bits &= bits - 1;
             let (axis, up) = ((bit / 2) as usize, bit % 2 == 1);
             let plane = m.rest_plane[axis];
             let at = if up { plane + r } else { plane - r };
@@ -523,16 +594,15 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             let lid = axis == 1 && !up;
             if keep && !lid {
                 // The tile behind the contact point (the lid, −y, is always there).
-                let across = if up { layout_index(layout, axis, plane.next_down()) } else { layout_index(layout, axis, plane) };
-                let mut t = layout.index_of(m.pos);
-                if !SPACE {
-                    t.j = 1;
-                }
-                match axis {
-                    0 => t.i = across,
-                    1 => t.j = across,
-                    _ => t.k = across,
-                }
+                let behind = if up { plane.next_down() } else { plane };
+                // Eq. 6 for the other two axes of the centre (the flat maze's walls
+                // are layer 1).
+                let j = || if SPACE { layout.index_y(m.pos.y) } else { 1 };
+                let t = match axis {
+                    0 => TileIndex::new(layout.index_xz(behind), j(), layout.index_xz(m.pos.z)),
+                    1 => TileIndex::new(layout.index_xz(m.pos.x), layout.index_y(behind), layout.index_xz(m.pos.z)),
+                    _ => TileIndex::new(layout.index_xz(m.pos.x), j(), layout.index_xz(behind)),
+                };
                 keep = self.tiles.is_solid(t);
             }
             if keep {
@@ -656,8 +726,10 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 set(&mut na, va);
                 set(&mut nb, vb);
                 let still = Kick::default();
-                na.supported = self.collide_tiles::<SPACE>(&mut na, &still, ma.pos) || na.supported;
-                nb.supported = self.collide_tiles::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
+                // The passes themselves (what `collide_tiles` comes to), without its
+                // inline shortcut for the common case: this one is rare.
+                na.supported = self.contact_passes::<SPACE>(&mut na, &still, ma.pos) || na.supported;
+                nb.supported = self.contact_passes::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
                 self.marbles[a] = na;
                 self.marbles[b] = nb;
             }
@@ -681,15 +753,6 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             eat(m.supported as u64 | (m.out as u64) << 1);
         }
         h
-    }
-}
-
-/// Eq. 6 along one axis.
-fn layout_index<S: Scalar>(layout: &TileLayout<S>, axis: usize, v: S) -> i32 {
-    if axis == 1 {
-        layout.index_y(v)
-    } else {
-        layout.index_xz(v)
     }
 }
 

@@ -46,34 +46,60 @@ impl Effects {
 /// Speeds are scaled by 1/16 before squaring so that `v²` stays inside the narrowest
 /// fixed format's range at the speed cap.
 pub fn rolling_resistance<S: Scalar>(v: &mut Vec3<S>, kick: &mut Kick<S>, decel: S, k: u32) {
+    Drag::new(decel, k).apply(v, kick);
+}
+
+/// [`rolling_resistance`] with what depends on the pull alone worked out once per
+/// pull (the world keeps one): the step is left with the per-marble part.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Drag<S> {
+    /// The deceleration per step, `decel`.
+    decel: S,
+    /// The static threshold's square, `(decel/16)²`.
+    limit2: S,
+    /// `½·decel·dt`: the displacement the deceleration takes in a step.
+    half_step: S,
+}
+
+impl<S: Scalar> Drag<S> {
     const SCALE: u32 = 4;
-    let (vx, vz) = (v.x.shr(SCALE), v.z.shr(SCALE));
-    let speed2 = vx * vx + vz * vz;
-    let limit = decel.shr(SCALE);
-    // Squares compared, and the direction from an inverse root: no root, no division.
-    let (dx, dz, len2) = if speed2 > limit * limit {
-        (vx, vz, speed2)
-    } else {
-        let (ax, az) = (kick.dv.x.shr(SCALE), kick.dv.z.shr(SCALE));
-        let pull2 = ax * ax + az * az;
-        if pull2 <= limit * limit {
-            v.x = S::ZERO;
-            v.z = S::ZERO;
-            kick.dv.x = S::ZERO;
-            kick.dv.z = S::ZERO;
-            kick.dp.x = S::ZERO;
-            kick.dp.z = S::ZERO;
-            return;
-        }
-        (ax, az, pull2)
-    };
-    let inv = len2.rsqrt();
-    let (ux, uz) = (dx * inv, dz * inv);
-    let half_step = decel.shr(k + 1);
-    kick.dv.x -= decel * ux;
-    kick.dv.z -= decel * uz;
-    kick.dp.x -= half_step * ux;
-    kick.dp.z -= half_step * uz;
+
+    /// The drag of a deceleration `decel` per step at `dt = 2^-k`.
+    pub fn new(decel: S, k: u32) -> Self {
+        let limit = decel.shr(Self::SCALE);
+        Drag { decel, limit2: limit * limit, half_step: decel.shr(k + 1) }
+    }
+
+    /// Applies the drag to a marble's velocity and kick (see [`rolling_resistance`]).
+    // Inlined into the step (its one caller), where the kick stays in registers.
+    #[inline(always)]
+    pub fn apply(&self, v: &mut Vec3<S>, kick: &mut Kick<S>) {
+        let (vx, vz) = (v.x.shr(Self::SCALE), v.z.shr(Self::SCALE));
+        let speed2 = vx.times(vx) + vz.times(vz);
+        // Squares compared, and the direction from an inverse root: no root, no division.
+        let (dx, dz, len2) = if speed2 > self.limit2 {
+            (vx, vz, speed2)
+        } else {
+            let (ax, az) = (kick.dv.x.shr(Self::SCALE), kick.dv.z.shr(Self::SCALE));
+            let pull2 = ax.times(ax) + az.times(az);
+            if pull2 <= self.limit2 {
+                v.x = S::ZERO;
+                v.z = S::ZERO;
+                kick.dv.x = S::ZERO;
+                kick.dv.z = S::ZERO;
+                kick.dp.x = S::ZERO;
+                kick.dp.z = S::ZERO;
+                return;
+            }
+            (ax, az, pull2)
+        };
+        let inv = len2.rsqrt();
+        let (ux, uz) = (dx.times(inv), dz.times(inv));
+        kick.dv.x -= self.decel.times(ux);
+        kick.dv.z -= self.decel.times(uz);
+        kick.dp.x -= self.half_step.times(ux);
+        kick.dp.z -= self.half_step.times(uz);
+    }
 }
 
 /// The board's rotation as the physics needs it, in the tile frame.
@@ -108,6 +134,9 @@ impl<S: Scalar> BoardMotion<S> {
     /// The fictitious accelerations of the rotating board frame acting on a marble at
     /// `p` moving at `v_step` (pitch/step): Euler `−ω̇×r`, centrifugal `−ω×(ω×r)` and
     /// Coriolis `−2ω×v`, as a kick at step `dt = 2^-k`.
+    // Inlined into the step: the flat maze drops the y' part, which then is never
+    // computed (a quarter of the products).
+    #[inline(always)]
     pub fn kick(&self, p: Vec3<S>, v_step: Vec3<S>, k: u32) -> Kick<S> {
         let r = p - self.pivot;
         let euler = -self.omega_dot.cross(r);

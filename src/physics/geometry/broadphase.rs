@@ -37,6 +37,9 @@ pub fn candidates_plane<S: Scalar>(layout: &TileLayout<S>, c: Vec3<S>, r: S) -> 
 }
 
 impl TileRange {
+    /// No tiles at all (`lo > hi`): never equal to the candidates of a point.
+    pub const EMPTY: TileRange = TileRange { lo: TileIndex::new(1, 1, 1), hi: TileIndex::new(0, 0, 0) };
+
     /// Every index in the box, in `k, j, i` order.
     pub fn iter(self) -> impl Iterator<Item = TileIndex> {
         (self.lo.k..=self.hi.k).flat_map(move |k| {
