@@ -304,6 +304,22 @@ fn trace_has_one_row_per_physics_step() {
     }
 }
 
+/// With a tilt that changes from frame to frame (the autopilot), sleeping
+/// marbles are woken by each new pull: the per-step replay must agree with the
+/// frames it traces all the same (it once reported a divergence here).
+#[test]
+fn trace_follows_a_changing_tilt() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli")
+        .join("autopilot-steps.csv");
+    let plain = sim_json(&["--level", "corner", "--autopilot"]);
+    let v = sim_json(&["--level", "corner", "--autopilot", "--trace", s(&out)]);
+    assert_eq!(v["outcome"], "won");
+    assert_eq!(v["state_hash"], plain["state_hash"]);
+    let rows = std::fs::read_to_string(&out).unwrap().lines().count() as u64;
+    assert_eq!(rows, v["steps"].as_u64().unwrap() + 1, "a header and a row per step");
+}
+
 #[test]
 fn falling_into_a_hole_exits_zero() {
     let level = scratch("pit.level", PIT);

@@ -390,6 +390,13 @@ fn replay_frame<S: Scalar>(
     let after = game.world();
     let mut w = after.clone();
     w.marbles_mut().copy_from_slice(before);
+    // The frame's new pull woke the marbles before its first step, which the
+    // copies from before it do not know. Waking them all is exact: a marble that
+    // stayed asleep through the frame is one whose step changes nothing, and
+    // stepping it falls asleep again with the same state.
+    for m in w.marbles_mut() {
+        m.asleep = false;
+    }
     w.stats = stats;
     let layout = after.params().layout;
     let first_step = game.steps() - substeps as u64;
