@@ -11,6 +11,8 @@
 #    `outcome`, `steps` and `state_hash`).
 # 3. Prints a table and fails (exit 1) if QEMU failed, a level was not won, or
 #    the outcome, step count or state hash of any level differ.
+# 4. Fails if the demo's CPU load is over 3.00 % of a 64 MHz Cortex-M4
+#    (CPU_BUDGET_CENTIPERCENT, default 300).
 #
 # Works on a fresh machine: the QEMU runner (tools/qemu-run.sh) installs
 # qemu-system-arm and defmt-print when missing, the linker wrapper
@@ -83,6 +85,19 @@ for row in "${rows[@]}"; do
     printf "$fmt" "$name" "$q_outcome" "${s_outcome:--}" "$q_steps" "${s_steps:--}" \
         "$q_hash" "${s_hash:--}" "$result"
 done
+
+# The CPU-load budget (issue: <= 3 % of a 64 MHz Cortex-M4 at the default rates).
+# Under -icount the count is exact and the same on every machine, so this is a
+# report with a limit, like the flash budget, not a timing test.
+budget=${CPU_BUDGET_CENTIPERCENT:-300}
+load=$(sed -n 's/.*cpu load: .* = \([0-9]*\)\.\([0-9][0-9]\) % of a 64 MHz.*/\1\2/p' "$log" | head -n 1)
+if [[ -z $load ]]; then
+    problem "no cpu load line in the QEMU log ($log)"
+elif ((10#$load > budget)); then
+    problem "CPU load $((10#$load / 100)).$(printf %02d $((10#$load % 100))) % is over the budget of $((budget / 100)).$(printf %02d $((budget % 100))) % (bash tools/qemu-profile.sh shows where it goes)"
+else
+    echo "check-demo: CPU load $((10#$load / 100)).$(printf %02d $((10#$load % 100))) % of 64 MHz (budget $((budget / 100)).$(printf %02d $((budget % 100))) %)" >&2
+fi
 
 if ((fail)); then
     echo "check-demo: FAILED (QEMU log: $log)" >&2
