@@ -477,8 +477,8 @@ async fn demo(ticker: &mut Ticker) -> GameExit {
             let flash = phase == Phase::Won && win_flash(left);
             if sent != Some(flash) {
                 sent = Some(flash);
-                FRAMES.signal(if flash {
-                    Frame::filled(MAX_BRIGHTNESS)
+                FRAMES.signal(if phase == Phase::Won {
+                    win_frame(&last, left)
                 } else {
                     last
                 });

@@ -135,7 +135,7 @@ pub mod clock {
     const CTRL_ENABLE: u32 = 1 << 0;
 
     /// Clock ticks per embassy tick (`TICK_HZ`, 1 MHz by default).
-    pub const PER_EMBASSY_TICK: u32 = {
+    const PER_EMBASSY_TICK: u32 = {
         let per = SYSCLK_HZ as u64 / embassy_time_driver::TICK_HZ;
         assert!(
             per * embassy_time_driver::TICK_HZ == SYSCLK_HZ as u64 && per <= u32::MAX as u64,
