@@ -43,11 +43,24 @@ pub fn distance<S: Scalar>(c: Vec3<S>, r: S, b: &Aabb<S>) -> S {
     offset(c, b).length_sq().sqrt() - r
 }
 
+/// Whether the centre is a whole radius or more from the box along some axis: then
+/// the marble cannot touch it, and [`contact`] says so at its first test (the very
+/// same comparisons). The step asks this before running the contact passes at all.
+#[inline]
+pub fn out_of_reach<S: Scalar>(c: Vec3<S>, r: S, b: &Aabb<S>) -> bool {
+    beyond(offset(c, b), r)
+}
+
+#[inline]
+fn beyond<S: Scalar>(d: Vec3<S>, r: S) -> bool {
+    d.x.abs() >= r || d.y.abs() >= r || d.z.abs() >= r
+}
+
 /// Seed §1.3.5: the marble overlaps the tile (`d < 0` in eq. 8), without a root.
 #[inline]
 pub fn overlaps<S: Scalar>(c: Vec3<S>, r: S, b: &Aabb<S>) -> bool {
     let d = offset(c, b);
-    if d.x.abs() >= r || d.y.abs() >= r || d.z.abs() >= r {
+    if beyond(d, r) {
         return false;
     }
     d.length_sq() < r * r
@@ -102,7 +115,7 @@ fn unit<S: Scalar>(axis: usize, positive: bool) -> Vec3<S> {
 /// box `b`, or `None` when they do not overlap or a solid neighbour owns the contact.
 pub fn contact<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Tiles<'_>) -> Option<Contact<S>> {
     let d = offset(c, b);
-    if d.x.abs() >= r || d.y.abs() >= r || d.z.abs() >= r {
+    if beyond(d, r) {
         return None;
     }
     let mut nonzero = 0u8;
@@ -180,4 +193,39 @@ pub fn lid_contact<S: Scalar>(c: Vec3<S>, r: S, top: S) -> Option<Contact<S>> {
         return None;
     }
     Some(Contact { normal: Vec3::new(S::ZERO, -S::ONE, S::ZERO), depth, feature: Feature::Face(1), plane: top })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::grid::TileGrid;
+    use super::super::tiles::TileLayout;
+    use super::*;
+    use fixed::types::I8F24;
+
+    type S = I8F24;
+
+    /// What the step skips the contact passes on is what `contact` finds nothing on,
+    /// and a marble resting on a face from below that face's axis is among it.
+    #[test]
+    fn out_of_reach_means_no_contact() {
+        let layout = TileLayout::<S>::from_um(2_000, 10_000).unwrap();
+        let mut grid = TileGrid::<8>::new(5, 2, 5).unwrap();
+        let t = TileIndex::new(2, 1, 2);
+        grid.set(2, 1, 2, true);
+        let (tiles, b) = (grid.view(), layout.tile_box(t));
+        let r = layout.from_um_len(3_500);
+        let y = r;
+        let held = Vec3::new(b.min.x - r, y, b.min.z + Scalar::half(layout.s));
+        assert!(out_of_reach(held, r, &b));
+        // Every 1/32 pitch over the tile and a cell around it.
+        for a in 0..96 {
+            for c in 0..96 {
+                let (x, z) = (S::ratio(a, 32), S::ratio(c, 32));
+                let p = Vec3::new(x, y, z);
+                if out_of_reach(p, r, &b) {
+                    assert_eq!(contact(p, r, t, &b, tiles), None, "{p:?}");
+                }
+            }
+        }
+    }
 }
