@@ -80,9 +80,7 @@ impl<C: Console> VirtualMatrix<C> {
             }
         }
     }
-}
 
-impl<C: Console> VirtualMatrix<C> {
     /// Waits for the next refresh slot (at [`REFRESH_HZ`]).
     async fn next_refresh(&mut self) {
         self.refreshed();
