@@ -27,12 +27,18 @@ fn sim_json(args: &[&str]) -> Value {
     serde_json::from_str(out.trim()).unwrap_or_else(|e| panic!("not JSON ({e}): {out}"))
 }
 
-/// A file under this test target's scratch directory.
+/// A file under this test target's scratch directory. Written under a name
+/// of its own and renamed into place: tests run in parallel, and two of them
+/// writing the same file in place let one read it half written.
 fn scratch(name: &str, content: &str) -> PathBuf {
+    static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
     std::fs::create_dir_all(&dir).unwrap();
     let p = dir.join(name);
-    std::fs::write(&p, content).unwrap();
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let partial = dir.join(format!("{name}.{}.{n}.partial", std::process::id()));
+    std::fs::write(&partial, content).unwrap();
+    std::fs::rename(&partial, &p).unwrap();
     p
 }
 
