@@ -71,6 +71,16 @@ impl<S: Scalar> Vec3<S> {
             _ => self.z,
         }
     }
+
+    /// Sets the component along the axis `axis` (0 = x', 1 = y', 2 = z').
+    #[inline]
+    pub fn set_axis(&mut self, axis: usize, value: S) {
+        match axis {
+            0 => self.x = value,
+            1 => self.y = value,
+            _ => self.z = value,
+        }
+    }
     /// Component-wise clamp into `[-limit, limit]`.
     #[inline]
     pub fn clamp_abs(self, limit: S) -> Self {

@@ -326,24 +326,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let k = self.params.k;
         let reach = self.params.radius.shr(3);
         let [full, roll, resist] = self.pulls;
-        for axis in 0..3 {
-            if !changed[axis] {
-                continue;
-            }
-            // The same values as `Kick::from_mg(g, full, ·, k).clamped(reach)`.
-            let (dv, dp) = full.kick::<S>(g[axis], k);
-            let dp = dp.clamp(-reach, reach);
-            set_axis(&mut self.kick_free.dv, axis, dv);
-            set_axis(&mut self.kick_free.dp, axis, dp);
+        for axis in (0..3).filter(|&a| changed[a]) {
+            let free = Kick::axis_of(g[axis], full, reach, k);
+            self.kick_free.set_axis(axis, free);
             // Rolling scales the tangential axes only (x', z'): the normal is full.
-            let (dv, dp) = if axis == 1 || roll == full {
-                (dv, dp)
-            } else {
-                let (dv, dp) = roll.kick::<S>(g[axis], k);
-                (dv, dp.clamp(-reach, reach))
-            };
-            set_axis(&mut self.kick_roll.dv, axis, dv);
-            set_axis(&mut self.kick_roll.dp, axis, dp);
+            let rolling = if axis == 1 || roll == full { free } else { Kick::axis_of(g[axis], roll, reach, k) };
+            self.kick_roll.set_axis(axis, rolling);
         }
         // Rolling resistance decelerates by c_rr·g_n (·5/7 when rolling), g_n = −g_y.
         if changed[1] && self.params.spec.effects.friction {
@@ -624,8 +612,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 keep = self.tiles.is_solid(t);
             }
             if keep {
-                set_axis(&mut kick.dv, axis, S::ZERO);
-                set_axis(&mut kick.dp, axis, S::ZERO);
+                kick.set_axis(axis, (S::ZERO, S::ZERO));
                 on_floor |= axis == 1 && up;
             } else {
                 m.rest_mask &= !(1 << bit);
@@ -771,14 +758,6 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             eat(m.supported as u64 | (m.out as u64) << 1);
         }
         h
-    }
-}
-
-fn set_axis<S: Scalar>(v: &mut Vec3<S>, axis: usize, value: S) {
-    match axis {
-        0 => v.x = value,
-        1 => v.y = value,
-        _ => v.z = value,
     }
 }
 

@@ -45,12 +45,9 @@ impl Effects {
 ///
 /// Speeds are scaled by 1/16 before squaring so that `v²` stays inside the narrowest
 /// fixed format's range at the speed cap.
-pub fn rolling_resistance<S: Scalar>(v: &mut Vec3<S>, kick: &mut Kick<S>, decel: S, k: u32) {
-    Drag::new(decel, k).apply(v, kick);
-}
-
-/// [`rolling_resistance`] with what depends on the pull alone worked out once per
-/// pull (the world keeps one): the step is left with the per-marble part.
+///
+/// What depends on the pull alone is worked out once per pull ([`Drag::new`]; the
+/// world keeps one): the step is left with the per-marble part ([`Drag::apply`]).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Drag<S> {
     /// The deceleration per step, `decel`.
@@ -70,7 +67,7 @@ impl<S: Scalar> Drag<S> {
         Drag { decel, limit2: limit * limit, half_step: decel.shr(k + 1) }
     }
 
-    /// Applies the drag to a marble's velocity and kick (see [`rolling_resistance`]).
+    /// Applies the drag to a marble's velocity and kick.
     // Inlined into the step (its one caller), where the kick stays in registers.
     #[inline(always)]
     pub fn apply(&self, v: &mut Vec3<S>, kick: &mut Kick<S>) {

@@ -55,13 +55,19 @@ impl PullScale {
 }
 
 impl<S: Scalar> Kick<S> {
-    /// The kick of a `g_mg` (milli-g, tile frame) acceleration, the tangential part
-    /// (x', z') scaled by `tangential`, the normal part (y') by `full`.
-    pub fn from_mg(g_mg: [i32; 3], full: PullScale, tangential: PullScale, k: u32) -> Self {
-        let (tx, px) = tangential.kick(g_mg[0], k);
-        let (ty, py) = full.kick(g_mg[1], k);
-        let (tz, pz) = tangential.kick(g_mg[2], k);
-        Kick { dv: Vec3::new(tx, ty, tz), dp: Vec3::new(px, py, pz) }
+    /// One axis of the kick of a `mg` milli-g pull scaled by `scale`: `(a·dt, ½·a·dt²)`
+    /// with the displacement limited to `±reach` (the step bound against tunnelling;
+    /// it only binds for strong pulls at low step rates). Each axis depends on that
+    /// axis of the pull alone, so a tilt that moves one axis recomputes one.
+    pub fn axis_of(mg: i32, scale: PullScale, reach: S, k: u32) -> (S, S) {
+        let (dv, dp) = scale.kick::<S>(mg, k);
+        (dv, dp.clamp(-reach, reach))
+    }
+
+    /// Sets axis `axis` (0 = x', 1 = y', 2 = z') to `(dv, dp)`.
+    pub fn set_axis(&mut self, axis: usize, (dv, dp): (S, S)) {
+        self.dv.set_axis(axis, dv);
+        self.dp.set_axis(axis, dp);
     }
 
     /// The sum of two kicks (constant accelerations add).
