@@ -504,13 +504,7 @@ impl<const W: usize, const H: usize> OnTimeIntegrator<W, H> {
 
     /// Ticks pixel `(x, y)` has been on (0 when out of range).
     pub fn on_ticks(&self, x: usize, y: usize) -> u32 {
-        match self.on.get(y) {
-            Some(counters) if x < W.min(MAX_WIDTH) => counters
-                .iter()
-                .enumerate()
-                .fold(0, |on, (j, bits)| on | (((bits >> x) & 1) << j)),
-            _ => 0,
-        }
+        self.row_on_ticks(y).get(x).copied().unwrap_or(0)
     }
 
     /// The on-times of row `y`'s pixels (zeros when out of range): each
