@@ -5,8 +5,8 @@
 //! in thin `#[embassy_executor::task]` functions that pass its own hardware:
 //!
 //! ```text
-//!  input_task(TiltInput) ──TILT (latest)──┐
-//!                       └─COMMANDS (queue)┴─> game_task ──FRAMES (latest)──> display_task(MatrixOutput)
+//!  input_task(TiltInput) ──tilt (latest)──┐
+//!                       └─commands (queue)┴─> game_task ──frames (latest)──> display_task(MatrixOutput)
 //!                                              │ Ticker at FRAME_HZ (128 Hz), each tick:
 //!                                              └ Player::frame(reading) → Session::frame → render
 //! ```
@@ -24,14 +24,15 @@
 //!   reaches LEDs (real pins, or QEMU's virtual matrix).
 //! * [`Console`]: a blocking byte sink for an interactive terminal.
 //!
-//! The display size is per board ([`WIDTH`] × [`HEIGHT`]): the micro:bit's
-//! 5×5 matrix, whose view scrolls with the marble, or for QEMU a 19×9 virtual
-//! matrix that shows every built-in maze whole. Everything below the tasks
-//! ([`Player`], [`fault_frame`], [`win_frame`]) is generic over the size.
+//! The display size `W`×`H` and whether the autopilot is linked (`PILOT`) are
+//! the board binary's choice, passed as const generics: the micro:bit's 5×5
+//! matrix, whose view scrolls with the marble, without the autopilot; or for
+//! QEMU a 19×9 virtual matrix that shows every built-in maze whole. The board
+//! binary owns the [`Links`] between its tasks in a `static`.
 
 use core::cell::Cell;
 use core::future::Future;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, Ordering};
 
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
@@ -49,22 +50,6 @@ use crate::physics::Fx;
 use crate::render::Renderer;
 use crate::tilt::TiltConfig;
 
-/// Display width in pixels: the micro:bit's 5×5 matrix.
-#[cfg(feature = "board-microbit")]
-pub const WIDTH: usize = 5;
-/// Display height in pixels.
-#[cfg(feature = "board-microbit")]
-pub const HEIGHT: usize = 5;
-/// Display width in pixels: QEMU's virtual matrix, as wide as the widest
-/// built-in maze (`grand-tour`, 19 tiles), so no built-in level scrolls.
-#[cfg(not(feature = "board-microbit"))]
-pub const WIDTH: usize = 19;
-/// Display height in pixels (the tallest built-in maze has 9 rows).
-#[cfg(not(feature = "board-microbit"))]
-pub const HEIGHT: usize = 9;
-/// One image for the LED matrix.
-pub type DisplayFrame = Frame<WIDTH, HEIGHT>;
-
 /// The game's configuration: 128 frames/s × 8 physics steps (the same as the
 /// host tools, so that `state_hash`es agree).
 pub const GAME_CONFIG: GameConfig = GameConfig::DEFAULT;
@@ -78,11 +63,6 @@ pub const WIN_PAUSE_FRAMES: u32 = FRAME_HZ;
 pub const LOSS_PAUSE_FRAMES: u32 = FRAME_HZ / 2;
 /// Flash period of the win display, frames (on and off for this long each).
 const WIN_FLASH_FRAMES: u32 = FRAME_HZ / 8;
-
-/// Whether this board has the autopilot ([`Command::ToggleAutopilot`],
-/// [`GameMode::Demo`]). The micro:bit leaves it out: no button combination
-/// is left for it, and leaving it out saves 6 KiB of flash.
-pub const AUTOPILOT: bool = !cfg!(feature = "board-microbit");
 
 /// One g in milli-g.
 pub const ONE_G_MG: i32 = 1000;
@@ -236,31 +216,57 @@ impl Status {
     };
 }
 
-/// Latest tilt, written by [`input_task`], read by [`game_task`] each frame.
-pub static TILT: Latest<Tilt> = Latest::new(Tilt::FLAT);
-/// Commands from [`input_task`] to [`game_task`].
-pub static COMMANDS: Channel<CriticalSectionRawMutex, Command, 8> = Channel::new();
-/// Latest frame from [`game_task`] to [`display_task`] (older ones are dropped).
-pub static FRAMES: Signal<CriticalSectionRawMutex, DisplayFrame> = Signal::new();
-/// The game's status after its latest frame.
-pub static STATUS: Latest<Status> = Latest::new(Status::START);
-/// Ticks of [`game_task`]'s frame loop so far (wrapping): a watchdog can
-/// check that it keeps moving.
-pub static GAME_FRAMES: AtomicU32 = AtomicU32::new(0);
-/// Set by the board while its accelerometer is down: the game pauses and
-/// shows [`fault_frame`] until it is cleared.
-pub static SENSOR_FAULT: AtomicBool = AtomicBool::new(false);
+/// The links between the tasks of a board with a `W`×`H` display. Each board
+/// binary owns one in a `static` (the size is the board's, so it cannot be a
+/// static of this module) and hands it to the tasks.
+pub struct Links<const W: usize, const H: usize> {
+    /// Latest tilt, written by [`input_task`], read by [`game_task`] each frame.
+    pub tilt: Latest<Tilt>,
+    /// Commands from [`input_task`] to [`game_task`].
+    pub commands: Channel<CriticalSectionRawMutex, Command, 8>,
+    /// Latest frame from [`game_task`] to [`display_task`] (older ones are
+    /// dropped).
+    pub frames: Signal<CriticalSectionRawMutex, Frame<W, H>>,
+    /// The game's status after its latest frame.
+    pub status: Latest<Status>,
+    /// Set by the board while its accelerometer is down: the game pauses and
+    /// shows [`fault_frame`] until it is cleared.
+    pub sensor_fault: AtomicBool,
+}
+
+impl<const W: usize, const H: usize> Links<W, H> {
+    /// Nothing sent yet: a flat board, no command, no frame.
+    pub const fn new() -> Self {
+        Self {
+            tilt: Latest::new(Tilt::FLAT),
+            commands: Channel::new(),
+            frames: Signal::new(),
+            status: Latest::new(Status::START),
+            sensor_fault: AtomicBool::new(false),
+        }
+    }
+}
+
+impl<const W: usize, const H: usize> Default for Links<W, H> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
 
 // ---------------------------------------------------------------------------
 // Tasks
 // ---------------------------------------------------------------------------
 
-/// Forwards events from `input` to [`TILT`] and [`COMMANDS`], forever.
-pub async fn input_task<I: TiltInput>(input: &mut I) -> ! {
+/// Forwards events from `input` to [`Links::tilt`] and [`Links::commands`],
+/// forever.
+pub async fn input_task<I: TiltInput, const W: usize, const H: usize>(
+    links: &Links<W, H>,
+    input: &mut I,
+) -> ! {
     loop {
         match input.next_event().await {
-            InputEvent::Tilt(tilt) => TILT.set(tilt),
-            InputEvent::Command(command) => COMMANDS.send(command).await,
+            InputEvent::Tilt(tilt) => links.tilt.set(tilt),
+            InputEvent::Command(command) => links.commands.send(command).await,
         }
     }
 }
@@ -269,7 +275,7 @@ pub async fn input_task<I: TiltInput>(input: &mut I) -> ! {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum GameMode {
-    /// A player with a tilt input: endless, levels in order, [`COMMANDS`]
+    /// A player with a tilt input: endless, levels in order, [`Links::commands`]
     /// obeyed. `tilt` configures the game's tilt path:
     /// [`TiltConfig::DEFAULT`] for a real accelerometer, [`SYNTHETIC_TILT`]
     /// for keys.
@@ -316,25 +322,32 @@ impl DemoSummary {
 }
 
 /// Runs the game at [`FRAME_HZ`] in `mode` (see [`GameMode`]), publishing a
-/// frame on [`FRAMES`] and the [`STATUS`] every tick, and bumping
-/// [`GAME_FRAMES`]. Returns on [`Command::Quit`] or at the end of the demo.
-pub async fn game_task(mode: GameMode) -> GameExit {
+/// frame on [`Links::frames`] and the [`Links::status`] every tick. Returns
+/// on [`Command::Quit`] or at the end of the demo. `PILOT` says whether the
+/// board has the autopilot (see [`Player`]).
+pub async fn game_task<const W: usize, const H: usize, const PILOT: bool>(
+    links: &Links<W, H>,
+    mode: GameMode,
+) -> GameExit {
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
-        GameMode::Play { tilt } => play(&mut ticker, tilt).await,
-        GameMode::Demo => demo(&mut ticker).await,
+        GameMode::Play { tilt } => play::<W, H, PILOT>(links, &mut ticker, tilt).await,
+        GameMode::Demo => demo::<W, H, PILOT>(links, &mut ticker).await,
     }
 }
 
 /// One tick of the frame loop.
 async fn tick(ticker: &mut Ticker) {
     ticker.next().await;
-    GAME_FRAMES.fetch_add(1, Ordering::Relaxed);
 }
 
 /// [`GameMode::Play`].
-async fn play(ticker: &mut Ticker, tilt: TiltConfig) -> GameExit {
-    let mut player = match Player::<WIDTH, HEIGHT>::new(0, tilt, false) {
+async fn play<const W: usize, const H: usize, const PILOT: bool>(
+    links: &Links<W, H>,
+    ticker: &mut Ticker,
+    tilt: TiltConfig,
+) -> GameExit {
+    let mut player = match Player::<W, H, PILOT>::new(0, tilt, false) {
         Ok(player) => player,
         Err(e) => return GameExit::SetupFailed(e),
     };
@@ -344,7 +357,7 @@ async fn play(ticker: &mut Ticker, tilt: TiltConfig) -> GameExit {
     let mut pause: Option<(Phase, u32)> = None;
     loop {
         tick(ticker).await;
-        while let Ok(command) = COMMANDS.try_receive() {
+        while let Ok(command) = links.commands.try_receive() {
             #[cfg(feature = "defmt")]
             defmt::info!("command {}", command);
             match command {
@@ -358,18 +371,18 @@ async fn play(ticker: &mut Ticker, tilt: TiltConfig) -> GameExit {
                 pause = None;
             }
         }
-        if SENSOR_FAULT.load(Ordering::Relaxed) {
-            if !FRAMES.signaled() {
-                FRAMES.signal(fault_frame());
+        if links.sensor_fault.load(Ordering::Relaxed) {
+            if !links.frames.signaled() {
+                links.frames.signal(fault_frame());
             }
             continue;
         }
         // Draw only once the display has taken the previous frame (it
         // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
-        let draw = !FRAMES.signaled();
+        let draw = !links.frames.signaled();
         let frame = match pause {
             None => {
-                let phase = player.frame(TILT.get().reading_mg());
+                let phase = player.frame(links.tilt.get().reading_mg());
                 if phase != Phase::Playing {
                     #[cfg(feature = "defmt")]
                     defmt::info!(
@@ -409,9 +422,9 @@ async fn play(ticker: &mut Ticker, tilt: TiltConfig) -> GameExit {
                 })
             }
         };
-        STATUS.set(player.status());
+        links.status.set(player.status());
         if let Some(frame) = frame {
-            FRAMES.signal(frame);
+            links.frames.signal(frame);
         }
     }
 }
@@ -422,11 +435,14 @@ async fn play(ticker: &mut Ticker, tilt: TiltConfig) -> GameExit {
 /// each frame, stopping at the first phase that is not
 /// [`Phase::Playing`]), one frame per tick; then the outcome is shown for
 /// [`WIN_PAUSE_FRAMES`].
-async fn demo(ticker: &mut Ticker) -> GameExit {
+async fn demo<const W: usize, const H: usize, const PILOT: bool>(
+    links: &Links<W, H>,
+    ticker: &mut Ticker,
+) -> GameExit {
     let mut summary = DemoSummary::default();
     for index in 0..LEVELS.len() {
         summary.levels = summary.levels.saturating_add(1);
-        let mut player = match Player::<WIDTH, HEIGHT>::new(index, SYNTHETIC_TILT, true) {
+        let mut player = match Player::<W, H, PILOT>::new(index, SYNTHETIC_TILT, true) {
             Ok(player) => player,
             Err(e) => {
                 #[cfg(feature = "defmt")]
@@ -444,9 +460,9 @@ async fn demo(ticker: &mut Ticker) -> GameExit {
         let phase = loop {
             tick(ticker).await;
             let phase = player.frame(Tilt::FLAT.reading_mg());
-            STATUS.set(player.status());
-            if !FRAMES.signaled() || phase != Phase::Playing {
-                FRAMES.signal(player.render());
+            links.status.set(player.status());
+            if !links.frames.signaled() || phase != Phase::Playing {
+                links.frames.signal(player.render());
             }
             if phase != Phase::Playing {
                 break phase;
@@ -477,7 +493,7 @@ async fn demo(ticker: &mut Ticker) -> GameExit {
             let flash = phase == Phase::Won && win_flash(left);
             if sent != Some(flash) {
                 sent = Some(flash);
-                FRAMES.signal(if phase == Phase::Won {
+                links.frames.signal(if phase == Phase::Won {
                     win_frame(&last, left)
                 } else {
                     last
@@ -488,8 +504,8 @@ async fn demo(ticker: &mut Ticker) -> GameExit {
     GameExit::DemoDone(summary)
 }
 
-/// Something that can show BCM scan steps on an LED matrix.
-pub trait MatrixOutput {
+/// Something that can show BCM scan steps on a `W`×`H` LED matrix.
+pub trait MatrixOutput<const W: usize, const H: usize> {
     /// Lights row `step.row` with the columns set in `step.columns`, holds it
     /// for `step.ticks` base ticks of the board's scan clock, then returns
     /// (the caller immediately shows the next step).
@@ -501,22 +517,25 @@ pub trait MatrixOutput {
     /// [`show`](Self::show); an output with nothing to wait for between steps
     /// (the virtual matrix) takes the whole refresh at once and saves an
     /// await per step.
-    fn show_refresh(&mut self, scanner: &mut Scanner<WIDTH, HEIGHT>) -> impl Future<Output = ()> {
+    fn show_refresh(&mut self, scanner: &mut Scanner<W, H>) -> impl Future<Output = ()> {
         async move {
-            for _ in 0..Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH {
+            for _ in 0..Scanner::<W, H>::STEPS_PER_REFRESH {
                 self.show(scanner.next_step()).await;
             }
         }
     }
 }
 
-/// Scans the latest frame from [`FRAMES`] onto `output`, forever. A new frame
-/// is taken only at the start of a refresh, so a refresh never mixes frames
-/// (the scanner skips a frame equal to the one on show).
-pub async fn display_task<O: MatrixOutput>(output: &mut O) -> ! {
-    let mut scanner = Scanner::<WIDTH, HEIGHT>::new();
+/// Scans the latest frame from [`Links::frames`] onto `output`, forever. A
+/// new frame is taken only at the start of a refresh, so a refresh never
+/// mixes frames (the scanner skips a frame equal to the one on show).
+pub async fn display_task<O: MatrixOutput<W, H>, const W: usize, const H: usize>(
+    links: &Links<W, H>,
+    output: &mut O,
+) -> ! {
+    let mut scanner = Scanner::<W, H>::new();
     loop {
-        if let Some(frame) = FRAMES.try_take() {
+        if let Some(frame) = links.frames.try_take() {
             scanner.load(&frame);
         }
         output.show_refresh(&mut scanner).await;
@@ -536,8 +555,13 @@ pub fn level_name(index: usize) -> &'static str {
 /// (fixed-point [`Fx`] physics), the [`Renderer`] that follows the marble,
 /// and, when it plays, the [`Autopilot`]. Synchronous and board-agnostic:
 /// [`game_task`] drives it from its ticker.
+///
+/// `PILOT` says whether the board has the autopilot at all
+/// ([`Command::ToggleAutopilot`], [`GameMode::Demo`]). It is a constant, not
+/// a flag, so that a board without it (the micro:bit: no button combination
+/// is left for it) does not link the controller: about 6 KiB of flash.
 #[derive(Clone, Debug)]
-pub struct Player<const W: usize, const H: usize> {
+pub struct Player<const W: usize, const H: usize, const PILOT: bool> {
     level: usize,
     session: Session<'static, Fx>,
     renderer: Renderer<W, H>,
@@ -545,9 +569,9 @@ pub struct Player<const W: usize, const H: usize> {
     autopilot: Option<Autopilot>,
 }
 
-impl<const W: usize, const H: usize> Player<W, H> {
+impl<const W: usize, const H: usize, const PILOT: bool> Player<W, H, PILOT> {
     /// Built-in level `level` (wrapped into range) with the tilt path `tilt`;
-    /// the autopilot plays if `autopilot` (and the board has [`AUTOPILOT`]).
+    /// the autopilot plays if `autopilot` (and the board has it, `PILOT`).
     pub fn new(level: usize, tilt: TiltConfig, autopilot: bool) -> Result<Self, SetupError> {
         let level = level % LEVELS.len();
         let view = LEVELS[level];
@@ -556,7 +580,7 @@ impl<const W: usize, const H: usize> Player<W, H> {
             session: Session::new(view, GAME_CONFIG, tilt)?,
             renderer: Renderer::new(),
             tilt,
-            autopilot: (AUTOPILOT && autopilot).then(|| Autopilot::new(&view)),
+            autopilot: (PILOT && autopilot).then(|| Autopilot::new(&view)),
         })
     }
 
@@ -586,19 +610,19 @@ impl<const W: usize, const H: usize> Player<W, H> {
     }
 
     /// Hands the board to the autopilot (planned afresh for the level), or
-    /// takes it back. Without [`AUTOPILOT`] it stays off.
+    /// takes it back. Without `PILOT` it stays off.
     pub fn set_autopilot(&mut self, on: bool) {
-        self.autopilot = (AUTOPILOT && on).then(|| Autopilot::new(&LEVELS[self.level]));
+        self.autopilot = (PILOT && on).then(|| Autopilot::new(&LEVELS[self.level]));
     }
 
     /// The reading for the next frame: the autopilot's when it plays, else
     /// `tilt_mg` (the accelerometer's or the keys').
     pub fn reading(&mut self, tilt_mg: [i32; 3]) -> [i32; 3] {
         match &mut self.autopilot {
-            // `AUTOPILOT` again, though the pilot is never set without it: the
+            // `PILOT` again, though the pilot is never set without it: the
             // compiler cannot see that, and the constant drops the controller
             // (~2 KB) from a board without it.
-            Some(pilot) if AUTOPILOT => pilot.reading_mg(self.session.game()),
+            Some(pilot) if PILOT => pilot.reading_mg(self.session.game()),
             _ => tilt_mg,
         }
     }

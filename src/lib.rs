@@ -7,7 +7,8 @@ pub mod physics;
 pub mod game;
 /// Pin-agnostic LED-matrix frames, BCM scanning and on-time integration.
 pub mod matrix;
-#[cfg(any(feature = "board-qemu", feature = "board-microbit"))]
+/// The firmware's board-agnostic tasks (feature `app`).
+#[cfg(feature = "app")]
 pub mod app;
 pub mod board;
 /// Accelerometer axis mapping, plausibility, calibration and fault supervision.

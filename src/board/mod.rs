@@ -1,15 +1,13 @@
-//! Board support: one submodule per firmware target, each behind its feature.
+//! Board support: the safe, host-testable half of each board.
 //!
-//! The library is `#![forbid(unsafe_code)]`, so only the safe, host-testable
-//! half of a board lives here (terminal rendering, arithmetic, argument
-//! parsing). Register access, interrupt handlers and the executor loop live in
-//! files that only the firmware binaries compile (for QEMU:
-//! `src/board/qemu/hw.rs`, included by `src/bin/qemu.rs` with `#[path]`).
+//! The library is `#![forbid(unsafe_code)]`, so only that half lives here
+//! (terminal rendering, arithmetic, argument parsing, pin and axis tables).
+//! Register access, interrupt handlers and the executor loop live in the
+//! board's firmware crate under `boards/` (`boards/qemu`, `boards/microbit`).
 
 // The QEMU board's pure parts are compiled everywhere too (host tests); its
-// virtual matrix needs the firmware dependencies (feature board-qemu).
+// virtual matrix needs the firmware tasks (feature `app`).
 pub mod qemu;
 // The micro:bit v2 board module: pure (pin-free) code, compiled everywhere so
-// that plain host `cargo test` covers it; its hardware half (hw.rs) is only
-// compiled by `src/bin/microbit.rs` (feature board-microbit).
+// that plain host `cargo test` covers it.
 pub mod microbit;

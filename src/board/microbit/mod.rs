@@ -2,10 +2,9 @@
 //!
 //! Only constants and pure functions live here, so `cargo test` on the host
 //! covers them. The wiring (embassy-nrf peripherals, the LSM303AGR driver, the
-//! executors, interrupt bindings, the watchdog) is `hw.rs` next to this file;
-//! it needs `unsafe` (interrupt handlers), which this library forbids, so
-//! only the firmware binary compiles it
-//! (`#[path = "../board/microbit/hw.rs"] mod hw;` in `src/bin/microbit.rs`).
+//! executors, interrupt bindings, the watchdog) is the firmware crate
+//! `boards/microbit`; it needs `unsafe` (interrupt handlers), which this
+//! library forbids.
 //! All game logic comes from [`crate::app`], exactly as in the QEMU build.
 //!
 //! # Wiring (micro:bit v2 schematic)
@@ -146,10 +145,3 @@ pub fn frame_columns<const W: usize, const H: usize>(frame: &Frame<W, H>, step: 
         .filter(|&(x, &level)| x < 32 && bit < 8 && (level >> bit) & 1 != 0)
         .fold(0, |acc, (x, _)| acc | (1u32 << x))
 }
-
-#[cfg(all(feature = "board-microbit", feature = "board-qemu"))]
-compile_error!(
-    "features `board-microbit` and `board-qemu` are mutually exclusive (each brings its own \
-     embassy time driver): build each firmware on its own, e.g. \
-     `cargo build --release --target thumbv7em-none-eabihf --features board-microbit --bin microbit`"
-);

@@ -3,18 +3,21 @@
 //! This part is plain, host-testable code: memory map constants, the
 //! firmware's command-line options, the CPU-load arithmetic
 //! ([`cpu_meter`]) and the virtual LED matrix that shows the scanned frames on
-//! an ANSI terminal (`virtual_matrix`, with feature `board-qemu` only: it
-//! needs embassy). The register-level half (UART and
-//! TIMER0 drivers, the WFI executor, interrupt handlers, the SysTick time
-//! driver, semihosting exit) is `hw.rs` next to this file; it needs `unsafe`,
-//! which this library forbids, so only the firmware binaries compile it
-//! (`#[path = "../board/qemu/hw.rs"] mod hw;` in `src/bin/qemu.rs`).
-//!
-//! How the firmware is run is described in `tools/qemu-run.sh`.
+//! an ANSI terminal (`virtual_matrix`, with feature `app` only: it needs
+//! embassy). The register-level half (UART and TIMER0 drivers, the WFI
+//! executor, interrupt handlers, the time driver, semihosting exit) is the
+//! firmware crate `boards/qemu`; it needs `unsafe`, which this library
+//! forbids. `cargo qemu` (xtask) builds it and runs it in qemu-system-arm.
 
 pub mod cpu_meter;
-#[cfg(feature = "board-qemu")]
+#[cfg(feature = "app")]
 pub mod virtual_matrix;
+
+/// Virtual matrix width in pixels: as wide as the widest built-in maze
+/// (`grand-tour`, 19 tiles), so no built-in level scrolls.
+pub const WIDTH: usize = 19;
+/// Virtual matrix height in pixels (the tallest built-in maze has 9 rows).
+pub const HEIGHT: usize = 9;
 
 /// Core (and APB peripheral) clock of QEMU's mps2-an386, Hz.
 pub const SYSCLK_HZ: u32 = 25_000_000;
@@ -40,7 +43,7 @@ pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
 
 /// How the firmware was started, from its semihosting command line.
 ///
-/// The runner (`tools/qemu-run.sh`) always passes exactly one of
+/// The runner (`cargo qemu`, xtask) always passes exactly one of
 /// `--interactive` (UART on the user's terminal, real-time clock) or
 /// `--headless` (UART discarded, `-icount shift=7,align=off,sleep=off`,
 /// deterministic), followed by the user's own arguments. When neither is

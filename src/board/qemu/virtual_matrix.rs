@@ -12,12 +12,13 @@ use core::fmt::Write as _;
 
 use embassy_time::{Duration, Ticker};
 
-use crate::app::{
-    level_name, Console, DisplayFrame, MatrixOutput, Status, FRAME_HZ, HEIGHT, REFRESH_HZ, STATUS,
-    WIDTH,
-};
+use super::{HEIGHT, WIDTH};
+use crate::app::{level_name, Console, Latest, MatrixOutput, Status, FRAME_HZ, REFRESH_HZ};
 use crate::game::levels::LEVELS;
-use crate::matrix::{Brightness, OnTimeIntegrator, ScanStep, Scanner};
+use crate::matrix::{Brightness, Frame, OnTimeIntegrator, ScanStep, Scanner};
+
+/// One picture of the virtual matrix.
+type DisplayFrame = Frame<WIDTH, HEIGHT>;
 
 /// Terminal redraws per second (at most; only changes are drawn).
 pub const DRAW_HZ: u32 = 20;
@@ -27,6 +28,7 @@ const TICKS_PER_REFRESH: u32 = Scanner::<WIDTH, HEIGHT>::TICKS_PER_REFRESH;
 
 /// The virtual matrix, drawing on `C` (or only logging when `C` is absent).
 pub struct VirtualMatrix<C: Console> {
+    status: &'static Latest<Status>,
     integrator: OnTimeIntegrator<WIDTH, HEIGHT>,
     ticks_in_refresh: u32,
     refreshes: u32,
@@ -38,10 +40,12 @@ pub struct VirtualMatrix<C: Console> {
 }
 
 impl<C: Console> VirtualMatrix<C> {
-    /// A matrix drawn on `console` (`None`: headless) that logs the perceived
-    /// frame with defmt every `log_every` refreshes when it changed (0: never).
-    pub fn new(console: Option<C>, log_every: u32) -> Self {
+    /// A matrix drawn on `console` (`None`: headless) with the game's
+    /// `status` below it, that logs the perceived frame with defmt every
+    /// `log_every` refreshes when it changed (0: never).
+    pub fn new(status: &'static Latest<Status>, console: Option<C>, log_every: u32) -> Self {
         Self {
+            status,
             integrator: OnTimeIntegrator::new(),
             ticks_in_refresh: 0,
             refreshes: 0,
@@ -70,7 +74,7 @@ impl<C: Console> VirtualMatrix<C> {
             defmt::info!("matrix {}", frame.rows());
         }
         if let (true, Some(console)) = (draw_due, self.console.as_mut()) {
-            let mut status = STATUS.get();
+            let mut status = self.status.get();
             // Redraw for whole tenths of a second only.
             status.frames -= status.frames % (FRAME_HZ / 10).max(1);
             let first = self.drawn.is_none();
@@ -91,7 +95,7 @@ impl<C: Console> VirtualMatrix<C> {
     }
 }
 
-impl<C: Console> MatrixOutput for VirtualMatrix<C> {
+impl<C: Console> MatrixOutput<WIDTH, HEIGHT> for VirtualMatrix<C> {
     async fn show(&mut self, step: ScanStep) {
         self.integrator.feed(step);
         self.ticks_in_refresh = self.ticks_in_refresh.saturating_add(step.ticks);

@@ -17,17 +17,11 @@
 //! Options: `--quick` (fewer timing repetitions), `--no-target`, `--no-m0`,
 //! `--no-callgrind`, `--out DIR` (default `docs/`).
 
-#[path = "accuracy/callgrind.rs"]
 mod callgrind;
-#[path = "accuracy/host.rs"]
 mod host;
-#[path = "accuracy/peer.rs"]
 mod peer;
-#[path = "accuracy/plot.rs"]
 mod plot;
-#[path = "accuracy/report.rs"]
 mod report;
-#[path = "accuracy/target.rs"]
 mod target;
 
 use std::collections::HashMap;
@@ -200,7 +194,9 @@ fn main() {
         );
         return;
     }
-    let mut out_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("docs");
+    // The repository's docs/, beside the study's own folder.
+    let study_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut out_dir = study_dir.parent().unwrap_or(study_dir).join("docs");
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {

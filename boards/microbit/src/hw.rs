@@ -1,6 +1,6 @@
 //! BBC micro:bit v2: the hardware half (embassy-nrf wiring only).
 //!
-//! Compiled only by `src/bin/microbit.rs` (feature `board-microbit`, target
+//! The `marble-microbit` firmware crate's board module (target
 //! thumbv7em-none-eabihf). Every decision — sensor fault policy, axis table,
 //! calibration, button combinations, scan timing, what the game does — is in
 //! host-tested library code ([`marble_rolling::sensor`],
@@ -77,7 +77,7 @@ impl Matrix {
     }
 }
 
-impl MatrixOutput for Matrix {
+impl MatrixOutput<{ board::WIDTH }, { board::HEIGHT }> for Matrix {
     async fn show(&mut self, step: ScanStep) {
         let columns = if SENSOR_DOWN.load(Ordering::Relaxed) {
             board::frame_columns(&board::FAULT_FRAME, step)

@@ -4,10 +4,10 @@
 //! run without a terminal on stdin) runs the deterministic headless demo: the
 //! autopilot plays every built-in level, one log line per level (outcome,
 //! physics steps, `state_hash`, as `cargo sim -- --level <name> --autopilot
-//! --json` reports them; `tools/check-demo.sh` compares the two), then the
+//! --json` reports them; `cargo xtask check-demo` compares the two), then the
 //! CPU load, the stack high-water mark, the instruction count of a game frame,
 //! and a summary. QEMU exits 0 when every level was won, 1 otherwise, 101 on
-//! a panic. The runner is `tools/qemu-run.sh`; it tells the firmware its mode
+//! a panic. The runner is `cargo qemu` (xtask); it tells the firmware its mode
 //! on the semihosting command line (see `marble_rolling::board::qemu::Options`).
 //!
 //! The tasks below are thin wrappers: the logic is in `marble_rolling::app`.
@@ -16,19 +16,24 @@
 
 
 use defmt_semihosting as _;
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Player, TerminalInput};
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, Player, TerminalInput};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
-use marble_rolling::board::qemu::Options;
+use marble_rolling::board::qemu::{Options, HEIGHT, WIDTH};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{OnTimeIntegrator, Scanner};
 
-#[path = "../board/qemu/hw.rs"]
-mod hw;
+use marble_qemu as hw;
 
 use hw::uart::{UartConsole, UartRx};
+
+/// The links between the tasks.
+static LINKS: Links<WIDTH, HEIGHT> = Links::new();
+
+/// This board has the autopilot (the demo, the `p` key).
+const PILOT: bool = true;
 
 /// Headless runs log the perceived matrix (when it changed) every this many
 /// refreshes (5 s).
@@ -47,8 +52,8 @@ fn main() -> ! {
     defmt::info!(
         "Marble Rolling on QEMU mps2-an386: {}, {=usize}x{=usize} virtual matrix, {=u32} frames/s",
         options,
-        app::WIDTH,
-        app::HEIGHT,
+        WIDTH,
+        HEIGHT,
         app::FRAME_HZ
     );
 
@@ -86,19 +91,18 @@ fn main() -> ! {
 
 #[embassy_executor::task]
 async fn terminal_input() -> ! {
-    app::input_task(&mut TerminalInput::new(UartRx)).await
+    app::input_task(&LINKS, &mut TerminalInput::new(UartRx)).await
 }
 
 #[embassy_executor::task]
 async fn display(interactive: bool) -> ! {
     if interactive {
-        app::display_task(&mut VirtualMatrix::new(Some(UartConsole), 0)).await
+        app::display_task(&LINKS, &mut VirtualMatrix::new(&LINKS.status, Some(UartConsole), 0))
+            .await
     } else {
-        app::display_task(&mut VirtualMatrix::<UartConsole>::new(
-            None,
-            LOG_MATRIX_EVERY,
-        ))
-        .await
+        let mut matrix =
+            VirtualMatrix::<UartConsole>::new(&LINKS.status, None, LOG_MATRIX_EVERY);
+        app::display_task(&LINKS, &mut matrix).await
     }
 }
 
@@ -127,7 +131,7 @@ async fn game(options: Options) {
         }
     }
     let start = hw::cpu_meter::sample();
-    let exit = app::game_task(mode).await;
+    let exit = app::game_task::<WIDTH, HEIGHT, PILOT>(&LINKS, mode).await;
     let end = hw::cpu_meter::sample();
     let summary = match exit {
         GameExit::Quit => {
@@ -188,10 +192,10 @@ const PROFILE_FRAMES: u32 = 1024;
 fn profile() {
     use hw::cpu_meter::count_instructions;
     let mut total = Costs::default();
-    let mut picture = app::DisplayFrame::new();
+    let mut picture = marble_rolling::matrix::Frame::<WIDTH, HEIGHT>::new();
     for index in 0..LEVELS.len() {
         let Ok(mut player) =
-            Player::<{ app::WIDTH }, { app::HEIGHT }>::new(index, SYNTHETIC_TILT, true)
+            Player::<WIDTH, HEIGHT, PILOT>::new(index, SYNTHETIC_TILT, true)
         else {
             continue;
         };
@@ -222,11 +226,11 @@ fn profile() {
     );
     // The display's share, without its async plumbing: converting a frame
     // into bit planes, then one refresh of scan steps into the integrator.
-    let mut scanner = Scanner::<{ app::WIDTH }, { app::HEIGHT }>::new();
-    let mut integrator = OnTimeIntegrator::<{ app::WIDTH }, { app::HEIGHT }>::new();
+    let mut scanner = Scanner::<WIDTH, HEIGHT>::new();
+    let mut integrator = OnTimeIntegrator::<WIDTH, HEIGHT>::new();
     let (_, load) = count_instructions(|| scanner.load(&picture));
     let (_, scan) = count_instructions(|| {
-        for _ in 0..Scanner::<{ app::WIDTH }, { app::HEIGHT }>::STEPS_PER_REFRESH {
+        for _ in 0..Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH {
             integrator.feed(scanner.next_step());
         }
     });

@@ -9,12 +9,9 @@
 //! BENCH <scene> <backend> <variant> <step_log2> <steps> <instructions> <hash> <contacts> <collisions>
 //! ```
 //!
-//! `cargo accuracy` runs it (through the runner, `tools/qemu-run.sh`, which
-//! decodes the defmt log) and parses those lines; by hand:
-//!
-//! ```text
-//! cargo run --release --target thumbv7em-none-eabihf --features board-qemu --bin bench -- --demo
-//! ```
+//! `cargo accuracy` runs it (through `cargo xtask bench-m4`, which decodes the
+//! defmt log) and parses those lines; by hand: `cargo xtask bench-m4
+//! [--backends=MASK] [--rates=MASK]`.
 //!
 //! Options on the semihosting command line: `--backends=MASK` (bit n selects
 //! `study::BACKENDS[n]`), `--rates=MASK` (bit k selects 2^k steps/s).
@@ -30,8 +27,7 @@
 use defmt_semihosting as _;
 use marble_rolling::study::{bench_one, bench_plan, Scene, BACKENDS};
 
-#[path = "../board/qemu/hw.rs"]
-mod hw;
+use marble_qemu as hw;
 
 fn mask_option(name: &str, default: u32) -> u32 {
     let Ok(args) = semihosting::experimental::env::args::<256>() else {

@@ -1,9 +1,10 @@
-//! QEMU `mps2-an386` board: the register-level half.
+//! QEMU `mps2-an386` board: the register-level half, shared by the game
+//! (`src/main.rs`) and the study's benchmark (`src/bin/bench.rs`).
 //!
-//! Compiled into the firmware binaries only (`#[path = "../board/qemu/hw.rs"]
-//! mod hw;`), never into the library: it needs `unsafe` (MMIO, interrupt
-//! handlers, exported symbols), and the library is `#![forbid(unsafe_code)]`.
-//! The safe half is `marble_rolling::board::qemu`.
+//! A crate of its own because it needs `unsafe` (MMIO, interrupt handlers,
+//! exported symbols), which the core library forbids. The safe half
+//! (memory map, options, CPU-load arithmetic, the virtual matrix) is
+//! `marble_rolling::board::qemu`, tested on the host.
 //!
 //! Contents: [`clock`] (TIMER0 as a free-running 64-bit clock), the embassy
 //! time driver (that clock + SysTick wake-ups), [`uart`] (CMSDK APB UART0
@@ -11,7 +12,7 @@
 //! counting), [`stack`] (painting, high-water mark), [`executor`] (an embassy
 //! raw executor that sleeps with WFI),
 //! interrupt/fault handlers, and semihosting [`options`] / [`exit`].
-#![allow(dead_code)] // each binary uses its own subset
+#![no_std]
 
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicBool, Ordering};

@@ -3,7 +3,7 @@
 //! `cargo microbit` builds it and runs it with `probe-rs run --chip nRF52833_xxAA`
 //! (defmt log over RTT). Wiring only: the tasks are the shared ones from
 //! `marble_rolling::app`, fed by the micro:bit input (LSM303AGR + buttons)
-//! and drawing on the 5×5 matrix (see `src/board/microbit/`).
+//! and drawing on the 5×5 matrix (`src/hw.rs` here, and `marble_rolling::board::microbit`).
 //!
 //! Executors:
 //! * thread mode: input (accelerometer + buttons, 100 Hz), the game
@@ -23,7 +23,6 @@
 use defmt_rtt as _;
 use panic_probe as _;
 
-#[path = "../board/microbit/hw.rs"]
 mod hw;
 
 use embassy_executor::{InterruptExecutor, Spawner};
@@ -35,13 +34,20 @@ use embassy_nrf::{bind_interrupts, peripherals};
 use embassy_time::{Duration, Ticker};
 use lsm303agr::Lsm303agr;
 
-use marble_rolling::app;
+use marble_rolling::app::{self, Links};
 use marble_rolling::board::microbit as board;
 use marble_rolling::tilt::TiltConfig;
 
 bind_interrupts!(struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
 });
+
+/// The links between the tasks.
+static LINKS: Links<{ board::WIDTH }, { board::HEIGHT }> = Links::new();
+
+/// No autopilot on the micro:bit: no button combination is left for it, and
+/// leaving it out saves about 6 KiB of flash.
+const PILOT: bool = false;
 
 /// Runs the display above thread mode.
 static EXECUTOR_DISPLAY: InterruptExecutor = InterruptExecutor::new();
@@ -55,22 +61,22 @@ unsafe fn EGU0_SWI0() {
 
 #[embassy_executor::task]
 async fn display(mut matrix: hw::Matrix) -> ! {
-    app::display_task(&mut matrix).await
+    app::display_task(&LINKS, &mut matrix).await
 }
 
 #[embassy_executor::task]
 async fn input(mut input: hw::MicrobitInput) -> ! {
-    app::input_task(&mut input).await
+    app::input_task(&LINKS, &mut input).await
 }
 
 #[embassy_executor::task]
 async fn game() {
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
-        let exit = app::game_task(app::GameMode::Play {
+        let mode = app::GameMode::Play {
             tilt: TiltConfig::DEFAULT,
-        })
-        .await;
+        };
+        let exit = app::game_task::<{ board::WIDTH }, { board::HEIGHT }, PILOT>(&LINKS, mode).await;
         defmt::warn!("game_task returned: {}", exit);
     }
 }
