@@ -9,7 +9,9 @@
 use divan::counter::ItemsCount;
 use divan::{black_box, Bencher};
 use marble_rolling::physics::Scalar;
-use marble_rolling::study::{drive, with_backend, Job, Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2};
+use marble_rolling::study::{
+    drive, with_backend, Job, Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2,
+};
 
 /// Steps timed per iteration (one second of scene time at the default rate).
 const STEPS: u32 = 1 << DEFAULT_STEP_LOG2;
@@ -44,8 +46,18 @@ impl Job for Steps<'_, '_> {
 }
 
 fn bench(bencher: Bencher, id: SceneId, backend: &str) {
-    let index = BACKENDS.iter().position(|b| *b == backend).expect("backend");
-    with_backend(index, Steps { bencher, scene: Scene::get(id) }).expect("backend");
+    let index = BACKENDS
+        .iter()
+        .position(|b| *b == backend)
+        .expect("backend");
+    with_backend(
+        index,
+        Steps {
+            bencher,
+            scene: Scene::get(id),
+        },
+    )
+    .expect("backend");
 }
 
 #[divan::bench(args = BACKENDS)]

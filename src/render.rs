@@ -139,7 +139,10 @@ fn axis_point<S: Scalar>(layout: &TileLayout<S>, a: S) -> i32 {
 /// Where the tile-frame point `(x', z')` (pitches) lies in tile-index space,
 /// mapped through the uneven short/long tile widths.
 pub fn tile_point<S: Scalar>(layout: &TileLayout<S>, x: S, z: S) -> TilePoint {
-    TilePoint { u: axis_point(layout, x), v: axis_point(layout, z) }
+    TilePoint {
+        u: axis_point(layout, x),
+        v: axis_point(layout, z),
+    }
 }
 
 /// How close (pixels) the followed marble's tile may come to an edge of a
@@ -244,7 +247,12 @@ pub fn render_background<const W: usize, const H: usize>(
 }
 
 /// Adds `level` to pixel `(px, py)` (saturating); ignored outside the frame.
-fn add_pixel<const W: usize, const H: usize>(frame: &mut Frame<W, H>, px: i32, py: i32, level: u32) {
+fn add_pixel<const W: usize, const H: usize>(
+    frame: &mut Frame<W, H>,
+    px: i32,
+    py: i32,
+    level: u32,
+) {
     if px < 0 || py < 0 || level == 0 {
         return;
     }
@@ -271,8 +279,14 @@ pub fn draw_marble<const W: usize, const H: usize>(
     // Pixel centres sit at `p + ½`: shift by half a pixel, then split.
     let pu = point.u.saturating_sub(HALF);
     let pv = point.v.saturating_sub(HALF);
-    let (x0, fx) = ((pu >> SUBPIXEL_BITS).saturating_sub(viewport.x), (pu & MASK) as u32);
-    let (y0, fy) = ((pv >> SUBPIXEL_BITS).saturating_sub(viewport.z), (pv & MASK) as u32);
+    let (x0, fx) = (
+        (pu >> SUBPIXEL_BITS).saturating_sub(viewport.x),
+        (pu & MASK) as u32,
+    );
+    let (y0, fy) = (
+        (pv >> SUBPIXEL_BITS).saturating_sub(viewport.z),
+        (pv & MASK) as u32,
+    );
     let one = SUBPIXEL_ONE as u32;
     let shares = [
         (0, 0, (one - fx) * (one - fy)),
@@ -290,7 +304,12 @@ pub fn draw_marble<const W: usize, const H: usize>(
     for (dx, dy, weight) in shares {
         cumulative += weight;
         let upto = (b * cumulative + round) >> shift;
-        add_pixel(frame, x0.saturating_add(dx), y0.saturating_add(dy), upto - drawn);
+        add_pixel(
+            frame,
+            x0.saturating_add(dx),
+            y0.saturating_add(dy),
+            upto - drawn,
+        );
         drawn = upto;
     }
 }
@@ -317,7 +336,12 @@ fn draw_marbles<S: Scalar, const M: usize, const W: usize, const H: usize>(
 ) {
     let layout = &world.params().layout;
     for m in world.marbles().iter().filter(|m| !m.out) {
-        draw_marble(frame, tile_point(layout, m.pos.x, m.pos.z), viewport, MARBLE);
+        draw_marble(
+            frame,
+            tile_point(layout, m.pos.x, m.pos.z),
+            viewport,
+            MARBLE,
+        );
     }
 }
 
@@ -344,7 +368,10 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
     /// A renderer without a viewport yet: the first frame centres the view on
     /// the marble (clamped to the maze).
     pub const fn new() -> Self {
-        Renderer { state: None, background: None }
+        Renderer {
+            state: None,
+            background: None,
+        }
     }
 
     /// Forgets the viewport (a new level or a restart): the next frame
@@ -373,8 +400,18 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
         };
         let target = focus(world).map(|p| p.tile());
         let viewport = Viewport {
-            x: follow_axis(current.map(|v| v.x), nx as i32, to_i32(W), target.map(|t| t.0)),
-            z: follow_axis(current.map(|v| v.z), nz as i32, to_i32(H), target.map(|t| t.1)),
+            x: follow_axis(
+                current.map(|v| v.x),
+                nx as i32,
+                to_i32(W),
+                target.map(|t| t.0),
+            ),
+            z: follow_axis(
+                current.map(|v| v.z),
+                nz as i32,
+                to_i32(H),
+                target.map(|t| t.1),
+            ),
         };
         self.state = Some((viewport, nx, nz));
         viewport
@@ -387,7 +424,12 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
         let blink = blink_on(game.frames(), game.config().frame_log2);
         let level = game.level();
         let key = BackgroundKey {
-            level: (level.info.name.as_ptr() as usize, level.info.name.len(), level.info.nx, level.info.nz),
+            level: (
+                level.info.name.as_ptr() as usize,
+                level.info.name.len(),
+                level.info.nx,
+                level.info.nz,
+            ),
             viewport,
             blink,
         };

@@ -14,7 +14,10 @@ fn g_pitch(pitch_um: u32) -> f64 {
 fn incline<S: Scalar>() {
     let floor = open_floor(127);
     for rolling in [false, true] {
-        let p = params::<S>(spec(Effects { rolling, ..Effects::NONE }));
+        let p = params::<S>(spec(Effects {
+            rolling,
+            ..Effects::NONE
+        }));
         let start = cell_centre(&p, 3, 63);
         let mut w: World<'_, S, 4> = world(p, &floor, &[start]);
         w.set_gravity_mg([50, -999, 0]);
@@ -26,7 +29,10 @@ fn incline<S: Scalar>() {
         let a = 0.05 * 9806.65 * if rolling { 5.0 / 7.0 } else { 1.0 };
         let want = 0.5 * a * 1.0;
         let err = (x - want).abs();
-        println!("{} rolling={rolling}: {x:.6} mm vs {want:.6} mm, error {err:.2e} mm", S::NAME);
+        println!(
+            "{} rolling={rolling}: {x:.6} mm vs {want:.6} mm, error {err:.2e} mm",
+            S::NAME
+        );
         // I16F16 resolves ½·a·dt² (2.3·10⁻⁵ pitch) to 1.5·10⁻⁵: up to half an LSB a
         // step, 1024 steps → 0.09 mm. The others are 256× finer or floating point.
         let bound = if S::NAME == "i16f16" { 0.15 } else { 0.01 };
@@ -37,7 +43,13 @@ fn incline<S: Scalar>() {
 for_each_backend!(incline_sliding_and_rolling, incline);
 
 fn space_spec(restitution_milli: u32) -> PhysicsSpec {
-    PhysicsSpec { restitution_milli, ..spec(Effects { holes: true, ..Effects::NONE }) }
+    PhysicsSpec {
+        restitution_milli,
+        ..spec(Effects {
+            holes: true,
+            ..Effects::NONE
+        })
+    }
 }
 
 /// Per-unit-mass energy `½v² + g·h` of marble 0 (pitch²/s²), flat board, 3-D.
@@ -72,15 +84,29 @@ fn bounce_heights<S: Scalar>() {
         last_vy = vy;
     }
     println!("{}: apexes {apexes:?}", S::NAME);
-    assert!(apexes.len() >= 3, "{}: only {} bounces", S::NAME, apexes.len());
+    assert!(
+        apexes.len() >= 3,
+        "{}: only {} bounces",
+        S::NAME,
+        apexes.len()
+    );
     // I16F16 squares per-step speeds (~0.005 pitch/step at the third bounce) to a few
     // LSB, and micromath's root is a few per cent off: both are checked on the two
     // bounces their precision resolves; the study reports the rest.
-    let checked = if S::NAME == "i16f16" || S::NAME == "f32-micromath" { 2 } else { apexes.len() };
+    let checked = if S::NAME == "i16f16" || S::NAME == "f32-micromath" {
+        2
+    } else {
+        apexes.len()
+    };
     for (n, h) in apexes.iter().enumerate().take(checked) {
         let want = 0.25f64.powi(n as i32 + 1) * h0;
         let rel = (h - want).abs() / want;
-        assert!(rel < 5.0 * loose::<S>(), "{} bounce {}: {h} vs {want}", S::NAME, n + 1);
+        assert!(
+            rel < 5.0 * loose::<S>(),
+            "{} bounce {}: {h} vs {want}",
+            S::NAME,
+            n + 1
+        );
     }
 }
 for_each_backend!(bounce_heights_follow_e_to_the_2n, bounce_heights);
@@ -103,7 +129,12 @@ fn bounce_to_rest<S: Scalar>() {
         }
     }
     let rested = rested_at.expect("never came to rest");
-    println!("{}: rest after {} steps, {} bounces", S::NAME, rested, w.stats.collisions);
+    println!(
+        "{}: rest after {} steps, {} bounces",
+        S::NAME,
+        rested,
+        w.stats.collisions
+    );
     assert!(w.stats.collisions < 20);
     let m = w.marbles()[0];
     assert_eq!(m.pos.y, p.radius, "{} resting height", S::NAME);
@@ -140,7 +171,11 @@ fn elastic_energy<S: Scalar>() {
     while w.stats.collisions < 10_000 && steps < 2_000_000 {
         w.step();
         let e = energy(&w);
-        assert!(e <= e0 + slack, "{}: energy rose from {e0} to {e} at step {steps}", S::NAME);
+        assert!(
+            e <= e0 + slack,
+            "{}: energy rose from {e0} to {e} at step {steps}",
+            S::NAME
+        );
         max_e = max_e.max(e);
         steps += 1;
         let m = w.marbles()[0];
@@ -149,9 +184,18 @@ fn elastic_energy<S: Scalar>() {
         }
     }
     let e_end = energy(&w);
-    println!("{}: {} bounces, E0 {e0:.9} max {max_e:.9} end {e_end:.9}", S::NAME, w.stats.collisions);
+    println!(
+        "{}: {} bounces, E0 {e0:.9} max {max_e:.9} end {e_end:.9}",
+        S::NAME,
+        w.stats.collisions
+    );
     if !matches!(S::NAME, "i16f16" | "f32-micromath") {
-        assert!(w.stats.collisions >= 10_000, "{}: settled after {} bounces", S::NAME, w.stats.collisions);
+        assert!(
+            w.stats.collisions >= 10_000,
+            "{}: settled after {} bounces",
+            S::NAME,
+            w.stats.collisions
+        );
     }
 }
 for_each_backend!(elastic_bounces_never_gain_energy, elastic_energy);
@@ -162,14 +206,24 @@ fn rest<S: Scalar>() {
     let floor = closed_box(3);
     for holes in [false, true] {
         for friction in [false, true] {
-            let p = params::<S>(spec(Effects { holes, friction, rolling: true, ..Effects::NONE }));
+            let p = params::<S>(spec(Effects {
+                holes,
+                friction,
+                rolling: true,
+                ..Effects::NONE
+            }));
             let mut w: World<'_, S, 4> = world(p, &floor, &[cell_centre(&p, 3, 3)]);
             w.set_sleeping(false); // step for real every time
             let before = w.marbles()[0];
             for _ in 0..100_000 {
                 w.step();
             }
-            assert_eq!(w.marbles()[0], before, "{} holes={holes} friction={friction}", S::NAME);
+            assert_eq!(
+                w.marbles()[0],
+                before,
+                "{} holes={holes} friction={friction}",
+                S::NAME
+            );
         }
     }
 }
@@ -181,10 +235,22 @@ fn effects_run_only_when_asked<S: Scalar>() {
     let floor = closed_box(3);
     let cases = [
         Effects::NONE,
-        Effects { friction: true, ..Effects::NONE },
-        Effects { board_motion: true, ..Effects::NONE },
-        Effects { holes: true, ..Effects::NONE },
-        Effects { marbles: true, ..Effects::NONE },
+        Effects {
+            friction: true,
+            ..Effects::NONE
+        },
+        Effects {
+            board_motion: true,
+            ..Effects::NONE
+        },
+        Effects {
+            holes: true,
+            ..Effects::NONE
+        },
+        Effects {
+            marbles: true,
+            ..Effects::NONE
+        },
         Effects::ALL,
     ];
     for fx in cases {
@@ -196,8 +262,18 @@ fn effects_run_only_when_asked<S: Scalar>() {
             w.step();
         }
         let s = w.stats;
-        assert_eq!(s.friction_runs > 0, fx.friction, "{} {fx:?} friction", S::NAME);
-        assert_eq!(s.board_motion_runs > 0, fx.board_motion, "{} {fx:?} board", S::NAME);
+        assert_eq!(
+            s.friction_runs > 0,
+            fx.friction,
+            "{} {fx:?} friction",
+            S::NAME
+        );
+        assert_eq!(
+            s.board_motion_runs > 0,
+            fx.board_motion,
+            "{} {fx:?} board",
+            S::NAME
+        );
         assert_eq!(s.space_runs > 0, fx.holes, "{} {fx:?} holes", S::NAME);
         assert_eq!(s.pair_runs > 0, fx.marbles, "{} {fx:?} marbles", S::NAME);
         assert!(s.contacts > 0, "walls are always on");
@@ -212,7 +288,12 @@ for_each_backend!(effects_off_never_run, effects_run_only_when_asked);
 fn no_tunnelling<S: Scalar>() {
     let g = closed_box(1);
     for step_log2 in 6..=14 {
-        let spec = PhysicsSpec { short_um: 200, long_um: 10_000, step_log2, ..spec(Effects::NONE) };
+        let spec = PhysicsSpec {
+            short_um: 200,
+            long_um: 10_000,
+            step_log2,
+            ..spec(Effects::NONE)
+        };
         let p = params::<S>(spec);
         let mut w: World<'_, S, 4> = world(p, &g, &[cell_centre(&p, 1, 1)]);
         w.set_gravity_mg([8000, -1000, 3000]);
@@ -227,7 +308,11 @@ fn no_tunnelling<S: Scalar>() {
             let m = w.marbles()[0];
             assert!(!m.out, "{} 2^{step_log2}: left the box", S::NAME);
             let clearance = min_clearance(&w, 0);
-            assert!(clearance > p.radius.to_f64() * 0.74, "{} 2^{step_log2}: clearance {clearance}", S::NAME);
+            assert!(
+                clearance > p.radius.to_f64() * 0.74,
+                "{} 2^{step_log2}: clearance {clearance}",
+                S::NAME
+            );
         }
         assert_eq!(w.stats.reverts, 0, "{} 2^{step_log2}", S::NAME);
     }
@@ -240,12 +325,25 @@ for_each_backend!(thin_wall_is_never_tunnelled, no_tunnelling);
 fn sleeping_is_exact<S: Scalar>() {
     let g = closed_box(3);
     for holes in [false, true] {
-        let p = params::<S>(spec(Effects { holes, friction: true, rolling: true, marbles: true, ..Effects::NONE }));
+        let p = params::<S>(spec(Effects {
+            holes,
+            friction: true,
+            rolling: true,
+            marbles: true,
+            ..Effects::NONE
+        }));
         let starts = [cell_centre(&p, 1, 1), cell_centre(&p, 5, 5)];
         let mut a: World<'_, S, 4> = World::new(p, g.view(), &starts).unwrap();
         let mut b: World<'_, S, 4> = World::new(p, g.view(), &starts).unwrap();
         b.set_sleeping(false);
-        let tilts = [[0, -1000, 0], [400, -1000, 300], [400, -1000, 300], [-600, -1000, 0], [5, -1000, 5], [0, -1000, -900]];
+        let tilts = [
+            [0, -1000, 0],
+            [400, -1000, 300],
+            [400, -1000, 300],
+            [-600, -1000, 0],
+            [5, -1000, 5],
+            [0, -1000, -900],
+        ];
         let mut slept = 0;
         for (n, t) in tilts.iter().enumerate() {
             a.set_gravity_mg(*t);
@@ -254,7 +352,12 @@ fn sleeping_is_exact<S: Scalar>() {
                 a.step();
                 b.step();
                 slept += a.marbles().iter().filter(|m| m.asleep).count();
-                assert_eq!(a.marbles(), b.marbles(), "{} phase {n} step {step}", S::NAME);
+                assert_eq!(
+                    a.marbles(),
+                    b.marbles(),
+                    "{} phase {n} step {step}",
+                    S::NAME
+                );
             }
         }
         assert_eq!(a.state_hash(), b.state_hash());

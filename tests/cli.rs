@@ -323,7 +323,11 @@ fn trace_follows_a_changing_tilt() {
     assert_eq!(v["outcome"], "won");
     assert_eq!(v["state_hash"], plain["state_hash"]);
     let rows = std::fs::read_to_string(&out).unwrap().lines().count() as u64;
-    assert_eq!(rows, v["steps"].as_u64().unwrap() + 1, "a header and a row per step");
+    assert_eq!(
+        rows,
+        v["steps"].as_u64().unwrap() + 1,
+        "a header and a row per step"
+    );
 }
 
 #[test]

@@ -8,7 +8,11 @@ use marble_rolling::physics::{Effects, PhysicsSpec, Scalar, Vec3, World};
 type W4<'a, S> = World<'a, S, 4>;
 
 fn space() -> Effects {
-    Effects { holes: true, rolling: true, ..Effects::NONE }
+    Effects {
+        holes: true,
+        rolling: true,
+        ..Effects::NONE
+    }
 }
 
 /// **Ghost bumps, floor.** Rolling fast across the seams of a floor made of 2 × 63
@@ -24,7 +28,13 @@ fn ghost_bumps_floor<S: Scalar>() {
     for _ in 0..1400 {
         w.step();
         let m = w.marbles()[0];
-        assert_eq!(m.pos.y, p.radius, "{}: vertical kick at x = {:?}", S::NAME, m.pos.x);
+        assert_eq!(
+            m.pos.y,
+            p.radius,
+            "{}: vertical kick at x = {:?}",
+            S::NAME,
+            m.pos.x
+        );
         assert_eq!(m.vel.y, S::ZERO, "{}", S::NAME);
         assert_eq!(m.vel.x, v0, "{}: caught at x = {:?}", S::NAME, m.pos.x);
     }
@@ -55,7 +65,13 @@ fn ghost_bumps_wall<S: Scalar>() {
     for _ in 0..4000 {
         w.step();
         let m = w.marbles()[0];
-        assert_eq!(m.pos.z, z_rest, "{}: left the wall at x = {:?}", S::NAME, m.pos.x);
+        assert_eq!(
+            m.pos.z,
+            z_rest,
+            "{}: left the wall at x = {:?}",
+            S::NAME,
+            m.pos.x
+        );
         assert_eq!(m.vel.z, S::ZERO, "{}", S::NAME);
         assert!(m.pos.x >= last_x, "{}: caught at {:?}", S::NAME, m.pos.x);
         last_x = m.pos.x;
@@ -63,7 +79,12 @@ fn ghost_bumps_wall<S: Scalar>() {
             break;
         }
     }
-    assert!(last_x.to_f64() > 10.0, "{}: rolled only to {:?}", S::NAME, last_x);
+    assert!(
+        last_x.to_f64() > 10.0,
+        "{}: rolled only to {:?}",
+        S::NAME,
+        last_x
+    );
     assert_eq!(w.stats.collisions, settling_bounces, "{}: bounced", S::NAME);
 }
 for_each_backend!(ghost_bumps_along_a_multi_tile_wall, ghost_bumps_wall);
@@ -75,7 +96,12 @@ fn skinny_wall<S: Scalar>() {
     let g = grid(&["#####", "#...#", "#.#.#", "#...#", "#####"]);
     for step_log2 in [6, 10, 14] {
         for (gx, gz) in [(8000, 0), (8000, 8000), (-8000, 3000)] {
-            let sp = PhysicsSpec { short_um: 200, long_um: 10_000, step_log2, ..spec(Effects::NONE) };
+            let sp = PhysicsSpec {
+                short_um: 200,
+                long_um: 10_000,
+                step_log2,
+                ..spec(Effects::NONE)
+            };
             let p = params::<S>(sp);
             let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
             w.set_gravity_mg([gx, -1000, gz]);
@@ -84,7 +110,11 @@ fn skinny_wall<S: Scalar>() {
                 w.step();
                 assert!(!w.marbles()[0].out, "{}: escaped", S::NAME);
                 let c = min_clearance(&w, 0);
-                assert!(c > 0.75 * p.radius.to_f64() - 1e-6, "{} 2^{step_log2} ({gx},{gz}): {c}", S::NAME);
+                assert!(
+                    c > 0.75 * p.radius.to_f64() - 1e-6,
+                    "{} 2^{step_log2} ({gx},{gz}): {c}",
+                    S::NAME
+                );
             }
             assert_eq!(w.stats.reverts, 0);
         }
@@ -96,14 +126,21 @@ for_each_backend!(skinny_wall_is_never_tunnelled, skinny_wall);
 /// rest within 2 s, then sits bit-for-bit still (no jitter), never penetrating.
 fn corner_pocket<S: Scalar>() {
     let g = closed_box(3);
-    let p = params::<S>(spec(Effects { rolling: true, ..Effects::NONE }));
+    let p = params::<S>(spec(Effects {
+        rolling: true,
+        ..Effects::NONE
+    }));
     let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 3)]);
     w.set_gravity_mg([2000, -1000, 2000]);
     let mut rest_at = None;
     for n in 0..(2 << p.k) {
         w.step();
         let m = w.marbles()[0];
-        assert!(min_clearance(&w, 0) >= p.radius.to_f64() - 1e-9, "{}: penetrates", S::NAME);
+        assert!(
+            min_clearance(&w, 0) >= p.radius.to_f64() - 1e-9,
+            "{}: penetrates",
+            S::NAME
+        );
         if m.vel == Vec3::ZERO && rest_at.is_none() {
             rest_at = Some(n);
         }
@@ -117,8 +154,16 @@ fn corner_pocket<S: Scalar>() {
     }
     let (ex, ez) = w.extent();
     let wall = p.layout.s;
-    assert!(((ex - wall - still.pos.x) - p.radius).abs().to_f64() < 1e-6, "{} x", S::NAME);
-    assert!(((ez - wall - still.pos.z) - p.radius).abs().to_f64() < 1e-6, "{} z", S::NAME);
+    assert!(
+        ((ex - wall - still.pos.x) - p.radius).abs().to_f64() < 1e-6,
+        "{} x",
+        S::NAME
+    );
+    assert!(
+        ((ez - wall - still.pos.z) - p.radius).abs().to_f64() < 1e-6,
+        "{} z",
+        S::NAME
+    );
 }
 for_each_backend!(corner_pocket_comes_to_rest, corner_pocket);
 
@@ -127,7 +172,13 @@ for_each_backend!(corner_pocket_comes_to_rest, corner_pocket);
 /// never undone, never penetrating more than the resting tolerance.
 fn wedge<S: Scalar>() {
     let g = grid(&["#########", "#.......#", "#########"]);
-    let sp = PhysicsSpec { radius_um: 4_950, ..spec(Effects { rolling: true, ..Effects::NONE }) };
+    let sp = PhysicsSpec {
+        radius_um: 4_950,
+        ..spec(Effects {
+            rolling: true,
+            ..Effects::NONE
+        })
+    };
     let p = params::<S>(sp);
     let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
     // Along the corridor and hard into its side, wobbling between the two sides.
@@ -137,10 +188,19 @@ fn wedge<S: Scalar>() {
             w.set_gravity_mg([300, -1000, side]);
         }
         w.step();
-        assert!(min_clearance(&w, 0) > p.radius.to_f64() - 1e-6, "{}: penetrates", S::NAME);
+        assert!(
+            min_clearance(&w, 0) > p.radius.to_f64() - 1e-6,
+            "{}: penetrates",
+            S::NAME
+        );
     }
     let end = cell_centre(&p, 7, 1).0;
-    assert!(w.marbles()[0].pos.x.to_f64() > end.to_f64() - 0.05, "{}: stuck at {:?}", S::NAME, w.marbles()[0].pos.x);
+    assert!(
+        w.marbles()[0].pos.x.to_f64() > end.to_f64() - 0.05,
+        "{}: stuck at {:?}",
+        S::NAME,
+        w.marbles()[0].pos.x
+    );
     assert_eq!(w.stats.reverts, 0, "{}", S::NAME);
 }
 for_each_backend!(wedge_barely_wider_than_the_marble, wedge);
@@ -151,7 +211,10 @@ for_each_backend!(wedge_barely_wider_than_the_marble, wedge);
 fn restitution_threshold<S: Scalar>() {
     let floor = open_floor(15);
     for e in [0, 1000] {
-        let p = params::<S>(PhysicsSpec { restitution_milli: e, ..spec(space()) });
+        let p = params::<S>(PhysicsSpec {
+            restitution_milli: e,
+            ..spec(space())
+        });
         let mut w: W4<'_, S> = world(p, &floor, &[cell_centre(&p, 7, 7)]);
         w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.2);
         w.marbles_mut()[0].supported = false;
@@ -171,42 +234,71 @@ fn restitution_threshold<S: Scalar>() {
             assert_eq!(w.marbles()[0].vel.y, S::ZERO);
         } else {
             assert!(w.stats.collisions >= 1);
-            assert!((peak_after - 0.2).abs() < 0.2 * loose::<S>() * 5.0, "{}: e = 1 peak {peak_after}", S::NAME);
+            assert!(
+                (peak_after - 0.2).abs() < 0.2 * loose::<S>() * 5.0,
+                "{}: e = 1 peak {peak_after}",
+                S::NAME
+            );
         }
     }
     // Slower than the threshold (20 mm/s): a contact even with e = 1.
-    let p = params::<S>(PhysicsSpec { restitution_milli: 1000, ..spec(space()) });
+    let p = params::<S>(PhysicsSpec {
+        restitution_milli: 1000,
+        ..spec(space())
+    });
     let mut w: W4<'_, S> = world(p, &floor, &[cell_centre(&p, 7, 7)]);
     w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.0001);
     w.marbles_mut()[0].supported = false;
     for _ in 0..200 {
         w.step();
     }
-    assert_eq!(w.stats.collisions, 0, "{}: bounced below the threshold", S::NAME);
+    assert_eq!(
+        w.stats.collisions,
+        0,
+        "{}: bounced below the threshold",
+        S::NAME
+    );
     assert_eq!(w.marbles()[0].pos.y, p.radius);
 }
 for_each_backend!(restitution_threshold_e0_and_e1, restitution_threshold);
-
 
 /// **Shaking.** Random tilt up to ±4 g on every axis, changed every 8 ms, for two
 /// simulated minutes in a closed maze with inner walls: the marble never leaves the
 /// maze, never gets inside a wall, is never undone.
 fn shaking<S: Scalar>() {
     let g = grid(&[
-        "#########", "#.......#", "#.#.###.#", "#.#...#.#", "#.###.#.#", "#.......#", "#########",
+        "#########",
+        "#.......#",
+        "#.#.###.#",
+        "#.#...#.#",
+        "#.###.#.#",
+        "#.......#",
+        "#########",
     ]);
-    let p = params::<S>(spec(Effects { rolling: true, friction: true, ..Effects::NONE }));
+    let p = params::<S>(spec(Effects {
+        rolling: true,
+        friction: true,
+        ..Effects::NONE
+    }));
     let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
     let mut rng = Lcg(42);
     let minutes = 2;
     for n in 0..(minutes * 60) << p.k {
         if n % 8 == 0 {
-            w.set_gravity_mg([rng.range(-4000, 4000), rng.range(-5000, 3000), rng.range(-4000, 4000)]);
+            w.set_gravity_mg([
+                rng.range(-4000, 4000),
+                rng.range(-5000, 3000),
+                rng.range(-4000, 4000),
+            ]);
         }
         w.step();
         if n % 64 == 0 {
             assert!(!w.marbles()[0].out, "{}: escaped", S::NAME);
-            assert!(min_clearance(&w, 0) > 0.75 * p.radius.to_f64(), "{}: inside a wall", S::NAME);
+            assert!(
+                min_clearance(&w, 0) > 0.75 * p.radius.to_f64(),
+                "{}: inside a wall",
+                S::NAME
+            );
         }
     }
     assert_eq!(w.stats.reverts, 0, "{}", S::NAME);
@@ -226,7 +318,11 @@ fn hole_edges<S: Scalar>() {
     for _ in 0..(4 << p.k) {
         w.step();
     }
-    assert!(w.marbles()[0].out, "{}: a slow marble should fall in", S::NAME);
+    assert!(
+        w.marbles()[0].out,
+        "{}: a slow marble should fall in",
+        S::NAME
+    );
 
     // Fast: 60 pitch/s (720 mm/s) over the hole cell (5, 1), no tilt.
     let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 1)]);
@@ -239,12 +335,21 @@ fn hole_edges<S: Scalar>() {
     }
     let m = w.marbles()[0];
     assert!(!m.out, "{}: a fast marble should cross", S::NAME);
-    assert!(m.pos.x.to_f64() > cell_centre(&p, 7, 1).0.to_f64() - 0.5, "{}: stopped at {:?}", S::NAME, m.pos.x);
+    assert!(
+        m.pos.x.to_f64() > cell_centre(&p, 7, 1).0.to_f64() - 0.5,
+        "{}: stopped at {:?}",
+        S::NAME,
+        m.pos.x
+    );
     // Free fall while the centre is over the gap: l = 0.833 pitch at 60 pitch/s.
     let t = p.layout.l.to_f64() / 60.0;
     let drop = 0.5 * 9806.65 / 12.0 * t * t;
     let dip = p.radius.to_f64() - lowest;
-    assert!(dip > 0.0 && dip < 2.0 * drop, "{}: dip {dip} vs free fall {drop}", S::NAME);
+    assert!(
+        dip > 0.0 && dip < 2.0 * drop,
+        "{}: dip {dip} vs free fall {drop}",
+        S::NAME
+    );
 
     // The 2 mm gap (short tile 8 is a hole) at 3 pitch/s.
     let g2 = grid(&["###########", "#.......O.#", "###########"]);
@@ -261,7 +366,10 @@ for_each_backend!(hole_edges_slow_drops_fast_crosses, hole_edges);
 /// largest board: the displacements agree to the backend's resolution there.
 fn far_from_origin<S: Scalar>() {
     let floor = open_floor(127);
-    let p = params::<S>(spec(Effects { rolling: true, ..Effects::NONE }));
+    let p = params::<S>(spec(Effects {
+        rolling: true,
+        ..Effects::NONE
+    }));
     let mut moved = Vec::new();
     for (i, k) in [(3, 3), (95, 95)] {
         let start = cell_centre(&p, i, k);
@@ -273,7 +381,9 @@ fn far_from_origin<S: Scalar>() {
         let m = w.marbles()[0];
         moved.push(((m.pos.x - start.0).to_f64(), (m.pos.z - start.1).to_f64()));
     }
-    let err = (moved[0].0 - moved[1].0).abs().max((moved[0].1 - moved[1].1).abs());
+    let err = (moved[0].0 - moved[1].0)
+        .abs()
+        .max((moved[0].1 - moved[1].1).abs());
     let mm = err * 12.0;
     println!("{}: displacement mismatch {mm:.2e} mm", S::NAME);
     let bound_mm = match S::NAME {
@@ -289,7 +399,11 @@ for_each_backend!(far_from_origin_precision_holds, far_from_origin);
 /// on a flat board with friction: not one bit of drift.
 fn long_rest<S: Scalar>() {
     let g = closed_box(2);
-    let p = params::<S>(spec(Effects { rolling: true, friction: true, ..Effects::NONE }));
+    let p = params::<S>(spec(Effects {
+        rolling: true,
+        friction: true,
+        ..Effects::NONE
+    }));
     for tilt in [[500, -1000, 300], [15, -1000, 8]] {
         let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 1, 1)]);
         w.set_sleeping(false); // the real step every time, not the skip
@@ -302,7 +416,12 @@ fn long_rest<S: Scalar>() {
         for _ in 0..(hours * 3600) << p.k {
             w.step();
         }
-        assert_eq!(w.marbles()[0], settled, "{} tilt {tilt:?}: drifted", S::NAME);
+        assert_eq!(
+            w.marbles()[0],
+            settled,
+            "{} tilt {tilt:?}: drifted",
+            S::NAME
+        );
     }
 }
 for_each_backend!(long_rest_has_no_drift_or_creep, long_rest);

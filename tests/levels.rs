@@ -16,13 +16,26 @@ fn eight_builtins_of_rising_size_use_every_effect() {
     let mut any = [false; 5];
     for l in LEVELS.iter() {
         let e = l.info.spec.effects;
-        for (slot, on) in any.iter_mut().zip([e.rolling, e.friction, e.board_motion, e.holes, e.marbles]) {
+        for (slot, on) in
+            any.iter_mut()
+                .zip([e.rolling, e.friction, e.board_motion, e.holes, e.marbles])
+        {
             *slot |= on;
         }
-        assert!(Game::<fixed::types::I8F24>::new(*l, GameConfig::DEFAULT).is_ok(), "{}", l.info.name);
+        assert!(
+            Game::<fixed::types::I8F24>::new(*l, GameConfig::DEFAULT).is_ok(),
+            "{}",
+            l.info.name
+        );
     }
-    assert_eq!(any, [true; 5], "rolling, friction, board_motion, holes, marbles");
-    let sizes: Vec<usize> = LEVELS.iter().map(|l| l.info.nx as usize * l.info.nz as usize).collect();
+    assert_eq!(
+        any, [true; 5],
+        "rolling, friction, board_motion, holes, marbles"
+    );
+    let sizes: Vec<usize> = LEVELS
+        .iter()
+        .map(|l| l.info.nx as usize * l.info.nz as usize)
+        .collect();
     assert!(sizes.first() < sizes.last());
     assert_eq!(by_name("corner").map(|(i, _)| i), Some(1));
     assert!(by_name("nope").is_none());
@@ -32,7 +45,14 @@ fn eight_builtins_of_rising_size_use_every_effect() {
 fn defaults_apply_when_the_header_is_empty() {
     let l = parse::<W>("---\n#####\n#S.G#\n#####\n").unwrap();
     assert_eq!(l.info.name, "untitled");
-    assert_eq!((l.info.spec.short_um, l.info.spec.long_um, l.info.spec.radius_um), (2000, 10000, 3500));
+    assert_eq!(
+        (
+            l.info.spec.short_um,
+            l.info.spec.long_um,
+            l.info.spec.radius_um
+        ),
+        (2000, 10000, 3500)
+    );
     assert_eq!(l.info.spec.restitution_milli, 500);
     assert_eq!(l.info.time_limit_s, 60);
     assert!(l.info.spec.effects.rolling && !l.info.spec.effects.friction);
@@ -48,7 +68,10 @@ fn header_values_are_read() {
     let l = parse::<W>(src).unwrap();
     assert_eq!(l.info.name, "Test level");
     let s = l.info.spec;
-    assert_eq!((s.short_um, s.long_um, s.radius_um, s.restitution_milli), (1500, 12000, 4250, 750));
+    assert_eq!(
+        (s.short_um, s.long_um, s.radius_um, s.restitution_milli),
+        (1500, 12000, 4250, 750)
+    );
     assert_eq!(s.rolling_resistance_ppm, 20_000);
     assert!(s.effects.friction && s.effects.board_motion && s.effects.holes && !s.effects.marbles);
     assert_eq!(l.info.time_limit_s, 90);
@@ -62,17 +85,47 @@ fn errors_name_line_and_column() {
         ("short_mm: 2.0001\n---\n", 1, 11, LevelErrorKind::BadNumber),
         ("long_mm: abc\n---\n", 1, 10, LevelErrorKind::BadNumber),
         ("restitution: 1.5\n---\n", 1, 14, LevelErrorKind::OutOfRange),
-        ("effects: rolling, flying\n---\n", 1, 19, LevelErrorKind::UnknownEffect),
+        (
+            "effects: rolling, flying\n---\n",
+            1,
+            19,
+            LevelErrorKind::UnknownEffect,
+        ),
         ("name: a\n#####\n", 3, 1, LevelErrorKind::MissingSeparator),
         ("---\n", 2, 1, LevelErrorKind::EmptyGrid),
         ("---\n#####\n#S.G#\n####\n", 4, 5, LevelErrorKind::RaggedRow),
-        ("---\n#####\n#S.G#\n######\n", 4, 6, LevelErrorKind::RaggedRow),
+        (
+            "---\n#####\n#S.G#\n######\n",
+            4,
+            6,
+            LevelErrorKind::RaggedRow,
+        ),
         ("---\n#####\n#SxG#\n#####\n", 3, 3, LevelErrorKind::BadTile),
         ("---\n#####\n#.SG#\n#####\n", 3, 3, LevelErrorKind::NotACell),
-        ("---\n#####\n#..G#\n#####\n", 4, 1, LevelErrorKind::StartCount),
-        ("---\n#####\n#S..#\n#####\n", 4, 1, LevelErrorKind::GoalCount),
-        ("marble_radius_mm: 5\n---\n#####\n#S.G#\n", 1, 19, LevelErrorKind::MarbleTooBig),
-        ("\n\nname: ok\n  colour: x\n---\n", 4, 3, LevelErrorKind::UnknownKey),
+        (
+            "---\n#####\n#..G#\n#####\n",
+            4,
+            1,
+            LevelErrorKind::StartCount,
+        ),
+        (
+            "---\n#####\n#S..#\n#####\n",
+            4,
+            1,
+            LevelErrorKind::GoalCount,
+        ),
+        (
+            "marble_radius_mm: 5\n---\n#####\n#S.G#\n",
+            1,
+            19,
+            LevelErrorKind::MarbleTooBig,
+        ),
+        (
+            "\n\nname: ok\n  colour: x\n---\n",
+            4,
+            3,
+            LevelErrorKind::UnknownKey,
+        ),
     ];
     for &(src, line, column, kind) in cases {
         let e = error_at(src);

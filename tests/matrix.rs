@@ -39,7 +39,11 @@ fn assert_round_trip<const W: usize, const H: usize>(frame: &Frame<W, H>) {
             );
         }
         for y in 0..H {
-            assert_eq!(integrator.row_ticks(y), TICKS_PER_ROW * refreshes, "row {y}");
+            assert_eq!(
+                integrator.row_ticks(y),
+                TICKS_PER_ROW * refreshes,
+                "row {y}"
+            );
         }
         assert_eq!(&integrator.perceived(), frame);
     }
@@ -234,7 +238,11 @@ fn frame_loaded_mid_refresh_waits_for_next_refresh() {
     while !scanner.at_refresh_start() {
         integrator.feed(scanner.next_step());
     }
-    assert_eq!(integrator.take_perceived(), old, "old frame must finish untorn");
+    assert_eq!(
+        integrator.take_perceived(),
+        old,
+        "old frame must finish untorn"
+    );
     integrator.feed_all(one_refresh(&mut scanner));
     assert!(!scanner.has_pending());
     assert_eq!(integrator.perceived(), new);
@@ -273,11 +281,20 @@ fn loading_the_frame_on_show_queues_nothing_and_cancels_a_queued_one() {
     let mut integrator = OnTimeIntegrator::new();
     integrator.feed_all(one_refresh(&mut scanner));
     scanner.load(&shown);
-    assert!(!scanner.has_pending(), "the frame on show is not queued again");
+    assert!(
+        !scanner.has_pending(),
+        "the frame on show is not queued again"
+    );
     scanner.load(&other);
-    assert!(scanner.has_pending(), "a frame differing in its last pixel is queued");
+    assert!(
+        scanner.has_pending(),
+        "a frame differing in its last pixel is queued"
+    );
     scanner.load(&shown);
-    assert!(!scanner.has_pending(), "back to the frame on show: nothing to swap");
+    assert!(
+        !scanner.has_pending(),
+        "back to the frame on show: nothing to swap"
+    );
     integrator.reset();
     integrator.feed_all(one_refresh(&mut scanner));
     assert_eq!(integrator.perceived(), shown);
@@ -290,12 +307,32 @@ fn integrator_rounds_half_up_per_row_period() {
     let mut integrator = OnTimeIntegrator::<3, 2>::new();
     // Row 0 driven 30 ticks; column 0 on 15 (7.5 → 8), column 1 on 1 (0.5 → 1),
     // column 2 on 0.
-    integrator.feed(ScanStep { row: 0, columns: 0b011, ticks: 1 });
-    integrator.feed(ScanStep { row: 0, columns: 0b001, ticks: 14 });
-    integrator.feed(ScanStep { row: 0, columns: 0, ticks: 15 });
+    integrator.feed(ScanStep {
+        row: 0,
+        columns: 0b011,
+        ticks: 1,
+    });
+    integrator.feed(ScanStep {
+        row: 0,
+        columns: 0b001,
+        ticks: 14,
+    });
+    integrator.feed(ScanStep {
+        row: 0,
+        columns: 0,
+        ticks: 15,
+    });
     // Row 1 driven 15 ticks, column 2 on 14 of them.
-    integrator.feed(ScanStep { row: 1, columns: 0b100, ticks: 14 });
-    integrator.feed(ScanStep { row: 1, columns: 0, ticks: 1 });
+    integrator.feed(ScanStep {
+        row: 1,
+        columns: 0b100,
+        ticks: 14,
+    });
+    integrator.feed(ScanStep {
+        row: 1,
+        columns: 0,
+        ticks: 1,
+    });
     assert_eq!(integrator.row_ticks(0), 30);
     assert_eq!(integrator.on_ticks(0, 0), 15);
     let frame = integrator.perceived();
@@ -305,12 +342,24 @@ fn integrator_rounds_half_up_per_row_period() {
 #[test]
 fn integrator_ignores_out_of_range_and_resets() {
     let mut integrator = OnTimeIntegrator::<2, 2>::new();
-    integrator.feed(ScanStep { row: 2, columns: u32::MAX, ticks: 8 });
-    integrator.feed(ScanStep { row: 0, columns: 0b100, ticks: 8 });
+    integrator.feed(ScanStep {
+        row: 2,
+        columns: u32::MAX,
+        ticks: 8,
+    });
+    integrator.feed(ScanStep {
+        row: 0,
+        columns: 0b100,
+        ticks: 8,
+    });
     assert_eq!(integrator.row_ticks(0), 8);
     assert_eq!(integrator.row_ticks(2), 0);
     assert!(integrator.perceived().is_blank());
-    integrator.feed(ScanStep { row: 1, columns: 0b10, ticks: 4 });
+    integrator.feed(ScanStep {
+        row: 1,
+        columns: 0b10,
+        ticks: 4,
+    });
     assert_eq!(integrator.perceived().get(1, 1), MAX_BRIGHTNESS);
     integrator.reset();
     assert_eq!(integrator, OnTimeIntegrator::new());
@@ -320,12 +369,24 @@ fn integrator_ignores_out_of_range_and_resets() {
 #[test]
 fn integrator_counters_saturate_per_pixel() {
     let mut integrator = OnTimeIntegrator::<3, 1>::new();
-    integrator.feed(ScanStep { row: 0, columns: 0b001, ticks: u32::MAX - 5 });
-    integrator.feed(ScanStep { row: 0, columns: 0b011, ticks: 8 });
+    integrator.feed(ScanStep {
+        row: 0,
+        columns: 0b001,
+        ticks: u32::MAX - 5,
+    });
+    integrator.feed(ScanStep {
+        row: 0,
+        columns: 0b011,
+        ticks: 8,
+    });
     assert_eq!(integrator.on_ticks(0, 0), u32::MAX, "saturated");
     assert_eq!(integrator.on_ticks(1, 0), 8, "its neighbour counts on");
     assert_eq!(integrator.on_ticks(2, 0), 0);
-    integrator.feed(ScanStep { row: 0, columns: 0b011, ticks: 1 });
+    integrator.feed(ScanStep {
+        row: 0,
+        columns: 0b011,
+        ticks: 1,
+    });
     assert_eq!(integrator.on_ticks(0, 0), u32::MAX, "stays saturated");
     assert_eq!(integrator.on_ticks(1, 0), 9);
     assert_eq!(integrator.row_ticks(0), u32::MAX);

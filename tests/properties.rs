@@ -66,7 +66,8 @@ struct Shot {
 }
 
 fn shot(holes: bool) -> impl Strategy<Value = Shot> {
-    let tilt = (8u16..300, -3000i32..=3000, -2000i32..=-300, -3000i32..=3000).prop_map(|(n, x, y, z)| (n, [x, y, z]));
+    let tilt = (8u16..300, -3000i32..=3000, -2000i32..=-300, -3000i32..=3000)
+        .prop_map(|(n, x, y, z)| (n, [x, y, z]));
     (
         maze(holes),
         (0i32..7, 0i32..7),
@@ -82,7 +83,13 @@ fn shot(holes: bool) -> impl Strategy<Value = Shot> {
                 maze,
                 v0,
                 tilts,
-                effects: Effects { rolling: true, friction, holes, marbles, board_motion: false },
+                effects: Effects {
+                    rolling: true,
+                    friction,
+                    holes,
+                    marbles,
+                    board_motion: false,
+                },
             }
         })
 }
@@ -103,7 +110,10 @@ fn clearance<S: Scalar>(w: &World<'_, S, 4>, idx: usize) -> f64 {
 fn run<S: Scalar>(s: &Shot, mut check: impl FnMut(&World<'_, S, 4>)) -> u64 {
     let rows: Vec<&str> = s.maze.rows.iter().map(String::as_str).collect();
     let g = grid(&rows);
-    let p = params::<S>(PhysicsSpec { effects: s.effects, ..PhysicsSpec::DEFAULT });
+    let p = params::<S>(PhysicsSpec {
+        effects: s.effects,
+        ..PhysicsSpec::DEFAULT
+    });
     let mut starts = vec![cell_centre(&p, s.start.0, s.start.1)];
     if s.effects.marbles {
         starts.push(cell_centre(&p, 1, 1));
@@ -112,7 +122,8 @@ fn run<S: Scalar>(s: &Shot, mut check: impl FnMut(&World<'_, S, 4>)) -> u64 {
         }
     }
     let mut w: World<'_, S, 4> = World::new(p, g.view(), &starts).expect("start on a cell");
-    w.marbles_mut()[0].vel = Vec3::new(S::from_int(s.v0.0), S::ZERO, S::from_int(s.v0.1)).clamp_abs(p.v_max);
+    w.marbles_mut()[0].vel =
+        Vec3::new(S::from_int(s.v0.0), S::ZERO, S::from_int(s.v0.1)).clamp_abs(p.v_max);
     for &(n, g) in &s.tilts {
         w.set_gravity_mg(g);
         for _ in 0..n {
@@ -133,7 +144,11 @@ fn never_inside_a_tile<S: Scalar>(s: &Shot) {
         for (n, m) in w.marbles().iter().enumerate() {
             if !m.out {
                 let c = clearance(w, n);
-                assert!(c >= r - tolerance::<S>(r), "{}: marble {n} at clearance {c} < r = {r}", S::NAME);
+                assert!(
+                    c >= r - tolerance::<S>(r),
+                    "{}: marble {n} at clearance {c} < r = {r}",
+                    S::NAME
+                );
             }
         }
         assert_eq!(w.stats.reverts, 0);
@@ -169,10 +184,20 @@ fn plane_energy<S: Scalar>(w: &World<'_, S, 4>, g: [i32; 3]) -> f64 {
 fn energy_never_grows<S: Scalar>(s: &Shot) {
     // One constant tilt, no holes (plane): no input after the start.
     let tilt = s.tilts[0].1;
-    let flat = Shot { tilts: vec![(600, tilt)], effects: Effects { holes: false, ..s.effects }, ..s.clone() };
+    let flat = Shot {
+        tilts: vec![(600, tilt)],
+        effects: Effects {
+            holes: false,
+            ..s.effects
+        },
+        ..s.clone()
+    };
     let rows: Vec<&str> = flat.maze.rows.iter().map(String::as_str).collect();
     let g = grid(&rows);
-    let p = params::<S>(PhysicsSpec { effects: flat.effects, ..PhysicsSpec::DEFAULT });
+    let p = params::<S>(PhysicsSpec {
+        effects: flat.effects,
+        ..PhysicsSpec::DEFAULT
+    });
     // The velocity update a·dt rounds to ±½ LSB each step; its energy effect sums to
     // ε·Σv = ε·(distance travelled)/dt, bounded by the board's size: that is the
     // whole allowance for fixed point. Floating point adds its rounding per step.
@@ -186,19 +211,30 @@ fn energy_never_grows<S: Scalar>(s: &Shot) {
     let span = (rows.len() + rows[0].len()) as f64;
     let allowance = lsb * span * (1u64 << p.k) as f64 * 4.0 + lsb * 1e3 * 600.0;
     let _ = run::<S>(&flat, |_| {});
-    let mut w: World<'_, S, 4> = World::new(p, g.view(), &[cell_centre(&p, flat.start.0, flat.start.1)]).unwrap();
-    w.marbles_mut()[0].vel = Vec3::new(S::from_int(flat.v0.0), S::ZERO, S::from_int(flat.v0.1)).clamp_abs(p.v_max);
+    let mut w: World<'_, S, 4> =
+        World::new(p, g.view(), &[cell_centre(&p, flat.start.0, flat.start.1)]).unwrap();
+    w.marbles_mut()[0].vel =
+        Vec3::new(S::from_int(flat.v0.0), S::ZERO, S::from_int(flat.v0.1)).clamp_abs(p.v_max);
     w.set_gravity_mg(tilt);
     let e0 = plane_energy(&w, tilt);
     for _ in 0..600 {
         w.step();
         let e = plane_energy(&w, tilt);
-        assert!(e <= e0 + allowance, "{}: energy {e0} → {e} (allowance {allowance})", S::NAME);
+        assert!(
+            e <= e0 + allowance,
+            "{}: energy {e0} → {e} (allowance {allowance})",
+            S::NAME
+        );
     }
 }
 
 fn deterministic<S: Scalar>(s: &Shot) {
-    assert_eq!(run::<S>(s, |_| {}), run::<S>(s, |_| {}), "{}: same inputs, different states", S::NAME);
+    assert_eq!(
+        run::<S>(s, |_| {}),
+        run::<S>(s, |_| {}),
+        "{}: same inputs, different states",
+        S::NAME
+    );
 }
 
 proptest! {

@@ -61,7 +61,10 @@ fn boundary(g: &Game<'_, S>, i: i32) -> S {
 }
 
 /// Per-pixel `frame − background` (saturated pixels count what was added).
-fn added<const W: usize, const H: usize>(frame: &Frame<W, H>, bg: &Frame<W, H>) -> Vec<(usize, usize, u8)> {
+fn added<const W: usize, const H: usize>(
+    frame: &Frame<W, H>,
+    bg: &Frame<W, H>,
+) -> Vec<(usize, usize, u8)> {
     frame
         .iter()
         .filter_map(|(x, y, v)| {
@@ -97,16 +100,40 @@ fn tile_kinds_get_their_levels() {
     let on: Frame<8, 8> = render_background(&v, true, Viewport::new(0, -2));
     let off: Frame<8, 8> = render_background(&v, false, Viewport::new(0, -2));
     let row = |f: &Frame<8, 8>, y| (0..8).map(|x| f.get(x, y)).collect::<Vec<_>>();
-    assert_eq!(row(&on, 2), vec![WALL; 7].into_iter().chain([OUTSIDE]).collect::<Vec<_>>());
-    assert_eq!(row(&on, 3), vec![WALL, FLOOR, FLOOR, HOLE, FLOOR, GOAL_ON, WALL, OUTSIDE]);
-    assert_eq!(row(&off, 3), vec![WALL, FLOOR, FLOOR, HOLE, FLOOR, GOAL_OFF, WALL, OUTSIDE]);
+    assert_eq!(
+        row(&on, 2),
+        vec![WALL; 7]
+            .into_iter()
+            .chain([OUTSIDE])
+            .collect::<Vec<_>>()
+    );
+    assert_eq!(
+        row(&on, 3),
+        vec![WALL, FLOOR, FLOOR, HOLE, FLOOR, GOAL_ON, WALL, OUTSIDE]
+    );
+    assert_eq!(
+        row(&off, 3),
+        vec![WALL, FLOOR, FLOOR, HOLE, FLOOR, GOAL_OFF, WALL, OUTSIDE]
+    );
     for y in [0, 1, 5, 6, 7] {
         assert_eq!(row(&on, y), vec![OUTSIDE; 8], "row {y}");
     }
     // The same through a Renderer on the game, marble at S drawn on its floor pixel.
     let g = game(&l);
     let f: Frame<8, 8> = Renderer::new().render(&g);
-    assert_eq!(row(&f, 3), vec![WALL, MAX_BRIGHTNESS, FLOOR, HOLE, FLOOR, GOAL_ON, WALL, OUTSIDE]);
+    assert_eq!(
+        row(&f, 3),
+        vec![
+            WALL,
+            MAX_BRIGHTNESS,
+            FLOOR,
+            HOLE,
+            FLOOR,
+            GOAL_ON,
+            WALL,
+            OUTSIDE
+        ]
+    );
     assert_eq!(f.get(1, 3), (FLOOR + MARBLE).min(MAX_BRIGHTNESS));
 }
 
@@ -145,7 +172,12 @@ fn marble_between_two_pixels_splits_its_brightness() {
     place(&mut g, 0, x, z);
     let vp = Viewport::new(3, 3);
     let mut blank = Frame::<5, 5>::new();
-    draw_marble(&mut blank, tile_point(&g.world().params().layout, x, z), vp, MARBLE);
+    draw_marble(
+        &mut blank,
+        tile_point(&g.world().params().layout, x, z),
+        vp,
+        MARBLE,
+    );
     let (a, b) = (blank.get(2, 2), blank.get(3, 2));
     assert!(a.abs_diff(b) <= 1 && a + b == MARBLE, "{a} + {b}");
     assert_eq!(blank.iter().filter(|p| p.2 > 0).count(), 2);
@@ -161,7 +193,12 @@ fn marble_between_two_pixels_splits_its_brightness() {
     let zb = boundary(&g, 5);
     place(&mut g, 0, x, zb);
     let mut blank = Frame::<5, 5>::new();
-    draw_marble(&mut blank, tile_point(&g.world().params().layout, x, zb), vp, MARBLE);
+    draw_marble(
+        &mut blank,
+        tile_point(&g.world().params().layout, x, zb),
+        vp,
+        MARBLE,
+    );
     let lit: Vec<_> = blank.iter().filter(|p| p.2 > 0).map(|p| p.2).collect();
     assert_eq!(lit.len(), 4);
     assert_eq!(lit.iter().map(|&v| v as u32).sum::<u32>(), MARBLE as u32);
@@ -187,7 +224,10 @@ fn motion_across_a_tile_is_smooth_and_conserves_brightness() {
         let total: u32 = f.iter().map(|p| p.2 as u32).sum();
         assert_eq!(total, MARBLE as u32, "x = {x}");
         let centroid: u32 = f.iter().map(|p| p.2 as u32 * p.0 as u32 * 64).sum::<u32>() / total;
-        assert!(centroid + 8 >= last_centroid, "x = {x}: {centroid} after {last_centroid}");
+        assert!(
+            centroid + 8 >= last_centroid,
+            "x = {x}: {centroid} after {last_centroid}"
+        );
         last_centroid = centroid;
     }
 }
@@ -265,7 +305,12 @@ fn brightness_saturates_never_wraps() {
         assert!(f.iter().all(|p| p.2 <= MAX_BRIGHTNESS));
         let mut blank = Frame::<9, 5>::new();
         for m in g.world().marbles() {
-            draw_marble(&mut blank, tile_point(&g.world().params().layout, m.pos.x, m.pos.z), vp, MARBLE);
+            draw_marble(
+                &mut blank,
+                tile_point(&g.world().params().layout, m.pos.x, m.pos.z),
+                vp,
+                MARBLE,
+            );
         }
         assert!(blank.iter().all(|p| p.2 <= MAX_BRIGHTNESS));
     }
@@ -291,26 +336,41 @@ fn viewport_follows<const W: usize, const H: usize>() {
             assert!(o >= 0 && o + size <= 41, "{vp:?} outside the maze");
             let m = margin(size);
             assert!(m >= 1);
-            assert!(t - o >= m || o == 0, "{t} too close to the low edge of {vp:?}");
-            assert!(o + size - 1 - t >= m || o + size == 41, "{t} too close to the high edge of {vp:?}");
+            assert!(
+                t - o >= m || o == 0,
+                "{t} too close to the low edge of {vp:?}"
+            );
+            assert!(
+                o + size - 1 - t >= m || o + size == 41,
+                "{t} too close to the high edge of {vp:?}"
+            );
         }
         // Its brightest pixel is always on screen, and so is its whole footprint
         // unless part of that lies beyond the maze (the outer half of a border tile).
         let (sc, sk) = (c - vp.x, k - vp.z);
-        assert!((0..W as i32).contains(&sc) && (0..H as i32).contains(&sk), "{p:?} off {vp:?}");
+        assert!(
+            (0..W as i32).contains(&sc) && (0..H as i32).contains(&sk),
+            "{p:?} off {vp:?}"
+        );
         let inner = |t: i32| (32..41 * 64 - 32).contains(&t);
         if inner(p.u) && inner(p.v) {
             let mut blank = Frame::<W, H>::new();
             draw_marble(&mut blank, p, vp, MARBLE);
             let total: u32 = blank.iter().map(|p| p.2 as u32).sum();
-            assert_eq!(total, MARBLE as u32, "marble partly off screen at {p:?} with {vp:?}");
+            assert_eq!(
+                total, MARBLE as u32,
+                "marble partly off screen at {p:?} with {vp:?}"
+            );
         }
     };
     // Jumps anywhere.
     for _ in 0..400 {
         place(&mut g, 0, rng.pitch(ex), rng.pitch(ez));
         let f = r.render(&g);
-        assert_eq!(f, render_world(g.level(), g.world(), blink_on(0, 7), r.viewport()));
+        assert_eq!(
+            f,
+            render_world(g.level(), g.world(), blink_on(0, 7), r.viewport())
+        );
         check(&r, &g);
     }
     // A random walk in small steps: the view scrolls at most a pixel per frame
@@ -339,7 +399,11 @@ fn viewport_follows<const W: usize, const H: usize>() {
         }
         check(&r, &g);
     }
-    assert!(still > 1500, "the view should mostly stand still, moved {} times", 3000 - still);
+    assert!(
+        still > 1500,
+        "the view should mostly stand still, moved {} times",
+        3000 - still
+    );
 }
 
 #[test]
@@ -444,7 +508,10 @@ fn mixed_axes_follow_one_and_centre_the_other() {
     r.render(&g);
     let vp = r.viewport();
     assert_eq!(vp.z, -2);
-    assert!((19 - vp.x) >= margin(8) && (vp.x + 7 - 19) >= margin(8), "{vp:?}");
+    assert!(
+        (19 - vp.x) >= margin(8) && (vp.x + 7 - 19) >= margin(8),
+        "{vp:?}"
+    );
 }
 
 #[test]

@@ -9,7 +9,12 @@ use marble_rolling::physics::geometry::tiles::Aabb;
 use marble_rolling::physics::{Scalar, TileIndex, TileLayout, Vec3};
 
 /// Layouts in µm: the default, thin walls, thick walls, an odd ratio.
-const LAYOUTS: [(u32, u32); 4] = [(2_000, 10_000), (200, 10_000), (5_000, 5_000), (1_700, 8_300)];
+const LAYOUTS: [(u32, u32); 4] = [
+    (2_000, 10_000),
+    (200, 10_000),
+    (5_000, 5_000),
+    (1_700, 8_300),
+];
 
 /// Eq. 6 evaluated exactly on integers, as the seed writes it (`s`, `l`, `a` in µm).
 fn eq6_exact(a: i64, s: i64, l: i64) -> i32 {
@@ -35,17 +40,42 @@ fn boundaries_round_trip<S: Scalar>() {
             let (lo, hi) = lay.span_xz(i);
             assert!(lo < hi, "{} tile {i} empty", S::NAME);
             assert_eq!(lay.index_xz(lo), i, "{} x lower bound of {i}", S::NAME);
-            assert_eq!(lay.index_xz(lo.next_down()), i - 1, "{} just below {i}", S::NAME);
-            assert_eq!(lay.index_xz(hi.next_down()), i, "{} just below upper bound of {i}", S::NAME);
-            assert_eq!(lay.index_xz(lo + (hi - lo).half()), i, "{} midpoint of {i}", S::NAME);
+            assert_eq!(
+                lay.index_xz(lo.next_down()),
+                i - 1,
+                "{} just below {i}",
+                S::NAME
+            );
+            assert_eq!(
+                lay.index_xz(hi.next_down()),
+                i,
+                "{} just below upper bound of {i}",
+                S::NAME
+            );
+            assert_eq!(
+                lay.index_xz(lo + (hi - lo).half()),
+                i,
+                "{} midpoint of {i}",
+                S::NAME
+            );
             // The next tile starts where this one ends (edge to edge, eq. 5).
             assert_eq!(lay.span_xz(i + 1).0, hi);
         }
         for j in -10..=10 {
             let (lo, hi) = lay.span_y(j);
             assert_eq!(lay.index_y(lo), j, "{} y lower bound of {j}", S::NAME);
-            assert_eq!(lay.index_y(lo.next_down()), j - 1, "{} y just below {j}", S::NAME);
-            assert_eq!(lay.index_y(lo + (hi - lo).half()), j, "{} y midpoint {j}", S::NAME);
+            assert_eq!(
+                lay.index_y(lo.next_down()),
+                j - 1,
+                "{} y just below {j}",
+                S::NAME
+            );
+            assert_eq!(
+                lay.index_y(lo + (hi - lo).half()),
+                j,
+                "{} y midpoint {j}",
+                S::NAME
+            );
             assert_eq!(lay.span_y(j + 1).0, hi);
         }
         // The floor slab is [-s, 0), the wall layer [0, l).
@@ -69,17 +99,33 @@ fn agrees_with_integer_eq6<S: Scalar>() {
             // Floats round the point; skip the few µm where rounding may cross a boundary.
             let (lo, hi) = lay.span_xz(lay.index_xz(x));
             let (ylo, yhi) = lay.span_y(lay.index_y(x));
-            let gap = [lo, hi, ylo, yhi].iter().map(|b| (x.to_f64() - b.to_f64()).abs()).fold(f64::INFINITY, f64::min);
+            let gap = [lo, hi, ylo, yhi]
+                .iter()
+                .map(|b| (x.to_f64() - b.to_f64()).abs())
+                .fold(f64::INFINITY, f64::min);
             let near = gap * (p as f64) < 1e-3 && !S::NAME.starts_with('i');
             if !near {
-                assert_eq!(lay.index_xz(x), eq6_exact(a, s_um as i64, l_um as i64), "{} x at {a} µm", S::NAME);
-                assert_eq!(lay.index_y(x), eq6_exact_y(a, s_um as i64, l_um as i64), "{} y at {a} µm", S::NAME);
+                assert_eq!(
+                    lay.index_xz(x),
+                    eq6_exact(a, s_um as i64, l_um as i64),
+                    "{} x at {a} µm",
+                    S::NAME
+                );
+                assert_eq!(
+                    lay.index_y(x),
+                    eq6_exact_y(a, s_um as i64, l_um as i64),
+                    "{} y at {a} µm",
+                    S::NAME
+                );
             }
             a += 137; // a step that is not a divisor of any layout: hits every phase
         }
     }
 }
-for_each_backend!(eq6_matches_exact_integer_evaluation, agrees_with_integer_eq6);
+for_each_backend!(
+    eq6_matches_exact_integer_evaluation,
+    agrees_with_integer_eq6
+);
 
 /// Eq. 7: the candidates cover every tile the marble's bounding box touches, and
 /// nothing further.
@@ -88,7 +134,9 @@ fn candidates_cover_bounding_box<S: Scalar>() {
     let r = lay.from_um_len(3_500);
     let mut seed = 12345u64;
     for _ in 0..2000 {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         let fx = ((seed >> 33) % 100_000) as f64 / 1000.0 - 10.0;
         let fz = ((seed >> 13) % 100_000) as f64 / 1000.0 - 10.0;
         let fy = ((seed >> 43) % 3000) as f64 / 1000.0 - 1.0;
@@ -102,43 +150,72 @@ fn candidates_cover_bounding_box<S: Scalar>() {
             let sgn = |d: i32| if d < 0 { -r } else { r };
             let p = Vec3::new(c.x + sgn(dx), c.y + sgn(dy), c.z + sgn(dz));
             let t = lay.index_of(p);
-            assert!(t.i >= range.lo.i && t.i <= range.hi.i && t.j >= range.lo.j && t.j <= range.hi.j);
+            assert!(
+                t.i >= range.lo.i && t.i <= range.hi.i && t.j >= range.lo.j && t.j <= range.hi.j
+            );
         }
         // And every tile in the range intersects the bounding box (closed).
         for t in range.iter() {
             let b = lay.tile_box(t);
-            assert!(b.max.x >= c.x - r && b.min.x <= c.x + r, "{} tile {t:?} outside box", S::NAME);
+            assert!(
+                b.max.x >= c.x - r && b.min.x <= c.x + r,
+                "{} tile {t:?} outside box",
+                S::NAME
+            );
         }
     }
 }
-for_each_backend!(eq7_candidates_cover_the_bounding_box, candidates_cover_bounding_box);
+for_each_backend!(
+    eq7_candidates_cover_the_bounding_box,
+    candidates_cover_bounding_box
+);
 
 /// Eq. 8 against a brute-force closest point: the minimum distance over a dense grid
 /// of points of the box (surface and interior).
 #[test]
 fn eq8_matches_brute_force_closest_point() {
-    let b = Aabb { min: Vec3::new(1.0, -0.25, 2.0), max: Vec3::new(1.5, 0.75, 2.25) };
+    let b = Aabb {
+        min: Vec3::new(1.0, -0.25, 2.0),
+        max: Vec3::new(1.5, 0.75, 2.25),
+    };
     let n = 40;
     let mut seed = 7u64;
     for _ in 0..300 {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         let u = |s: u64, lo: f64, hi: f64| lo + (s % 10_000) as f64 / 10_000.0 * (hi - lo);
-        let c = Vec3::new(u(seed >> 11, 0.0, 2.5), u(seed >> 24, -1.0, 1.5), u(seed >> 37, 1.0, 3.0));
+        let c = Vec3::new(
+            u(seed >> 11, 0.0, 2.5),
+            u(seed >> 24, -1.0, 1.5),
+            u(seed >> 37, 1.0, 3.0),
+        );
         let r = 0.3;
         let mut brute = f64::INFINITY;
         for a in 0..=n {
             for bb in 0..=n {
                 for cc in 0..=n {
                     let t = |lo: f64, hi: f64, q: i32| lo + (hi - lo) * q as f64 / n as f64;
-                    let p = [t(b.min.x, b.max.x, a), t(b.min.y, b.max.y, bb), t(b.min.z, b.max.z, cc)];
-                    let d = ((c.x - p[0]).powi(2) + (c.y - p[1]).powi(2) + (c.z - p[2]).powi(2)).sqrt();
+                    let p = [
+                        t(b.min.x, b.max.x, a),
+                        t(b.min.y, b.max.y, bb),
+                        t(b.min.z, b.max.z, cc),
+                    ];
+                    let d =
+                        ((c.x - p[0]).powi(2) + (c.y - p[1]).powi(2) + (c.z - p[2]).powi(2)).sqrt();
                     brute = brute.min(d);
                 }
             }
         }
-        let grid_step = ((0.5f64 / n as f64).powi(2) + (1.0f64 / n as f64).powi(2) + (0.25f64 / n as f64).powi(2)).sqrt();
+        let grid_step = ((0.5f64 / n as f64).powi(2)
+            + (1.0f64 / n as f64).powi(2)
+            + (0.25f64 / n as f64).powi(2))
+        .sqrt();
         let d = distance(c, r, &b) + r;
-        assert!(d <= brute + 1e-12, "eq8 {d} larger than a point of the box {brute}");
+        assert!(
+            d <= brute + 1e-12,
+            "eq8 {d} larger than a point of the box {brute}"
+        );
         assert!(brute - d <= grid_step, "eq8 {d} vs brute {brute}");
         assert_eq!(overlaps(c, r, &b), d < r);
     }
@@ -148,7 +225,13 @@ fn eq8_matches_brute_force_closest_point() {
 fn eq8_terms<S: Scalar>() {
     let lay = TileLayout::<S>::from_um(2_000, 10_000).unwrap();
     let b = lay.tile_box(TileIndex::new(3, 1, 4));
-    for (x, y, z) in [(0.9, 0.3, 2.1), (1.5, 0.3, 2.1), (1.2, 1.0, 2.5), (1.0, -0.2, 1.9), (1.1, 0.3, 2.1)] {
+    for (x, y, z) in [
+        (0.9, 0.3, 2.1),
+        (1.5, 0.3, 2.1),
+        (1.2, 1.0, 2.5),
+        (1.0, -0.2, 1.9),
+        (1.1, 0.3, 2.1),
+    ] {
         let c = Vec3::new(S::from_f64(x), S::from_f64(y), S::from_f64(z));
         let pos = |v: S| if v > S::ZERO { v } else { S::ZERO };
         let terms = [
@@ -178,18 +261,46 @@ fn contact_on_features<S: Scalar>() {
     let mid = |lo: S, hi: S| (lo + hi).half();
     let cases = [
         // (centre, expected normal) — on the +x face, on the +x/+z edge, inside.
-        (Vec3::new(b.max.x, mid(b.min.y, b.max.y), mid(b.min.z, b.max.z)), [1.0, 0.0, 0.0]),
-        (Vec3::new(b.min.x + f(0.01), mid(b.min.y, b.max.y), mid(b.min.z, b.max.z)), [-1.0, 0.0, 0.0]),
-        (Vec3::new(b.max.x + f(0.1), mid(b.min.y, b.max.y), b.max.z + f(0.1)), [core::f64::consts::FRAC_1_SQRT_2, 0.0, core::f64::consts::FRAC_1_SQRT_2]),
-        (Vec3::new(mid(b.min.x, b.max.x), b.max.y + f(0.01), b.min.z - f(0.05)), [0.0, 0.19611614, -0.98058068]),
+        (
+            Vec3::new(b.max.x, mid(b.min.y, b.max.y), mid(b.min.z, b.max.z)),
+            [1.0, 0.0, 0.0],
+        ),
+        (
+            Vec3::new(
+                b.min.x + f(0.01),
+                mid(b.min.y, b.max.y),
+                mid(b.min.z, b.max.z),
+            ),
+            [-1.0, 0.0, 0.0],
+        ),
+        (
+            Vec3::new(b.max.x + f(0.1), mid(b.min.y, b.max.y), b.max.z + f(0.1)),
+            [
+                core::f64::consts::FRAC_1_SQRT_2,
+                0.0,
+                core::f64::consts::FRAC_1_SQRT_2,
+            ],
+        ),
+        (
+            Vec3::new(mid(b.min.x, b.max.x), b.max.y + f(0.01), b.min.z - f(0.05)),
+            [0.0, 0.19611614, -0.98058068],
+        ),
     ];
     for (c, want) in cases {
         let got = contact(c, r, t, &b, g.view()).expect("contact");
         let n = got.normal.to_f64();
         let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        assert!((len - 1.0).abs() < common::loose::<S>(), "{} normal length {len}", S::NAME);
+        assert!(
+            (len - 1.0).abs() < common::loose::<S>(),
+            "{} normal length {len}",
+            S::NAME
+        );
         for a in 0..3 {
-            assert!((n[a] - want[a]).abs() < 2.0 * common::loose::<S>(), "{}: normal {n:?}, want {want:?}", S::NAME);
+            assert!(
+                (n[a] - want[a]).abs() < 2.0 * common::loose::<S>(),
+                "{}: normal {n:?}, want {want:?}",
+                S::NAME
+            );
         }
         assert!(got.depth > S::ZERO);
     }
@@ -198,7 +309,10 @@ fn contact_on_features<S: Scalar>() {
     let got = contact(c, r, t, &b, g.view()).expect("corner contact");
     assert!(got.depth >= r);
 }
-for_each_backend!(contact_normals_on_faces_edges_corners_and_inside, contact_on_features);
+for_each_backend!(
+    contact_normals_on_faces_edges_corners_and_inside,
+    contact_on_features
+);
 
 /// Eq. 1 worked examples, including a moving board.
 fn eq1_examples<S: Scalar>() {
@@ -209,22 +323,43 @@ fn eq1_examples<S: Scalar>() {
     };
     let up = v(0.0, 1.0, 0.0);
     // Straight down onto a still board, e = 0.5: bounces up at half speed.
-    assert!(close(restitution(v(0.0, -2.0, 0.0), v(0.0, 0.0, 0.0), up, S::from_f64(0.5)), [0.0, 1.0, 0.0]));
+    assert!(close(
+        restitution(v(0.0, -2.0, 0.0), v(0.0, 0.0, 0.0), up, S::from_f64(0.5)),
+        [0.0, 1.0, 0.0]
+    ));
     // Oblique, e = 1: the tangential part is kept, the normal part reversed.
-    assert!(close(restitution(v(3.0, -2.0, 1.0), Vec3::ZERO, up, S::ONE), [3.0, 2.0, 1.0]));
+    assert!(close(
+        restitution(v(3.0, -2.0, 1.0), Vec3::ZERO, up, S::ONE),
+        [3.0, 2.0, 1.0]
+    ));
     // e = 0: the normal part is removed.
-    assert!(close(restitution(v(3.0, -2.0, 1.0), Vec3::ZERO, up, S::ZERO), [3.0, 0.0, 1.0]));
+    assert!(close(
+        restitution(v(3.0, -2.0, 1.0), Vec3::ZERO, up, S::ZERO),
+        [3.0, 0.0, 1.0]
+    ));
     // A board rising at 1 under a marble at rest, e = 1: v' = 0 − 2·(0 − 1)·n = 2 up.
-    assert!(close(restitution(Vec3::ZERO, v(0.0, 1.0, 0.0), up, S::ONE), [0.0, 2.0, 0.0]));
+    assert!(close(
+        restitution(Vec3::ZERO, v(0.0, 1.0, 0.0), up, S::ONE),
+        [0.0, 2.0, 0.0]
+    ));
     // A board rising at 1, marble falling at 1, e = 0.5: (v−v_b)·n = −2 → v' = −1 + 3 = 2.
-    assert!(close(restitution(v(0.0, -1.0, 0.0), v(0.0, 1.0, 0.0), up, S::from_f64(0.5)), [0.0, 2.0, 0.0]));
+    assert!(close(
+        restitution(v(0.0, -1.0, 0.0), v(0.0, 1.0, 0.0), up, S::from_f64(0.5)),
+        [0.0, 2.0, 0.0]
+    ));
     // A wall moving sideways (along its own plane) does nothing to the normal part.
     let wall = v(-1.0, 0.0, 0.0);
-    assert!(close(restitution(v(-1.0, 0.0, 0.5), v(0.0, 0.0, 3.0), wall, S::ONE), [1.0, 0.0, 0.5]));
+    assert!(close(
+        restitution(v(-1.0, 0.0, 0.5), v(0.0, 0.0, 3.0), wall, S::ONE),
+        [1.0, 0.0, 0.5]
+    ));
     // A 45° normal.
     let h = 0.5f64.sqrt();
     let n = v(h, h, 0.0);
-    assert!(close(restitution(v(-1.0, -1.0, 0.0), Vec3::ZERO, n, S::ONE), [1.0, 1.0, 0.0]));
+    assert!(close(
+        restitution(v(-1.0, -1.0, 0.0), Vec3::ZERO, n, S::ONE),
+        [1.0, 1.0, 0.0]
+    ));
 }
 for_each_backend!(eq1_restitution_worked_examples, eq1_examples);
 
@@ -232,19 +367,30 @@ for_each_backend!(eq1_restitution_worked_examples, eq1_examples);
 /// as the inverse.
 fn eq4_frames<S: Scalar>() {
     let f = S::from_f64;
-    let frame = Frame::rotated(Vec3::new(f(0.1), f(-0.05), f(0.2)), Vec3::new(f(3.0), f(0.0), f(2.0)));
+    let frame = Frame::rotated(
+        Vec3::new(f(0.1), f(-0.05), f(0.2)),
+        Vec3::new(f(3.0), f(0.0), f(2.0)),
+    );
     for a in 0..3 {
         for b in 0..3 {
             let d = frame.basis[a].dot(frame.basis[b]).to_f64();
             let want = if a == b { 1.0 } else { 0.0 };
-            assert!((d - want).abs() < common::loose::<S>(), "{} basis {a}.{b} = {d}", S::NAME);
+            assert!(
+                (d - want).abs() < common::loose::<S>(),
+                "{} basis {a}.{b} = {d}",
+                S::NAME
+            );
         }
     }
     for p in [[0.0, 0.0, 0.0], [1.0, 0.5, -2.0], [10.0, 0.3, 7.5]] {
         let w = Vec3::new(f(p[0]), f(p[1]), f(p[2]));
         let back = frame.to_world(frame.to_tile(w)).to_f64();
         for a in 0..3 {
-            assert!((back[a] - p[a]).abs() < 5.0 * common::loose::<S>(), "{} round trip {p:?} → {back:?}", S::NAME);
+            assert!(
+                (back[a] - p[a]).abs() < 5.0 * common::loose::<S>(),
+                "{} round trip {p:?} → {back:?}",
+                S::NAME
+            );
         }
     }
     // The pivot maps to itself.

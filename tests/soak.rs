@@ -18,15 +18,18 @@ use marble_rolling::physics::geometry::broadphase::candidates;
 use marble_rolling::physics::geometry::narrowphase::offset;
 use marble_rolling::physics::{Fx, Scalar};
 
-
 #[test]
 #[ignore = "minutes in a debug build; CI runs it with --profile soak"]
 fn twenty_four_hours_of_play() {
-    let seconds: u64 = std::env::var("SOAK_SECONDS").ok().and_then(|h| h.parse().ok()).unwrap_or(24 * 3600);
+    let seconds: u64 = std::env::var("SOAK_SECONDS")
+        .ok()
+        .and_then(|h| h.parse().ok())
+        .unwrap_or(24 * 3600);
     let config = GameConfig::DEFAULT;
     let total_frames = seconds * config.frame_hz() as u64;
     let mut rng = Lcg(2026);
-    let (mut frames, mut wins, mut falls, mut timeouts, mut shaken) = (0u64, 0u32, 0u32, 0u32, 0u64);
+    let (mut frames, mut wins, mut falls, mut timeouts, mut shaken) =
+        (0u64, 0u32, 0u32, 0u32, 0u64);
     let mut level = 0usize;
     while frames < total_frames {
         let view = LEVELS[level % LEVELS.len()];
@@ -34,12 +37,20 @@ fn twenty_four_hours_of_play() {
         let mut ap = Autopilot::new(&view);
         // Every third attempt starts with a bout of shaking (random readings up to ±2 g,
         // the sensor's range), then the autopilot takes over from wherever it ended up.
-        let shake_frames = if level % 3 == 2 { rng.range(128, 2048) as u64 } else { 0 };
+        let shake_frames = if level % 3 == 2 {
+            rng.range(128, 2048) as u64
+        } else {
+            0
+        };
         let mut n = 0u64;
         loop {
             let phase = if n < shake_frames {
                 shaken += 1;
-                session.frame([rng.range(-2000, 2000), rng.range(-500, 2000), rng.range(-2000, 2000)])
+                session.frame([
+                    rng.range(-2000, 2000),
+                    rng.range(-500, 2000),
+                    rng.range(-2000, 2000),
+                ])
             } else {
                 session.autopilot_frame(&mut ap)
             };
@@ -84,13 +95,26 @@ fn check(session: &Session<'_, Fx>, frame: u64) {
         for t in candidates(&p.layout, m.pos, p.radius).solid(w.tiles()) {
             let d = offset(m.pos, &p.layout.tile_box(t)).to_f64();
             let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            assert!(dist >= r * (1.0 - 1e-3), "frame {frame}: clearance {dist} < r {r}");
+            assert!(
+                dist >= r * (1.0 - 1e-3),
+                "frame {frame}: clearance {dist} < r {r}"
+            );
         }
         // On the floor or above it (below, it is falling through a hole: out soon).
-        let on_board = m.pos.y < Fx::ZERO || (m.pos.x >= Fx::ZERO && m.pos.z >= Fx::ZERO && m.pos.x <= ex && m.pos.z <= ez);
-        assert!(on_board, "frame {frame}: off the board: {:?} level {} g {:?}", m, session.game().level().info.name, w.gravity_mg());
+        let on_board = m.pos.y < Fx::ZERO
+            || (m.pos.x >= Fx::ZERO && m.pos.z >= Fx::ZERO && m.pos.x <= ex && m.pos.z <= ez);
+        assert!(
+            on_board,
+            "frame {frame}: off the board: {:?} level {} g {:?}",
+            m,
+            session.game().level().info.name,
+            w.gravity_mg()
+        );
         let v = m.vel.to_f64();
-        assert!(v.iter().all(|c| c.abs() <= p.v_max.to_f64()), "frame {frame}: over the speed cap");
+        assert!(
+            v.iter().all(|c| c.abs() <= p.v_max.to_f64()),
+            "frame {frame}: over the speed cap"
+        );
     }
     assert_eq!(w.stats.reverts, 0, "frame {frame}: a step was undone");
 }

@@ -166,7 +166,10 @@ pub struct LevelView<'a> {
 impl<'a, const WORDS: usize> Level<'a, WORDS> {
     /// The borrowed view.
     pub const fn view(&'a self) -> LevelView<'a> {
-        LevelView { info: self.info, tiles: self.grid.view() }
+        LevelView {
+            info: self.info,
+            tiles: self.grid.view(),
+        }
     }
 }
 
@@ -174,9 +177,15 @@ impl<'a, const WORDS: usize> Level<'a, WORDS> {
 /// why). Use it to size [`Level`] for a `const` level.
 pub const fn words_needed(src: &str) -> usize {
     let b = src.as_bytes();
-    let Some(grid_start) = grid_start(b) else { return 1 };
+    let Some(grid_start) = grid_start(b) else {
+        return 1;
+    };
     let (nx, nz) = grid_size(b, grid_start);
-    let w = words_for(if nx == 0 { 1 } else { nx }, 2, if nz == 0 { 1 } else { nz });
+    let w = words_for(
+        if nx == 0 { 1 } else { nx },
+        2,
+        if nz == 0 { 1 } else { nz },
+    );
     if w == 0 {
         1
     } else {
@@ -251,8 +260,18 @@ const fn count_chars(b: &[u8], start: usize, end: usize) -> usize {
     n
 }
 
-const fn err<T>(line: usize, b: &[u8], line_start: usize, at: usize, kind: LevelErrorKind) -> Result<T, LevelError> {
-    Err(LevelError { line: line as u32, column: (count_chars(b, line_start, at) + 1) as u32, kind })
+const fn err<T>(
+    line: usize,
+    b: &[u8],
+    line_start: usize,
+    at: usize,
+    kind: LevelErrorKind,
+) -> Result<T, LevelError> {
+    Err(LevelError {
+        line: line as u32,
+        column: (count_chars(b, line_start, at) + 1) as u32,
+        kind,
+    })
 }
 
 const fn eq_bytes(b: &[u8], start: usize, end: usize, word: &[u8]) -> bool {
@@ -327,10 +346,17 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
             }
             p += 1;
         }
-        return Err(LevelError { line: lines + 1, column: 1, kind: LevelErrorKind::MissingSeparator });
+        return Err(LevelError {
+            line: lines + 1,
+            column: 1,
+            kind: LevelErrorKind::MissingSeparator,
+        });
     }
     let mut spec = PhysicsSpec::DEFAULT;
-    let mut effects = Effects { rolling: true, ..Effects::NONE };
+    let mut effects = Effects {
+        rolling: true,
+        ..Effects::NONE
+    };
     let mut name: &str = "untitled";
     let mut time_limit_s = 60u32;
     let mut radius_line = (0usize, 0usize, 0usize);
@@ -427,23 +453,47 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
         line += 1;
     }
     if !separator {
-        return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::MissingSeparator });
+        return Err(LevelError {
+            line: line as u32,
+            column: 1,
+            kind: LevelErrorKind::MissingSeparator,
+        });
     }
-    if 2 * spec.radius_um as u64 >= spec.long_um as u64 || spec.short_um as u64 + spec.long_um as u64 > 100_000 {
-        let (l, ls, at) = if radius_line.0 > 0 { radius_line } else { (1, 0, 0) };
+    if 2 * spec.radius_um as u64 >= spec.long_um as u64
+        || spec.short_um as u64 + spec.long_um as u64 > 100_000
+    {
+        let (l, ls, at) = if radius_line.0 > 0 {
+            radius_line
+        } else {
+            (1, 0, 0)
+        };
         return err(l, b, ls, at, LevelErrorKind::MarbleTooBig);
     }
     // Grid.
     let (nx, nz) = grid_size(b, i);
     if nz == 0 || nx == 0 {
-        return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::EmptyGrid });
+        return Err(LevelError {
+            line: line as u32,
+            column: 1,
+            kind: LevelErrorKind::EmptyGrid,
+        });
     }
     if nx > MAX_TILES_XZ || nz > MAX_TILES_XZ {
-        return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::TooLarge });
+        return Err(LevelError {
+            line: line as u32,
+            column: 1,
+            kind: LevelErrorKind::TooLarge,
+        });
     }
     let mut grid = match TileGrid::<WORDS>::new(nx, 2, nz) {
         Ok(g) => g,
-        Err(_) => return Err(LevelError { line: line as u32, column: 1, kind: LevelErrorKind::TooLarge }),
+        Err(_) => {
+            return Err(LevelError {
+                line: line as u32,
+                column: 1,
+                kind: LevelErrorKind::TooLarge,
+            })
+        }
     };
     let mut starts = [(0u8, 0u8); MAX_MARBLES];
     let mut n_starts = 0usize;
@@ -508,10 +558,18 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
         line += 1;
     }
     if n_starts == 0 {
-        return Err(LevelError { line: last_row_line as u32, column: 1, kind: LevelErrorKind::StartCount });
+        return Err(LevelError {
+            line: last_row_line as u32,
+            column: 1,
+            kind: LevelErrorKind::StartCount,
+        });
     }
     if n_goals == 0 {
-        return Err(LevelError { line: last_row_line as u32, column: 1, kind: LevelErrorKind::GoalCount });
+        return Err(LevelError {
+            line: last_row_line as u32,
+            column: 1,
+            kind: LevelErrorKind::GoalCount,
+        });
     }
     effects.holes = holes;
     effects.marbles = n_starts > 1;
@@ -553,18 +611,20 @@ pub use const_panic as __const_panic;
 macro_rules! builtin_level {
     ($src:expr) => {{
         const SRC: &str = $src;
-        const LEVEL: $crate::game::level::Level<'static, { $crate::game::level::words_needed(SRC) }> =
-            match $crate::game::level::parse(SRC) {
-                Ok(l) => l,
-                Err(e) => $crate::game::level::__const_panic::concat_panic!(
-                    "built-in level: line ",
-                    e.line,
-                    ", column ",
-                    e.column,
-                    ": ",
-                    e.kind.message()
-                ),
-            };
+        const LEVEL: $crate::game::level::Level<
+            'static,
+            { $crate::game::level::words_needed(SRC) },
+        > = match $crate::game::level::parse(SRC) {
+            Ok(l) => l,
+            Err(e) => $crate::game::level::__const_panic::concat_panic!(
+                "built-in level: line ",
+                e.line,
+                ", column ",
+                e.column,
+                ": ",
+                e.kind.message()
+            ),
+        };
         LEVEL.view()
     }};
 }

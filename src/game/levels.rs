@@ -131,5 +131,9 @@ time_limit_s: 180
 
 /// A built-in level by name.
 pub fn by_name(name: &str) -> Option<(usize, LevelView<'static>)> {
-    LEVELS.iter().copied().enumerate().find(|(_, l)| l.info.name == name)
+    LEVELS
+        .iter()
+        .copied()
+        .enumerate()
+        .find(|(_, l)| l.info.name == name)
 }

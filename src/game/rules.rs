@@ -5,8 +5,8 @@
 
 use crate::physics::dynamics::effects::BoardMotion;
 use crate::physics::geometry::frame::Frame;
-use crate::physics::world::{Params, SetupError, World};
 use crate::physics::scalar::rsqrt_bits;
+use crate::physics::world::{Params, SetupError, World};
 use crate::physics::{Scalar, Vec3};
 
 use super::level::{LevelView, MAX_MARBLES};
@@ -23,7 +23,10 @@ pub struct GameConfig {
 
 impl GameConfig {
     /// 128 frames/s × 8 substeps = 1024 steps/s (see the accuracy study in `docs/`).
-    pub const DEFAULT: GameConfig = GameConfig { frame_log2: 7, substeps_log2: 3 };
+    pub const DEFAULT: GameConfig = GameConfig {
+        frame_log2: 7,
+        substeps_log2: 3,
+    };
 
     /// Frames per second.
     pub const fn frame_hz(&self) -> u32 {
@@ -86,7 +89,14 @@ impl<'a, S: Scalar> Game<'a, S> {
             *slot = cell_centre(&params, i, k);
         }
         let world = World::new(params, level.tiles, &starts[..n])?;
-        Ok(Game { level, config, world, frames: 0, phase: Phase::Playing, board: None })
+        Ok(Game {
+            level,
+            config,
+            world,
+            frames: 0,
+            phase: Phase::Playing,
+            board: None,
+        })
     }
 
     /// Starts the attempt over (same level, same configuration).
@@ -162,7 +172,11 @@ impl<'a, S: Scalar> Game<'a, S> {
             None => (Vec3::ZERO, Vec3::ZERO),
         };
         self.board = Some((frame, omega));
-        self.world.set_board_motion(BoardMotion { omega, omega_dot, pivot });
+        self.world.set_board_motion(BoardMotion {
+            omega,
+            omega_dot,
+            pivot,
+        });
     }
 
     /// Plays one frame (all its substeps) and judges it.
@@ -186,12 +200,22 @@ impl<'a, S: Scalar> Game<'a, S> {
         }
         let in_goal = marbles.iter().any(|m| {
             let (i, k) = (layout.index_xz(m.pos.x), layout.index_xz(m.pos.z));
-            self.level.info.goals().iter().any(|&(gi, gk)| gi as i32 == i && gk as i32 == k)
+            self.level
+                .info
+                .goals()
+                .iter()
+                .any(|&(gi, gk)| gi as i32 == i && gk as i32 == k)
         });
         if in_goal {
             return Phase::Won;
         }
-        if self.frames >= self.level.info.time_limit_s.saturating_mul(self.config.frame_hz()) {
+        if self.frames
+            >= self
+                .level
+                .info
+                .time_limit_s
+                .saturating_mul(self.config.frame_hz())
+        {
             return Phase::TimeUp;
         }
         Phase::Playing
@@ -204,4 +228,3 @@ pub fn cell_centre<S: Scalar>(p: &Params<S>, i: u8, k: u8) -> (S, S) {
     let (z0, z1) = p.layout.span_xz(k as i32);
     (x0 + (x1 - x0).half(), z0 + (z1 - z0).half())
 }
-

@@ -19,7 +19,10 @@ use super::rules::{Game, GameConfig, Phase};
 
 /// The tilt path's settings for synthetic inputs (keys, traces, autopilot):
 /// identical consecutive readings are normal there, so the stuck-sensor check is off.
-pub const SYNTHETIC_TILT: TiltConfig = TiltConfig { stuck_samples: 0, ..TiltConfig::DEFAULT };
+pub const SYNTHETIC_TILT: TiltConfig = TiltConfig {
+    stuck_samples: 0,
+    ..TiltConfig::DEFAULT
+};
 
 /// A game, its tilt path and (optionally) its autopilot.
 #[derive(Clone, Debug)]
@@ -34,7 +37,11 @@ pub struct Session<'a, S: Scalar> {
 
 impl<'a, S: Scalar> Session<'a, S> {
     /// A session on `level`.
-    pub fn new(level: LevelView<'a>, config: GameConfig, tilt: TiltConfig) -> Result<Self, SetupError> {
+    pub fn new(
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> Result<Self, SetupError> {
         Ok(Session {
             game: Game::new(level, config)?,
             tilt: TiltFilter::new(tilt),

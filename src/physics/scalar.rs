@@ -197,7 +197,11 @@ macro_rules! fixed_scalar {
                 let den = den as i128;
                 let q = scaled.div_euclid(den);
                 let r = scaled.rem_euclid(den);
-                let q = if 2 * r.abs() >= den.abs() { q + den.signum() } else { q };
+                let q = if 2 * r.abs() >= den.abs() {
+                    q + den.signum()
+                } else {
+                    q
+                };
                 let bits = q.clamp(<$t>::MIN.to_bits() as i128, <$t>::MAX.to_bits() as i128);
                 <$t>::from_bits(bits as _)
             }
@@ -265,7 +269,11 @@ macro_rules! fixed_scalar {
                 let m = n.unsigned_abs();
                 if shift > frac && (32..64).contains(&(shift - frac)) && m >> 94 == 0 {
                     let s = shift - frac;
-                    let bias = if away { (1u64 << s) - 1 } else { 1u64 << (s - 1) };
+                    let bias = if away {
+                        (1u64 << s) - 1
+                    } else {
+                        1u64 << (s - 1)
+                    };
                     let low = (m as u32) as u64 + (bias as u32) as u64;
                     let high = (m >> 32) as u64 + (bias >> 32) + (low >> 32);
                     // high < 2^63, so the quotient fits i64 and its negation too.
@@ -397,8 +405,16 @@ fn scaled_bits(n: i128, shift: u32, away: bool, frac: u32, lo: i64, hi: i64) -> 
     } else {
         let s = shift - frac;
         let m = n.unsigned_abs();
-        let q = if away { (m + (1u128 << s) - 1) >> s } else { (m + (1u128 << (s - 1))) >> s };
-        if n < 0 { -(q as i128) } else { q as i128 }
+        let q = if away {
+            (m + (1u128 << s) - 1) >> s
+        } else {
+            (m + (1u128 << (s - 1))) >> s
+        };
+        if n < 0 {
+            -(q as i128)
+        } else {
+            q as i128
+        }
     };
     bits.clamp(lo as i128, hi as i128) as i64
 }
@@ -440,7 +456,7 @@ pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
         // y·(3 − m·y²)/2 with y in Q31, m in Q30.
         let y2 = ((y as u64 * y as u64) >> 31) as u32; // Q31
         let my2 = ((m as u64 * y2 as u64) >> 30) as u32; // Q31, ≈ 1
-        // (3 − m·y²)/2 in Q31 is (3·2^31 − my2)/2 = 3·2^30 − my2/2.
+                                                         // (3 − m·y²)/2 in Q31 is (3·2^31 − my2)/2 = 3·2^30 − my2/2.
         let t = (3u32 << 30).wrapping_sub(my2 >> 1);
         y = ((y as u64 * t as u64) >> 31) as u32;
     }
@@ -463,22 +479,102 @@ pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
 
 /// `1/√m` in Q31 at the middle of the 96 slices of width 1/32 covering `[1, 4)`.
 const RSQRT_SEED: [u32; 96] = [
-    2_130_900_515, 2_098_855_072, 2_068_213_208, 2_038_875_364, 2_010_751_598, 1_983_760_420,
-    1_957_827_796, 1_932_886_296, 1_908_874_354, 1_885_735_628, 1_863_418_444, 1_841_875_310,
-    1_821_062_491, 1_800_939_636, 1_781_469_447, 1_762_617_387, 1_744_351_429, 1_726_641_819,
-    1_709_460_876, 1_692_782_810, 1_676_583_559, 1_660_840_642, 1_645_533_028, 1_630_641_020,
-    1_616_146_146, 1_602_031_062, 1_588_279_468, 1_574_876_026, 1_561_806_289, 1_549_056_637,
-    1_536_614_214, 1_524_466_875, 1_512_603_139, 1_501_012_140, 1_489_683_584, 1_478_607_716,
-    1_467_775_280, 1_457_177_486, 1_446_805_984, 1_436_652_834, 1_426_710_480, 1_416_971_728,
-    1_407_429_723, 1_398_077_927, 1_388_910_104, 1_379_920_300, 1_371_102_827, 1_362_452_250,
-    1_353_963_368, 1_345_631_207, 1_337_451_002, 1_329_418_191, 1_321_528_399, 1_313_777_432,
-    1_306_161_267, 1_298_676_040, 1_291_318_043, 1_284_083_712, 1_276_969_620, 1_269_972_473,
-    1_263_089_103, 1_256_316_458, 1_249_651_603, 1_243_091_706, 1_236_634_043, 1_230_275_986,
-    1_224_014_999, 1_217_848_637, 1_211_774_541, 1_205_790_433, 1_199_894_112, 1_194_083_452,
-    1_188_356_400, 1_182_710_970, 1_177_145_240, 1_171_657_354, 1_166_245_512, 1_160_907_976,
-    1_155_643_060, 1_150_449_133, 1_145_324_612, 1_140_267_967, 1_135_277_711, 1_130_352_405,
-    1_125_490_652, 1_120_691_096, 1_115_952_423, 1_111_273_357, 1_106_652_658, 1_102_089_122,
-    1_097_581_581, 1_093_128_899, 1_088_729_972, 1_084_383_727, 1_080_089_122, 1_075_845_140,
+    2_130_900_515,
+    2_098_855_072,
+    2_068_213_208,
+    2_038_875_364,
+    2_010_751_598,
+    1_983_760_420,
+    1_957_827_796,
+    1_932_886_296,
+    1_908_874_354,
+    1_885_735_628,
+    1_863_418_444,
+    1_841_875_310,
+    1_821_062_491,
+    1_800_939_636,
+    1_781_469_447,
+    1_762_617_387,
+    1_744_351_429,
+    1_726_641_819,
+    1_709_460_876,
+    1_692_782_810,
+    1_676_583_559,
+    1_660_840_642,
+    1_645_533_028,
+    1_630_641_020,
+    1_616_146_146,
+    1_602_031_062,
+    1_588_279_468,
+    1_574_876_026,
+    1_561_806_289,
+    1_549_056_637,
+    1_536_614_214,
+    1_524_466_875,
+    1_512_603_139,
+    1_501_012_140,
+    1_489_683_584,
+    1_478_607_716,
+    1_467_775_280,
+    1_457_177_486,
+    1_446_805_984,
+    1_436_652_834,
+    1_426_710_480,
+    1_416_971_728,
+    1_407_429_723,
+    1_398_077_927,
+    1_388_910_104,
+    1_379_920_300,
+    1_371_102_827,
+    1_362_452_250,
+    1_353_963_368,
+    1_345_631_207,
+    1_337_451_002,
+    1_329_418_191,
+    1_321_528_399,
+    1_313_777_432,
+    1_306_161_267,
+    1_298_676_040,
+    1_291_318_043,
+    1_284_083_712,
+    1_276_969_620,
+    1_269_972_473,
+    1_263_089_103,
+    1_256_316_458,
+    1_249_651_603,
+    1_243_091_706,
+    1_236_634_043,
+    1_230_275_986,
+    1_224_014_999,
+    1_217_848_637,
+    1_211_774_541,
+    1_205_790_433,
+    1_199_894_112,
+    1_194_083_452,
+    1_188_356_400,
+    1_182_710_970,
+    1_177_145_240,
+    1_171_657_354,
+    1_166_245_512,
+    1_160_907_976,
+    1_155_643_060,
+    1_150_449_133,
+    1_145_324_612,
+    1_140_267_967,
+    1_135_277_711,
+    1_130_352_405,
+    1_125_490_652,
+    1_120_691_096,
+    1_115_952_423,
+    1_111_273_357,
+    1_106_652_658,
+    1_102_089_122,
+    1_097_581_581,
+    1_093_128_899,
+    1_088_729_972,
+    1_084_383_727,
+    1_080_089_122,
+    1_075_845_140,
 ];
 
 fn pow2_neg_f32(n: u32) -> f32 {
@@ -597,22 +693,33 @@ mod tests {
 
     #[test]
     fn fixed_rsqrt_is_within_an_lsb() {
-        for x in [1e-6, 3e-5, 0.001, 0.0123, 0.25, 0.5, 1.0, 2.0, 3.99, 7.0, 100.0, 127.9] {
+        for x in [
+            1e-6, 3e-5, 0.001, 0.0123, 0.25, 0.5, 1.0, 2.0, 3.99, 7.0, 100.0, 127.9,
+        ] {
             let got = I8F24::from_f64(x).rsqrt().to_f64();
             let q = I8F24::from_f64(x).to_f64();
             let want = 1.0 / q.sqrt();
             if want < 127.0 {
                 let lsb = 1.0 / (1u64 << 24) as f64;
-                assert!((got - want).abs() <= (want * 2e-7).max(lsb), "rsqrt {x}: {got} vs {want}");
+                assert!(
+                    (got - want).abs() <= (want * 2e-7).max(lsb),
+                    "rsqrt {x}: {got} vs {want}"
+                );
             }
             let got = I32F32::from_f64(x).rsqrt().to_f64();
             let want = 1.0 / I32F32::from_f64(x).to_f64().sqrt();
-            assert!((got - want).abs() <= want * 1e-8 + 1.0 / (1u64 << 32) as f64, "i32f32 rsqrt {x}: {got} vs {want}");
+            assert!(
+                (got - want).abs() <= want * 1e-8 + 1.0 / (1u64 << 32) as f64,
+                "i32f32 rsqrt {x}: {got} vs {want}"
+            );
             let got = I16F16::from_f64(x).rsqrt().to_f64();
             let q = I16F16::from_f64(x).to_f64();
             if q > 0.0 {
                 let want = 1.0 / q.sqrt();
-                assert!((got - want).abs() <= want * 1e-6 + 1.0 / 65536.0, "i16f16 rsqrt {x}: {got} vs {want}");
+                assert!(
+                    (got - want).abs() <= want * 1e-6 + 1.0 / 65536.0,
+                    "i16f16 rsqrt {x}: {got} vs {want}"
+                );
             }
         }
         assert_eq!(I8F24::ZERO.rsqrt(), I8F24::ZERO);
@@ -635,10 +742,12 @@ mod tests {
             for shift in 0..=100 {
                 for away in [false, true] {
                     let got = I8F24::from_scaled(n, shift, away).to_bits() as i128;
-                    let want = scaled_bits(n, shift, away, 24, i32::MIN.into(), i32::MAX.into()) as i128;
+                    let want =
+                        scaled_bits(n, shift, away, 24, i32::MIN.into(), i32::MAX.into()) as i128;
                     assert_eq!(got, want, "i8f24 {n} >> {shift} away {away}");
                     let got = I16F16::from_scaled(n, shift, away).to_bits() as i128;
-                    let want = scaled_bits(n, shift, away, 16, i32::MIN.into(), i32::MAX.into()) as i128;
+                    let want =
+                        scaled_bits(n, shift, away, 16, i32::MIN.into(), i32::MAX.into()) as i128;
                     assert_eq!(got, want, "i16f16 {n} >> {shift} away {away}");
                     let got = I32F32::from_scaled(n, shift, away).to_bits() as i128;
                     let want = scaled_bits(n, shift, away, 32, i64::MIN, i64::MAX) as i128;
@@ -682,9 +791,18 @@ mod tests {
         for _ in 0..200_000 {
             let (x, y) = (rng(&mut state), rng(&mut state));
             let (sx, sy) = ((rng(&mut state) % 40) as u32, (rng(&mut state) % 40) as u32);
-            check(I8F24::from_bits((x as i32) >> (sx % 32)), I8F24::from_bits((y as i32) >> (sy % 32)));
-            check(I16F16::from_bits((x as i32) >> (sx % 32)), I16F16::from_bits((y as i32) >> (sy % 32)));
-            check(I32F32::from_bits((x as i64) >> sx), I32F32::from_bits((y as i64) >> sy));
+            check(
+                I8F24::from_bits((x as i32) >> (sx % 32)),
+                I8F24::from_bits((y as i32) >> (sy % 32)),
+            );
+            check(
+                I16F16::from_bits((x as i32) >> (sx % 32)),
+                I16F16::from_bits((y as i32) >> (sy % 32)),
+            );
+            check(
+                I32F32::from_bits((x as i64) >> sx),
+                I32F32::from_bits((y as i64) >> sy),
+            );
         }
         for v in [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX] {
             for w in [i32::MIN, -(1 << 24), -1, 0, 1, 1 << 24, i32::MAX] {
@@ -731,7 +849,11 @@ mod tests {
     fn rsqrt_bits_matches_the_u64_reference() {
         let check = |x: u64| {
             for frac in [0, 1, 16, 23, 24, 25, 31, 32, 40, 48, 60] {
-                assert_eq!(rsqrt_bits(x, frac), rsqrt_bits_u64(x, frac), "rsqrt_bits({x}, {frac})");
+                assert_eq!(
+                    rsqrt_bits(x, frac),
+                    rsqrt_bits_u64(x, frac),
+                    "rsqrt_bits({x}, {frac})"
+                );
             }
         };
         for x in [0, 1, 2, 3, u32::MAX as u64, u32::MAX as u64 + 1, u64::MAX] {

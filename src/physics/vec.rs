@@ -18,7 +18,11 @@ pub struct Vec3<S> {
 
 impl<S: Scalar> Vec3<S> {
     /// The zero vector.
-    pub const ZERO: Self = Vec3 { x: S::ZERO, y: S::ZERO, z: S::ZERO };
+    pub const ZERO: Self = Vec3 {
+        x: S::ZERO,
+        y: S::ZERO,
+        z: S::ZERO,
+    };
 
     /// A vector from its components.
     #[inline]

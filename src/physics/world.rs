@@ -59,7 +59,13 @@ impl PhysicsSpec {
         rolling_resistance_ppm: 10_000,
         rest_threshold_um_s: 20_000,
         step_log2: 10,
-        effects: Effects { rolling: true, friction: false, board_motion: false, holes: false, marbles: false },
+        effects: Effects {
+            rolling: true,
+            friction: false,
+            board_motion: false,
+            holes: false,
+            marbles: false,
+        },
     };
 }
 
@@ -107,7 +113,8 @@ pub struct Params<S> {
 impl<S: Scalar> Params<S> {
     /// Validates a spec and converts it.
     pub fn new(spec: PhysicsSpec) -> Result<Self, SetupError> {
-        let layout = TileLayout::<S>::from_um(spec.short_um, spec.long_um).map_err(SetupError::Layout)?;
+        let layout =
+            TileLayout::<S>::from_um(spec.short_um, spec.long_um).map_err(SetupError::Layout)?;
         if spec.radius_um == 0 || 2 * spec.radius_um as u64 >= spec.long_um as u64 {
             return Err(SetupError::MarbleSize);
         }
@@ -116,7 +123,10 @@ impl<S: Scalar> Params<S> {
         }
         let k = spec.step_log2;
         let radius = layout.from_um_len(spec.radius_um as i64);
-        let threshold = S::ratio(spec.rest_threshold_um_s as i64, (layout.pitch_um as i64) << T_LOG2);
+        let threshold = S::ratio(
+            spec.rest_threshold_um_s as i64,
+            (layout.pitch_um as i64) << T_LOG2,
+        );
         let cap = S::from_int(64);
         let v_max = radius.shr(2).shl(k).min(cap);
         Ok(Params {
@@ -227,7 +237,10 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             return Err(SetupError::MarbleCount);
         }
         let layout = params.layout;
-        let extent = (layout.span_xz(tiles.nx() as i32 - 1).1, layout.span_xz(tiles.nz() as i32 - 1).1);
+        let extent = (
+            layout.span_xz(tiles.nx() as i32 - 1).1,
+            layout.span_xz(tiles.nz() as i32 - 1).1,
+        );
         let mut marbles = HVec::new();
         for (n, &(x, z)) in starts.iter().enumerate() {
             let pos = Vec3::new(x, params.radius, z);
@@ -260,7 +273,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             sleeping: true,
             pulls: {
                 let pitch = params.layout.pitch_um;
-                let roll: (i64, i64) = if params.spec.effects.rolling { (5, 7) } else { (1, 1) };
+                let roll: (i64, i64) = if params.spec.effects.rolling {
+                    (5, 7)
+                } else {
+                    (1, 1)
+                };
                 let ppm = params.spec.rolling_resistance_ppm as i64;
                 [
                     PullScale::new(1, 1, pitch),
@@ -330,7 +347,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             let free = Kick::axis_of(g[axis], full, reach, k);
             self.kick_free.set_axis(axis, free);
             // Rolling scales the tangential axes only (x', z'): the normal is full.
-            let rolling = if axis == 1 || roll == full { free } else { Kick::axis_of(g[axis], roll, reach, k) };
+            let rolling = if axis == 1 || roll == full {
+                free
+            } else {
+                Kick::axis_of(g[axis], roll, reach, k)
+            };
             self.kick_roll.set_axis(axis, rolling);
         }
         // Rolling resistance decelerates by c_rr·g_n (·5/7 when rolling), g_n = −g_y.
@@ -355,7 +376,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let k = self.params.k;
         let w_max = S::ONE.shr(k - 4);
         let a_max = S::ONE.shr(2 * k - 10);
-        let motion = BoardMotion { omega: motion.omega.clamp_abs(w_max), omega_dot: motion.omega_dot.clamp_abs(a_max), ..motion };
+        let motion = BoardMotion {
+            omega: motion.omega.clamp_abs(w_max),
+            omega_dot: motion.omega_dot.clamp_abs(a_max),
+            ..motion
+        };
         self.motion = motion;
         if motion.omega != Vec3::ZERO || motion.omega_dot != Vec3::ZERO {
             for m in self.marbles.iter_mut() {
@@ -389,7 +414,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 // Asleep only when the step changed nothing at all and the board
                 // is not turning (its pull then changes every step). The step
                 // works on the copy: the stored marble is still the one before it.
-                m.asleep = self.sleeping && m == self.marbles[n] && !self.params.spec.effects.board_motion;
+                m.asleep =
+                    self.sleeping && m == self.marbles[n] && !self.params.spec.effects.board_motion;
                 self.marbles[n] = m;
             }
         }
@@ -399,7 +425,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let k = self.params.k;
         let effects = self.params.spec.effects;
         let supported = !SPACE || m.supported;
-        let mut kick = if supported { self.kick_roll } else { self.kick_free };
+        let mut kick = if supported {
+            self.kick_roll
+        } else {
+            self.kick_free
+        };
         if effects.friction && supported {
             self.stats.friction_runs = self.stats.friction_runs.wrapping_add(1);
             self.drag.apply(&mut m.vel, &mut kick);
@@ -443,9 +473,19 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// free); the passes run only when a solid tile (or the lid) is within a radius
     /// of the centre on every axis.
     #[inline(always)]
-    fn collide_tiles<const SPACE: bool>(&mut self, n: usize, m: &mut Marble<S>, kick: &Kick<S>, start: Vec3<S>) -> bool {
+    fn collide_tiles<const SPACE: bool>(
+        &mut self,
+        n: usize,
+        m: &mut Marble<S>,
+        kick: &Kick<S>,
+        start: Vec3<S>,
+    ) -> bool {
         let (r, tiles, layout) = (self.params.radius, self.tiles, &self.params.layout);
-        let range = if SPACE { candidates(layout, m.pos, r) } else { candidates_plane(layout, m.pos, r) };
+        let range = if SPACE {
+            candidates(layout, m.pos, r)
+        } else {
+            candidates_plane(layout, m.pos, r)
+        };
         let mut clear = range == self.clear[n];
         if !clear {
             clear = true;
@@ -490,13 +530,22 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
 
     /// The contact passes of [`World::collide_tiles`].
     #[inline(never)]
-    fn contact_passes<const SPACE: bool>(&mut self, m: &mut Marble<S>, kick: &Kick<S>, start: Vec3<S>) -> bool {
+    fn contact_passes<const SPACE: bool>(
+        &mut self,
+        m: &mut Marble<S>,
+        kick: &Kick<S>,
+        start: Vec3<S>,
+    ) -> bool {
         let (r, tiles) = (self.params.radius, self.tiles);
         let layout = self.params.layout;
         // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
         let mut supported = !SPACE;
         for pass in 0..3 {
-            let range = if SPACE { candidates(&layout, m.pos, r) } else { candidates_plane(&layout, m.pos, r) };
+            let range = if SPACE {
+                candidates(&layout, m.pos, r)
+            } else {
+                candidates_plane(&layout, m.pos, r)
+            };
             let mut touched = false;
             // Face contacts on distinct axes push the marble straight back into the
             // free part of its own cell, where nothing else can be in reach (2r < l):
@@ -517,7 +566,14 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                             if let Some(c) = contact(m.pos, r, t, &layout.tile_box(t), tiles) {
                                 touched = true;
                                 settled &= face_once(&mut faces, &c);
-                                if self.take_contact::<SPACE>(m, &c, kick, pass, start, &mut supported) {
+                                if self.take_contact::<SPACE>(
+                                    m,
+                                    &c,
+                                    kick,
+                                    pass,
+                                    start,
+                                    &mut supported,
+                                ) {
                                     return supported;
                                 }
                             }
@@ -606,7 +662,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 let j = || if SPACE { layout.index_y(m.pos.y) } else { 1 };
                 let t = match axis {
                     0 => TileIndex::new(layout.index_xz(behind), j(), layout.index_xz(m.pos.z)),
-                    1 => TileIndex::new(layout.index_xz(m.pos.x), layout.index_y(behind), layout.index_xz(m.pos.z)),
+                    1 => TileIndex::new(
+                        layout.index_xz(m.pos.x),
+                        layout.index_y(behind),
+                        layout.index_xz(m.pos.z),
+                    ),
                     _ => TileIndex::new(layout.index_xz(m.pos.x), j(), layout.index_xz(behind)),
                 };
                 keep = self.tiles.is_solid(t);
@@ -628,20 +688,38 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let v_board = if p.spec.effects.board_motion {
             // The board's surface is held to the marble's speed range (64 pitch/s):
             // faster is no toy, and it keeps the solver's squares in range.
-            self.motion.surface_velocity(m.pos - c.normal.scale(p.radius)).shl(sub).clamp_abs(p.v_max.shr(T_LOG2))
+            self.motion
+                .surface_velocity(m.pos - c.normal.scale(p.radius))
+                .shl(sub)
+                .clamp_abs(p.v_max.shr(T_LOG2))
         } else {
             Vec3::ZERO
         };
         // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
         let k = p.k;
-        let acc = if k >= 2 * T_LOG2 { kick.dv.shl(k - 2 * T_LOG2) } else { kick.dv.shr(2 * T_LOG2 - k) };
-        let imp = Impact { n: c.normal, depth: c.depth, v: m.vel.shr(T_LOG2), v_board, acc, dt: S::ONE.shr(sub) };
+        let acc = if k >= 2 * T_LOG2 {
+            kick.dv.shl(k - 2 * T_LOG2)
+        } else {
+            kick.dv.shr(2 * T_LOG2 - k)
+        };
+        let imp = Impact {
+            n: c.normal,
+            depth: c.depth,
+            v: m.vel.shr(T_LOG2),
+            v_board,
+            acc,
+            dt: S::ONE.shr(sub),
+        };
         let res = resolve(&imp, p.restitution, p.threshold);
         match c.feature {
             // Axis-aligned: put the centre exactly at `plane ± (r + lift)`.
             Feature::Face(_) | Feature::Inside => {
                 let (axis, up) = axis_of(c.normal);
-                let at = if up { c.plane + p.radius + res.lift } else { c.plane - p.radius - res.lift };
+                let at = if up {
+                    c.plane + p.radius + res.lift
+                } else {
+                    c.plane - p.radius - res.lift
+                };
                 match axis {
                     0 => m.pos.x = at,
                     1 => m.pos.y = at,
@@ -651,14 +729,20 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             Feature::Edge => m.pos += c.normal.scale(res.push),
         }
         let vn_now = m.vel.dot(c.normal);
-        let vn_new = (res.vn + v_board.dot(c.normal)).shl(T_LOG2).clamp(-p.v_max, p.v_max);
+        let vn_new = (res.vn + v_board.dot(c.normal))
+            .shl(T_LOG2)
+            .clamp(-p.v_max, p.v_max);
         let mut tangential = m.vel - c.normal.scale(vn_now);
         if res.deficit > S::ZERO {
             // Pay the rest of the push-out's energy from the tangential speed (rare:
             // a fast marble grazing an edge under a strong pull). In T units: ½|v_t|².
             let vt = tangential.shr(T_LOG2);
             let s2 = vt.length_sq();
-            let keep = if s2 > res.deficit + res.deficit { S::ONE - (res.deficit + res.deficit).div(s2) } else { S::ZERO };
+            let keep = if s2 > res.deficit + res.deficit {
+                S::ONE - (res.deficit + res.deficit).div(s2)
+            } else {
+                S::ZERO
+            };
             tangential = tangential.scale(keep.sqrt());
         }
         // A slanted normal can move speed between axes: keep every axis under the cap
@@ -679,7 +763,13 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             // Through a hole once entirely below the floor slab (top below −s): there
             // is nothing down there to hold it, not even under the neighbouring tiles.
             let depth = self.params.layout.s + self.params.radius;
-            if p.y < -depth || p.y > S::from_int(4) || p.x < -margin || p.z < -margin || p.x > ex + margin || p.z > ez + margin {
+            if p.y < -depth
+                || p.y > S::from_int(4)
+                || p.x < -margin
+                || p.z < -margin
+                || p.x > ex + margin
+                || p.z > ez + margin
+            {
                 m.out = true;
             }
         } else if p.x < S::ZERO || p.z < S::ZERO || p.x > ex || p.z > ez {
@@ -718,9 +808,21 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                     (d.scale(inv), len2 * inv)
                 };
                 let push = (r2 - len).half();
-                let (va, vb) = marble_pair(ma.vel.shr(T_LOG2), mb.vel.shr(T_LOG2), n, p.restitution, p.threshold);
-                let mut na = Marble { asleep: false, ..ma };
-                let mut nb = Marble { asleep: false, ..mb };
+                let (va, vb) = marble_pair(
+                    ma.vel.shr(T_LOG2),
+                    mb.vel.shr(T_LOG2),
+                    n,
+                    p.restitution,
+                    p.threshold,
+                );
+                let mut na = Marble {
+                    asleep: false,
+                    ..ma
+                };
+                let mut nb = Marble {
+                    asleep: false,
+                    ..mb
+                };
                 na.pos -= n.scale(push);
                 nb.pos += n.scale(push);
                 let set = |m: &mut Marble<S>, v_step: Vec3<S>| {
@@ -733,8 +835,10 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 let still = Kick::default();
                 // The passes themselves (what `collide_tiles` comes to), without its
                 // inline shortcut for the common case: this one is rare.
-                na.supported = self.contact_passes::<SPACE>(&mut na, &still, ma.pos) || na.supported;
-                nb.supported = self.contact_passes::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
+                na.supported =
+                    self.contact_passes::<SPACE>(&mut na, &still, ma.pos) || na.supported;
+                nb.supported =
+                    self.contact_passes::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
                 self.marbles[a] = na;
                 self.marbles[b] = nb;
             }

@@ -91,7 +91,10 @@ pub fn closed_box(cells: usize) -> Grid {
 }
 
 pub fn spec(effects: Effects) -> PhysicsSpec {
-    PhysicsSpec { effects, ..PhysicsSpec::DEFAULT }
+    PhysicsSpec {
+        effects,
+        ..PhysicsSpec::DEFAULT
+    }
 }
 
 pub fn params<S: Scalar>(spec: PhysicsSpec) -> Params<S> {
@@ -127,7 +130,13 @@ pub fn min_clearance<S: Scalar>(w: &World<'_, S, 4>, idx: usize) -> f64 {
                 let (lo, hi) = (b.min.to_f64(), b.max.to_f64());
                 let mut d2 = 0.0;
                 for a in 0..3 {
-                    let v = if c[a] < lo[a] { lo[a] - c[a] } else if c[a] > hi[a] { c[a] - hi[a] } else { 0.0 };
+                    let v = if c[a] < lo[a] {
+                        lo[a] - c[a]
+                    } else if c[a] > hi[a] {
+                        c[a] - hi[a]
+                    } else {
+                        0.0
+                    };
                     d2 += v * v;
                 }
                 best = best.min(d2.sqrt());
@@ -152,7 +161,10 @@ pub fn loose<S: Scalar>() -> f64 {
 pub struct Lcg(pub u64);
 impl Lcg {
     pub fn next(&mut self) -> u32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 33) as u32
     }
     /// Uniform in `lo ..= hi`.

@@ -14,7 +14,6 @@
 #![no_std]
 #![no_main]
 
-
 use defmt_semihosting as _;
 use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, Player, TerminalInput};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
@@ -97,11 +96,13 @@ async fn terminal_input() -> ! {
 #[embassy_executor::task]
 async fn display(interactive: bool) -> ! {
     if interactive {
-        app::display_task(&LINKS, &mut VirtualMatrix::new(&LINKS.status, Some(UartConsole), 0))
-            .await
+        app::display_task(
+            &LINKS,
+            &mut VirtualMatrix::new(&LINKS.status, Some(UartConsole), 0),
+        )
+        .await
     } else {
-        let mut matrix =
-            VirtualMatrix::<UartConsole>::new(&LINKS.status, None, LOG_MATRIX_EVERY);
+        let mut matrix = VirtualMatrix::<UartConsole>::new(&LINKS.status, None, LOG_MATRIX_EVERY);
         app::display_task(&LINKS, &mut matrix).await
     }
 }
@@ -194,8 +195,7 @@ fn profile() {
     let mut total = Costs::default();
     let mut picture = marble_rolling::matrix::Frame::<WIDTH, HEIGHT>::new();
     for index in 0..LEVELS.len() {
-        let Ok(mut player) =
-            Player::<WIDTH, HEIGHT, PILOT>::new(index, SYNTHETIC_TILT, true)
+        let Ok(mut player) = Player::<WIDTH, HEIGHT, PILOT>::new(index, SYNTHETIC_TILT, true)
         else {
             continue;
         };

@@ -30,10 +30,21 @@ pub struct Effects {
 
 impl Effects {
     /// Every effect on.
-    pub const ALL: Effects = Effects { rolling: true, friction: true, board_motion: true, holes: true, marbles: true };
+    pub const ALL: Effects = Effects {
+        rolling: true,
+        friction: true,
+        board_motion: true,
+        holes: true,
+        marbles: true,
+    };
     /// Every effect off: walls, floor and restitution only.
-    pub const NONE: Effects =
-        Effects { rolling: false, friction: false, board_motion: false, holes: false, marbles: false };
+    pub const NONE: Effects = Effects {
+        rolling: false,
+        friction: false,
+        board_motion: false,
+        holes: false,
+        marbles: false,
+    };
 }
 
 /// Rolling resistance for a marble on the floor (tangent plane x'–z').
@@ -64,7 +75,11 @@ impl<S: Scalar> Drag<S> {
     /// The drag of a deceleration `decel` per step at `dt = 2^-k`.
     pub fn new(decel: S, k: u32) -> Self {
         let limit = decel.shr(Self::SCALE);
-        Drag { decel, limit2: limit * limit, half_step: decel.shr(k + 1) }
+        Drag {
+            decel,
+            limit2: limit * limit,
+            half_step: decel.shr(k + 1),
+        }
     }
 
     /// Applies the drag to a marble's velocity and kick.
@@ -119,7 +134,11 @@ impl<S: Scalar> BoardMotion<S> {
         let cx = prev.dir_to_tile(cur.basis[0]);
         let cy = prev.dir_to_tile(cur.basis[1]);
         let cz = prev.dir_to_tile(cur.basis[2]);
-        Vec3::new((cy.z - cz.y).half(), (cz.x - cx.z).half(), (cx.y - cy.x).half())
+        Vec3::new(
+            (cy.z - cz.y).half(),
+            (cz.x - cx.z).half(),
+            (cx.y - cy.x).half(),
+        )
     }
 
     /// Velocity of the board surface at tile point `p` (pitch/step): `ω × (p − pivot)`.
@@ -140,14 +159,23 @@ impl<S: Scalar> BoardMotion<S> {
         let centrifugal = -self.omega.cross(self.omega.cross(r));
         let coriolis = -self.omega.cross(v_step).scale(S::from_int(2));
         let a = euler + centrifugal + coriolis; // pitch/step²
-        Kick { dv: a.shl(k), dp: a.shr(1) }
+        Kick {
+            dv: a.shl(k),
+            dp: a.shr(1),
+        }
     }
 }
 
 /// Two equal marbles in contact along unit normal `n` (from 1 to 2), in the contact
 /// solver's units (pitch/T). Returns the new velocities. The pair's relative motion obeys eq. 1 with the
 /// other marble as the "board", each taking half of the momentum change.
-pub fn marble_pair<S: Scalar>(v1: Vec3<S>, v2: Vec3<S>, n: Vec3<S>, e: S, threshold: S) -> (Vec3<S>, Vec3<S>) {
+pub fn marble_pair<S: Scalar>(
+    v1: Vec3<S>,
+    v2: Vec3<S>,
+    n: Vec3<S>,
+    e: S,
+    threshold: S,
+) -> (Vec3<S>, Vec3<S>) {
     let vn = (v2 - v1).dot(n);
     if vn >= S::ZERO {
         return (v1, v2);

@@ -50,7 +50,10 @@ impl PullScale {
     /// 10⁴ elastic bounces in I32F32), while one rounded past it only loses it.
     pub fn kick<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
         let n = mg as i128 * self.0 as i128;
-        (S::from_scaled(n, SCALE_SHIFT + k, false), S::from_scaled(n, SCALE_SHIFT + 2 * k + 1, true))
+        (
+            S::from_scaled(n, SCALE_SHIFT + k, false),
+            S::from_scaled(n, SCALE_SHIFT + 2 * k + 1, true),
+        )
     }
 }
 
@@ -72,13 +75,19 @@ impl<S: Scalar> Kick<S> {
 
     /// The sum of two kicks (constant accelerations add).
     pub fn plus(self, o: Self) -> Self {
-        Kick { dv: self.dv + o.dv, dp: self.dp + o.dp }
+        Kick {
+            dv: self.dv + o.dv,
+            dp: self.dp + o.dp,
+        }
     }
 
     /// This kick with each axis of its displacement limited to `±reach` (the step
     /// bound against tunnelling; it only binds for strong pulls at low step rates).
     pub fn clamped(self, reach: S) -> Self {
-        Kick { dv: self.dv, dp: self.dp.clamp_abs(reach) }
+        Kick {
+            dv: self.dv,
+            dp: self.dp.clamp_abs(reach),
+        }
     }
 }
 

@@ -106,7 +106,13 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
                 deficit = (-e2).half();
             }
         }
-        return Resolution { push: delta, lift: S::ZERO, vn: out, outcome: Outcome::Separating, deficit };
+        return Resolution {
+            push: delta,
+            lift: S::ZERO,
+            vn: out,
+            outcome: Outcome::Separating,
+            deficit,
+        };
     }
     let wc2 = w * w - two * b * delta;
     if wc2 <= threshold * threshold {
@@ -123,7 +129,13 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
                 deficit = b * unpaid;
             }
         }
-        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact, deficit };
+        return Resolution {
+            push: delta,
+            lift: S::ZERO,
+            vn: S::ZERO,
+            outcome: Outcome::Contact,
+            deficit,
+        };
     }
     let wc = wc2.sqrt();
     let tau = (two * delta).div(w + wc).min(c.dt);
@@ -132,7 +144,13 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     let out = (restitution(v_c, c.v_board, c.n, e) - c.v_board).dot(c.n);
     let u = out * tau - b * tau * tau.half();
     if u <= S::ZERO {
-        return Resolution { push: delta, lift: S::ZERO, vn: S::ZERO, outcome: Outcome::Contact, deficit: S::ZERO };
+        return Resolution {
+            push: delta,
+            lift: S::ZERO,
+            vn: S::ZERO,
+            outcome: Outcome::Contact,
+            deficit: S::ZERO,
+        };
     }
     // Rounding must not add energy: the normal energy after (½vn² + b·u) may not
     // exceed the energy before (½w² − b·δ, the state at the end of the step).
@@ -140,12 +158,21 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     let before = w * w.half() - b * delta;
     if vn * vn.half() + b * u > before {
         let room = before - b * u;
-        let mut mag = if room > S::ZERO { (room + room).sqrt() } else { S::ZERO };
+        let mut mag = if room > S::ZERO {
+            (room + room).sqrt()
+        } else {
+            S::ZERO
+        };
         // The root rounds, and an approximate one (micromath) may overshoot: step
         // down an ULP at a time, then by 1/64 at a time.
         let mut tries = 0;
         while mag > S::ZERO && mag * mag.half() + b * u > before && tries < 16 {
-            mag = if tries < 4 { mag.next_down() } else { mag - mag.shr(6) }.max(S::ZERO);
+            mag = if tries < 4 {
+                mag.next_down()
+            } else {
+                mag - mag.shr(6)
+            }
+            .max(S::ZERO);
             tries += 1;
         }
         if tries == 16 {
@@ -153,5 +180,11 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         }
         vn = if vn < S::ZERO { -mag } else { mag };
     }
-    Resolution { push: delta + u, lift: u, vn, outcome: Outcome::Collision, deficit: S::ZERO }
+    Resolution {
+        push: delta + u,
+        lift: u,
+        vn,
+        outcome: Outcome::Collision,
+        deficit: S::ZERO,
+    }
 }

@@ -3,10 +3,10 @@
 //! `i- = f_x'(a - r)`, `i+ = f_x'(a + r)` and the same for `j` and `k`; only the
 //! candidates present in `tile_state` go on to the narrowphase (seed §1.3.3).
 
-use super::grid::Tiles;
-use super::tiles::{TileIndex, TileLayout};
 use super::super::scalar::Scalar;
 use super::super::vec::Vec3;
+use super::grid::Tiles;
+use super::tiles::{TileIndex, TileLayout};
 
 /// The inclusive index box `[i-, i+] × [j-, j+] × [k-, k+]`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,8 +21,16 @@ pub struct TileRange {
 #[inline]
 pub fn candidates<S: Scalar>(layout: &TileLayout<S>, c: Vec3<S>, r: S) -> TileRange {
     TileRange {
-        lo: TileIndex::new(layout.index_xz(c.x - r), layout.index_y(c.y - r), layout.index_xz(c.z - r)),
-        hi: TileIndex::new(layout.index_xz(c.x + r), layout.index_y(c.y + r), layout.index_xz(c.z + r)),
+        lo: TileIndex::new(
+            layout.index_xz(c.x - r),
+            layout.index_y(c.y - r),
+            layout.index_xz(c.z - r),
+        ),
+        hi: TileIndex::new(
+            layout.index_xz(c.x + r),
+            layout.index_y(c.y + r),
+            layout.index_xz(c.z + r),
+        ),
     }
 }
 
@@ -38,7 +46,10 @@ pub fn candidates_plane<S: Scalar>(layout: &TileLayout<S>, c: Vec3<S>, r: S) -> 
 
 impl TileRange {
     /// No tiles at all (`lo > hi`): never equal to the candidates of a point.
-    pub const EMPTY: TileRange = TileRange { lo: TileIndex::new(1, 1, 1), hi: TileIndex::new(0, 0, 0) };
+    pub const EMPTY: TileRange = TileRange {
+        lo: TileIndex::new(1, 1, 1),
+        hi: TileIndex::new(0, 0, 0),
+    };
 
     /// Every index in the box, in `k, j, i` order.
     pub fn iter(self) -> impl Iterator<Item = TileIndex> {

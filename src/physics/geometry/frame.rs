@@ -36,7 +36,11 @@ impl<S: Scalar> Frame<S> {
     /// Eq. 4 for a direction or velocity (no origin): `Bᵀ v`.
     #[inline]
     pub fn dir_to_tile(&self, v: Vec3<S>) -> Vec3<S> {
-        Vec3::new(self.basis[0].dot(v), self.basis[1].dot(v), self.basis[2].dot(v))
+        Vec3::new(
+            self.basis[0].dot(v),
+            self.basis[1].dot(v),
+            self.basis[2].dot(v),
+        )
     }
 
     /// The inverse of eq. 4: tile point → world, `O' + B p'`.
@@ -64,7 +68,10 @@ impl<S: Scalar> Frame<S> {
         let z = x.cross(y);
         let basis = [x, y, z];
         // The pivot stays put: O' = pivot − B·pivot.
-        let mut f = Frame { origin: Vec3::ZERO, basis };
+        let mut f = Frame {
+            origin: Vec3::ZERO,
+            basis,
+        };
         f.origin = pivot - f.dir_to_world(pivot);
         f
     }

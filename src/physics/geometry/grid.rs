@@ -38,13 +38,24 @@ pub struct TileGrid<const WORDS: usize> {
 impl<const WORDS: usize> TileGrid<WORDS> {
     /// An empty grid of `nx × ny × nz` tiles.
     pub const fn new(nx: usize, ny: usize, nz: usize) -> Result<Self, GridError> {
-        if nx == 0 || nz == 0 || ny == 0 || nx > MAX_TILES_XZ || nz > MAX_TILES_XZ || ny > MAX_LAYERS {
+        if nx == 0
+            || nz == 0
+            || ny == 0
+            || nx > MAX_TILES_XZ
+            || nz > MAX_TILES_XZ
+            || ny > MAX_LAYERS
+        {
             return Err(GridError::BadDimensions);
         }
         if words_for(nx, ny, nz) > WORDS {
             return Err(GridError::TooLarge);
         }
-        Ok(TileGrid { nx: nx as u16, ny: ny as u16, nz: nz as u16, bits: [0; WORDS] })
+        Ok(TileGrid {
+            nx: nx as u16,
+            ny: ny as u16,
+            nz: nz as u16,
+            bits: [0; WORDS],
+        })
     }
 
     /// Sets tile `[i, j, k]` present or absent; `false` when it is outside the grid.
@@ -69,7 +80,12 @@ impl<const WORDS: usize> TileGrid<WORDS> {
 
     /// The borrowed view the physics reads.
     pub const fn view(&self) -> Tiles<'_> {
-        Tiles { nx: self.nx, ny: self.ny, nz: self.nz, bits: &self.bits }
+        Tiles {
+            nx: self.nx,
+            ny: self.ny,
+            nz: self.nz,
+            bits: &self.bits,
+        }
     }
 }
 
@@ -116,6 +132,7 @@ impl Tiles<'_> {
     /// Whether any floor tile (`j = 0`) is missing inside the grid: the scene then
     /// needs 3-D motion (holes).
     pub fn has_holes(&self) -> bool {
-        (0..self.nz as i32).any(|k| (0..self.nx as i32).any(|i| !self.is_solid(TileIndex::new(i, 0, k))))
+        (0..self.nz as i32)
+            .any(|k| (0..self.nx as i32).any(|i| !self.is_solid(TileIndex::new(i, 0, k))))
     }
 }

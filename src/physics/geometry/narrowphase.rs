@@ -16,10 +16,10 @@
 //!   Seams between floor tiles and between the tiles of one wall then produce no
 //!   sideways normals, which is what makes other engines "bump".
 
-use super::grid::Tiles;
-use super::tiles::{Aabb, TileIndex};
 use super::super::scalar::Scalar;
 use super::super::vec::Vec3;
+use super::grid::Tiles;
+use super::tiles::{Aabb, TileIndex};
 
 /// `d = c − clamp(c, box)`; its components are eq. 8's `d_{x'+} − d_{x'-}` etc.
 #[inline]
@@ -33,7 +33,11 @@ pub fn offset<S: Scalar>(c: Vec3<S>, b: &Aabb<S>) -> Vec3<S> {
             S::ZERO
         }
     };
-    Vec3::new(axis(c.x, b.min.x, b.max.x), axis(c.y, b.min.y, b.max.y), axis(c.z, b.min.z, b.max.z))
+    Vec3::new(
+        axis(c.x, b.min.x, b.max.x),
+        axis(c.y, b.min.y, b.max.y),
+        axis(c.z, b.min.z, b.max.z),
+    )
 }
 
 /// Eq. 8 as the seed writes it: distance between the marble's surface and the tile
@@ -113,7 +117,13 @@ fn unit<S: Scalar>(axis: usize, positive: bool) -> Vec3<S> {
 
 /// The contact between a marble (centre `c`, radius `r`) and the solid tile `t` with
 /// box `b`, or `None` when they do not overlap or a solid neighbour owns the contact.
-pub fn contact<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Tiles<'_>) -> Option<Contact<S>> {
+pub fn contact<S: Scalar>(
+    c: Vec3<S>,
+    r: S,
+    t: TileIndex,
+    b: &Aabb<S>,
+    tiles: Tiles<'_>,
+) -> Option<Contact<S>> {
     let d = offset(c, b);
     if beyond(d, r) {
         return None;
@@ -135,7 +145,11 @@ pub fn contact<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Ti
         0 => inside(c, r, t, b, tiles),
         1 => {
             let v = d.axis(face_axis);
-            let plane = if v > S::ZERO { b.max.axis(face_axis) } else { b.min.axis(face_axis) };
+            let plane = if v > S::ZERO {
+                b.max.axis(face_axis)
+            } else {
+                b.min.axis(face_axis)
+            };
             Some(Contact {
                 normal: unit(face_axis, v > S::ZERO),
                 depth: r - v.abs(),
@@ -164,14 +178,24 @@ pub fn contact<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Ti
 }
 
 /// The centre is on or inside the box: leave through the nearest exposed face.
-fn inside<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Tiles<'_>) -> Option<Contact<S>> {
+fn inside<S: Scalar>(
+    c: Vec3<S>,
+    r: S,
+    t: TileIndex,
+    b: &Aabb<S>,
+    tiles: Tiles<'_>,
+) -> Option<Contact<S>> {
     let mut best: Option<(S, usize, bool)> = None;
     for axis in 0..3 {
         for up in [false, true] {
             if tiles.is_solid(neighbour(t, axis, up)) {
                 continue;
             }
-            let gap = if up { b.max.axis(axis) - c.axis(axis) } else { c.axis(axis) - b.min.axis(axis) };
+            let gap = if up {
+                b.max.axis(axis) - c.axis(axis)
+            } else {
+                c.axis(axis) - b.min.axis(axis)
+            };
             if best.is_none_or(|(g, _, _)| gap < g) {
                 best = Some((gap, axis, up));
             }
@@ -179,8 +203,17 @@ fn inside<S: Scalar>(c: Vec3<S>, r: S, t: TileIndex, b: &Aabb<S>, tiles: Tiles<'
     }
     // A tile buried on all six sides cannot be reached from outside: no contact.
     let (gap, axis, up) = best?;
-    let plane = if up { b.max.axis(axis) } else { b.min.axis(axis) };
-    Some(Contact { normal: unit(axis, up), depth: r + gap, feature: Feature::Inside, plane })
+    let plane = if up {
+        b.max.axis(axis)
+    } else {
+        b.min.axis(axis)
+    };
+    Some(Contact {
+        normal: unit(axis, up),
+        depth: r + gap,
+        feature: Feature::Inside,
+        plane,
+    })
 }
 
 /// The maze's lid: a plane on top of the walls (`y' = l`), as on the real toy. It
@@ -192,7 +225,12 @@ pub fn lid_contact<S: Scalar>(c: Vec3<S>, r: S, top: S) -> Option<Contact<S>> {
     if depth <= S::ZERO {
         return None;
     }
-    Some(Contact { normal: Vec3::new(S::ZERO, -S::ONE, S::ZERO), depth, feature: Feature::Face(1), plane: top })
+    Some(Contact {
+        normal: Vec3::new(S::ZERO, -S::ONE, S::ZERO),
+        depth,
+        feature: Feature::Face(1),
+        plane: top,
+    })
 }
 
 #[cfg(test)]

@@ -86,7 +86,11 @@ impl<S: Scalar> TileLayout<S> {
             return Err(LayoutError::PitchOutOfRange);
         }
         let s = S::ratio(short_um as i64, pitch as i64);
-        Ok(TileLayout { s, l: S::ONE - s, pitch_um: pitch as u32 })
+        Ok(TileLayout {
+            s,
+            l: S::ONE - s,
+            pitch_um: pitch as u32,
+        })
     }
 
     /// Eq. 5 along x' (and z'): the extent `[lo, hi)` of column `i`.
@@ -119,7 +123,10 @@ impl<S: Scalar> TileLayout<S> {
         let (x0, x1) = self.span_xz(t.i);
         let (y0, y1) = self.span_y(t.j);
         let (z0, z1) = self.span_xz(t.k);
-        Aabb { min: Vec3::new(x0, y0, z0), max: Vec3::new(x1, y1, z1) }
+        Aabb {
+            min: Vec3::new(x0, y0, z0),
+            max: Vec3::new(x1, y1, z1),
+        }
     }
 
     /// Eq. 6, `f_x'` (and `f_z'`): the column holding coordinate `a`.

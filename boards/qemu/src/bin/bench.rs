@@ -23,7 +23,6 @@
 #![no_std]
 #![no_main]
 
-
 use defmt_semihosting as _;
 use marble_rolling::study::{bench_one, bench_plan, Scene, BACKENDS};
 
