@@ -1,26 +1,25 @@
 //! Marble Rolling: the no_std core of a tilt-controlled marble maze.
+//!
+//! Data flows one way: board → [`input`] → [`game`] (with its [`physics`]) →
+//! [`render`] → [`matrix`] (the display). The [`board`] modules hold the safe,
+//! host-tested half of each board; the firmware's tasks are [`app`].
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-/// The firmware's board-agnostic tasks (feature `app`).
+pub mod physics;
+pub mod game;
+pub mod input;
+/// World → LED-matrix frame: tiles, blinking goal, anti-aliased marbles, a following viewport.
+pub mod render;
+/// Pin-agnostic LED-matrix frames, BCM scanning and on-time integration.
+pub mod matrix;
+/// The firmware's board-agnostic tasks and the links between them (feature `app`).
 #[cfg(feature = "app")]
 pub mod app;
 pub mod board;
-/// Two-button debouncing and the A / B / A+B-hold combinations.
-pub mod buttons;
-pub mod game;
-/// Pin-agnostic LED-matrix frames, BCM scanning and on-time integration.
-pub mod matrix;
-pub mod physics;
-/// World → LED-matrix frame: tiles, blinking goal, anti-aliased marbles, a following viewport.
-pub mod render;
-/// Accelerometer axis mapping, plausibility, calibration and fault supervision.
-pub mod sensor;
 /// The accuracy/cost study's scene suite, shared by `cargo accuracy` and the target benchmarks.
 pub mod study;
-/// Tilt input path: accelerometer sample → filtered, calibrated gravity for the physics.
-pub mod tilt;
 
 // Host tools (`tools` feature only): the library stays no_std everywhere else.
 #[cfg(feature = "tools")]

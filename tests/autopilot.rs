@@ -7,8 +7,8 @@ use marble_rolling::game::level::{parse, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
 use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::input::tilt::{TiltConfig, TiltFilter};
 use marble_rolling::physics::{Scalar, Vec3};
-use marble_rolling::tilt::{TiltConfig, TiltFilter};
 
 /// How one attempt ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -365,3 +365,81 @@ fn play_needs_a_terminal() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("must be a terminal"), "{}", stderr(&o));
 }
+
+#[test]
+fn check_names_the_value_that_setup_would_refuse() {
+    // (file, content, line:column, words): issue 12 item 4.1 and 4.2.
+    let cases = [
+        (
+            "tiny-pitch.level",
+            "short_mm: 0.001\nlong_mm: 0.003\nmarble_radius_mm: 0.001\n---\n#####\n#S.G#\n#####\n",
+            "2:10",
+            [
+                "cell pitch short_mm + long_mm must be 1 ..= 100 mm",
+                "0.004 mm",
+            ],
+        ),
+        (
+            "long-pitch.level",
+            "short_mm: 50\nlong_mm: 50.001\nmarble_radius_mm: 25\n---\n#####\n#S.G#\n#####\n",
+            "2:10",
+            [
+                "cell pitch short_mm + long_mm must be 1 ..= 100 mm",
+                "50 + 50.001 = 100.001 mm",
+            ],
+        ),
+    ];
+    for (name, content, at, words) in cases {
+        let p = scratch(name, content);
+        let o = sim(&["--check", s(&p)]);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        let err = stderr(&o);
+        assert!(err.starts_with(&format!("{}:{at}: ", s(&p))), "{err}");
+        for w in words {
+            assert!(err.contains(w), "{err:?} lacks {w:?}");
+        }
+        assert!(!err.contains("marble does not fit"), "{err}");
+        // Simulating it gives the same place and words, not a debug value.
+        let o = sim(&["--level", s(&p)]);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let err = stderr(&o);
+        assert!(
+            err.contains(&format!("{}:{at}: cell pitch", s(&p))),
+            "{err}"
+        );
+        assert!(
+            !err.contains("Layout") && !err.contains("cannot be set up"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn a_byte_order_mark_is_fine_in_levels_and_tilt_traces() {
+    const BOM: &str = "\u{feff}";
+    let level = "name: bom\ntime_limit_s: 5\n---\n#######\n#S...G#\n#######\n";
+    let plain = scratch("plain.level", level);
+    let marked = scratch("bom.level", &format!("{BOM}{level}"));
+    assert_eq!(std::fs::read(&marked).unwrap()[..3], [0xEF, 0xBB, 0xBF]);
+    let o = sim(&["--check", s(&marked)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
+
+    let trace_plain = scratch("plain-right.csv", RIGHT);
+    let trace_marked = scratch("bom-right.csv", &format!("{BOM}{RIGHT}"));
+    let run =
+        |lvl: &PathBuf, trace: &PathBuf| sim_json(&["--level", s(lvl), "--tilt-trace", s(trace)]);
+    let reference = run(&plain, &trace_plain);
+    assert_eq!(reference["level"], "bom");
+    assert_eq!(reference["outcome"], "won");
+    for (lvl, trace) in [
+        (&marked, &trace_plain),
+        (&plain, &trace_marked),
+        (&marked, &trace_marked),
+    ] {
+        let v = run(lvl, trace);
+        for key in ["level", "outcome", "steps", "state_hash"] {
+            assert_eq!(v[key], reference[key], "{key} with {lvl:?}, {trace:?}");
+        }
+    }
+}

@@ -1,8 +1,13 @@
 //! The level format: built-ins, defaults, and errors with line and column.
 
-use marble_rolling::game::level::{parse, words_needed, LevelError, LevelErrorKind};
+use marble_rolling::game::level::{
+    parse, words_needed, LevelError, LevelErrorKind, MAX_PITCH_UM, MIN_PITCH_UM,
+};
 use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
+use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::physics::geometry::tiles::LayoutError;
+use marble_rolling::physics::{MicroF32, Params, PhysicsSpec, Scalar, SetupError};
 
 const W: usize = 1016;
 
@@ -118,7 +123,10 @@ fn errors_name_line_and_column() {
             "marble_radius_mm: 5\n---\n#####\n#S.G#\n",
             1,
             19,
-            LevelErrorKind::MarbleTooBig,
+            LevelErrorKind::MarbleTooBig {
+                radius_um: 5000,
+                long_um: 10000,
+            },
         ),
         (
             "\n\nname: ok\n  colour: x\n---\n",
@@ -186,4 +194,275 @@ fn the_largest_grid_parses_and_plays() {
         assert!(frames < 2000, "never arrived");
     }
     assert_eq!(g.phase(), Phase::Won);
+}
+
+/// A level with the given header over a small playable grid.
+fn with_header(header: &str) -> String {
+    format!("{header}---\n#####\n#S.G#\n#####\n")
+}
+
+#[test]
+fn what_setup_refuses_is_a_parse_error_at_the_value() {
+    // (header, line, column, kind, words the message must contain)
+    let cases: &[(&str, u32, u32, LevelErrorKind, &[&str])] = &[
+        // Issue 12 item 4.1: a 0.004 mm pitch used to parse and fail at setup.
+        (
+            "short_mm: 0.001\nlong_mm: 0.003\nmarble_radius_mm: 0.001\n",
+            2,
+            10,
+            LevelErrorKind::PitchOutOfRange {
+                short_um: 1,
+                long_um: 3,
+            },
+            &[
+                "cell pitch",
+                "short_mm + long_mm",
+                "1 ..= 100 mm",
+                "0.001 + 0.003 = 0.004 mm",
+            ],
+        ),
+        // Item 4.2: the marble fits (2 × 25 = 50 < 50.001); the pitch is too long.
+        (
+            "short_mm: 50\nlong_mm: 50.001\nmarble_radius_mm: 25\n",
+            2,
+            10,
+            LevelErrorKind::PitchOutOfRange {
+                short_um: 50_000,
+                long_um: 50_001,
+            },
+            &["cell pitch", "1 ..= 100 mm", "50 + 50.001 = 100.001 mm"],
+        ),
+        // Only short_mm given: the default long_mm (10) completes the pitch.
+        (
+            "name: x\nshort_mm: 90.001\n",
+            2,
+            11,
+            LevelErrorKind::PitchOutOfRange {
+                short_um: 90_001,
+                long_um: 10_000,
+            },
+            &["90.001 + 10 = 100.001 mm"],
+        ),
+        // The later of the two values is the one reported.
+        (
+            "long_mm: 0.5\nshort_mm: 0.499\n",
+            2,
+            11,
+            LevelErrorKind::PitchOutOfRange {
+                short_um: 499,
+                long_um: 500,
+            },
+            &["0.499 + 0.5 = 0.999 mm"],
+        ),
+        (
+            "long_mm: 8\nmarble_radius_mm: 4\n",
+            2,
+            19,
+            LevelErrorKind::MarbleTooBig {
+                radius_um: 4000,
+                long_um: 8000,
+            },
+            &[
+                "marble does not fit a cell",
+                "less than long_mm",
+                "2 × 4 = 8 mm",
+                "long_mm 8 mm",
+            ],
+        ),
+        (
+            "marble_radius_mm: 3\nlong_mm: 5.999\n",
+            2,
+            10,
+            LevelErrorKind::MarbleTooBig {
+                radius_um: 3000,
+                long_um: 5999,
+            },
+            &["2 × 3 = 6 mm against long_mm 5.999 mm"],
+        ),
+        // Only long_mm given: the default radius (3.5 mm) no longer fits.
+        (
+            "long_mm: 7\n",
+            1,
+            10,
+            LevelErrorKind::MarbleTooBig {
+                radius_um: 3500,
+                long_um: 7000,
+            },
+            &["2 × 3.5 = 7 mm"],
+        ),
+    ];
+    for &(header, line, column, kind, words) in cases {
+        let src = with_header(header);
+        let e = error_at(&src);
+        assert_eq!((e.line, e.column, e.kind), (line, column, kind), "{src:?}");
+        let text = e.to_string();
+        assert!(text.starts_with(&format!("{line}:{column}: ")), "{text}");
+        for w in words {
+            assert!(text.contains(w), "{text:?} lacks {w:?}");
+        }
+        assert!(!text.contains("Layout") && !text.contains('{'), "{text}");
+    }
+}
+
+/// Sets a parsed level up the way the tools do, with every backend.
+fn sets_up(src: &str) -> Result<(), String> {
+    let l = parse::<W>(src).map_err(|e| e.to_string())?;
+    fn on<S: Scalar>(l: &marble_rolling::game::level::Level<'_, W>) -> Result<(), String> {
+        Session::<S>::new(l.view(), GameConfig::DEFAULT, SYNTHETIC_TILT)
+            .map(|_| ())
+            .map_err(|e| format!("{}: {e}", S::NAME))
+    }
+    on::<fixed::types::I8F24>(&l)?;
+    on::<fixed::types::I32F32>(&l)?;
+    on::<fixed::types::I16F16>(&l)?;
+    on::<f32>(&l)?;
+    on::<MicroF32>(&l)?;
+    on::<f64>(&l)
+}
+
+#[test]
+fn just_inside_the_limits_sets_up_and_just_outside_is_refused() {
+    let inside = [
+        // The smallest pitch, 1 mm, with the largest marble it takes.
+        "short_mm: 0.2\nlong_mm: 0.8\nmarble_radius_mm: 0.399\n",
+        "short_mm: 0.001\nlong_mm: 0.999\nmarble_radius_mm: 0.001\n",
+        // The largest pitch, 100 mm.
+        "short_mm: 2\nlong_mm: 98\nmarble_radius_mm: 48.999\n",
+        "short_mm: 50\nlong_mm: 50\nmarble_radius_mm: 24.999\n",
+        "short_mm: 99.997\nlong_mm: 0.003\nmarble_radius_mm: 0.001\n",
+    ];
+    for h in inside {
+        sets_up(&with_header(h)).unwrap_or_else(|e| panic!("{h:?}: {e}"));
+    }
+    let outside = [
+        (
+            "short_mm: 0.2\nlong_mm: 0.799\nmarble_radius_mm: 0.399\n",
+            2,
+        ),
+        (
+            "short_mm: 2\nlong_mm: 98.001\nmarble_radius_mm: 48.999\n",
+            2,
+        ),
+        ("short_mm: 2\nlong_mm: 98\nmarble_radius_mm: 49\n", 3),
+        ("short_mm: 0.2\nlong_mm: 0.8\nmarble_radius_mm: 0.4\n", 3),
+        ("short_mm: 0\n", 1),
+        ("marble_radius_mm: 0\n", 1),
+        ("long_mm: 100.001\n", 1),
+    ];
+    for (h, line) in outside {
+        let e = error_at(&with_header(h));
+        assert_eq!(e.line, line, "{h:?}: {e}");
+    }
+}
+
+/// The parser's rules and `Params::new`'s agree (they are written twice: the parser is
+/// a `const fn` and the setup is generic over the scalar): around every limit, a
+/// spec parses exactly when it sets up.
+#[test]
+fn parser_and_setup_agree_around_the_limits() {
+    let around = |x: u32| [x.saturating_sub(1), x, x + 1];
+    let mut widths = vec![
+        1, 2, 3, 500, 998, 999, 1000, 2000, 10_000, 49_999, 50_000, 50_001,
+    ];
+    widths.extend(around(MIN_PITCH_UM / 2));
+    widths.extend(around(MAX_PITCH_UM / 2));
+    widths.extend(around(MAX_PITCH_UM - 1000));
+    widths.extend(around(MAX_PITCH_UM - 1));
+    widths.extend(around(MAX_PITCH_UM));
+    let mut checked = [0usize; 2];
+    for &short_um in &widths {
+        for &long_um in &widths {
+            for radius_um in [
+                0,
+                1,
+                (long_um / 2).saturating_sub(1),
+                long_um / 2,
+                long_um.div_ceil(2),
+            ] {
+                let spec = PhysicsSpec {
+                    short_um,
+                    long_um,
+                    radius_um,
+                    ..PhysicsSpec::DEFAULT
+                };
+                let mm = |um: u32| format!("{}.{:03}", um / 1000, um % 1000);
+                let src = with_header(&format!(
+                    "short_mm: {}\nlong_mm: {}\nmarble_radius_mm: {}\n",
+                    mm(short_um),
+                    mm(long_um),
+                    mm(radius_um)
+                ));
+                let parsed = parse::<W>(&src).is_ok();
+                let params = Params::<fixed::types::I8F24>::new(spec);
+                assert_eq!(parsed, params.is_ok(), "{src:?}: {params:?}");
+                if parsed {
+                    sets_up(&src).unwrap_or_else(|e| panic!("{src:?}: {e}"));
+                }
+                checked[parsed as usize] += 1;
+            }
+        }
+    }
+    assert!(checked[0] > 100 && checked[1] > 100, "{checked:?}");
+}
+
+#[test]
+fn setup_errors_read_as_words() {
+    let cases = [
+        (
+            SetupError::Layout(LayoutError::PitchOutOfRange),
+            "short_mm + long_mm is outside 1 ..= 100 mm",
+        ),
+        (
+            SetupError::Layout(LayoutError::ZeroWidth),
+            "must not be zero",
+        ),
+        (SetupError::MarbleSize, "marble does not fit a cell"),
+        (SetupError::Parameter, "restitution"),
+        (SetupError::MarbleCount, "marble start"),
+        (SetupError::BadStart(1), "marble start 2"),
+    ];
+    for (e, words) in cases {
+        let text = e.to_string();
+        assert!(text.contains(words), "{text:?} lacks {words:?}");
+        assert_ne!(text, format!("{e:?}"));
+    }
+}
+
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    let plain = "name: bom\nshort_mm: 1.5\neffects: friction\n---\n#####\n#S.G#\n#####\n";
+    let bom = format!("\u{feff}{plain}");
+    assert_eq!(bom.as_bytes()[..3], [0xEF, 0xBB, 0xBF]);
+    assert_eq!(words_needed(&bom), words_needed(plain));
+    let (a, b) = (parse::<W>(plain).unwrap(), parse::<W>(&bom).unwrap());
+    assert_eq!(a, b);
+    assert_eq!(b.info.name, "bom");
+    // The grid may start right after the mark.
+    let grid = "---\n#####\n#S.G#\n#####\n";
+    assert_eq!(
+        parse::<W>(&format!("\u{feff}{grid}")).unwrap(),
+        parse::<W>(grid).unwrap()
+    );
+    // Columns on line 1 count from the first visible character.
+    for (src, column) in [("colour: x\n---\n", 1), ("restitution: 2\n---\n", 14)] {
+        let e = error_at(&format!("\u{feff}{src}"));
+        assert_eq!((e.line, e.column), (1, column), "{src:?}: {e}");
+        assert_eq!(e, error_at(src));
+    }
+    // Only at the very start: a second mark is an unknown key.
+    let e = error_at(&format!("\u{feff}\u{feff}{plain}"));
+    assert_eq!(
+        (e.line, e.column, e.kind),
+        (1, 1, LevelErrorKind::UnknownKey)
+    );
+}
+
+/// A built-in level may carry the mark too: the `const fn` parser skips it at
+/// compile time.
+#[test]
+fn a_byte_order_mark_is_skipped_at_compile_time() {
+    static BOM: marble_rolling::game::level::LevelView<'static> =
+        marble_rolling::builtin_level!("\u{feff}name: bom\n---\n#####\n#S.G#\n#####\n");
+    assert_eq!(BOM.info.name, "bom");
+    assert_eq!(BOM.info.goals(), &[(3, 1)]);
 }

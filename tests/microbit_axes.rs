@@ -7,7 +7,7 @@
 //! out of the LEDs, z towards the player (edge connector side).
 
 use marble_rolling::board::microbit::AXIS_MAP;
-use marble_rolling::sensor::{AccelMg, AxisMap};
+use marble_rolling::input::sensor::{AccelMg, AxisMap};
 
 fn board(raw: (i32, i32, i32)) -> AccelMg {
     AXIS_MAP.apply(AccelMg::new(raw.0, raw.1, raw.2))

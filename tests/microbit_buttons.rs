@@ -2,7 +2,7 @@
 //! micro:bit timing (10 ms samples: 30 ms debounce, 1 s A+B hold).
 
 use marble_rolling::board::microbit::BUTTONS;
-use marble_rolling::buttons::{ButtonConfig, ButtonEvent, Buttons};
+use marble_rolling::input::buttons::{ButtonConfig, ButtonEvent, Buttons};
 
 /// Feeds `n` identical samples, collecting events.
 fn hold(b: &mut Buttons, a: bool, bb: bool, n: usize) -> Vec<ButtonEvent> {

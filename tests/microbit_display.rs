@@ -1,9 +1,10 @@
-//! micro:bit LED refresh budget and the fault pattern substitution.
+//! micro:bit LED refresh budget and the fault picture on its 5×5 matrix.
 
 use marble_rolling::board::microbit::{
-    frame_columns, refresh_millihz, rtc_ticks_per_base_tick, FAULT_FRAME, HEIGHT, RTC_HZ, WIDTH,
+    refresh_millihz, rtc_ticks_per_base_tick, HEIGHT, RTC_HZ, WIDTH,
 };
-use marble_rolling::matrix::{Frame, OnTimeIntegrator, Scanner, LEVELS};
+use marble_rolling::game::player::fault_frame;
+use marble_rolling::matrix::{OnTimeIntegrator, Scanner, LEVELS, MAX_BRIGHTNESS};
 
 #[test]
 fn bcm_slices_fit_the_rtc_at_100_hz() {
@@ -27,32 +28,22 @@ fn degenerate_rates_do_not_panic() {
 }
 
 #[test]
-fn fault_pattern_substitution_shows_the_fault_frame() {
-    // Scan some other frame, but substitute the fault frame's columns per step:
-    // what a viewer sees is exactly the fault frame.
-    let mut scanner = Scanner::<WIDTH, HEIGHT>::with_frame(&Frame::filled(7));
+fn a_downed_sensor_shows_a_cross_on_the_5x5() {
+    // The game's fault picture, scanned like any frame: what a viewer sees is
+    // the two diagonals at full brightness and nothing else.
+    let cross = fault_frame::<WIDTH, HEIGHT>();
+    let mut scanner = Scanner::<WIDTH, HEIGHT>::with_frame(&cross);
     let mut seen = OnTimeIntegrator::<WIDTH, HEIGHT>::new();
     for _ in 0..3 * Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH {
-        let mut step = scanner.next_step();
-        step.columns = frame_columns(&FAULT_FRAME, step);
-        seen.feed(step);
+        seen.feed(scanner.next_step());
     }
-    assert_eq!(seen.perceived(), FAULT_FRAME);
-    assert!(!FAULT_FRAME.is_blank());
-}
-
-#[test]
-fn frame_columns_matches_the_scanner_for_grey_levels() {
-    let mut frame = Frame::<WIDTH, HEIGHT>::new();
-    for (i, (x, y)) in (0..WIDTH)
-        .flat_map(|x| (0..HEIGHT).map(move |y| (x, y)))
-        .enumerate()
-    {
-        frame.set(x, y, (i % 16) as u8);
-    }
-    let mut scanner = Scanner::<WIDTH, HEIGHT>::with_frame(&frame);
-    for _ in 0..2 * Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH {
-        let step = scanner.next_step();
-        assert_eq!(frame_columns(&frame, step), step.columns, "{step:?}");
+    let perceived = seen.perceived();
+    for y in 0..HEIGHT {
+        for x in 0..WIDTH {
+            let on = x == y || x == WIDTH - 1 - y;
+            let level = perceived.rows()[y][x];
+            assert_eq!(level == MAX_BRIGHTNESS, on, "pixel ({x}, {y}): {level}");
+            assert!(on || level == 0, "pixel ({x}, {y}): {level}");
+        }
     }
 }

@@ -2,7 +2,7 @@
 //! micro:bit firmware uses them.
 
 use marble_rolling::board::microbit::{AXIS_MAP, SUPERVISOR};
-use marble_rolling::sensor::{
+use marble_rolling::input::sensor::{
     AccelMg, Action, AxisMap, Calibration, Fault, Plausibility, SensorSupervisor, SupervisorConfig,
     TiltPipeline,
 };

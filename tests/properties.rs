@@ -379,7 +379,7 @@ proptest! {
         use marble_rolling::game::levels::LEVELS;
         use marble_rolling::game::rules::{GameConfig, Phase};
         use marble_rolling::game::session::Session;
-        use marble_rolling::tilt::TiltConfig;
+        use marble_rolling::input::tilt::TiltConfig;
         let mut s = Session::<fixed::types::I8F24>::new(LEVELS[2], GameConfig::DEFAULT, TiltConfig::DEFAULT).unwrap();
         let mut frames = 0;
         for r in readings {

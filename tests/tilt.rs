@@ -1,8 +1,8 @@
 //! The tilt input path (src/tilt.rs): accelerometer reading → gravity.
 
+use marble_rolling::input::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
+use marble_rolling::input::tilt::{TiltConfig, TiltError, TiltFilter};
 use marble_rolling::physics::world::MAX_MG;
-use marble_rolling::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
-use marble_rolling::tilt::{TiltConfig, TiltError, TiltFilter};
 use proptest::prelude::*;
 
 /// Tiny in-plane noise (±2 mg, well inside the dead zone) so that a long run

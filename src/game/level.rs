@@ -14,9 +14,9 @@
 //! | key | meaning | default |
 //! |-----|---------|---------|
 //! | `name` | shown by tools | `untitled` |
-//! | `short_mm` | short tile width `s` (walls, posts) | `2` |
-//! | `long_mm` | long tile width `l` (cells) | `10` |
-//! | `marble_radius_mm` | marble radius, `2r < l` | `3.5` |
+//! | `short_mm` | short tile width `s` (walls, posts), 0.001 ..= 100 | `2` |
+//! | `long_mm` | long tile width `l` (cells), 0.001 ..= 100; pitch `s + l` 1 ..= 100 | `10` |
+//! | `marble_radius_mm` | marble radius, 0.001 ..= 100 and `2r < l` | `3.5` |
 //! | `restitution` | `e` in eq. 1, 0 ..= 1 | `0.5` |
 //! | `effects` | comma list of `rolling`, `friction`, `board_motion` | `rolling` |
 //! | `rolling_resistance` | rolling-resistance coefficient (with `friction`) | `0.01` |
@@ -28,10 +28,19 @@
 //! row `k` the line's; even indices are short tiles, odd ones long, so `S` and `G`
 //! must sit at odd column and odd row (a long×long cell). Holes and several `S` switch
 //! on the `holes` and `marbles` effects. All rows have the same length, at most 127.
+//!
+//! The parser refuses what the physics setup ([`Params::new`]) would refuse of a
+//! header (pitch `s + l` 1 ..= 100 mm, `2r < l`), at the value that breaks the rule
+//! (the later of the keys involved). A leading UTF-8 byte-order mark is skipped
+//! (columns on line 1 count from the first character after it).
+//!
+//! [`Params::new`]: crate::physics::world::Params::new
 
 use crate::physics::dynamics::effects::Effects;
 use crate::physics::geometry::grid::{words_for, TileGrid, Tiles, MAX_TILES_XZ};
-use crate::physics::world::PhysicsSpec;
+use crate::physics::geometry::tiles::LayoutError;
+pub use crate::physics::geometry::tiles::{MAX_PITCH_UM, MIN_PITCH_UM};
+use crate::physics::world::{PhysicsSpec, SetupError};
 
 /// Most marbles a level may start (several `S`).
 pub const MAX_MARBLES: usize = 4;
@@ -68,14 +77,27 @@ pub enum LevelErrorKind {
     StartCount,
     /// No `G`, or more than [`MAX_GOALS`].
     GoalCount,
+    /// The cell pitch `s + l` is outside [`MIN_PITCH_UM`] ..= [`MAX_PITCH_UM`].
+    PitchOutOfRange {
+        /// `short_mm` in µm.
+        short_um: u32,
+        /// `long_mm` in µm.
+        long_um: u32,
+    },
     /// The marble does not fit in a cell (`2r ≥ l`).
-    MarbleTooBig,
+    MarbleTooBig {
+        /// `marble_radius_mm` in µm.
+        radius_um: u32,
+        /// `long_mm` in µm.
+        long_um: u32,
+    },
     /// The name is not valid UTF-8.
     BadName,
 }
 
 impl LevelErrorKind {
-    /// A short description.
+    /// A short description: the rule that was broken. (`Display` adds the numbers
+    /// that broke it, for the kinds that have them.)
     pub const fn message(self) -> &'static str {
         match self {
             LevelErrorKind::MissingColon => "expected `key: value`",
@@ -91,7 +113,12 @@ impl LevelErrorKind {
             LevelErrorKind::NotACell => "S and G must be on a cell (odd column and odd row)",
             LevelErrorKind::StartCount => "need 1 to 4 marble starts (S)",
             LevelErrorKind::GoalCount => "need 1 to 4 goal cells (G)",
-            LevelErrorKind::MarbleTooBig => "marble does not fit a cell (2·radius ≥ long_mm)",
+            LevelErrorKind::PitchOutOfRange { .. } => {
+                "cell pitch short_mm + long_mm must be 1 ..= 100 mm"
+            }
+            LevelErrorKind::MarbleTooBig { .. } => {
+                "marble does not fit a cell: 2 × marble_radius_mm must be less than long_mm"
+            }
             LevelErrorKind::BadName => "name is not valid UTF-8",
         }
     }
@@ -109,9 +136,91 @@ pub struct LevelError {
     pub kind: LevelErrorKind,
 }
 
+/// Micrometres as millimetres, without trailing zeros (`100001` → `100.001`).
+struct Mm(u32);
+
+impl core::fmt::Display for Mm {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let (whole, mut frac, mut digits) = (self.0 / 1000, self.0 % 1000, 3);
+        if frac == 0 {
+            return write!(f, "{whole}");
+        }
+        while frac % 10 == 0 {
+            frac /= 10;
+            digits -= 1;
+        }
+        write!(f, "{whole}.{frac:0digits$}")
+    }
+}
+
+/// The rule, then the numbers that broke it.
+impl core::fmt::Display for LevelErrorKind {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.message())?;
+        match *self {
+            LevelErrorKind::PitchOutOfRange { short_um, long_um } => write!(
+                f,
+                ", is {} + {} = {} mm",
+                Mm(short_um),
+                Mm(long_um),
+                Mm(short_um.saturating_add(long_um))
+            ),
+            LevelErrorKind::MarbleTooBig { radius_um, long_um } => write!(
+                f,
+                ", is 2 × {} = {} mm against long_mm {} mm",
+                Mm(radius_um),
+                Mm(radius_um.saturating_mul(2)),
+                Mm(long_um)
+            ),
+            _ => Ok(()),
+        }
+    }
+}
+
 impl core::fmt::Display for LevelError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "{}:{}: {}", self.line, self.column, self.kind.message())
+        write!(f, "{}:{}: {}", self.line, self.column, self.kind)
+    }
+}
+
+// The physics' setup errors in words (tools print these, never `{:?}`). They live
+// here, next to the level format, because a level is what a person edits to fix them.
+impl core::fmt::Display for LayoutError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            LayoutError::ZeroWidth => f.write_str("short_mm and long_mm must not be zero"),
+            LayoutError::PitchOutOfRange => write!(
+                f,
+                "cell pitch short_mm + long_mm is outside {} ..= {} mm",
+                Mm(MIN_PITCH_UM),
+                Mm(MAX_PITCH_UM)
+            ),
+        }
+    }
+}
+
+impl core::fmt::Display for SetupError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            SetupError::Layout(e) => write!(f, "{e}"),
+            SetupError::MarbleSize => f.write_str(
+                "marble does not fit a cell: 2 × marble_radius_mm must be more than 0 and less \
+                 than long_mm",
+            ),
+            SetupError::Parameter => {
+                f.write_str("restitution above 1, or a step rate outside 64 ..= 16384 steps/s")
+            }
+            SetupError::MarbleCount => {
+                f.write_str("no marble start, or more marbles than the world has room for")
+            }
+            SetupError::BadStart(n) => write!(
+                f,
+                "marble start {} (S number {} in reading order) overlaps a tile or lies \
+                 outside the board",
+                n + 1,
+                n + 1
+            ),
+        }
     }
 }
 
@@ -176,7 +285,7 @@ impl<'a, const WORDS: usize> Level<'a, WORDS> {
 /// Occupancy words a level needs (`0` when its grid is malformed; `parse` then reports
 /// why). Use it to size [`Level`] for a `const` level.
 pub const fn words_needed(src: &str) -> usize {
-    let b = src.as_bytes();
+    let b = without_bom(src.as_bytes());
     let Some(grid_start) = grid_start(b) else {
         return 1;
     };
@@ -190,6 +299,28 @@ pub const fn words_needed(src: &str) -> usize {
         1
     } else {
         w
+    }
+}
+
+/// The text after a leading UTF-8 byte-order mark (`EF BB BF`), if there is one:
+/// editors on some systems save one, and it is not part of the first line.
+const fn without_bom(b: &[u8]) -> &[u8] {
+    if b.len() >= 3 && b[0] == 0xEF && b[1] == 0xBB && b[2] == 0xBF {
+        b.split_at(3).1
+    } else {
+        b
+    }
+}
+
+/// Where a header value was given: (line, line start, value start); line 0 if not.
+type At = (usize, usize, usize);
+
+/// The later of two header values (the one that completed a broken rule).
+const fn later(a: At, b: At) -> At {
+    if a.0 >= b.0 {
+        a
+    } else {
+        b
     }
 }
 
@@ -335,7 +466,7 @@ const fn decimal(b: &[u8], start: usize, end: usize, decimals: u32) -> Option<u6
 
 /// Parses a level. `WORDS` must be at least [`words_needed`]`(src)`.
 pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, LevelError> {
-    let b = src.as_bytes();
+    let b = without_bom(src.as_bytes());
     if grid_start(b).is_none() {
         // Without `---` every grid row would read as a bad header line: say what is missing.
         let mut lines = 1;
@@ -359,7 +490,9 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
     };
     let mut name: &str = "untitled";
     let mut time_limit_s = 60u32;
-    let mut radius_line = (0usize, 0usize, 0usize);
+    let mut short_at: At = (0, 0, 0);
+    let mut long_at: At = (0, 0, 0);
+    let mut radius_at: At = (0, 0, 0);
     let mut i = 0;
     let mut line = 1;
     let mut separator = false;
@@ -435,11 +568,13 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
                 let n = n as u32;
                 if eq_bytes(b, s, kend, b"short_mm") {
                     spec.short_um = n;
+                    short_at = (line, i, v);
                 } else if eq_bytes(b, s, kend, b"long_mm") {
                     spec.long_um = n;
+                    long_at = (line, i, v);
                 } else if eq_bytes(b, s, kend, b"marble_radius_mm") {
                     spec.radius_um = n;
-                    radius_line = (line, i, v);
+                    radius_at = (line, i, v);
                 } else if eq_bytes(b, s, kend, b"restitution") {
                     spec.restitution_milli = n;
                 } else if eq_bytes(b, s, kend, b"rolling_resistance") {
@@ -459,15 +594,24 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
             kind: LevelErrorKind::MissingSeparator,
         });
     }
-    if 2 * spec.radius_um as u64 >= spec.long_um as u64
-        || spec.short_um as u64 + spec.long_um as u64 > 100_000
-    {
-        let (l, ls, at) = if radius_line.0 > 0 {
-            radius_line
-        } else {
-            (1, 0, 0)
+    // What `Params::new` checks, in its order (each value is already 0.001 ..= 100 mm,
+    // so no width is zero). A rule of two values is reported at the later one given.
+    let pitch = spec.short_um as u64 + spec.long_um as u64;
+    if pitch < MIN_PITCH_UM as u64 || pitch > MAX_PITCH_UM as u64 {
+        let (l, ls, at) = later(short_at, long_at);
+        let kind = LevelErrorKind::PitchOutOfRange {
+            short_um: spec.short_um,
+            long_um: spec.long_um,
         };
-        return err(l, b, ls, at, LevelErrorKind::MarbleTooBig);
+        return err(if l == 0 { 1 } else { l }, b, ls, at, kind);
+    }
+    if 2 * spec.radius_um as u64 >= spec.long_um as u64 {
+        let (l, ls, at) = later(radius_at, long_at);
+        let kind = LevelErrorKind::MarbleTooBig {
+            radius_um: spec.radius_um,
+            long_um: spec.long_um,
+        };
+        return err(if l == 0 { 1 } else { l }, b, ls, at, kind);
     }
     // Grid.
     let (nx, nz) = grid_size(b, i);

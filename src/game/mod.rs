@@ -2,6 +2,7 @@
 //! autopilot.
 
 pub mod autopilot;
+pub mod player;
 pub mod level;
 pub mod levels;
 pub mod rules;

@@ -9,9 +9,9 @@
 //!
 //! The reading comes from the caller (sensor, keys, trace) or from the autopilot.
 
+use crate::input::tilt::{TiltConfig, TiltError, TiltFilter};
 use crate::physics::world::SetupError;
 use crate::physics::Scalar;
-use crate::tilt::{TiltConfig, TiltError, TiltFilter};
 
 use super::autopilot::Autopilot;
 use super::level::LevelView;

@@ -13,11 +13,13 @@
 //! way, up to ±500 mg per axis; space levels the board. `r` restarts, `n` goes to the next
 //! level, `p` hands the board to the autopilot (and back), `q` / Esc / Ctrl-C quit.
 //!
-//! The game runs at its own frame rate (128 frames/s, [`GameConfig::DEFAULT`]) in
-//! real time, through the same [`Session`] as the firmware, with
-//! [`SYNTHETIC_TILT`] (a held key repeats the same reading, which a real sensor
-//! never does). The terminal is put in raw mode on the alternate screen and
-//! restored on every way out: quitting, an error, or a panic.
+//! The game runs at its own frame rate (128 frames/s, [`GAME_CONFIG`]) in real
+//! time, through the firmware's own game loop step ([`Player::tick`]) and key
+//! code ([`KeyTilt`]), with [`SYNTHETIC_TILT`] (a held key repeats the same
+//! reading, which a real sensor never does): the same keys give the same
+//! readings and the same game as in `cargo qemu`. The terminal is put in raw
+//! mode on the alternate screen and restored on every way out: quitting, an
+//! error, or a panic.
 
 use std::boxed::Box;
 use std::io::{self, IsTerminal, Write};
@@ -33,18 +35,20 @@ use crossterm::terminal::{self, Clear, ClearType};
 use crossterm::{cursor, execute, queue};
 
 use super::{load_level, Loaded};
-use crate::game::autopilot::Autopilot;
+use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
-use crate::game::rules::{GameConfig, Phase};
-use crate::game::session::{Session, SYNTHETIC_TILT};
+use crate::game::player::{Player, GAME_CONFIG};
+use crate::game::rules::Phase;
+use crate::game::session::SYNTHETIC_TILT;
+use crate::input::event::InputEvent;
+use crate::input::keys::{Key, KeyTilt};
 use crate::matrix::MAX_BRIGHTNESS;
-use crate::physics::Fx;
 use crate::render::{blink_on, follow_axis, render_world, tile_point, Viewport};
 
-/// Milli-g added to the held reading per key press.
-pub const TILT_STEP_MG: i32 = 100;
-/// Largest held tilt per axis (mg).
-pub const TILT_MAX_MG: i32 = 500;
+/// The firmware's player. The terminal draws its own picture, sized to the
+/// terminal, so the player's own renderer is a single pixel that is never
+/// asked for.
+pub type TerminalPlayer = Player<1, 1, true>;
 /// Frames between two screen updates (128 / 4 = 32 updates per second).
 const DRAW_EVERY: u32 = 4;
 /// Lines under the matrix (status, tilt, help).
@@ -101,7 +105,7 @@ pub fn main() -> i32 {
                 return 1;
             }
         };
-        let r = Player::new(first, args.autopilot).and_then(|mut p| p.run());
+        let r = Game::new(first, args.autopilot).and_then(|mut g| g.run());
         drop(guard);
         r
     };
@@ -154,93 +158,79 @@ fn restore_terminal() {
     let _ = terminal::disable_raw_mode();
 }
 
-/// What a key asks for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Action {
-    /// Tilt by `(dx, dz)` steps (reading components; `ax < 0` rolls towards +x').
-    Tilt(i32, i32),
-    Level,
-    Restart,
-    Next,
-    Autopilot,
-    Quit,
-    None,
-}
-
-fn action(key: KeyEvent) -> Action {
-    if key.kind == KeyEventKind::Release {
-        return Action::None;
+/// The key a terminal key event stands for ([`KeyTilt`]'s keys, as the
+/// firmware decodes them from raw bytes), or none.
+pub fn key_of(event: KeyEvent) -> Option<Key> {
+    if event.kind == KeyEventKind::Release {
+        return None;
     }
-    if key.modifiers.contains(KeyModifiers::CONTROL) && matches!(key.code, KeyCode::Char('c' | 'C'))
+    if event.modifiers.contains(KeyModifiers::CONTROL)
+        && matches!(event.code, KeyCode::Char('c' | 'C'))
     {
-        return Action::Quit;
+        return Some(Key::Quit);
     }
-    match key.code {
-        // The marble rolls the way the key points: left needs ax > 0.
-        KeyCode::Left | KeyCode::Char('a' | 'A') => Action::Tilt(1, 0),
-        KeyCode::Right | KeyCode::Char('d' | 'D') => Action::Tilt(-1, 0),
-        // Up (away from the player, −z') needs az > 0.
-        KeyCode::Up | KeyCode::Char('w' | 'W') => Action::Tilt(0, 1),
-        KeyCode::Down | KeyCode::Char('s' | 'S') => Action::Tilt(0, -1),
-        KeyCode::Char(' ') => Action::Level,
-        KeyCode::Char('r' | 'R') => Action::Restart,
-        KeyCode::Char('n' | 'N') => Action::Next,
-        KeyCode::Char('p' | 'P') => Action::Autopilot,
-        KeyCode::Char('q' | 'Q') | KeyCode::Esc => Action::Quit,
-        _ => Action::None,
+    Some(match event.code {
+        KeyCode::Left | KeyCode::Char('a' | 'A') => Key::Left,
+        KeyCode::Right | KeyCode::Char('d' | 'D') => Key::Right,
+        KeyCode::Up | KeyCode::Char('w' | 'W') => Key::Up,
+        KeyCode::Down | KeyCode::Char('s' | 'S') => Key::Down,
+        KeyCode::Char(' ') => Key::Level,
+        KeyCode::Char('r' | 'R') => Key::Restart,
+        KeyCode::Char('n' | 'N') => Key::Next,
+        KeyCode::Char('c' | 'C') => Key::Calibrate,
+        KeyCode::Char('p' | 'P') => Key::Autopilot,
+        KeyCode::Char('q' | 'Q') | KeyCode::Esc => Key::Quit,
+        _ => return None,
+    })
+}
+
+/// The level list `cargo play` cycles through: the chosen level file, if
+/// any, then the built-in levels. Leaked: the player's session borrows its
+/// level for the whole run, as the firmware's borrows flash.
+fn level_list(first: Loaded) -> (&'static [LevelView<'static>], usize) {
+    match first.builtin {
+        Some(index) => (&LEVELS, index),
+        None => {
+            let mut list = Vec::with_capacity(LEVELS.len() + 1);
+            list.push(first.view);
+            list.extend_from_slice(&LEVELS);
+            (Vec::leak(list), 0)
+        }
     }
 }
 
-/// The held reading for an in-plane tilt: `y` makes the total 1 g.
-pub fn held_reading(ax: i32, az: i32) -> [i32; 3] {
-    let y2 = (1_000_000 - ax * ax - az * az).max(0) as f64;
-    [ax, y2.sqrt().round() as i32, az]
-}
-
-struct Player {
-    level: Loaded,
-    session: Session<'static, Fx>,
-    autopilot: Option<Autopilot>,
-    tilt: (i32, i32),
+struct Game {
+    player: TerminalPlayer,
+    keys: KeyTilt,
     /// The viewport's origin (tile shown top left) while the level does not fit.
     view: Option<(i32, i32)>,
+    shown_level: usize,
     out: io::Stdout,
     buf: Vec<u8>,
 }
 
-impl Player {
-    fn new(level: Loaded, autopilot: bool) -> io::Result<Player> {
-        let session = new_session(level)?;
-        let autopilot = autopilot.then(|| Autopilot::new(&level.view));
-        Ok(Player {
-            level,
-            session,
-            autopilot,
-            tilt: (0, 0),
+impl Game {
+    fn new(first: Loaded, autopilot: bool) -> io::Result<Game> {
+        let (levels, index) = level_list(first);
+        let player =
+            TerminalPlayer::new(levels, index, SYNTHETIC_TILT, autopilot).map_err(|e| {
+                io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!("level `{}` cannot be set up: {e}", first.view.info.name),
+                )
+            })?;
+        Ok(Game {
+            shown_level: player.level_index(),
+            player,
+            keys: KeyTilt::new(),
             view: None,
             out: io::stdout(),
             buf: Vec::with_capacity(1 << 16),
         })
     }
 
-    fn switch(&mut self, level: Loaded) -> io::Result<()> {
-        self.session = new_session(level)?;
-        self.level = level;
-        self.restarted()
-    }
-
-    fn restarted(&mut self) -> io::Result<()> {
-        self.tilt = (0, 0);
-        self.view = None;
-        if self.autopilot.is_some() {
-            self.autopilot = Some(Autopilot::new(&self.level.view));
-        }
-        execute!(self.out, Clear(ClearType::All))
-    }
-
     fn run(&mut self) -> io::Result<()> {
-        let config = self.session.game().config();
-        let period = Duration::from_secs(1) / config.frame_hz();
+        let period = Duration::from_secs(1) / GAME_CONFIG.frame_hz();
         let mut next = Instant::now();
         let mut frame = 0u32;
         self.draw()?;
@@ -250,10 +240,12 @@ impl Player {
                 if event::poll(next - now)? {
                     match event::read()? {
                         Event::Key(k) => {
-                            if !self.key(action(k))? {
-                                return Ok(());
+                            if let Some(key) = key_of(k) {
+                                if !self.key(key) {
+                                    return Ok(());
+                                }
+                                self.draw()?;
                             }
-                            self.draw()?;
                         }
                         Event::Resize(..) => {
                             self.view = None;
@@ -265,12 +257,11 @@ impl Player {
                 }
                 continue;
             }
-            if self.session.game().phase() == Phase::Playing {
-                let reading = match &mut self.autopilot {
-                    Some(ap) => ap.reading_mg(self.session.game()),
-                    None => held_reading(self.tilt.0, self.tilt.1),
-                };
-                self.session.frame(reading);
+            self.player.tick(self.keys.tilt().reading_mg(), false);
+            if self.player.level_index() != self.shown_level || self.player.game().frames() == 0 {
+                // Another level, or the same one restarted: a new picture.
+                self.shown_level = self.player.level_index();
+                self.view = None;
             }
             frame = frame.wrapping_add(1);
             if frame.is_multiple_of(DRAW_EVERY) {
@@ -285,34 +276,12 @@ impl Player {
     }
 
     /// Applies a key; `false` to quit.
-    fn key(&mut self, a: Action) -> io::Result<bool> {
-        match a {
-            Action::Tilt(dx, dz) => {
-                self.tilt.0 = (self.tilt.0 + dx * TILT_STEP_MG).clamp(-TILT_MAX_MG, TILT_MAX_MG);
-                self.tilt.1 = (self.tilt.1 + dz * TILT_STEP_MG).clamp(-TILT_MAX_MG, TILT_MAX_MG);
-            }
-            Action::Level => self.tilt = (0, 0),
-            Action::Restart => {
-                self.session.restart();
-                self.restarted()?;
-            }
-            Action::Next => {
-                let i = self.level.builtin.map_or(0, |i| (i + 1) % LEVELS.len());
-                self.switch(Loaded {
-                    view: LEVELS[i],
-                    builtin: Some(i),
-                })?;
-            }
-            Action::Autopilot => {
-                self.autopilot = match self.autopilot {
-                    Some(_) => None,
-                    None => Some(Autopilot::new(&self.level.view)),
-                };
-            }
-            Action::Quit => return Ok(false),
-            Action::None => {}
+    fn key(&mut self, key: Key) -> bool {
+        match self.keys.press(key) {
+            // The tilt is read by every tick.
+            InputEvent::Tilt(_) => true,
+            event => self.player.handle(event),
         }
-        Ok(true)
     }
 
     /// The matrix image: the whole level, one pixel per tile, or where it does not
@@ -320,7 +289,7 @@ impl Player {
     /// rule, sized to the terminal).
     fn picture(&mut self, cols: u16, rows: u16) -> (usize, usize, Vec<u8>) {
         const N: usize = 128;
-        let game = self.session.game();
+        let game = self.player.game();
         let level = game.level();
         let (nx, nz) = (level.info.nx as i32, level.info.nz as i32);
         let w = nx.min(cols as i32 / 2).max(1);
@@ -366,22 +335,19 @@ impl Player {
             }
         }
         queue!(b, ResetColor)?;
-        let game = self.session.game();
-        let info = &self.level.view.info;
+        let game = self.player.game();
+        let info = &game.level().info;
         let hz = game.config().frame_hz() as f64;
         let t = game.frames() as f64 / hz;
-        let which = match self.level.builtin {
-            Some(i) => format!("level {}/{}", i + 1, LEVELS.len()),
-            None => "level file".to_string(),
-        };
+        let which = format!("level {}", self.player.level_index() + 1);
         let status = match game.phase() {
             Phase::Playing => format!("{:.1} / {} s", t, info.time_limit_s),
-            Phase::Won => format!("WON in {t:.2} s!  n: next level, r: again"),
-            Phase::Fell => "FELL into a hole.  r: try again, n: next level".to_string(),
-            Phase::TimeUp => "TIME'S UP.  r: try again, n: next level".to_string(),
+            Phase::Won => format!("WON in {t:.2} s!"),
+            Phase::Fell => "FELL into a hole: again".to_string(),
+            Phase::TimeUp => "TIME'S UP: again".to_string(),
         };
-        let reading = self.session.reading();
-        let pilot = if self.autopilot.is_some() {
+        let reading = self.player.session().reading();
+        let pilot = if self.player.autopilot() {
             "  [autopilot]"
         } else {
             ""
@@ -392,7 +358,7 @@ impl Player {
                 "tilt  x {:+5} mg  z {:+5} mg{pilot}",
                 -reading[0], -reading[2]
             ),
-            "arrows/WASD tilt · space level · r restart · n next · p autopilot · q quit"
+            "arrows/WASD tilt · space level · c calibrate · r restart · n next · p autopilot · q quit"
                 .to_string(),
         ];
         for (i, l) in lines.iter().enumerate() {
@@ -407,15 +373,6 @@ impl Player {
         self.out.write_all(b)?;
         self.out.flush()
     }
-}
-
-fn new_session(level: Loaded) -> io::Result<Session<'static, Fx>> {
-    Session::new(level.view, GameConfig::DEFAULT, SYNTHETIC_TILT).map_err(|e| {
-        io::Error::new(
-            io::ErrorKind::InvalidData,
-            format!("level `{}` cannot be set up: {e:?}", level.view.info.name),
-        )
-    })
 }
 
 /// Two characters per pixel, denser for brighter pixels (readable without colour).

@@ -47,7 +47,7 @@ use crate::game::autopilot::Autopilot;
 use crate::game::level::{LevelError, LevelView};
 use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::{Session, SYNTHETIC_TILT};
-use crate::physics::{Marble, Scalar};
+use crate::physics::{Marble, Scalar, SetupError};
 
 /// Seconds the last GIF image is held before the animation loops.
 const GIF_HOLD_S: f64 = 1.5;
@@ -275,7 +275,7 @@ impl WithScalar for Job<'_> {
 
     fn run<S: Scalar>(mut self) -> Result<Report, String> {
         let mut session = Session::<S>::new(self.level, self.config, SYNTHETIC_TILT)
-            .map_err(|e| format!("level `{}` cannot be set up: {e:?}", self.level.info.name))?;
+            .map_err(|e| format!("level `{}` cannot be set up: {e}", self.level.info.name))?;
         let mut autopilot = match self.input {
             Input::Autopilot => Some(Autopilot::new(&self.level)),
             _ => None,
@@ -435,21 +435,36 @@ fn check(path: &Path) -> i32 {
             return 2;
         }
     };
-    let view = match super::parse_runtime(src) {
+    let view = match super::parse_runtime(src.clone()) {
         Ok(v) => v,
         Err(LevelError { line, column, kind }) => {
-            eprintln!("{shown}:{line}:{column}: {}", kind.message());
+            eprintln!("{shown}:{line}:{column}: {kind}");
             return 1;
         }
     };
-    // The parser checks the format; the physics checks that the scene can be set up
-    // (e.g. a start the marble does not fit at) with the firmware's scalar.
+    // The parser refuses what `Params::new` would; the physics still checks that each
+    // start is clear of the tiles with the firmware's scalar.
     if let Err(e) = Game::<crate::physics::Fx>::new(view, GameConfig::DEFAULT) {
-        eprintln!("{shown}:1:1: the physics cannot set the level up: {e:?}");
+        let (line, column) = match e {
+            SetupError::BadStart(n) => nth_start(&src, n).unwrap_or((1, 1)),
+            _ => (1, 1),
+        };
+        eprintln!("{shown}:{line}:{column}: the physics cannot set the level up: {e}");
         return 1;
     }
     println!("ok");
     0
+}
+
+/// Line and column (1-based, characters) of the `n`-th `S` of a level's grid.
+fn nth_start(src: &str, n: usize) -> Option<(usize, usize)> {
+    let mut lines = src.lines().enumerate();
+    lines.find(|(_, l)| l.trim_start_matches('\u{feff}').trim() == "---")?;
+    lines
+        .flat_map(|(i, l)| l.chars().enumerate().map(move |(c, ch)| (i + 1, c + 1, ch)))
+        .filter(|&(_, _, ch)| ch == 'S')
+        .nth(n)
+        .map(|(line, column, _)| (line, column))
 }
 
 fn list() {

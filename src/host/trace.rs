@@ -11,7 +11,8 @@
 //! the accelerometer hands [`crate::game::session::Session::frame`]. Each sample
 //! holds until the next one; before the first one the board lies flat. Times must
 //! not decrease. Blank lines and lines starting with `#` are ignored; numbers may
-//! have decimals (readings are rounded to whole milli-g).
+//! have decimals (readings are rounded to whole milli-g). A leading UTF-8
+//! byte-order mark (some editors save one) is skipped.
 
 use std::format;
 use std::string::String;
@@ -51,7 +52,9 @@ impl core::fmt::Display for TraceError {
 
 impl TiltTrace {
     /// Parses a trace's text.
+    /// A leading UTF-8 byte-order mark is skipped.
     pub fn parse(text: &str) -> Result<TiltTrace, TraceError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut samples = Vec::new();
         let mut header = false;
         let names = ["t_s", "ax_mg", "ay_mg", "az_mg"];
@@ -158,6 +161,15 @@ mod tests {
         assert_eq!(t.reading_at(0.99), [-200, 980, 0]);
         assert_eq!(t.reading_at(7.0), [0, 1000, 10]);
         assert_eq!(t.reading_at(0.1), FLAT);
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let plain = "t_s,ax_mg,ay_mg,az_mg\n0.5,-200,980,0\n";
+        let with_bom = TiltTrace::parse(&format!("\u{feff}{plain}")).unwrap();
+        assert_eq!(with_bom, TiltTrace::parse(plain).unwrap());
+        // Only at the very start: anywhere else it is still a bad header or number.
+        assert!(TiltTrace::parse(&format!("\u{feff}\u{feff}{plain}")).is_err());
     }
 
     #[test]

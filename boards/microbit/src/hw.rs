@@ -8,25 +8,21 @@
 //! [`marble_rolling::app`]); this file only moves bits between those and the
 //! pins, and nothing here panics on a sensor or bus error.
 
-use core::sync::atomic::{AtomicBool, Ordering};
-
 use embassy_nrf::gpio::{Input, Level, Output, OutputDrive, Pull};
 use embassy_nrf::twim::{self, Twim};
 use embassy_nrf::wdt::WatchdogHandle;
 use embassy_time::{Duration, Instant, Ticker, Timer};
+use heapless::Deque;
 use lsm303agr::interface::I2cInterface;
 use lsm303agr::mode::MagOneShot;
 use lsm303agr::{AccelMode, AccelOutputDataRate, Lsm303agr};
 
-use marble_rolling::app::{Command, InputEvent, MatrixOutput, Tilt, TiltInput, REFRESH_HZ};
+use marble_rolling::app::{MatrixOutput, TiltInput, REFRESH_HZ};
 use marble_rolling::board::microbit as board;
-use marble_rolling::buttons::{ButtonEvent, Buttons};
+use marble_rolling::input::buttons::{ButtonEvent, Buttons};
+use marble_rolling::input::event::{Command, InputEvent, Tilt};
+use marble_rolling::input::sensor::{AccelMg, Action, Fault, TiltPipeline};
 use marble_rolling::matrix::ScanStep;
-use marble_rolling::sensor::{AccelMg, Action, Fault, TiltPipeline};
-
-/// Set by the input task while the accelerometer is down; the display then
-/// shows [`board::FAULT_FRAME`] instead of the game.
-pub static SENSOR_DOWN: AtomicBool = AtomicBool::new(false);
 
 /// RTC ticks per BCM base tick (4 → 109 Hz refresh; see the board module).
 const RTC_TICKS_PER_BASE_TICK: u64 = board::rtc_ticks_per_base_tick(REFRESH_HZ) as u64;
@@ -79,11 +75,7 @@ impl Matrix {
 
 impl MatrixOutput<{ board::WIDTH }, { board::HEIGHT }> for Matrix {
     async fn show(&mut self, step: ScanStep) {
-        let columns = if SENSOR_DOWN.load(Ordering::Relaxed) {
-            board::frame_columns(&board::FAULT_FRAME, step)
-        } else {
-            step.columns
-        };
+        let columns = step.columns;
         if self.lit_row != Some(step.row) {
             // Columns off before switching rows: no ghosting of the old row.
             for col in &mut self.cols {
@@ -199,7 +191,11 @@ pub struct MicrobitInput {
     buttons: Buttons,
     pipeline: TiltPipeline,
     ticker: Option<Ticker>,
-    pending: Option<InputEvent>,
+    /// Events of this poll still to hand out, in order.
+    pending: Deque<InputEvent, 4>,
+    /// Whether the game has been told the sensor is down.
+    down: bool,
+    last_fault: Fault,
     watchdog: Option<WatchdogHandle>,
 }
 
@@ -218,7 +214,9 @@ impl MicrobitInput {
             buttons: Buttons::new(board::BUTTONS),
             pipeline: TiltPipeline::new(board::AXIS_MAP, board::SUPERVISOR),
             ticker: None,
-            pending: None,
+            pending: Deque::new(),
+            down: false,
+            last_fault: Fault::Bus,
             watchdog,
         }
     }
@@ -239,11 +237,7 @@ impl MicrobitInput {
         {
             Some(ButtonEvent::NextLevel) => Some(Command::NextLevel),
             Some(ButtonEvent::Restart) => Some(Command::Restart),
-            Some(ButtonEvent::Calibrate) => {
-                let done = self.pipeline.calibrate();
-                defmt::info!("calibrate: {} ({})", done, self.pipeline.calibration());
-                None
-            }
+            Some(ButtonEvent::Calibrate) => Some(Command::Calibrate),
             None => None,
         };
         let sample = read(&mut self.sensor).await;
@@ -264,9 +258,19 @@ impl MicrobitInput {
             }
             Action::ShowFault => {}
         }
+        if let Err(fault) = sample {
+            self.last_fault = fault;
+        }
         let down = self.pipeline.is_down();
-        if SENSOR_DOWN.swap(down, Ordering::Relaxed) != down {
+        if self.down != down {
+            self.down = down;
             defmt::warn!("accelerometer down: {}", down);
+            let event = if down {
+                InputEvent::SensorDown(self.last_fault)
+            } else {
+                InputEvent::SensorUp
+            };
+            let _ = self.pending.push_back(event);
         }
         (command, to_tilt(self.pipeline.tilt()))
     }
@@ -274,7 +278,7 @@ impl MicrobitInput {
 
 impl TiltInput for MicrobitInput {
     async fn next_event(&mut self) -> InputEvent {
-        if let Some(event) = self.pending.take() {
+        if let Some(event) = self.pending.pop_front() {
             return event;
         }
         match &mut self.ticker {
@@ -294,12 +298,10 @@ impl TiltInput for MicrobitInput {
             watchdog.pet();
         }
         let (command, tilt) = self.poll().await;
-        match command {
-            Some(command) => {
-                self.pending = Some(InputEvent::Tilt(tilt));
-                InputEvent::Command(command)
-            }
-            None => InputEvent::Tilt(tilt),
+        if let Some(command) = command {
+            let _ = self.pending.push_back(InputEvent::Command(command));
         }
+        let _ = self.pending.push_back(InputEvent::Tilt(tilt));
+        self.pending.pop_front().unwrap_or(InputEvent::Tilt(tilt))
     }
 }

@@ -36,7 +36,7 @@ use lsm303agr::Lsm303agr;
 
 use marble_rolling::app::{self, Links};
 use marble_rolling::board::microbit as board;
-use marble_rolling::tilt::TiltConfig;
+use marble_rolling::input::tilt::TiltConfig;
 
 bind_interrupts!(struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;

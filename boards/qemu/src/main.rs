@@ -15,11 +15,12 @@
 #![no_main]
 
 use defmt_semihosting as _;
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, Player, TerminalInput};
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TerminalInput};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
 use marble_rolling::board::qemu::{Options, HEIGHT, WIDTH};
 use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{OnTimeIntegrator, Scanner};
@@ -195,7 +196,8 @@ fn profile() {
     let mut total = Costs::default();
     let mut picture = marble_rolling::matrix::Frame::<WIDTH, HEIGHT>::new();
     for index in 0..LEVELS.len() {
-        let Ok(mut player) = Player::<WIDTH, HEIGHT, PILOT>::new(index, SYNTHETIC_TILT, true)
+        let Ok(mut player) =
+            Player::<WIDTH, HEIGHT, PILOT>::new(&LEVELS, index, SYNTHETIC_TILT, true)
         else {
             continue;
         };

@@ -33,9 +33,9 @@
 //! exact to the microsecond but needs its own interrupt handler and shared
 //! state; the RTC budget above makes it unnecessary.
 
-use crate::buttons::ButtonConfig;
-use crate::matrix::{base_tick_hz, Frame, ScanStep};
-use crate::sensor::{Axis, AxisMap, AxisSource, SupervisorConfig};
+use crate::input::buttons::ButtonConfig;
+use crate::input::sensor::{Axis, AxisMap, AxisSource, SupervisorConfig};
+use crate::matrix::base_tick_hz;
 
 /// Frequency of the nRF RTC that drives embassy-time (`time-driver-rtc1`).
 pub const RTC_HZ: u32 = 32_768;
@@ -118,30 +118,3 @@ pub const AXIS_MAP: AxisMap = AxisMap {
     y: AxisSource::neg(Axis::Z),
     z: AxisSource::pos(Axis::Y),
 };
-
-/// Full brightness, for the fault pattern.
-const F: u8 = crate::matrix::MAX_BRIGHTNESS;
-
-/// Shown instead of the game while the accelerometer is down: a cross.
-pub const FAULT_FRAME: Frame<WIDTH, HEIGHT> = Frame::from_rows([
-    [F, 0, 0, 0, F],
-    [0, F, 0, F, 0],
-    [0, 0, F, 0, 0],
-    [0, F, 0, F, 0],
-    [F, 0, 0, 0, F],
-]);
-
-/// The columns `frame` lights during `step` (same row and BCM slice), to
-/// substitute `frame` for whatever the scanner was showing without
-/// disturbing the scan timing. `step.ticks` is `2^bit` of the slice.
-pub fn frame_columns<const W: usize, const H: usize>(frame: &Frame<W, H>, step: ScanStep) -> u32 {
-    let bit = step.ticks.trailing_zeros();
-    let Some(levels) = frame.rows().get(step.row) else {
-        return 0;
-    };
-    levels
-        .iter()
-        .enumerate()
-        .filter(|&(x, &level)| x < 32 && bit < 8 && (level >> bit) & 1 != 0)
-        .fold(0, |acc, (x, _)| acc | (1u32 << x))
-}

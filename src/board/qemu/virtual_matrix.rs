@@ -13,8 +13,9 @@ use core::fmt::Write as _;
 use embassy_time::{Duration, Ticker};
 
 use super::{HEIGHT, WIDTH};
-use crate::app::{level_name, Console, Latest, MatrixOutput, Status, FRAME_HZ, REFRESH_HZ};
+use crate::app::{Console, Latest, MatrixOutput, FRAME_HZ, REFRESH_HZ};
 use crate::game::levels::LEVELS;
+use crate::game::player::Status;
 use crate::matrix::{Brightness, Frame, OnTimeIntegrator, ScanStep, Scanner};
 
 /// One picture of the virtual matrix.
@@ -172,7 +173,9 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
         "\r\n  level {}/{} {}: {} {}.{} s{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
         usize::from(status.level) + 1,
         LEVELS.len(),
-        level_name(usize::from(status.level)),
+        LEVELS
+            .get(usize::from(status.level))
+            .map_or("?", |level| level.info.name),
         status.phase.as_str(),
         tenths / 10,
         tenths % 10,

@@ -63,6 +63,13 @@ pub enum LayoutError {
     PitchOutOfRange,
 }
 
+/// Smallest cell pitch `s + l` in micrometres that [`TileLayout::from_um`]
+/// sets up: 1 mm. The level parser checks the same constants.
+pub const MIN_PITCH_UM: u32 = 1_000;
+/// Largest cell pitch `s + l` in micrometres: 100 mm, so that a 127-tile board
+/// (63.5 pitches) stays well inside I8F24's ±128 pitches.
+pub const MAX_PITCH_UM: u32 = 100_000;
+
 /// The short width `s` and long width `l`, in pitches (`s + l = 1` exactly).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TileLayout<S> {
@@ -82,7 +89,7 @@ impl<S: Scalar> TileLayout<S> {
             return Err(LayoutError::ZeroWidth);
         }
         let pitch = short_um as u64 + long_um as u64;
-        if !(1_000..=100_000).contains(&pitch) {
+        if !(MIN_PITCH_UM as u64..=MAX_PITCH_UM as u64).contains(&pitch) {
             return Err(LayoutError::PitchOutOfRange);
         }
         let s = S::ratio(short_um as i64, pitch as i64);

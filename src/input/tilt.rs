@@ -8,7 +8,7 @@
 //! # Frames and signs
 //!
 //! Readings are in the **board frame** of [`crate::sensor`] (after its
-//! [`AxisMap`](crate::sensor::AxisMap)): `x` right (grid columns), `y` up out of
+//! [`AxisMap`](crate::input::sensor::AxisMap)): `x` right (grid columns), `y` up out of
 //! the board, `z` towards the player (grid rows downwards). An accelerometer
 //! reads the reaction to gravity, so a flat board reads `(0, +1000, 0)` and the
 //! gravity handed to the physics is its negation, `(0, −1000, 0)` (down = −y).
@@ -18,10 +18,10 @@
 //! # Fit with [`crate::sensor`]
 //!
 //! The plausibility bounds are a [`Plausibility`] and the "level" offset is a
-//! [`Calibration`], with exactly the rules of [`crate::sensor::TiltPipeline`],
+//! [`Calibration`], with exactly the rules of [`crate::input::sensor::TiltPipeline`],
 //! so both paths accept the same samples and calibrate the same way. A
 //! [`TiltError`] converts into a [`Fault`] (`Stuck` → [`Fault::NoData`], the
-//! rest → [`Fault::Implausible`]), so a [`SensorSupervisor`](crate::sensor::SensorSupervisor)
+//! rest → [`Fault::Implausible`]), so a [`SensorSupervisor`](crate::input::sensor::SensorSupervisor)
 //! over gravity can run the re-init / fault-display policy:
 //! `supervisor.feed(filter.push(raw).map_err(Fault::from))`. Feed it raw
 //! (uncalibrated) board-frame samples: the filter does its own calibration.
@@ -33,8 +33,8 @@
 //! cheap on a Cortex-M0. Every operation is saturating or provably in range,
 //! so no `i32` input can overflow or panic.
 
+use crate::input::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
 use crate::physics::world::MAX_MG;
-use crate::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
 
 /// Fractional bits of the low-pass state (the state is mg · 2^12).
 ///

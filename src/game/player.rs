@@ -1,0 +1,359 @@
+//! One player's game as the firmware and the terminal player run it: a
+//! [`Session`] on a level, the [`Renderer`] that follows the marble, the
+//! autopilot when it plays, and the game loop's own state — the pause that
+//! shows a finished attempt, and the pause while the sensor is down.
+//!
+//! [`Player::tick`] is one frame of that loop, synchronous and free of
+//! time: the firmware's game task calls it from its ticker, host tests call
+//! it frame by frame, and `cargo play` calls it from its terminal loop, so
+//! all three play the same game for the same inputs.
+//!
+//! # A downed sensor pauses the game
+//!
+//! While the accelerometer is down ([`InputEvent::SensorDown`]) nothing
+//! moves: no physics step, no frame on the level clock, no countdown of a
+//! win or loss display, and the display shows [`fault_frame`]. The tilt the
+//! game last had is not trusted any more, and letting the marble roll on it
+//! behind the fault picture would let it win or fall unseen. When the sensor
+//! is back ([`InputEvent::SensorUp`]) the game goes on from the very state it
+//! paused in: pausing changes no bit of the session.
+
+use super::autopilot::Autopilot;
+use super::level::LevelView;
+use super::rules::{Game, GameConfig, Phase};
+use super::session::Session;
+use crate::input::event::{Command, InputEvent};
+use crate::input::sensor::Fault;
+use crate::input::tilt::TiltConfig;
+use crate::matrix::{Frame, MAX_BRIGHTNESS};
+use crate::physics::world::SetupError;
+use crate::physics::Fx;
+use crate::render::Renderer;
+
+/// The game's configuration: 128 frames/s × 8 physics steps (the same as the
+/// host tools, so that `state_hash`es agree).
+pub const GAME_CONFIG: GameConfig = GameConfig::DEFAULT;
+/// Game frames per second (each one is `2^substeps_log2` physics steps).
+pub const FRAME_HZ: u32 = GAME_CONFIG.frame_hz();
+/// How long a won level is shown (flashing) before the next one, in frames.
+pub const WIN_PAUSE_FRAMES: u32 = FRAME_HZ;
+/// How long a lost attempt (fell, time up) is shown before the restart.
+pub const LOSS_PAUSE_FRAMES: u32 = FRAME_HZ / 2;
+/// Flash period of the win display, frames (on and off for this long each).
+const WIN_FLASH_FRAMES: u32 = FRAME_HZ / 8;
+
+/// What the game is doing, for status displays (QEMU's terminal).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// Index of the level in the player's level list.
+    pub level: u8,
+    /// Where the attempt stands.
+    pub phase: Phase,
+    /// Frames played in this attempt.
+    pub frames: u32,
+    /// The reading fed to the game last (milli-g, board frame).
+    pub reading: [i32; 3],
+    /// Whether the autopilot is playing.
+    pub autopilot: bool,
+    /// Whether the game is paused because the sensor is down.
+    pub sensor_down: bool,
+}
+
+impl Status {
+    /// Before the first frame.
+    pub const START: Status = Status {
+        level: 0,
+        phase: Phase::Playing,
+        frames: 0,
+        reading: [0, 1000, 0],
+        autopilot: false,
+        sensor_down: false,
+    };
+}
+
+/// What one [`Player::tick`] did.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Tick<const W: usize, const H: usize> {
+    /// The picture to show, when the caller asked for one (and something is
+    /// to be shown: the fault picture is drawn once per outage).
+    pub frame: Option<Frame<W, H>>,
+    /// The attempt finished in this frame, with this outcome.
+    pub finished: Option<Phase>,
+}
+
+/// One player's game on a `W`×`H` display (see the module doc).
+///
+/// `PILOT` says whether the board has the autopilot at all
+/// ([`Command::ToggleAutopilot`], the demo). It is a constant, not a flag, so
+/// that a board without it (the micro:bit: no button combination is left for
+/// it) does not link the controller: about 6 KiB of flash.
+#[derive(Clone, Debug)]
+pub struct Player<const W: usize, const H: usize, const PILOT: bool> {
+    levels: &'static [LevelView<'static>],
+    level: usize,
+    session: Session<'static, Fx>,
+    renderer: Renderer<W, H>,
+    tilt: TiltConfig,
+    autopilot: Option<Autopilot>,
+    /// The finished attempt on show, and frames left to show it.
+    pause: Option<(Phase, u32)>,
+    /// Why the sensor is down, while it is.
+    sensor_down: Option<Fault>,
+    /// The fault picture has been handed out for this outage.
+    fault_shown: bool,
+}
+
+impl<const W: usize, const H: usize, const PILOT: bool> Player<W, H, PILOT> {
+    /// Level `level` of `levels` (wrapped into range; `levels` must not be
+    /// empty) with the tilt path `tilt`; the autopilot plays if `autopilot`
+    /// (and the board has it, `PILOT`).
+    pub fn new(
+        levels: &'static [LevelView<'static>],
+        level: usize,
+        tilt: TiltConfig,
+        autopilot: bool,
+    ) -> Result<Self, SetupError> {
+        let level = level % levels.len().max(1);
+        let Some(view) = levels.get(level) else {
+            return Err(SetupError::MarbleCount);
+        };
+        Ok(Player {
+            levels,
+            level,
+            session: Session::new(*view, GAME_CONFIG, tilt)?,
+            renderer: Renderer::new(),
+            tilt,
+            autopilot: (PILOT && autopilot).then(|| Autopilot::new(view)),
+            pause: None,
+            sensor_down: None,
+            fault_shown: false,
+        })
+    }
+
+    /// Index of the level in the level list.
+    pub fn level_index(&self) -> usize {
+        self.level
+    }
+    /// The level's name.
+    pub fn level_name(&self) -> &'static str {
+        self.levels
+            .get(self.level)
+            .map_or("?", |level| level.info.name)
+    }
+    /// The session.
+    pub fn session(&self) -> &Session<'static, Fx> {
+        &self.session
+    }
+    /// The session, mutably (profiling, tools).
+    pub fn session_mut(&mut self) -> &mut Session<'static, Fx> {
+        &mut self.session
+    }
+    /// The game.
+    pub fn game(&self) -> &Game<'static, Fx> {
+        self.session.game()
+    }
+    /// Whether the autopilot plays.
+    pub fn autopilot(&self) -> bool {
+        self.autopilot.is_some()
+    }
+    /// Why the sensor is down, while the game is paused for it.
+    pub fn sensor_down(&self) -> Option<Fault> {
+        self.sensor_down
+    }
+
+    /// Hands the board to the autopilot (planned afresh for the level), or
+    /// takes it back. Without `PILOT` it stays off.
+    pub fn set_autopilot(&mut self, on: bool) {
+        self.autopilot = match self.levels.get(self.level) {
+            Some(view) if PILOT && on => Some(Autopilot::new(view)),
+            _ => None,
+        };
+    }
+
+    /// The reading for the next frame: the autopilot's when it plays, else
+    /// `tilt_mg` (the accelerometer's or the keys').
+    pub fn reading(&mut self, tilt_mg: [i32; 3]) -> [i32; 3] {
+        match &mut self.autopilot {
+            // `PILOT` again, though the pilot is never set without it: the
+            // compiler cannot see that, and the constant drops the controller
+            // (~2 KB) from a board without it.
+            Some(pilot) if PILOT => pilot.reading_mg(self.session.game()),
+            _ => tilt_mg,
+        }
+    }
+
+    /// Plays one frame (`2^substeps_log2` physics steps) with
+    /// [`Player::reading`]`(tilt_mg)` and returns where the attempt stands. A
+    /// finished attempt stays finished (the game does not step any more).
+    /// This is the bare step, without the loop's pauses: [`Player::tick`] is
+    /// the game loop.
+    pub fn frame(&mut self, tilt_mg: [i32; 3]) -> Phase {
+        let reading = self.reading(tilt_mg);
+        self.session.frame(reading)
+    }
+
+    /// The current picture.
+    pub fn render(&mut self) -> Frame<W, H> {
+        self.renderer.render(self.session.game())
+    }
+
+    /// For status displays.
+    pub fn status(&self) -> Status {
+        let game = self.session.game();
+        Status {
+            level: self.level.min(usize::from(u8::MAX)) as u8,
+            phase: game.phase(),
+            frames: game.frames(),
+            reading: self.session.reading(),
+            autopilot: self.autopilot(),
+            sensor_down: self.sensor_down.is_some(),
+        }
+    }
+
+    /// Takes an input event other than a tilt reading (tilt readings are
+    /// passed to [`Player::tick`]). Returns `false` for [`Command::Quit`].
+    pub fn handle(&mut self, event: InputEvent) -> bool {
+        match event {
+            InputEvent::Tilt(_) => {}
+            InputEvent::Command(command) => match command {
+                Command::Restart => self.restart(),
+                Command::NextLevel => self.next_level(),
+                Command::Calibrate => self.calibrate(),
+                Command::ToggleAutopilot => self.set_autopilot(!self.autopilot()),
+                Command::Quit => return false,
+            },
+            InputEvent::SensorDown(fault) => {
+                if self.sensor_down.is_none() {
+                    self.fault_shown = false;
+                }
+                self.sensor_down = Some(fault);
+            }
+            InputEvent::SensorUp => self.sensor_down = None,
+        }
+        true
+    }
+
+    /// One frame of the game loop with the latest tilt reading `tilt_mg`:
+    /// paused while the sensor is down; else a physics frame, or one frame of
+    /// a finished attempt's display, after which a won level moves on to the
+    /// next and a lost one restarts. `draw` asks for the picture (the
+    /// firmware asks only once the display has taken the previous one:
+    /// rendering is not free).
+    pub fn tick(&mut self, tilt_mg: [i32; 3], draw: bool) -> Tick<W, H> {
+        if self.sensor_down.is_some() {
+            let frame = (draw && !self.fault_shown).then(fault_frame);
+            self.fault_shown |= frame.is_some();
+            return Tick {
+                frame,
+                finished: None,
+            };
+        }
+        if self.fault_shown {
+            // Back from an outage: the game's picture replaces the fault's.
+            self.fault_shown = false;
+        }
+        let mut finished = None;
+        let frame = match self.pause {
+            None => {
+                let phase = self.frame(tilt_mg);
+                if phase != Phase::Playing {
+                    finished = Some(phase);
+                    let frames = if phase == Phase::Won {
+                        WIN_PAUSE_FRAMES
+                    } else {
+                        LOSS_PAUSE_FRAMES
+                    };
+                    self.pause = Some((phase, frames));
+                }
+                draw.then(|| self.render())
+            }
+            Some((phase, 0)) => {
+                if phase == Phase::Won {
+                    self.next_level();
+                } else {
+                    self.restart();
+                }
+                draw.then(|| self.render())
+            }
+            Some((phase, left)) => {
+                self.pause = Some((phase, left - 1));
+                draw.then(|| {
+                    let frame = self.render();
+                    if phase == Phase::Won {
+                        win_frame(&frame, left)
+                    } else {
+                        frame
+                    }
+                })
+            }
+        };
+        Tick { frame, finished }
+    }
+
+    /// Starts the level over (the tilt calibration is kept).
+    pub fn restart(&mut self) {
+        self.session.restart();
+        self.renderer.reset();
+        self.pause = None;
+        if self.autopilot.is_some() {
+            self.set_autopilot(true);
+        }
+    }
+
+    /// Moves on to the next level of the list (after the last: the first),
+    /// keeping the tilt calibration, the autopilot setting and a sensor
+    /// outage. A level that cannot be set up is skipped.
+    pub fn next_level(&mut self) {
+        let calibration = self.session.tilt().calibration();
+        for offset in 1..=self.levels.len() {
+            let index = self.level + offset;
+            if let Ok(mut next) = Self::new(self.levels, index, self.tilt, self.autopilot()) {
+                next.session.tilt_mut().set_calibration(calibration);
+                next.sensor_down = self.sensor_down;
+                next.fault_shown = self.fault_shown;
+                *self = next;
+                #[cfg(feature = "defmt")]
+                defmt::info!("level {=usize}: {=str}", self.level + 1, self.level_name());
+                return;
+            }
+        }
+    }
+
+    /// Takes the current filtered tilt as level (an implausible one is
+    /// refused). This is the one place the game calibrates: a board's
+    /// buttons and a terminal's key both send [`Command::Calibrate`].
+    pub fn calibrate(&mut self) {
+        let reading = self.session.tilt().filtered_reading_mg();
+        let result = self.session.tilt_mut().calibrate(reading);
+        #[cfg(feature = "defmt")]
+        defmt::info!("calibrate: {}", result);
+        let _ = result;
+    }
+}
+
+/// The won level's display: the final picture flashing with a full-on
+/// screen, [`WIN_FLASH_FRAMES`] each; `left` counts the frames down.
+pub fn win_frame<const W: usize, const H: usize>(last: &Frame<W, H>, left: u32) -> Frame<W, H> {
+    if win_flash(left) {
+        Frame::filled(MAX_BRIGHTNESS)
+    } else {
+        *last
+    }
+}
+
+/// Whether [`win_frame`] shows the full-on screen with `left` frames to go.
+pub fn win_flash(left: u32) -> bool {
+    (left / WIN_FLASH_FRAMES.max(1)).is_multiple_of(2)
+}
+
+/// Shown while the accelerometer is down: a cross from corner to corner.
+pub fn fault_frame<const W: usize, const H: usize>() -> Frame<W, H> {
+    let mut frame = Frame::new();
+    for y in 0..H {
+        let x = if H > 1 { y * (W - 1) / (H - 1) } else { 0 };
+        frame.set(x, y, MAX_BRIGHTNESS);
+        frame.set(W - 1 - x, y, MAX_BRIGHTNESS);
+    }
+    frame
+}

@@ -1,0 +1,20 @@
+//! The input path, from what a board reads to the gravity the physics gets:
+//!
+//! ```text
+//! accelerometer ─► sensor: axis map, plausibility, fault supervision ─┐
+//! buttons ───────► buttons: debounce, A / B / A+B hold ───────────────┼─► events ─► game
+//! terminal keys ─► keys: decoding, key tilt ──────────────────────────┘
+//!                          (in the game's session) tilt: calibration, low-pass, stuck check ─► physics
+//! ```
+//!
+//! Everything here is pure: a board feeds bytes, pin levels and samples in,
+//! and host tests drive the same code.
+
+pub mod event;
+pub mod keys;
+/// Two-button debouncing and the A / B / A+B-hold combinations.
+pub mod buttons;
+/// Accelerometer axis mapping, plausibility and fault supervision.
+pub mod sensor;
+/// Tilt input path: accelerometer sample → filtered, calibrated gravity for the physics.
+pub mod tilt;

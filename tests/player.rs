@@ -1,0 +1,190 @@
+//! The game loop step every front end runs (`game::player::Player::tick`):
+//! a downed sensor pauses the game and the game resumes exactly where it was;
+//! the terminal player's keys give the firmware's readings and game.
+
+use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::player::{fault_frame, Player, LOSS_PAUSE_FRAMES, WIN_PAUSE_FRAMES};
+use marble_rolling::game::rules::Phase;
+use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::input::event::{Command, InputEvent, Tilt};
+use marble_rolling::input::keys::KeyTilt;
+use marble_rolling::input::sensor::Fault;
+
+type FivePlayer = Player<5, 5, true>;
+
+/// A reading that rolls the marble: 0.3 g towards +x.
+const TILTED: [i32; 3] = [-300, 954, 0];
+
+fn player(level: usize) -> FivePlayer {
+    FivePlayer::new(&LEVELS, level, SYNTHETIC_TILT, false).expect("built-in level")
+}
+
+#[test]
+fn a_downed_sensor_pauses_the_game_and_it_resumes_where_it_was() {
+    let mut reference = player(1);
+    let mut paused = player(1);
+    for _ in 0..40 {
+        reference.tick(TILTED, false);
+        paused.tick(TILTED, false);
+    }
+    assert_eq!(
+        paused.session().state_hash(),
+        reference.session().state_hash()
+    );
+
+    assert!(paused.handle(InputEvent::SensorDown(Fault::Bus)));
+    let hash = paused.session().state_hash();
+    let frames = paused.game().frames();
+    let steps = paused.game().steps();
+    let first = paused.tick(TILTED, true);
+    assert_eq!(
+        first.frame,
+        Some(fault_frame::<5, 5>()),
+        "the fault picture is shown"
+    );
+    for _ in 0..500 {
+        let tick = paused.tick(TILTED, true);
+        assert_eq!(
+            tick.frame, None,
+            "the fault picture is handed out once per outage"
+        );
+        assert_eq!(tick.finished, None);
+    }
+    assert!(paused.status().sensor_down);
+    assert_eq!(paused.session().state_hash(), hash, "no physics while down");
+    assert_eq!(paused.game().frames(), frames, "the level clock stopped");
+    assert_eq!(paused.game().steps(), steps);
+
+    // Commands still work while down (a restart, say); here none is sent.
+    assert!(paused.handle(InputEvent::SensorUp));
+    let back = paused.tick(TILTED, true);
+    assert!(back.frame.is_some(), "the game's picture again");
+    assert_ne!(back.frame, Some(fault_frame::<5, 5>()));
+    reference.tick(TILTED, false);
+    for _ in 0..200 {
+        reference.tick(TILTED, false);
+        paused.tick(TILTED, false);
+        assert_eq!(
+            paused.session().state_hash(),
+            reference.session().state_hash()
+        );
+    }
+    assert!(!paused.status().sensor_down);
+}
+
+#[test]
+fn an_outage_during_the_win_display_holds_it() {
+    let mut p = FivePlayer::new(&LEVELS, 0, SYNTHETIC_TILT, true).expect("level");
+    let mut won = None;
+    for frame in 0..20_000 {
+        if let Some(phase) = p.tick([0, 1000, 0], false).finished {
+            won = Some((phase, frame));
+            break;
+        }
+    }
+    assert_eq!(
+        won.map(|w| w.0),
+        Some(Phase::Won),
+        "the autopilot wins level 1"
+    );
+    p.handle(InputEvent::SensorDown(Fault::NoData));
+    for _ in 0..10 * WIN_PAUSE_FRAMES {
+        p.tick([0, 1000, 0], false);
+    }
+    assert_eq!(
+        p.level_index(),
+        0,
+        "the win display does not run out while paused"
+    );
+    p.handle(InputEvent::SensorUp);
+    for _ in 0..=WIN_PAUSE_FRAMES {
+        p.tick([0, 1000, 0], false);
+    }
+    assert_eq!(
+        p.level_index(),
+        1,
+        "then the next level, as without the outage"
+    );
+    const { assert!(LOSS_PAUSE_FRAMES < WIN_PAUSE_FRAMES) };
+}
+
+#[test]
+fn commands_reach_the_game_and_quit_is_reported() {
+    let mut p = player(2);
+    for _ in 0..50 {
+        p.tick(TILTED, false);
+    }
+    assert!(p.game().frames() > 0);
+    assert!(p.handle(InputEvent::Command(Command::Restart)));
+    assert_eq!(p.game().frames(), 0);
+    assert!(p.handle(InputEvent::Command(Command::NextLevel)));
+    assert_eq!(p.level_index(), 3);
+    assert!(!p.handle(InputEvent::Command(Command::Quit)));
+    // Tilt events are not commands: the tilt is passed to every tick.
+    assert!(p.handle(InputEvent::Tilt(Tilt::FLAT)));
+}
+
+/// Raw terminal bytes: right, right, up (an escape sequence and WASD), then
+/// a level key.
+const BYTES: &[u8] = b"\x1b[C\x1b[Cw d\x1bOA";
+
+#[test]
+fn key_bytes_give_the_same_game_on_every_front_end() {
+    // The firmware's terminal input feeds raw bytes to KeyTilt.
+    let mut keys = KeyTilt::new();
+    let events: Vec<InputEvent> = BYTES.iter().filter_map(|&b| keys.feed(b)).collect();
+    assert_eq!(events.len(), 6, "{events:?}");
+    let readings: Vec<[i32; 3]> = events
+        .iter()
+        .filter_map(|e| match e {
+            InputEvent::Tilt(t) => Some(t.reading_mg()),
+            _ => None,
+        })
+        .collect();
+    // Two presses to the right: x = -200 mg, and y makes the total 1 g with
+    // the integer root the firmware uses.
+    assert_eq!(readings[1], [-200, 979, 0]);
+    let play = |events: &[InputEvent]| {
+        let mut p = player(1);
+        let mut keys_tilt = Tilt::FLAT;
+        for event in events {
+            if let InputEvent::Tilt(t) = event {
+                keys_tilt = *t;
+            }
+            for _ in 0..64 {
+                p.tick(keys_tilt.reading_mg(), false);
+            }
+        }
+        p.session().state_hash()
+    };
+    let firmware = play(&events);
+    #[cfg(feature = "tools")]
+    {
+        use crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+        use marble_rolling::host::play::key_of;
+        let codes = [
+            KeyCode::Right,
+            KeyCode::Right,
+            KeyCode::Char('w'),
+            KeyCode::Char(' '),
+            KeyCode::Char('d'),
+            KeyCode::Up,
+        ];
+        let mut keys = KeyTilt::new();
+        let terminal: Vec<InputEvent> = codes
+            .iter()
+            .filter_map(|&code| key_of(KeyEvent::new(code, KeyModifiers::NONE)))
+            .map(|key| keys.press(key))
+            .collect();
+        assert_eq!(
+            terminal, events,
+            "cargo play's keys give the firmware's readings"
+        );
+        assert_eq!(play(&terminal), firmware, "and the same game");
+    }
+    assert_ne!(
+        firmware,
+        player(1).session().state_hash(),
+        "the keys moved the marble"
+    );
+}
