@@ -333,7 +333,7 @@ impl<const W: usize, const H: usize, const PILOT: bool> Player<W, H, PILOT> {
 }
 
 /// The won level's display: the final picture flashing with a full-on
-/// screen, [`WIN_FLASH_FRAMES`] each; `left` counts the frames down.
+/// screen, an eighth of a second each; `left` counts the frames down.
 pub fn win_frame<const W: usize, const H: usize>(last: &Frame<W, H>, left: u32) -> Frame<W, H> {
     if win_flash(left) {
         Frame::filled(MAX_BRIGHTNESS)

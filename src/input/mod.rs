@@ -12,9 +12,6 @@
 
 pub mod event;
 pub mod keys;
-/// Two-button debouncing and the A / B / A+B-hold combinations.
 pub mod buttons;
-/// Accelerometer axis mapping, plausibility and fault supervision.
 pub mod sensor;
-/// Tilt input path: accelerometer sample → filtered, calibrated gravity for the physics.
 pub mod tilt;

@@ -1,6 +1,6 @@
 //! The target measurements: the `bench` firmware in QEMU mps2-an386 (Cortex-M4F)
-//! and `bench_m0` in QEMU microbit (Cortex-M0), built and run through cargo (their
-//! runners are `tools/qemu-run.sh` and `tools/qemu-m0-run.sh`), their logs parsed.
+//! and `bench_m0` in QEMU microbit (Cortex-M0), built and run by the project's
+//! tasks (`cargo xtask bench-m4`, `cargo xtask bench-m0`), their logs parsed.
 
 use std::collections::HashMap;
 use std::process::{Command, Stdio};
@@ -97,30 +97,13 @@ pub fn run(cpu: Cpu, rates: u32) -> TargetRun {
     let start = Instant::now();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
-    match cpu {
-        Cpu::M4 => cmd.args([
-            "run",
-            "--release",
-            "--target",
-            "thumbv7em-none-eabihf",
-            "--features",
-            "board-qemu",
-            "--bin",
-            "bench",
-            "--",
-        ]),
-        Cpu::M0 => cmd.args([
-            "run",
-            "--release",
-            "--target",
-            "thumbv6m-none-eabi",
-            "--features",
-            "bench-m0",
-            "--bin",
-            "bench_m0",
-            "--",
-        ]),
-    };
+    cmd.args([
+        "xtask",
+        match cpu {
+            Cpu::M4 => "bench-m4",
+            Cpu::M0 => "bench-m0",
+        },
+    ]);
     cmd.arg(format!("--rates={rates}"));
     cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
     cmd.stdin(Stdio::null())
