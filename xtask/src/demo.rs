@@ -1,0 +1,500 @@
+//! `cargo xtask check-demo`: the firmware must play exactly like the host
+//! simulator. The QEMU firmware's headless demo (the autopilot plays every
+//! built-in level) logs, per level,
+//!
+//! ```text
+//! demo <n>/<total> level=<name> outcome=<won|fell|timeout> steps=<physics steps> state_hash=<16 hex>
+//! ```
+//!
+//! and `sim --level <name> --autopilot --json` must report the same outcome,
+//! step count and state hash; every level must be won. The demo's CPU load must
+//! stay within CPU_BUDGET_CENTIPERCENT (default 300: 3.00 % of a 64 MHz
+//! Cortex-M4). Under -icount that count is exact and the same on every machine,
+//! so the budget is a report with a limit, like the flash budget, not a timing
+//! test.
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use crate::error::{say, Failure, Outcome};
+use crate::firmware::{self, Artifact};
+use crate::runner::{self, Output};
+use crate::setup::{self, M4};
+use crate::workspace;
+
+/// One level as the firmware reported it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Level {
+    pub name: String,
+    pub outcome: String,
+    pub steps: String,
+    pub hash: String,
+}
+
+/// The simulator's `--json` fields we compare (absent ones are `None`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Sim {
+    pub outcome: Option<String>,
+    pub steps: Option<String>,
+    pub hash: Option<String>,
+}
+
+/// One row's verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    Ok,
+    SimFailed,
+    NotWon,
+    Mismatch,
+}
+
+impl Verdict {
+    fn text(self) -> &'static str {
+        match self {
+            Verdict::Ok => "ok",
+            Verdict::SimFailed => "SIM FAILED",
+            Verdict::NotWon => "NOT WON",
+            Verdict::Mismatch => "MISMATCH",
+        }
+    }
+}
+
+/// `text` without ANSI colour sequences (`ESC [ digits/semicolons m`), should
+/// defmt-print or cargo add any.
+pub fn strip_colours(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(at) = rest.find("\x1b[") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + 2..];
+        let params = after.len()
+            - after
+                .trim_start_matches(|c: char| c.is_ascii_digit() || c == ';')
+                .len();
+        if after[params..].starts_with('m') {
+            rest = &after[params + 1..];
+        } else {
+            out.push('\x1b');
+            rest = &rest[at + 1..];
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The per-level lines, in playing order, and the total the first one names.
+pub fn parse_levels(log: &str) -> (Vec<Level>, Option<usize>) {
+    let mut levels = Vec::new();
+    let mut total = None;
+    let mut total_seen = false;
+    for line in log.lines() {
+        if !total_seen {
+            if let Some(found) = rightmost(line, "demo ", parse_total) {
+                total_seen = true;
+                total = found.parse().ok();
+            }
+        }
+        if let Some(level) = rightmost(line, "demo ", parse_level) {
+            levels.push(level);
+        }
+    }
+    (levels, total)
+}
+
+/// The rightmost occurrence of `marker` in `line` from which `parse` succeeds
+/// (what a sed pattern led by a greedy `.*` matches).
+fn rightmost<T>(line: &str, marker: &str, parse: impl Fn(&str) -> Option<T>) -> Option<T> {
+    line.rmatch_indices(marker)
+        .find_map(|(at, _)| parse(&line[at + marker.len()..]))
+}
+
+/// `<digits>/<digits> level=` → the total (possibly empty), after `demo `.
+fn parse_total(rest: &str) -> Option<String> {
+    let rest = rest
+        .trim_start_matches(|c: char| c.is_ascii_digit())
+        .strip_prefix('/')?;
+    let total = digits(rest);
+    rest[total.len()..]
+        .starts_with(" level=")
+        .then(|| total.to_string())
+}
+
+/// `<n>/<total> level=<name> outcome=<o> steps=<s> state_hash=<hex>`, after `demo `.
+fn parse_level(rest: &str) -> Option<Level> {
+    let rest = rest
+        .trim_start_matches(|c: char| c.is_ascii_digit())
+        .strip_prefix('/')?;
+    let rest = rest
+        .trim_start_matches(|c: char| c.is_ascii_digit())
+        .strip_prefix(" level=")?;
+    let (name, rest) = rest.split_once(' ')?;
+    let rest = rest.strip_prefix("outcome=")?;
+    let (outcome, rest) = rest.split_once(' ')?;
+    let rest = rest.strip_prefix("steps=")?;
+    let steps = digits(rest);
+    let rest = rest[steps.len()..].strip_prefix(" state_hash=")?;
+    let hash = rest
+        .split(|c: char| !c.is_ascii_hexdigit())
+        .next()
+        .unwrap_or_default();
+    Some(Level {
+        name: name.into(),
+        outcome: outcome.into(),
+        steps: steps.into(),
+        hash: hash.into(),
+    })
+}
+
+fn digits(text: &str) -> &str {
+    let end = text
+        .find(|c: char| !c.is_ascii_digit())
+        .unwrap_or(text.len());
+    &text[..end]
+}
+
+/// The CPU load in hundredths of a percent, from the first line like
+/// `cpu load: … = X.YY % of a 64 MHz …`.
+pub fn parse_cpu_load(log: &str) -> Option<u64> {
+    log.lines().find_map(cpu_load_of)
+}
+
+fn cpu_load_of(line: &str) -> Option<u64> {
+    let start = line.find("cpu load: ")? + "cpu load: ".len();
+    let line = &line[start..];
+    line.rmatch_indices(" % of a 64 MHz").find_map(|(end, _)| {
+        let number = &line[..end];
+        let cents = number.get(number.len().checked_sub(2)?..)?;
+        let before = number[..number.len() - 2].strip_suffix('.')?;
+        let head = before.trim_end_matches(|c: char| c.is_ascii_digit());
+        let whole = &before[head.len()..];
+        if !head.ends_with(" = ") || !cents.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        format!("{whole}{cents}").parse().ok()
+    })
+}
+
+/// The simulator's fields from its output (its last line that starts with `{`).
+pub fn parse_sim(stdout: &str) -> Option<Sim> {
+    let line = stdout.lines().rfind(|line| line.starts_with('{'))?;
+    let json: serde_json::Value = serde_json::from_str(line).ok()?;
+    let field = |name: &str| match &json[name] {
+        serde_json::Value::String(text) => Some(text.clone()),
+        serde_json::Value::Number(number) => Some(number.to_string()),
+        serde_json::Value::Bool(flag) => Some(flag.to_string()),
+        _ => None,
+    };
+    Some(Sim {
+        outcome: field("outcome"),
+        steps: field("steps"),
+        hash: field("state_hash"),
+    })
+}
+
+/// How the firmware's result for a level compares with the simulator's.
+pub fn verdict(qemu: &Level, sim: Option<&Sim>) -> Verdict {
+    let Some(sim) = sim else {
+        return Verdict::SimFailed;
+    };
+    if qemu.outcome != "won" {
+        return Verdict::NotWon;
+    }
+    let same = sim.outcome.as_deref() == Some(qemu.outcome.as_str())
+        && sim.steps.as_deref() == Some(qemu.steps.as_str())
+        && sim
+            .hash
+            .as_ref()
+            .is_some_and(|hash| hash.eq_ignore_ascii_case(&qemu.hash));
+    if same {
+        Verdict::Ok
+    } else {
+        Verdict::Mismatch
+    }
+}
+
+/// One table row (the old script's printf format).
+pub fn row(cells: [&str; 8]) -> String {
+    let [name, q, s, qs, ss, qh, sh, result] = cells;
+    format!("{name:<16} {q:<8} {s:<8} {qs:>8} {ss:>8} {qh:<16} {sh:<16} {result}")
+}
+
+/// Hundredths as `X.YY`.
+pub fn centi(value: u64) -> String {
+    format!("{}.{:02}", value / 100, value % 100)
+}
+
+/// Whether anything failed; each problem is reported when found, and the check
+/// goes on so that one run shows them all.
+#[derive(Default)]
+struct Problems(bool);
+
+impl Problems {
+    fn report(&mut self, message: String) {
+        say!("{message}");
+        self.0 = true;
+    }
+}
+
+/// `cargo xtask check-demo`.
+pub fn run() -> Outcome {
+    let log = workspace::env_path(
+        "CHECK_DEMO_LOG",
+        workspace::target_dir()?.join("check-demo-qemu.log"),
+    );
+    let mut problems = Problems::default();
+
+    say!("running the QEMU demo (cargo qemu --demo)…");
+    let status = run_demo(&log)?;
+    let text = std::fs::read(&log)
+        .map_err(|e| Failure::new(format!("cannot read the QEMU log {}: {e}", log.display())))?;
+    let text = strip_colours(&String::from_utf8_lossy(&text));
+    // The log is kept for reading, as plain text.
+    let _ = std::fs::write(&log, &text);
+    if status != 0 {
+        problems.report(format!(
+            "the QEMU demo exited with status {status} (log: {}); its last lines:",
+            log.display()
+        ));
+        let lines: Vec<&str> = text.lines().collect();
+        for line in &lines[lines.len().saturating_sub(15)..] {
+            eprintln!("{line}");
+        }
+    }
+
+    let (levels, total) = parse_levels(&text);
+    if levels.is_empty() {
+        return Err(Failure::new(format!(
+            "no per-level lines in the QEMU log ({})",
+            log.display()
+        )));
+    }
+    if let Some(total) = total.filter(|&total| total != levels.len()) {
+        problems.report(format!(
+            "the QEMU demo reported {} of {total} levels",
+            levels.len()
+        ));
+    }
+
+    say!("building the host simulator (cargo sim)…");
+    let sim = firmware::build(&Artifact {
+        package: "marble-rolling",
+        bin: "sim",
+        target: None,
+        features: Some("tools"),
+        quiet: true,
+    })
+    .map_err(|e| {
+        Failure::new(format!(
+            "cannot build the host simulator (bin sim, feature tools): {}",
+            e.message
+        ))
+    })?;
+
+    println!(
+        "{}",
+        row([
+            "level",
+            "qemu",
+            "sim",
+            "q.steps",
+            "s.steps",
+            "qemu hash",
+            "sim hash",
+            "result"
+        ])
+    );
+    for level in &levels {
+        let sim = simulate(&sim, &level.name);
+        let verdict = verdict(level, sim.as_ref());
+        problems.0 |= verdict != Verdict::Ok;
+        let sim = sim.unwrap_or_default();
+        let or_dash = |field: &Option<String>| match field.as_deref() {
+            Some(text) if !text.is_empty() => text.to_string(),
+            _ => "-".to_string(),
+        };
+        println!(
+            "{}",
+            row([
+                &level.name,
+                &level.outcome,
+                &or_dash(&sim.outcome),
+                &level.steps,
+                &or_dash(&sim.steps),
+                &level.hash,
+                &or_dash(&sim.hash),
+                verdict.text(),
+            ])
+        );
+    }
+
+    let budget = workspace::env_number("CPU_BUDGET_CENTIPERCENT", 300)?;
+    match parse_cpu_load(&text) {
+        None => problems.report(format!("no cpu load line in the QEMU log ({})", log.display())),
+        Some(load) if load > budget => problems.report(format!(
+            "CPU load {} % is over the budget of {} % (cargo xtask qemu-profile shows where it goes)",
+            centi(load),
+            centi(budget)
+        )),
+        Some(load) => say!("CPU load {} % of 64 MHz (budget {} %)", centi(load), centi(budget)),
+    }
+
+    if problems.0 {
+        return Err(Failure::new(format!(
+            "FAILED (QEMU log: {})",
+            log.display()
+        )));
+    }
+    say!(
+        "OK: {} levels won, QEMU and the simulator agree on outcome, steps and state hash",
+        levels.len()
+    );
+    Ok(0)
+}
+
+/// The headless demo, exactly as `cargo xtask qemu --demo` runs it, its output
+/// (QEMU's and defmt-print's) into `log`; QEMU's status.
+fn run_demo(log: &Path) -> Outcome {
+    if let Some(dir) = log.parent() {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let file = File::create(log)
+        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log.display())))?;
+    let limit = runner::timeout(600)?;
+    let tools = setup::m4_qemu()?;
+    let elf = firmware::build(&Artifact::firmware("marble-qemu", "qemu", M4))?;
+    let demo = ["--demo".to_string()];
+    match runner::headless(&tools, &elf, &demo, Output::File(&file), limit) {
+        Ok(status) => Ok(status),
+        // A timeout is a failed demo like any other: report it with the log.
+        Err(failure) if failure.status == 124 => Ok(124),
+        Err(failure) => Err(failure),
+    }
+}
+
+/// The simulator's result for `level`, or `None` when it printed no JSON.
+fn simulate(sim: &PathBuf, level: &str) -> Option<Sim> {
+    let out = Command::new(sim)
+        .args(["--level", level, "--autopilot", "--json"])
+        .current_dir(workspace::root())
+        .stdin(Stdio::null())
+        .stderr(Stdio::null())
+        .output()
+        .ok()?;
+    parse_sim(&String::from_utf8_lossy(&out.stdout))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LOG: &str = "\
+\x1b[32mINFO \x1b[0m demo 1/3 level=corner outcome=won steps=1234 state_hash=00ab12CD34ef5678
+└─ app::demo @ src/app.rs:463
+INFO  demo 2/3 level=pit outcome=fell steps=99 state_hash=ffffffffffffffff
+noise demo 3/3 level=last outcome=won steps=7 state_hash=0123456789abcdef
+INFO  cpu load: 123 busy instructions in 456 us of firmware time = 789 instructions/s = 1.23 % of a 64 MHz Cortex-M4 (60 frames/s, 1000 refreshes/s)
+";
+
+    fn level(name: &str, outcome: &str, steps: &str, hash: &str) -> Level {
+        Level {
+            name: name.into(),
+            outcome: outcome.into(),
+            steps: steps.into(),
+            hash: hash.into(),
+        }
+    }
+
+    #[test]
+    fn colours_are_stripped() {
+        assert_eq!(
+            strip_colours("\x1b[1;31mred\x1b[0m plain \x1b[2K"),
+            "red plain \x1b[2K"
+        );
+        assert_eq!(strip_colours("no escapes"), "no escapes");
+    }
+
+    #[test]
+    fn level_lines_are_parsed_in_order() {
+        let (levels, total) = parse_levels(&strip_colours(LOG));
+        assert_eq!(total, Some(3));
+        assert_eq!(
+            levels,
+            [
+                level("corner", "won", "1234", "00ab12CD34ef5678"),
+                level("pit", "fell", "99", "ffffffffffffffff"),
+                level("last", "won", "7", "0123456789abcdef"),
+            ]
+        );
+    }
+
+    #[test]
+    fn malformed_level_lines_are_skipped() {
+        let (levels, total) = parse_levels("demo 1/2 level=a outcome=won steps=x state_hash=00\n");
+        assert!(levels.is_empty());
+        assert_eq!(total, Some(2));
+        let (levels, total) = parse_levels("demo /  level=a\n");
+        assert!(levels.is_empty());
+        assert_eq!(total, None);
+    }
+
+    #[test]
+    fn the_rightmost_level_record_of_a_line_wins() {
+        let line = "demo 1/2 level=a outcome=won steps=1 state_hash=01 demo 2/2 level=b outcome=won steps=2 state_hash=02";
+        assert_eq!(parse_levels(line).0, [level("b", "won", "2", "02")]);
+    }
+
+    #[test]
+    fn cpu_load_is_read_in_hundredths() {
+        assert_eq!(parse_cpu_load(LOG), Some(123));
+        assert_eq!(
+            parse_cpu_load("cpu load: x = 12.05 % of a 64 MHz"),
+            Some(1205)
+        );
+        assert_eq!(parse_cpu_load("cpu load: x = .50 % of a 64 MHz"), Some(50));
+        assert_eq!(parse_cpu_load("cpu load: x = 1.5 % of a 64 MHz"), None);
+        assert_eq!(parse_cpu_load("cpu load: no time elapsed"), None);
+        assert_eq!(parse_cpu_load("load = 1.00 % of a 64 MHz"), None);
+    }
+
+    #[test]
+    fn sim_json_fields() {
+        let out = "warming up\n{\"level\":\"x\"}\n{\"level\":\"corner\",\"outcome\":\"won\",\"steps\":1234,\"final\":{\"steps\":1},\"state_hash\":\"00AB12cd34ef5678\"}\n";
+        let sim = parse_sim(out).unwrap();
+        assert_eq!(
+            sim,
+            Sim {
+                outcome: Some("won".into()),
+                steps: Some("1234".into()),
+                hash: Some("00AB12cd34ef5678".into())
+            }
+        );
+        assert_eq!(parse_sim("error: no such level\n"), None);
+        assert_eq!(parse_sim("{not json\n"), None);
+    }
+
+    #[test]
+    fn verdicts() {
+        let won = level("corner", "won", "1234", "00ab12cd34ef5678");
+        let sim = parse_sim(r#"{"outcome":"won","steps":1234,"state_hash":"00AB12CD34EF5678"}"#);
+        assert_eq!(verdict(&won, sim.as_ref()), Verdict::Ok);
+        assert_eq!(verdict(&won, None), Verdict::SimFailed);
+        let fell = level("pit", "fell", "1234", "00ab12cd34ef5678");
+        assert_eq!(verdict(&fell, sim.as_ref()), Verdict::NotWon);
+        let other = parse_sim(r#"{"outcome":"won","steps":1235,"state_hash":"00ab12cd34ef5678"}"#);
+        assert_eq!(verdict(&won, other.as_ref()), Verdict::Mismatch);
+        let hashless = parse_sim(r#"{"outcome":"won","steps":1234}"#);
+        assert_eq!(verdict(&won, hashless.as_ref()), Verdict::Mismatch);
+    }
+
+    #[test]
+    fn table_and_hundredths() {
+        assert_eq!(
+            row(["corner", "won", "won", "1234", "1234", "00ab", "00ab", "ok"]),
+            "corner           won      won          1234     1234 00ab             00ab             ok"
+        );
+        assert_eq!(centi(300), "3.00");
+        assert_eq!(centi(7), "0.07");
+    }
+}

@@ -1,0 +1,226 @@
+//! The project's tasks (the cargo-xtask convention): `cargo xtask <task>`, or
+//! the aliases `cargo qemu`, `cargo microbit` and `cargo accuracy` from
+//! .cargo/config.toml. Plain Rust instead of shell scripts, so that they run
+//! wherever cargo does, install what they need on first use, and fail with a
+//! message naming what and where.
+
+mod demo;
+mod error;
+mod firmware;
+mod game;
+mod process;
+mod profile;
+mod properties;
+mod runner;
+mod setup;
+mod size;
+mod study;
+mod symbols;
+mod trace;
+mod tty;
+mod workspace;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// The marble maze's tasks: firmware runners, checks and reports.
+#[derive(Parser, Debug)]
+#[command(name = "xtask", bin_name = "cargo xtask", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    task: Task,
+}
+
+/// Everything after the task name is the firmware's (or the tool's): `--`
+/// separators are dropped, so `cargo qemu -- --demo` and `cargo qemu --demo`
+/// are the same.
+#[derive(Subcommand, Debug)]
+enum Task {
+    /// Install what the QEMU firmware and the study need (thumbv7em-none-eabihf
+    /// and thumbv6m-none-eabi targets, qemu-system-arm, flip-link, defmt-print).
+    Setup {
+        /// Also report on probe-rs (the micro:bit's runner, never installed).
+        #[arg(long)]
+        all: bool,
+    },
+    /// Play in QEMU mps2-an386 on the terminal; headless demo with --demo or
+    /// without a terminal on stdin (exit status: the firmware's).
+    Qemu {
+        /// The headless demo: the autopilot plays every level.
+        #[arg(long)]
+        demo: bool,
+        /// Firmware arguments (semihosting command line).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// Build the micro:bit v2 firmware and run it on the board (probe-rs).
+    Microbit {
+        /// Passed to probe-rs after the ELF.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// The study's Cortex-M4F benchmark in QEMU mps2-an386 (defmt log on stdout).
+    BenchM4 {
+        /// Benchmark arguments, e.g. --rates=MASK --backends=MASK.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// The study's Cortex-M0 benchmark in QEMU microbit (console on stdout).
+    BenchM0 {
+        /// Benchmark arguments, e.g. --rates=MASK --backends=MASK.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// Check that the QEMU demo plays exactly like the host simulator, within
+    /// the CPU budget (CPU_BUDGET_CENTIPERCENT, default 300).
+    CheckDemo,
+    /// The micro:bit firmware's flash and RAM against their budgets (FLASH_BUDGET,
+    /// RAM_BUDGET), as a markdown table.
+    SizeReport {
+        /// Measure the existing build.
+        #[arg(long)]
+        no_build: bool,
+        /// Measure this ELF instead of the micro:bit firmware.
+        elf: Option<PathBuf>,
+    },
+    /// The full property run (profile soak): CASES per property, 21 shots each.
+    Properties {
+        #[arg(default_value_t = 48000)]
+        cases: u64,
+    },
+    /// Where the QEMU firmware's instructions go, by function (top TOP).
+    QemuProfile {
+        #[arg(default_value_t = 40)]
+        top: usize,
+    },
+    /// The accuracy/cost study (writes docs/accuracy.md and docs/accuracy.png).
+    Accuracy {
+        /// The study's arguments (`cargo accuracy -- --help`).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+}
+
+impl Task {
+    fn name(&self) -> &'static str {
+        match self {
+            Task::Setup { .. } => "setup",
+            Task::Qemu { .. } => "qemu",
+            Task::Microbit { .. } => "microbit",
+            Task::BenchM4 { .. } => "bench-m4",
+            Task::BenchM0 { .. } => "bench-m0",
+            Task::CheckDemo => "check-demo",
+            Task::SizeReport { .. } => "size-report",
+            Task::Properties { .. } => "properties",
+            Task::QemuProfile { .. } => "qemu-profile",
+            Task::Accuracy { .. } => "accuracy",
+        }
+    }
+
+    fn run(self) -> error::Outcome {
+        match self {
+            Task::Setup { all } => setup::run(all),
+            Task::Qemu { demo, args } => game::qemu(&with_demo(demo, args)),
+            Task::Microbit { args } => game::microbit(&args),
+            Task::BenchM4 { args } => study::bench_m4(&args),
+            Task::BenchM0 { args } => study::bench_m0(&args),
+            Task::CheckDemo => demo::run(),
+            Task::SizeReport { no_build, elf } => size::run(no_build, elf),
+            Task::Properties { cases } => properties::run(cases),
+            Task::QemuProfile { top } => profile::run(top),
+            Task::Accuracy { args } => study::accuracy(&args),
+        }
+    }
+}
+
+/// The firmware's arguments with `--demo` back in front when clap took it as
+/// our flag (it can only have been first, before any firmware argument).
+fn with_demo(demo: bool, mut args: Vec<String>) -> Vec<String> {
+    if demo {
+        args.insert(0, "--demo".into());
+    }
+    args
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let task = cli.task.name();
+    error::set_task(task);
+    match cli.task.run() {
+        Ok(status) => ExitCode::from(status),
+        Err(failure) => {
+            eprintln!("xtask {task}: {}", failure.message);
+            ExitCode::from(failure.status.max(1))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Task {
+        Cli::try_parse_from([&["xtask"], args].concat())
+            .expect("parses")
+            .task
+    }
+
+    fn qemu_args(args: &[&str]) -> Vec<String> {
+        match parse(args) {
+            Task::Qemu { demo, args } => runner::drop_separators(&with_demo(demo, args)),
+            other => panic!("not qemu: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn qemu_accepts_both_spellings() {
+        assert_eq!(qemu_args(&["qemu", "--", "--demo"]), ["--demo"]);
+        assert_eq!(qemu_args(&["qemu", "--demo"]), ["--demo"]);
+        assert_eq!(
+            qemu_args(&["qemu", "--demo", "--level", "x"]),
+            ["--demo", "--level", "x"]
+        );
+        assert_eq!(
+            qemu_args(&["qemu", "--level", "x", "--demo"]),
+            ["--level", "x", "--demo"]
+        );
+        assert_eq!(qemu_args(&["qemu", "--", "--level=a,b"]), ["--level=a,b"]);
+        assert!(qemu_args(&["qemu"]).is_empty());
+    }
+
+    #[test]
+    fn bench_arguments_pass_through() {
+        match parse(&["bench-m4", "--rates=1024", "--backends=1"]) {
+            Task::BenchM4 { args } => assert_eq!(args, ["--rates=1024", "--backends=1"]),
+            other => panic!("not bench-m4: {other:?}"),
+        }
+        match parse(&["accuracy", "--", "--quick"]) {
+            Task::Accuracy { args } => assert_eq!(runner::drop_separators(&args), ["--quick"]),
+            other => panic!("not accuracy: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn defaults_and_usage_errors() {
+        assert!(matches!(
+            parse(&["properties"]),
+            Task::Properties { cases: 48000 }
+        ));
+        assert!(matches!(
+            parse(&["qemu-profile", "20"]),
+            Task::QemuProfile { top: 20 }
+        ));
+        assert!(matches!(
+            parse(&["size-report", "--no-build"]),
+            Task::SizeReport {
+                no_build: true,
+                elf: None
+            }
+        ));
+        assert!(Cli::try_parse_from(["xtask", "size-report", "--bogus"]).is_err());
+        assert!(Cli::try_parse_from(["xtask", "properties", "many"]).is_err());
+        assert!(Cli::try_parse_from(["xtask", "nonsense"]).is_err());
+    }
+}

@@ -1,0 +1,194 @@
+//! Prerequisites, installed on first use so that a fresh machine needs nothing
+//! but rustup: the firmware targets' standard libraries, qemu-system-arm (with
+//! apt-get when we are root), and flip-link and defmt-print (`cargo install`).
+//! Each install is one status line; the tool's own output shows only when it
+//! fails, with the command to run by hand. probe-rs is never installed: it is
+//! large, and only the micro:bit needs it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::error::{say, Failure, Outcome};
+use crate::process;
+use crate::workspace::{self, find_tool, on_path};
+
+/// The QEMU firmware (game and Cortex-M4 benchmark).
+pub const M4: &str = "thumbv7em-none-eabihf";
+/// The study's Cortex-M0 benchmark.
+pub const M0: &str = "thumbv6m-none-eabi";
+
+/// The tools a QEMU run needs, where they were found.
+pub struct Qemu {
+    pub qemu: PathBuf,
+    pub defmt_print: PathBuf,
+}
+
+/// `cargo xtask setup [--all]`: everything the QEMU firmware and the study's
+/// target benchmarks need; `--all` also reports on probe-rs (micro:bit).
+pub fn run(all: bool) -> Outcome {
+    target(M4)?;
+    target(M0)?;
+    qemu()?;
+    flip_link()?;
+    defmt_print()?;
+    if all {
+        match probe_rs() {
+            Ok(path) => say!("probe-rs: {}", path.display()),
+            // Informational only: the QEMU tasks work without it.
+            Err(missing) => say!("{}", missing.message),
+        }
+    }
+    say!("all set");
+    Ok(0)
+}
+
+/// What building and running the mps2-an386 firmware needs (the game, the
+/// Cortex-M4 benchmark).
+pub fn m4_qemu() -> Result<Qemu, Failure> {
+    target(M4)?;
+    flip_link()?;
+    let qemu = qemu()?;
+    let defmt_print = defmt_print()?;
+    Ok(Qemu { qemu, defmt_print })
+}
+
+/// What the Cortex-M0 benchmark needs: it prints through semihosting's console,
+/// not defmt, and links with plain rust-lld.
+pub fn m0_qemu() -> Result<PathBuf, Failure> {
+    target(M0)?;
+    qemu()
+}
+
+/// flip-link, the firmware's linker (set in .cargo/config.toml).
+pub fn flip_link() -> Result<PathBuf, Failure> {
+    cargo_tool("flip-link", "flip-link", "about a minute")
+}
+
+/// defmt-print, which decodes the mps2-an386 firmware's defmt log.
+fn defmt_print() -> Result<PathBuf, Failure> {
+    cargo_tool("defmt-print", "defmt-print", "a few minutes")
+}
+
+/// The standard library of `triple`, added with rustup when missing.
+pub fn target(triple: &str) -> Result<(), Failure> {
+    let mut rustc = Command::new("rustc");
+    rustc
+        .current_dir(workspace::root())
+        .args(["--print", "sysroot"]);
+    let sysroot = PathBuf::from(process::read(&mut rustc)?.trim());
+    let lib = sysroot.join("lib/rustlib").join(triple).join("lib");
+    if has_libcore(&lib) {
+        return Ok(());
+    }
+    if on_path("rustup").is_none() {
+        return Err(Failure::new(format!(
+            "the {triple} standard library is missing (no libcore in {}) and rustup is not \
+             installed: install rustup (https://rustup.rs), then run `rustup target add {triple}` \
+             in {}",
+            lib.display(),
+            workspace::root().display()
+        ))
+        .status(127));
+    }
+    // `target add` installs even where RUSTUP_AUTO_INSTALL=0 stops rustup from
+    // installing toolchains on its own; run in the root, it picks the pinned one.
+    let mut add = Command::new("rustup");
+    add.current_dir(workspace::root())
+        .args(["target", "add", triple]);
+    process::quietly(
+        &format!("installing the {triple} target (once)…"),
+        &mut [add],
+    )?;
+    if has_libcore(&lib) {
+        Ok(())
+    } else {
+        Err(Failure::new(format!(
+            "`rustup target add {triple}` ran but {} still has no libcore",
+            lib.display()
+        )))
+    }
+}
+
+fn has_libcore(lib: &Path) -> bool {
+    std::fs::read_dir(lib).is_ok_and(|entries| {
+        entries.flatten().any(|entry| {
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            name.starts_with("libcore-") && name.ends_with(".rlib")
+        })
+    })
+}
+
+/// qemu-system-arm, installed with apt-get when we can (root, Debian-like).
+pub fn qemu() -> Result<PathBuf, Failure> {
+    if let Some(path) = on_path("qemu-system-arm") {
+        return Ok(path);
+    }
+    if is_root() && on_path("apt-get").is_some() {
+        let mut update = Command::new("apt-get");
+        update.args(["update", "-qq"]);
+        let mut install = Command::new("apt-get");
+        install.env("DEBIAN_FRONTEND", "noninteractive").args([
+            "install",
+            "-y",
+            "-qq",
+            "qemu-system-arm",
+        ]);
+        process::quietly(
+            "installing qemu-system-arm with apt-get (once)…",
+            &mut [update, install],
+        )?;
+        if let Some(path) = on_path("qemu-system-arm") {
+            return Ok(path);
+        }
+        return Err(
+            Failure::new("apt-get installed qemu-system-arm but it is not on PATH").status(127),
+        );
+    }
+    Err(Failure::new(
+        "qemu-system-arm not found. Install it, e.g.:\n\
+         \x20   sudo apt-get install qemu-system-arm     (Debian/Ubuntu)\n\
+         \x20   sudo dnf install qemu-system-arm         (Fedora)\n\
+         \x20   brew install qemu                        (macOS)",
+    )
+    .status(127))
+}
+
+fn is_root() -> bool {
+    let mut id = Command::new("id");
+    id.arg("-u");
+    process::read(&mut id).is_ok_and(|uid| uid.trim() == "0")
+}
+
+/// A tool installed with `cargo install <krate> --locked` when missing
+/// (`duration`: how long that takes, for the status line).
+fn cargo_tool(binary: &str, krate: &str, duration: &str) -> Result<PathBuf, Failure> {
+    if let Some(path) = find_tool(binary) {
+        return Ok(path);
+    }
+    let mut install = workspace::cargo();
+    install.args(["install", krate, "--locked", "--quiet"]);
+    process::quietly(
+        &format!("installing {binary} (once, {duration})…"),
+        &mut [install],
+    )?;
+    find_tool(binary).ok_or_else(|| {
+        Failure::new(format!(
+            "`cargo install {krate} --locked` ran but {binary} is neither on PATH nor in {}",
+            workspace::cargo_bin().unwrap_or_default().display()
+        ))
+        .status(127)
+    })
+}
+
+/// probe-rs, for the micro:bit; never installed for the user.
+pub fn probe_rs() -> Result<PathBuf, Failure> {
+    find_tool("probe-rs").ok_or_else(|| {
+        Failure::new(
+            "probe-rs is needed to run the micro:bit firmware; install it with: \
+             cargo install probe-rs-tools --locked (on Linux also install its udev rules: \
+             https://probe.rs/docs/getting-started/probe-setup/)",
+        )
+        .status(127)
+    })
+}

@@ -1,0 +1,269 @@
+//! `cargo xtask size-report`: the micro:bit v2 firmware's flash and static-RAM
+//! budget, as a markdown table on stdout. Exit 1 when over a budget, 2 on a
+//! usage or tooling error.
+//!
+//!   Flash      = text + data   (vector table, code, read-only data, and the
+//!                               initial values of .data, all stored in flash)
+//!   Static RAM = data + bss    (.data, .bss and .uninit: the defmt-RTT buffer,
+//!                               embassy task arenas, statics; not the stack,
+//!                               which takes the rest of RAM)
+//!
+//! Measured from the ELF's section headers with the `object` crate, with the
+//! Berkeley accounting of `llvm-size -B` (so no llvm-tools component is needed
+//! and the figures stay those of the old llvm-size report). Budgets in bytes:
+//! FLASH_BUDGET (default 65536 = 64 KiB), RAM_BUDGET (default 16384 = 16 KiB).
+
+use std::path::{Path, PathBuf};
+
+use object::elf::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS};
+use object::read::elf::{FileHeader, SectionHeader};
+use object::{elf, Endianness, FileKind};
+
+use crate::error::{say, Failure, Outcome};
+use crate::firmware::{self, Artifact};
+use crate::setup::{self, M4};
+use crate::workspace;
+
+/// What the accounting needs of a section header.
+#[derive(Clone, Copy, Debug)]
+pub struct Section {
+    pub sh_type: u32,
+    pub sh_flags: u64,
+    pub size: u64,
+}
+
+/// Berkeley totals.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Berkeley {
+    pub text: u64,
+    pub data: u64,
+    pub bss: u64,
+}
+
+impl Berkeley {
+    pub fn flash(&self) -> u64 {
+        self.text + self.data
+    }
+
+    pub fn ram(&self) -> u64 {
+        self.data + self.bss
+    }
+}
+
+/// llvm-size's Berkeley rules (`ELFObjectFile::isBerkeleyText`/`isBerkeleyData`,
+/// `isSectionBSS`), in its order. Text: allocated and executable or read-only
+/// (so .vector_table and .rodata count); data: allocated, loaded, not text;
+/// bss: not loaded (NOBITS), allocated or writable. Non-allocated sections
+/// (.defmt, debug info, symbols) count nowhere.
+pub fn berkeley(sections: &[Section]) -> Berkeley {
+    let mut totals = Berkeley::default();
+    for section in sections {
+        let flags = section.sh_flags;
+        let alloc = flags & u64::from(SHF_ALLOC) != 0;
+        let write = flags & u64::from(SHF_WRITE) != 0;
+        let exec = flags & u64::from(SHF_EXECINSTR) != 0;
+        let nobits = section.sh_type == SHT_NOBITS;
+        if alloc && (exec || !write) {
+            totals.text += section.size;
+        } else if alloc && !nobits {
+            totals.data += section.size;
+        } else if (alloc || write) && nobits {
+            totals.bss += section.size;
+        }
+    }
+    totals
+}
+
+/// The section headers of an ELF file (32- or 64-bit, either byte order).
+pub fn sections(data: &[u8]) -> Result<Vec<Section>, String> {
+    match FileKind::parse(data).map_err(|e| e.to_string())? {
+        FileKind::Elf32 => sections_of::<elf::FileHeader32<Endianness>>(data),
+        FileKind::Elf64 => sections_of::<elf::FileHeader64<Endianness>>(data),
+        kind => Err(format!("not an ELF file ({kind:?})")),
+    }
+}
+
+fn sections_of<H: FileHeader<Endian = Endianness>>(data: &[u8]) -> Result<Vec<Section>, String> {
+    let header = H::parse(data).map_err(|e| e.to_string())?;
+    let endian = header.endian().map_err(|e| e.to_string())?;
+    let table = header.sections(endian, data).map_err(|e| e.to_string())?;
+    Ok(table
+        .iter()
+        .map(|section| Section {
+            sh_type: section.sh_type(endian),
+            sh_flags: section.sh_flags(endian).into(),
+            size: section.sh_size(endian).into(),
+        })
+        .collect())
+}
+
+/// Measures the ELF at `path`.
+pub fn measure(path: &Path) -> Result<Berkeley, Failure> {
+    let data = std::fs::read(path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", path.display())).status(2))?;
+    let sections = sections(&data)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", path.display())).status(2))?;
+    Ok(berkeley(&sections))
+}
+
+fn kib(bytes: u64) -> String {
+    format!("{:.1} KiB", bytes as f64 / 1024.0)
+}
+
+fn share(used: u64, budget: u64) -> String {
+    format!("{:.0} %", 100.0 * used as f64 / budget as f64)
+}
+
+fn verdict(used: u64, budget: u64) -> &'static str {
+    if used <= budget {
+        "ok"
+    } else {
+        "**OVER**"
+    }
+}
+
+/// The markdown report.
+pub fn table(size: &Berkeley, flash_budget: u64, ram_budget: u64) -> String {
+    let line = |what: &str, used: u64, budget: u64| {
+        format!(
+            "| {what} | {used} B ({}) | {} | {} | {} |",
+            kib(used),
+            kib(budget),
+            share(used, budget),
+            verdict(used, budget)
+        )
+    };
+    [
+        "| micro:bit v2 firmware | used | budget | share | |".to_string(),
+        "| --- | ---: | ---: | ---: | --- |".to_string(),
+        line("Flash (text + data)", size.flash(), flash_budget),
+        line("Static RAM (data + bss)", size.ram(), ram_budget),
+    ]
+    .join("\n")
+}
+
+/// `cargo xtask size-report [--no-build] [ELF]`: an explicit ELF is measured
+/// as it is; otherwise the micro:bit firmware, built first unless `--no-build`.
+pub fn run(no_build: bool, elf: Option<PathBuf>) -> Outcome {
+    let flash_budget = workspace::env_number("FLASH_BUDGET", 65536)?;
+    let ram_budget = workspace::env_number("RAM_BUDGET", 16384)?;
+    let elf = match elf {
+        Some(elf) => elf,
+        None if no_build => workspace::target_dir()?.join(M4).join("release/microbit"),
+        None => {
+            setup::target(M4)?;
+            setup::flip_link()?;
+            firmware::build(&Artifact::firmware("marble-microbit", "microbit", M4))?
+        }
+    };
+    if !elf.is_file() {
+        return Err(Failure::new(format!(
+            "{} not found (build it, or drop --no-build)",
+            elf.display()
+        ))
+        .status(2));
+    }
+    let size = measure(&elf)?;
+    println!("{}", table(&size, flash_budget, ram_budget));
+    let mut status = 0;
+    if size.flash() > flash_budget {
+        say!(
+            "flash {} B exceeds the budget of {flash_budget} B",
+            size.flash()
+        );
+        status = 1;
+    }
+    if size.ram() > ram_budget {
+        say!(
+            "static RAM {} B exceeds the budget of {ram_budget} B",
+            size.ram()
+        );
+        status = 1;
+    }
+    Ok(status)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use object::elf::{SHT_ARM_ATTRIBUTES, SHT_PROGBITS, SHT_SYMTAB};
+
+    const A: u64 = SHF_ALLOC as u64;
+    const W: u64 = SHF_WRITE as u64;
+    const X: u64 = SHF_EXECINSTR as u64;
+
+    fn s(sh_type: u32, sh_flags: u64, size: u64) -> Section {
+        Section {
+            sh_type,
+            sh_flags,
+            size,
+        }
+    }
+
+    #[test]
+    fn berkeley_accounting() {
+        let sections = [
+            s(0, 0, 0),                     // null section
+            s(SHT_PROGBITS, A, 0x400),      // .vector_table
+            s(SHT_PROGBITS, A | X, 50_000), // .text
+            s(SHT_PROGBITS, A, 6_000),      // .rodata
+            s(SHT_PROGBITS, A | W, 60),     // .data
+            s(SHT_NOBITS, A | W, 4_000),    // .bss
+            s(SHT_NOBITS, A | W, 700),      // .uninit
+            s(SHT_PROGBITS, 0, 9_999),      // .defmt
+            s(SHT_PROGBITS, 0x30, 123_456), // .debug_str (merge, strings)
+            s(SHT_SYMTAB, 0, 77_777),       // .symtab
+            s(SHT_ARM_ATTRIBUTES, 0, 50),   // .ARM.attributes
+            s(SHT_PROGBITS, A | W | X, 8),  // writable code: text, as llvm-size has it
+            s(SHT_NOBITS, A, 16),           // read-only NOBITS: text, as llvm-size has it
+            s(SHT_NOBITS, W, 32),           // writable, not allocated: bss
+        ];
+        let size = berkeley(&sections);
+        assert_eq!(
+            size,
+            Berkeley {
+                text: 0x400 + 50_000 + 6_000 + 8 + 16,
+                data: 60,
+                bss: 4_732
+            }
+        );
+        assert_eq!(size.flash(), size.text + 60);
+        assert_eq!(size.ram(), 60 + 4_732);
+    }
+
+    #[test]
+    fn report_table() {
+        let size = Berkeley {
+            text: 56_000,
+            data: 1_060,
+            bss: 3_792,
+        };
+        assert_eq!(
+            table(&size, 65536, 16384),
+            "| micro:bit v2 firmware | used | budget | share | |\n\
+             | --- | ---: | ---: | ---: | --- |\n\
+             | Flash (text + data) | 57060 B (55.7 KiB) | 64.0 KiB | 87 % | ok |\n\
+             | Static RAM (data + bss) | 4852 B (4.7 KiB) | 16.0 KiB | 30 % | ok |"
+        );
+        assert!(table(&size, 1000, 16384).contains("| 5706 % | **OVER** |"));
+    }
+
+    #[test]
+    fn rejects_what_is_not_elf() {
+        assert!(sections(b"not an ELF file at all").is_err());
+        assert!(sections(&[]).is_err());
+    }
+
+    #[test]
+    fn measures_a_real_elf() {
+        // This test binary itself: every count must be consistent with its headers.
+        let Ok(exe) = std::env::current_exe() else {
+            return;
+        };
+        let Ok(data) = std::fs::read(exe) else { return };
+        if let Ok(sections) = sections(&data) {
+            let size = berkeley(&sections);
+            assert!(size.text > 0);
+        }
+    }
+}
