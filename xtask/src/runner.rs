@@ -79,9 +79,7 @@ pub fn mps2(qemu: &Path, elf: &Path, mode: &str, args: &[String]) -> Command {
     line.extend_from_slice(args);
     let mut cmd = Command::new(qemu);
     cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
-        // The board's Ethernet controller has nothing to talk to: no NIC, no
-        // "has no peer" warning.
-        .args(["-display", "none", "-monitor", "none", "-nodefaults", "-nic", "none"])
+        .args(["-display", "none", "-monitor", "none", "-nodefaults"])
         .arg("-semihosting-config")
         .arg(semihosting_config(&program(elf), &line))
         .arg("-kernel")
