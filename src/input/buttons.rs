@@ -12,6 +12,12 @@
 //! Single-button events fire on *release*, and never once both buttons have
 //! been down together during that press: pressing A then B to calibrate does
 //! not also restart the level.
+//!
+//! All timing is counted in samples, not read from a clock, so that the logic
+//! stays pure; the price is that the board must keep the sampling period.
+//! A poll loop that catches up on missed periods back to back (an embassy
+//! `Ticker` after a slow sensor re-init) squeezes the 30 ms debounce into a
+//! millisecond; the micro:bit restarts its ticker after slow work instead.
 
 /// A user command from the buttons.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

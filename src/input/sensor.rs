@@ -1,10 +1,32 @@
 //! Board-agnostic accelerometer plumbing: axis remapping, plausibility checks,
-//! "level" calibration and the fault-supervision policy.
+//! the "level" offset arithmetic and the fault-supervision policy.
 //!
-//! Everything here is pure (no I/O, no time source, no allocation, no panics):
-//! a board reads its sensor, maps the axes with its [`AxisMap`], and feeds the
-//! result to a [`SensorSupervisor`], which says what to do next
-//! ([`Action`]). The host tests drive the same code the firmware runs.
+//! Everything here is pure (no I/O, no time source, no allocation, no panics)
+//! so that the policy a real board depends on is the code the host tests run:
+//! a board polls its sensor once a period and hands the outcome ([`Read`]: a
+//! sample, "no new sample yet", or a fault) to a [`TiltPipeline`], which maps
+//! the axes, checks plausibility, supervises, and says what to do next
+//! ([`Action`]) and whether the sensor just went down or came back
+//! ([`Transition`]). The board forwards; it keeps no state of its own about
+//! the sensor's health, so the game and the tests see one story.
+//!
+//! # "Not ready yet" is not a fault
+//!
+//! A poll may find no new sample for harmless reasons: the poll came a little
+//! early, or the sensor was just re-initialised. Counting that as a failure
+//! turned poll-timing jitter into spurious re-inits and fault pictures, so the
+//! supervisor tolerates [`SupervisorConfig::not_ready_before_fault`] − 1
+//! not-ready polls in a row uncounted; only data missing for longer is
+//! [`Fault::NoData`].
+//!
+//! # One calibration
+//!
+//! The pipeline does not calibrate: the game's tilt filter
+//! ([`crate::input::tilt::TiltFilter`]) does, on [`Command::Calibrate`]
+//! (e.g. the micro:bit's A+B hold). Two calibrations in series stacked their
+//! offsets, and only the filter knows the filtered reading the player sees as
+//! "level". [`Calibration`] (the offset arithmetic) lives here because it is
+//! expressed in the board frame defined here.
 //!
 //! # Board frame
 //!
@@ -13,6 +35,10 @@
 //! reports the reaction to gravity, so a board lying flat reads
 //! `(0, +1000, 0)`, and tilting the right edge down (the marble rolls towards
 //! `+x`) makes `x` negative.
+//!
+//! [`Command::Calibrate`]: crate::input::event::Command::Calibrate
+
+use super::event::InputEvent;
 
 /// One accelerometer sample in milli-g (1000 = 1 g).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -234,16 +260,44 @@ const fn clamp_i32(v: i32, limit: i32) -> i32 {
     }
 }
 
-/// Why a read produced no usable sample.
+/// Why a poll produced no usable sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Fault {
-    /// The bus transfer failed (NACK, arbitration loss, timeout, …).
+    /// The bus transfer failed (NACK, arbitration loss, driver refusal, …).
     Bus,
-    /// The sensor answered but had no new data for longer than expected.
+    /// A bus transfer did not finish in time (a hung bus, cleared by the
+    /// board before reporting).
+    Timeout,
+    /// The sensor answered but had no new data for longer than expected
+    /// (see [`SupervisorConfig::not_ready_before_fault`]), or its samples
+    /// are stuck.
     NoData,
-    /// The sample failed the [`Plausibility`] check.
+    /// The sample failed the [`Plausibility`] check (or the sensor is not
+    /// the one expected).
     Implausible,
+}
+
+/// The outcome of one poll of the sensor, in the sensor's frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Read<S> {
+    /// A new sample.
+    Sample(S),
+    /// The sensor answered, but has no new sample since the last one: not a
+    /// fault by itself (see the module doc).
+    NotReady,
+    /// The poll failed.
+    Failed(Fault),
+}
+
+impl<S> From<Result<S, Fault>> for Read<S> {
+    fn from(read: Result<S, Fault>) -> Self {
+        match read {
+            Ok(sample) => Read::Sample(sample),
+            Err(fault) => Read::Failed(fault),
+        }
+    }
 }
 
 /// What the caller should do after feeding the supervisor.
@@ -252,7 +306,8 @@ pub enum Fault {
 pub enum Action<S> {
     /// A good sample: use it.
     Use(S),
-    /// Transient failure: keep using the last good sample (given here).
+    /// Transient failure, or no new sample yet: keep using the last good
+    /// sample (given here).
     KeepLast(S),
     /// Too many failures in a row: re-initialise the sensor, then report the
     /// outcome with [`SensorSupervisor::reinit_done`]. Keep the last good
@@ -264,8 +319,7 @@ pub enum Action<S> {
     ShowFault,
 }
 
-/// Tuning of a [`SensorSupervisor`], in calls to [`SensorSupervisor::feed`]
-/// (one per sampling period).
+/// Tuning of a [`SensorSupervisor`], in polls (one per sampling period).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SupervisorConfig {
@@ -276,15 +330,23 @@ pub struct SupervisorConfig {
     pub reinits_before_fault: u8,
     /// While down, ask for a re-init every this many failed reads (≥ 1).
     pub retry_period_when_down: u16,
+    /// The n-th not-ready poll in a row is the first to count as a
+    /// [`Fault::NoData`] failure (≥ 1; every later one in the streak counts
+    /// too). Choose it so that n polls span several of the sensor's sample
+    /// periods: fewer not-ready polls are taken as "not yet", uncounted.
+    pub not_ready_before_fault: u16,
 }
 
 impl SupervisorConfig {
-    /// Defaults for a ~100 Hz sampling loop: re-init after 50 ms of failures,
-    /// fault shown after 3 failed re-inits (~0.2 s), retry twice a second.
+    /// Defaults for a ~100 Hz poll of a sensor sampling at least as fast:
+    /// re-init after 50 ms of failures, fault shown after 3 failed re-inits
+    /// (~0.2 s), retry twice a second; no new sample for 3 polls in a row
+    /// (~30 ms) is a fault.
     pub const DEFAULT: Self = Self {
         failures_before_reinit: 5,
         reinits_before_fault: 3,
         retry_period_when_down: 50,
+        not_ready_before_fault: 3,
     };
 }
 
@@ -295,10 +357,11 @@ impl Default for SupervisorConfig {
 }
 
 /// The sensor-fault policy: keep the last good sample through transient
-/// errors, re-initialise after repeated ones, declare a fault if that does not
-/// help, and recover by itself on the next good sample.
+/// errors and not-ready polls, re-initialise after repeated failures, declare
+/// the sensor down if that does not help, and recover by itself on the next
+/// good sample.
 ///
-/// Feed it once per sampling period with the read's outcome; it never panics
+/// Feed it once per sampling period with the poll's outcome; it never panics
 /// and its counters saturate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -307,8 +370,11 @@ pub struct SensorSupervisor<S> {
     plausibility: Plausibility,
     last_good: S,
     consecutive_failures: u16,
+    not_ready_streak: u16,
     reinits: u8,
-    down: bool,
+    /// `Some(fault that brought it down)` while down.
+    down: Option<Fault>,
+    last_fault: Option<Fault>,
     since_retry: u16,
     total_faults: u32,
 }
@@ -321,8 +387,10 @@ impl<S: Copy> SensorSupervisor<S> {
             plausibility: Plausibility::DEFAULT,
             last_good: initial,
             consecutive_failures: 0,
+            not_ready_streak: 0,
             reinits: 0,
-            down: false,
+            down: None,
+            last_fault: None,
             since_retry: 0,
             total_faults: 0,
         }
@@ -335,32 +403,71 @@ impl<S: Copy> SensorSupervisor<S> {
 
     /// Whether the sensor is considered down (fault pattern showing).
     pub const fn is_down(&self) -> bool {
+        self.down.is_some()
+    }
+
+    /// While down, the fault of the failure that brought the sensor down.
+    pub const fn down_fault(&self) -> Option<Fault> {
         self.down
     }
 
-    /// Failed reads so far (saturating), for diagnostics.
+    /// The most recent failure (of a read or a re-init), for diagnostics.
+    pub const fn last_fault(&self) -> Option<Fault> {
+        self.last_fault
+    }
+
+    /// Failures so far (saturating), for diagnostics. Not-ready polls count
+    /// only once they are [`Fault::NoData`].
     pub const fn total_faults(&self) -> u32 {
         self.total_faults
     }
 
-    /// Feeds the outcome of one read.
+    /// Feeds the outcome of one completed read.
     pub fn feed(&mut self, read: Result<S, Fault>) -> Action<S> {
+        self.not_ready_streak = 0;
         match read {
             Ok(sample) => {
                 self.last_good = sample;
                 self.consecutive_failures = 0;
                 self.reinits = 0;
-                self.down = false;
+                self.down = None;
                 self.since_retry = 0;
                 Action::Use(sample)
             }
-            Err(_) => self.failure(),
+            Err(fault) => self.failure(fault),
         }
     }
 
-    fn failure(&mut self) -> Action<S> {
+    /// Feeds a poll that found no new sample. Uncounted ([`Action::KeepLast`],
+    /// or [`Action::ShowFault`] while down) until
+    /// [`SupervisorConfig::not_ready_before_fault`] such polls in a row; from
+    /// then on each is a [`Fault::NoData`] failure.
+    pub fn not_ready(&mut self) -> Action<S> {
+        self.not_ready_streak = self.not_ready_streak.saturating_add(1);
+        if self.not_ready_streak >= self.config.not_ready_before_fault.max(1) {
+            return self.failure(Fault::NoData);
+        }
+        if self.down.is_some() {
+            Action::ShowFault
+        } else {
+            Action::KeepLast(self.last_good)
+        }
+    }
+
+    /// Feeds one poll's outcome (no plausibility check: see
+    /// [`SensorSupervisor::check`] for samples that need one).
+    pub fn poll(&mut self, read: Read<S>) -> Action<S> {
+        match read {
+            Read::Sample(sample) => self.feed(Ok(sample)),
+            Read::NotReady => self.not_ready(),
+            Read::Failed(fault) => self.feed(Err(fault)),
+        }
+    }
+
+    fn failure(&mut self, fault: Fault) -> Action<S> {
         self.total_faults = self.total_faults.saturating_add(1);
-        if self.down {
+        self.last_fault = Some(fault);
+        if self.down.is_some() {
             self.since_retry = self.since_retry.saturating_add(1);
             if self.since_retry >= self.config.retry_period_when_down.max(1) {
                 self.since_retry = 0;
@@ -374,7 +481,7 @@ impl<S: Copy> SensorSupervisor<S> {
         }
         self.consecutive_failures = 0;
         if self.reinits >= self.config.reinits_before_fault {
-            self.down = true;
+            self.down = Some(fault);
             self.since_retry = 0;
             return Action::ShowFault;
         }
@@ -384,13 +491,16 @@ impl<S: Copy> SensorSupervisor<S> {
 
     /// Reports the outcome of a re-init asked for by [`Action::Reinit`].
     /// A failed re-init counts as a full window of failures, so the next
-    /// failed read escalates at once.
+    /// failed read escalates at once. Either way the not-ready streak starts
+    /// over: a freshly configured sensor needs a moment for its first sample.
     pub fn reinit_done(&mut self, outcome: Result<(), Fault>) {
+        self.not_ready_streak = 0;
         match outcome {
             Ok(()) => self.consecutive_failures = 0,
-            Err(_) => {
+            Err(fault) => {
                 self.total_faults = self.total_faults.saturating_add(1);
-                if !self.down {
+                self.last_fault = Some(fault);
+                if self.down.is_none() {
                     self.consecutive_failures =
                         self.config.failures_before_reinit.max(1).saturating_sub(1);
                 }
@@ -420,45 +530,79 @@ impl SensorSupervisor<AccelMg> {
     }
 }
 
+/// The sensor went down or came back: what the game must hear about once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Transition {
+    /// The supervisor gave up on the sensor, because of this fault.
+    Down(Fault),
+    /// A good sample after being down.
+    Up,
+}
+
+impl Transition {
+    /// The input event that tells the game.
+    pub const fn event(self) -> InputEvent {
+        match self {
+            Transition::Down(fault) => InputEvent::SensorDown(fault),
+            Transition::Up => InputEvent::SensorUp,
+        }
+    }
+}
+
+/// What one [`TiltPipeline::feed`] says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Step {
+    /// What to do now. `Use` and `KeepLast` carry the board-frame tilt.
+    pub action: Action<AccelMg>,
+    /// The sensor went down or came back with this poll.
+    pub transition: Option<Transition>,
+}
+
 /// The whole tilt path of a board with an accelerometer, minus the I/O:
-/// sensor-frame read → [`AxisMap`] → plausibility → [`SensorSupervisor`] →
-/// [`Calibration`].
+/// sensor-frame poll → [`AxisMap`] → plausibility → [`SensorSupervisor`] →
+/// board-frame tilt and down/up [`Transition`]s.
 ///
-/// The supervisor keeps *uncalibrated* board-frame samples, so calibrating
-/// again replaces the offset rather than stacking it.
+/// Samples come out uncalibrated: the game's tilt filter calibrates (see the
+/// module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TiltPipeline {
     map: AxisMap,
-    calibration: Calibration,
     supervisor: SensorSupervisor<AccelMg>,
-    seen_good: bool,
+    /// Whether the last transition reported was `Down`.
+    reported_down: bool,
 }
 
 impl TiltPipeline {
-    /// Starts level, uncalibrated, with no good sample seen yet.
+    /// Starts level and up, with no sample seen yet.
     pub const fn new(map: AxisMap, config: SupervisorConfig) -> Self {
         Self {
             map,
-            calibration: Calibration::NONE,
             supervisor: SensorSupervisor::new(AccelMg::LEVEL, config),
-            seen_good: false,
+            reported_down: false,
         }
     }
 
-    /// Feeds one read in the **sensor** frame. `Use` and `KeepLast` carry the
-    /// calibrated board-frame tilt to use; for `Reinit` and `ShowFault` keep
-    /// using [`TiltPipeline::tilt`].
-    pub fn feed(&mut self, read: Result<AccelMg, Fault>) -> Action<AccelMg> {
-        let action = self.supervisor.check(read.map(|raw| self.map.apply(raw)));
-        match action {
-            Action::Use(s) => {
-                self.seen_good = true;
-                Action::Use(self.calibration.apply(s))
-            }
-            Action::KeepLast(s) => Action::KeepLast(self.calibration.apply(s)),
-            other => other,
+    /// Feeds one poll in the **sensor** frame. Each down and up of the
+    /// sensor comes out exactly once, as [`Step::transition`]; for `Reinit`
+    /// and `ShowFault` keep using [`TiltPipeline::tilt`].
+    pub fn feed(&mut self, read: Read<AccelMg>) -> Step {
+        let action = match read {
+            Read::Sample(raw) => self.supervisor.check(Ok(self.map.apply(raw))),
+            Read::NotReady => self.supervisor.not_ready(),
+            Read::Failed(fault) => self.supervisor.check(Err(fault)),
+        };
+        let transition = match (self.reported_down, self.supervisor.down_fault()) {
+            (false, Some(fault)) => Some(Transition::Down(fault)),
+            (true, None) => Some(Transition::Up),
+            _ => None,
+        };
+        if transition.is_some() {
+            self.reported_down = !self.reported_down;
         }
+        Step { action, transition }
     }
 
     /// Reports the outcome of a re-init asked for by [`Action::Reinit`].
@@ -466,26 +610,10 @@ impl TiltPipeline {
         self.supervisor.reinit_done(outcome);
     }
 
-    /// The calibrated board-frame tilt to use now (level until the first
-    /// good sample).
-    pub fn tilt(&self) -> AccelMg {
-        self.calibration.apply(self.supervisor.last_good())
-    }
-
-    /// Makes the current orientation "level". Refused (returns `false`, the
-    /// calibration unchanged) while no good sample has been seen or the sensor
-    /// is down.
-    pub fn calibrate(&mut self) -> bool {
-        if !self.seen_good || self.supervisor.is_down() {
-            return false;
-        }
-        self.calibration = Calibration::from_reference(self.supervisor.last_good());
-        true
-    }
-
-    /// The calibration in force.
-    pub const fn calibration(&self) -> Calibration {
-        self.calibration
+    /// The board-frame tilt to use now: the last good sample (level until
+    /// the first one).
+    pub const fn tilt(&self) -> AccelMg {
+        self.supervisor.last_good()
     }
 
     /// Whether the sensor is considered down.

@@ -1,27 +1,37 @@
 //! BBC micro:bit v2: the hardware half (embassy-nrf wiring only).
 //!
 //! The `marble-microbit` firmware crate's board module (target
-//! thumbv7em-none-eabihf). Every decision — sensor fault policy, axis table,
-//! calibration, button combinations, scan timing, what the game does — is in
-//! host-tested library code ([`marble_rolling::sensor`],
-//! [`marble_rolling::buttons`], [`marble_rolling::board::microbit`],
-//! [`marble_rolling::app`]); this file only moves bits between those and the
-//! pins, and nothing here panics on a sensor or bus error.
+//! thumbv7em-none-eabihf). Every decision — sensor fault policy and its
+//! down/up transitions, axis table, button combinations, scan timing, the
+//! bus-clear sequence, the watchdog's rule — is in host-tested library code
+//! ([`marble_rolling::input::sensor`], [`marble_rolling::input::buttons`],
+//! [`marble_rolling::board::microbit`], [`marble_rolling::app`]), because
+//! this half can only be tested on a board. What stays here moves bits
+//! between those and the pins, and nothing here panics on a sensor or bus
+//! error: every failure becomes a [`Fault`] for the supervisor.
+//!
+//! The I²C bus gets particular care ([`Bus`]): a transfer that never ends
+//! would park the input task until the watchdog reset, so each one has a
+//! deadline, and a failed one is followed by the I²C bus clear.
 
-use embassy_nrf::gpio::{Input, Level, Output, OutputDrive, Pull};
+use core::future::Future;
+use core::pin::Pin;
+
+use embassy_nrf::gpio::{AnyPin, Flex, Input, Level, Output, OutputDrive, Pull};
 use embassy_nrf::twim::{self, Twim};
-use embassy_nrf::wdt::WatchdogHandle;
-use embassy_time::{Duration, Instant, Ticker, Timer};
+use embassy_nrf::{peripherals, Peri};
+use embassy_time::{with_timeout, Duration, Instant, Ticker, Timer};
+use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 use heapless::Deque;
 use lsm303agr::interface::I2cInterface;
 use lsm303agr::mode::MagOneShot;
 use lsm303agr::{AccelMode, AccelOutputDataRate, Lsm303agr};
 
 use marble_rolling::app::{MatrixOutput, TiltInput, REFRESH_HZ};
-use marble_rolling::board::microbit as board;
+use marble_rolling::board::microbit::{self as board, BusClear, BusLines, Heartbeats, Task};
 use marble_rolling::input::buttons::{ButtonEvent, Buttons};
 use marble_rolling::input::event::{Command, InputEvent, Tilt};
-use marble_rolling::input::sensor::{AccelMg, Action, Fault, TiltPipeline};
+use marble_rolling::input::sensor::{AccelMg, Action, Fault, Read, TiltPipeline};
 use marble_rolling::matrix::ScanStep;
 
 /// RTC ticks per BCM base tick (4 → 109 Hz refresh; see the board module).
@@ -31,6 +41,9 @@ const RTC_TICKS_PER_BASE_TICK: u64 = board::rtc_ticks_per_base_tick(REFRESH_HZ) 
 const REFRESH_TICKS: u64 = RTC_TICKS_PER_BASE_TICK
     * marble_rolling::matrix::Scanner::<{ board::WIDTH }, { board::HEIGHT }>::TICKS_PER_REFRESH
         as u64;
+
+/// CPU cycles per microsecond (64 MHz), for the bus clear's busy waits.
+const CYCLES_PER_US: u32 = 64;
 
 // ---------------------------------------------------------------------------
 // LED matrix
@@ -42,39 +55,42 @@ pub struct Matrix {
     cols: [Output<'static>; board::WIDTH],
     lit_row: Option<usize>,
     deadline: Instant,
+    heartbeats: &'static Heartbeats,
 }
 
 impl Matrix {
-    /// Takes the row pins (top to bottom) and column pins (left to right).
+    /// Takes the row pins (top to bottom) and column pins (left to right);
+    /// every scan step is the display task's heartbeat.
     pub fn new(
         rows: [Output<'static>; board::HEIGHT],
         cols: [Output<'static>; board::WIDTH],
+        heartbeats: &'static Heartbeats,
     ) -> Self {
         Self {
             rows,
             cols,
             lit_row: None,
             deadline: Instant::now(),
+            heartbeats,
         }
     }
 
     /// An output pin for a row (idle low = off).
-    pub fn row_pin(
-        pin: embassy_nrf::Peri<'static, impl embassy_nrf::gpio::Pin>,
-    ) -> Output<'static> {
+    pub fn row_pin(pin: Peri<'static, impl embassy_nrf::gpio::Pin>) -> Output<'static> {
         Output::new(pin, Level::Low, OutputDrive::HighDrive)
     }
 
     /// An output pin for a column (idle high = off).
-    pub fn col_pin(
-        pin: embassy_nrf::Peri<'static, impl embassy_nrf::gpio::Pin>,
-    ) -> Output<'static> {
+    pub fn col_pin(pin: Peri<'static, impl embassy_nrf::gpio::Pin>) -> Output<'static> {
         Output::new(pin, Level::High, OutputDrive::HighDrive)
     }
 }
 
 impl MatrixOutput<{ board::WIDTH }, { board::HEIGHT }> for Matrix {
     async fn show(&mut self, step: ScanStep) {
+        // `show` runs inside app::display_task: reaching it proves the
+        // display task runs (the watchdog waits for it).
+        self.heartbeats.beat(Task::Display);
         let columns = step.columns;
         if self.lit_row != Some(step.row) {
             // Columns off before switching rows: no ghosting of the old row.
@@ -110,11 +126,206 @@ impl MatrixOutput<{ board::WIDTH }, { board::HEIGHT }> for Matrix {
 }
 
 // ---------------------------------------------------------------------------
+// I²C: the TWIM with a deadline and a bus clear
+// ---------------------------------------------------------------------------
+
+/// I²C configuration of the internal bus ([`board::I2C_KHZ`]; the board has
+/// external pull-ups).
+pub fn twim_config() -> twim::Config {
+    let mut config = twim::Config::default();
+    config.frequency = twim::Frequency::K400;
+    config
+}
+
+/// Why a transfer on [`Bus`] failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum BusError {
+    /// The TWIM reported an error.
+    Twim(twim::Error),
+    /// The transfer did not finish within [`board::I2C_TIMEOUT_MS`]; the bus
+    /// was cleared.
+    Timeout,
+}
+
+impl embedded_hal_async::i2c::Error for BusError {
+    fn kind(&self) -> embedded_hal_async::i2c::ErrorKind {
+        match self {
+            BusError::Twim(e) => embedded_hal_async::i2c::Error::kind(e),
+            BusError::Timeout => embedded_hal_async::i2c::ErrorKind::Other,
+        }
+    }
+}
+
+/// The internal I²C bus (TWIM0, SDA P0.16, SCL P0.08) as the sensor driver's
+/// `I2c`: every transfer on a fresh `Twim` with a copy buffer, under a
+/// deadline, and a bus clear after any transfer that failed on the wire.
+///
+/// The `Twim` lives for one transfer only: it borrows the peripheral and the
+/// pins from here, so dropping it hands them back for the bus clear and the
+/// next transfer starts from a freshly configured TWIM — without `unsafe`
+/// stealing of peripherals. Creating one is a few register writes.
+pub struct Bus {
+    twim: Peri<'static, peripherals::TWISPI0>,
+    sda: Peri<'static, AnyPin>,
+    scl: Peri<'static, AnyPin>,
+    /// The TWIM's RAM copy buffer for writes from flash
+    /// ([`board::TWIM_COPY_BUFFER_BYTES`] says why and how big). A field
+    /// borrowed mutably, so it is in RAM (the input task's static storage),
+    /// never in flash.
+    copy: [u8; board::TWIM_COPY_BUFFER_BYTES],
+    /// Clear the bus before the next transfer (set at boot: a slave may be
+    /// stuck mid-read from before a reset).
+    clear_first: bool,
+    /// Bus clears run, for the log.
+    clears: u32,
+}
+
+impl Bus {
+    /// Takes TWIM0 and the bus pins.
+    pub fn new(
+        twim: Peri<'static, peripherals::TWISPI0>,
+        sda: Peri<'static, AnyPin>,
+        scl: Peri<'static, AnyPin>,
+    ) -> Self {
+        Self {
+            twim,
+            sda,
+            scl,
+            copy: [0; board::TWIM_COPY_BUFFER_BYTES],
+            clear_first: true,
+            clears: 0,
+        }
+    }
+
+    /// Runs the bus clear on the pins as open-drain GPIOs (the TWIM must be
+    /// dropped: it is, outside [`Bus::transaction`]).
+    fn clear(&mut self) -> BusClear {
+        let outcome = board::clear_bus(&mut GpioLines::new(
+            self.sda.reborrow(),
+            self.scl.reborrow(),
+        ));
+        self.clears = self.clears.saturating_add(1);
+        if outcome.is_clear() {
+            defmt::debug!("i2c: bus clear #{}: {}", self.clears, outcome);
+        } else {
+            defmt::warn!("i2c: bus clear #{}: {}", self.clears, outcome);
+        }
+        outcome
+    }
+}
+
+/// Whether a TWIM error came from the wire (so the bus may be stuck), rather
+/// than from the driver refusing the buffers before any traffic.
+fn on_the_wire(e: twim::Error) -> bool {
+    !matches!(
+        e,
+        twim::Error::TxBufferTooLong
+            | twim::Error::RxBufferTooLong
+            | twim::Error::RAMBufferTooSmall
+    )
+}
+
+impl ErrorType for Bus {
+    type Error = BusError;
+}
+
+impl I2c for Bus {
+    async fn transaction(
+        &mut self,
+        address: u8,
+        operations: &mut [Operation<'_>],
+    ) -> Result<(), BusError> {
+        if self.clear_first {
+            self.clear_first = false;
+            self.clear();
+        }
+        let mut twim = Twim::new(
+            self.twim.reborrow(),
+            crate::Irqs,
+            self.sda.reborrow(),
+            self.scl.reborrow(),
+            twim_config(),
+            &mut self.copy,
+        );
+        let outcome = with_timeout(
+            Duration::from_millis(board::I2C_TIMEOUT_MS),
+            twim.transaction(address, operations),
+        )
+        .await;
+        // Dropping the Twim disables TWIM0 and with it its EasyDMA, here,
+        // while `operations` (the DMA's buffers) are still borrowed: a timed
+        // out transfer cannot write into memory that is gone.
+        drop(twim);
+        match outcome {
+            Ok(Ok(())) => Ok(()),
+            Ok(Err(e)) => {
+                if e == twim::Error::RAMBufferTooSmall {
+                    defmt::error!(
+                        "i2c: a write from flash exceeds the {} B copy buffer",
+                        board::TWIM_COPY_BUFFER_BYTES
+                    );
+                }
+                if on_the_wire(e) {
+                    self.clear();
+                }
+                Err(BusError::Twim(e))
+            }
+            Err(_) => {
+                defmt::warn!("i2c: transfer to {=u8:#x} timed out", address);
+                self.clear();
+                Err(BusError::Timeout)
+            }
+        }
+    }
+}
+
+/// The bus pins as open-drain GPIOs with pull-ups, for [`board::clear_bus`].
+struct GpioLines<'a> {
+    sda: Flex<'a>,
+    scl: Flex<'a>,
+}
+
+impl<'a> GpioLines<'a> {
+    fn new(sda: Peri<'a, AnyPin>, scl: Peri<'a, AnyPin>) -> Self {
+        let mut sda = Flex::new(sda);
+        let mut scl = Flex::new(scl);
+        for pin in [&mut sda, &mut scl] {
+            // Released before the output is enabled: no glitch on the bus.
+            pin.set_high();
+            pin.set_as_input_output(Pull::Up, OutputDrive::Standard0Disconnect1);
+        }
+        Self { sda, scl }
+    }
+}
+
+impl BusLines for GpioLines<'_> {
+    fn set_scl(&mut self, high: bool) {
+        self.scl.set_level(Level::from(high));
+    }
+
+    fn set_sda(&mut self, high: bool) {
+        self.sda.set_level(Level::from(high));
+    }
+
+    fn scl(&mut self) -> bool {
+        self.scl.is_high()
+    }
+
+    fn sda(&mut self) -> bool {
+        self.sda.is_high()
+    }
+
+    fn half_period(&mut self) {
+        cortex_m::asm::delay(board::BUS_CLEAR_HALF_PERIOD_US * CYCLES_PER_US);
+    }
+}
+
+// ---------------------------------------------------------------------------
 // Accelerometer
 // ---------------------------------------------------------------------------
 
-/// The LSM303AGR on TWIM0 (address 0x19 for the accelerometer).
-pub type Sensor = Lsm303agr<I2cInterface<Twim<'static>>, MagOneShot>;
+/// The LSM303AGR on the internal bus (address 0x19 for the accelerometer).
+pub type Sensor = Lsm303agr<I2cInterface<Bus>, MagOneShot>;
 
 /// The driver's mode changes take a blocking delay; we wait asynchronously
 /// afterwards instead ([`board::ACCEL_SETTLE_MS`]).
@@ -124,22 +335,24 @@ impl embedded_hal::delay::DelayNs for NoDelay {
     fn delay_ns(&mut self, _ns: u32) {}
 }
 
-/// I²C configuration of the internal bus.
-pub fn twim_config() -> twim::Config {
-    let mut config = twim::Config::default();
-    config.frequency = twim::Frequency::K400;
-    config
+/// The supervisor's name for a driver error.
+fn fault(e: lsm303agr::Error<BusError>) -> Fault {
+    match e {
+        lsm303agr::Error::Comm(BusError::Timeout) => Fault::Timeout,
+        lsm303agr::Error::Comm(BusError::Twim(_)) => Fault::Bus,
+        lsm303agr::Error::InvalidInputData => Fault::Implausible,
+    }
 }
 
 /// (Re)configures the accelerometer: identity check, block data update,
 /// high-resolution mode at [`board::ACCEL_ODR_HZ`], then waits until the
 /// output is valid.
 async fn configure(sensor: &mut Sensor) -> Result<(), Fault> {
-    let id = sensor.accelerometer_id().await.map_err(|_| Fault::Bus)?;
+    let id = sensor.accelerometer_id().await.map_err(fault)?;
     if !id.is_correct() {
         return Err(Fault::Implausible);
     }
-    sensor.init().await.map_err(|_| Fault::Bus)?;
+    sensor.init().await.map_err(fault)?;
     sensor
         .set_accel_mode_and_odr(
             &mut NoDelay,
@@ -147,23 +360,25 @@ async fn configure(sensor: &mut Sensor) -> Result<(), Fault> {
             AccelOutputDataRate::Hz200,
         )
         .await
-        .map_err(|_| Fault::Bus)?;
+        .map_err(fault)?;
     Timer::after_millis(board::ACCEL_SETTLE_MS).await;
     Ok(())
 }
 
-/// One sample in the sensor frame, milli-g.
-async fn read(sensor: &mut Sensor) -> Result<AccelMg, Fault> {
-    let status = sensor.accel_status().await.map_err(|_| Fault::Bus)?;
-    if !status.xyz_new_data() {
-        return Err(Fault::NoData);
+/// One poll in the sensor frame, milli-g.
+async fn read(sensor: &mut Sensor) -> Read<AccelMg> {
+    match sensor.accel_status().await {
+        Ok(status) if !status.xyz_new_data() => return Read::NotReady,
+        Ok(_) => {}
+        Err(e) => return Read::Failed(fault(e)),
     }
-    let (x, y, z) = sensor
-        .acceleration()
-        .await
-        .map_err(|_| Fault::Bus)?
-        .xyz_mg();
-    Ok(AccelMg::new(x, y, z))
+    match sensor.acceleration().await {
+        Ok(a) => {
+            let (x, y, z) = a.xyz_mg();
+            Read::Sample(AccelMg::new(x, y, z))
+        }
+        Err(e) => Read::Failed(fault(e)),
+    }
 }
 
 fn saturate(v: i32) -> i16 {
@@ -183,7 +398,8 @@ fn to_tilt(s: AccelMg) -> Tilt {
 // ---------------------------------------------------------------------------
 
 /// Polls the accelerometer and buttons every [`board::INPUT_PERIOD_MS`] and
-/// produces the app's tilt and command events.
+/// produces the app's tilt and command events, and the sensor's down/up
+/// transitions as the pipeline reports them.
 pub struct MicrobitInput {
     sensor: Sensor,
     button_a: Input<'static>,
@@ -193,19 +409,16 @@ pub struct MicrobitInput {
     ticker: Option<Ticker>,
     /// Events of this poll still to hand out, in order.
     pending: Deque<InputEvent, 4>,
-    /// Whether the game has been told the sensor is down.
-    down: bool,
-    last_fault: Fault,
-    watchdog: Option<WatchdogHandle>,
+    heartbeats: &'static Heartbeats,
 }
 
 impl MicrobitInput {
-    /// `watchdog` is this loop's watchdog channel (petted every period).
+    /// Every poll is the input task's heartbeat in `heartbeats`.
     pub fn new(
         sensor: Sensor,
         button_a: Input<'static>,
         button_b: Input<'static>,
-        watchdog: Option<WatchdogHandle>,
+        heartbeats: &'static Heartbeats,
     ) -> Self {
         Self {
             sensor,
@@ -215,22 +428,27 @@ impl MicrobitInput {
             pipeline: TiltPipeline::new(board::AXIS_MAP, board::SUPERVISOR),
             ticker: None,
             pending: Deque::new(),
-            down: false,
-            last_fault: Fault::Bus,
-            watchdog,
+            heartbeats,
         }
     }
 
     /// A button input (active low; the board has pull-ups, the internal one
     /// is added for safety).
-    pub fn button_pin(
-        pin: embassy_nrf::Peri<'static, impl embassy_nrf::gpio::Pin>,
-    ) -> Input<'static> {
+    pub fn button_pin(pin: Peri<'static, impl embassy_nrf::gpio::Pin>) -> Input<'static> {
         Input::new(pin, Pull::Up)
     }
 
+    /// (Re)configures the sensor and tells the pipeline how it went.
+    async fn reinit(&mut self) {
+        let outcome = configure(&mut self.sensor).await;
+        if let Err(fault) = outcome {
+            defmt::warn!("accelerometer: (re)init failed: {}", fault);
+        }
+        self.pipeline.reinit_done(outcome);
+    }
+
     /// One polling period: buttons, then the sensor through the pipeline.
-    async fn poll(&mut self) -> (Option<Command>, Tilt) {
+    async fn poll(&mut self) -> Option<Command> {
         let command = match self
             .buttons
             .update(self.button_a.is_low(), self.button_b.is_low())
@@ -240,39 +458,25 @@ impl MicrobitInput {
             Some(ButtonEvent::Calibrate) => Some(Command::Calibrate),
             None => None,
         };
-        let sample = read(&mut self.sensor).await;
-        match self.pipeline.feed(sample) {
-            Action::Use(_) => {}
+        let read = read(&mut self.sensor).await;
+        let step = self.pipeline.feed(read);
+        match step.action {
+            Action::Use(_) | Action::ShowFault => {}
             Action::KeepLast(_) => {
-                if let Err(fault) = sample {
+                if let Read::Failed(fault) = read {
                     defmt::debug!("accelerometer: {}", fault);
                 }
             }
             Action::Reinit => {
                 defmt::warn!("accelerometer: re-initialising");
-                let outcome = configure(&mut self.sensor).await;
-                if let Err(fault) = outcome {
-                    defmt::warn!("accelerometer: re-init failed: {}", fault);
-                }
-                self.pipeline.reinit_done(outcome);
+                self.reinit().await;
             }
-            Action::ShowFault => {}
         }
-        if let Err(fault) = sample {
-            self.last_fault = fault;
+        if let Some(transition) = step.transition {
+            defmt::warn!("accelerometer: {}", transition);
+            let _ = self.pending.push_back(transition.event());
         }
-        let down = self.pipeline.is_down();
-        if self.down != down {
-            self.down = down;
-            defmt::warn!("accelerometer down: {}", down);
-            let event = if down {
-                InputEvent::SensorDown(self.last_fault)
-            } else {
-                InputEvent::SensorUp
-            };
-            let _ = self.pending.push_back(event);
-        }
-        (command, to_tilt(self.pipeline.tilt()))
+        command
     }
 }
 
@@ -281,27 +485,49 @@ impl TiltInput for MicrobitInput {
         if let Some(event) = self.pending.pop_front() {
             return event;
         }
+        let period = Duration::from_millis(board::INPUT_PERIOD_MS);
         match &mut self.ticker {
             Some(ticker) => ticker.next().await,
             None => {
                 // First call: bring the sensor up (a failure is handled by the
                 // supervisor like any other).
-                let outcome = configure(&mut self.sensor).await;
-                if let Err(fault) = outcome {
-                    defmt::warn!("accelerometer: init failed: {}", fault);
-                }
-                self.pipeline.reinit_done(outcome);
-                self.ticker = Some(Ticker::every(Duration::from_millis(board::INPUT_PERIOD_MS)));
+                self.reinit().await;
+                self.ticker = Some(Ticker::every(period));
             }
         }
-        if let Some(watchdog) = &mut self.watchdog {
-            watchdog.pet();
+        self.heartbeats.beat(Task::Input);
+        let started = Instant::now();
+        let command = self.poll().await;
+        if Instant::now() >= started + period {
+            // Slow work (a re-init, a timed-out transfer and its bus clear):
+            // the ticker would fire every missed period back to back, polling
+            // a sensor with no new sample yet and squeezing the button
+            // debounce. Start the period over instead.
+            if let Some(ticker) = &mut self.ticker {
+                ticker.reset();
+            }
         }
-        let (command, tilt) = self.poll().await;
         if let Some(command) = command {
             let _ = self.pending.push_back(InputEvent::Command(command));
         }
-        let _ = self.pending.push_back(InputEvent::Tilt(tilt));
-        self.pending.pop_front().unwrap_or(InputEvent::Tilt(tilt))
+        let tilt = InputEvent::Tilt(to_tilt(self.pipeline.tilt()));
+        let _ = self.pending.push_back(tilt);
+        self.pending.pop_front().unwrap_or(tilt)
     }
+}
+
+/// Runs `future`, beating `task` in `heartbeats` each time it is polled: for
+/// a task whose loop lives elsewhere (`app::game_task`), being polled is the
+/// proof it is not parked forever. The future is pinned by the caller, in
+/// its own task's storage: taken by value here it would be stored twice.
+pub async fn with_heartbeat<F: Future>(
+    heartbeats: &'static Heartbeats,
+    task: Task,
+    mut future: Pin<&mut F>,
+) -> F::Output {
+    core::future::poll_fn(|cx| {
+        heartbeats.beat(task);
+        future.as_mut().poll(cx)
+    })
+    .await
 }

@@ -7,15 +7,18 @@
 //!
 //! Executors:
 //! * thread mode: input (accelerometer + buttons, 100 Hz), the game
-//!   (`app::game_task`), and a liveness task for the watchdog;
+//!   (`app::game_task`), and the watchdog task;
 //! * EGU0_SWI0 interrupt (priority P6, above thread mode): the display, so
 //!   game computation can never stretch a BCM slice.
 //!
-//! Watchdog (1 s, paused while a debugger halts the CPU): channel 0 is petted
-//! by the input loop every 10 ms (a hung I²C transfer stops it), channel 1 by
-//! a thread-mode task every 100 ms (a task hogging the thread executor, e.g.
-//! a game step stuck in a loop, stops it). A panic halts in panic-probe and
-//! the watchdog restarts the board.
+//! Watchdog (1 s, paused while a debugger halts the CPU): one channel, petted
+//! by the watchdog task only when every task has proved since the last pet
+//! that it runs (`board::Heartbeats`, `board::WatchdogGate`): input beats
+//! once a poll, the display on every scan step, the game each time it is
+//! polled. A loop petting on its own would miss a task parked forever at an
+//! `await`; this way any stalled task, or a task hogging the thread executor
+//! (the watchdog task runs there too), stops the pets and resets the board.
+//! A panic halts in panic-probe and the watchdog restarts the board.
 
 #![no_std]
 #![no_main]
@@ -25,25 +28,34 @@ use panic_probe as _;
 
 mod hw;
 
+use core::pin::pin;
+
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_nrf::interrupt;
 use embassy_nrf::interrupt::{InterruptExt, Priority};
-use embassy_nrf::twim::{self, Twim};
+use embassy_nrf::twim;
 use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
 use embassy_nrf::{bind_interrupts, peripherals};
 use embassy_time::{Duration, Ticker};
 use lsm303agr::Lsm303agr;
 
 use marble_rolling::app::{self, Links};
-use marble_rolling::board::microbit as board;
+use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, WatchdogGate};
 use marble_rolling::input::tilt::TiltConfig;
 
-bind_interrupts!(struct Irqs {
+bind_interrupts!(pub struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
 });
 
 /// The links between the tasks.
 static LINKS: Links<{ board::WIDTH }, { board::HEIGHT }> = Links::new();
+
+/// Each task's proof that it runs, read by the watchdog task.
+static HEARTBEATS: Heartbeats = Heartbeats::new();
+
+/// Checks without a pet after which the watchdog task logs who is stalled
+/// (half the watchdog period).
+const STALL_LOG_CHECKS: u16 = 5;
 
 /// No autopilot on the micro:bit: no button combination is left for it, and
 /// leaving it out saves about 6 KiB of flash.
@@ -76,34 +88,45 @@ async fn game() {
         let mode = app::GameMode::Play {
             tilt: TiltConfig::DEFAULT,
         };
-        let exit = app::game_task::<{ board::WIDTH }, { board::HEIGHT }, PILOT>(&LINKS, mode).await;
+        // The game loop is app's; being polled (every frame tick, paused or
+        // not) is its heartbeat.
+        let game = pin!(app::game_task::<{ board::WIDTH }, { board::HEIGHT }, PILOT>(&LINKS, mode));
+        let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
         defmt::warn!("game_task returned: {}", exit);
     }
 }
 
+/// Pets the watchdog whenever every task has beaten since the last pet.
 #[embassy_executor::task]
-async fn liveness(mut watchdog: WatchdogHandle) -> ! {
-    let mut ticker = Ticker::every(Duration::from_millis(board::WATCHDOG_PET_MS));
+async fn watchdog(mut handle: WatchdogHandle) -> ! {
+    let mut gate = WatchdogGate::new(HEARTBEATS.snapshot());
+    let mut ticker = Ticker::every(Duration::from_millis(board::WATCHDOG_CHECK_MS));
     loop {
-        watchdog.pet();
         ticker.next().await;
+        match gate.check(HEARTBEATS.snapshot()) {
+            Verdict::Pet => handle.pet(),
+            Verdict::Wait { stalled, checks } => {
+                if checks == STALL_LOG_CHECKS {
+                    defmt::error!("watchdog: no pet, stalled: {}", stalled);
+                }
+            }
+        }
     }
 }
 
-/// Starts the watchdog with two channels (input loop, liveness task).
-fn start_watchdog(
-    wdt: embassy_nrf::Peri<'static, peripherals::WDT>,
-) -> [Option<WatchdogHandle>; 2] {
+/// Starts the watchdog with one channel (the watchdog task's).
+fn start_watchdog(wdt: embassy_nrf::Peri<'static, peripherals::WDT>) -> Option<WatchdogHandle> {
     let mut config = wdt::Config::default();
     config.timeout_ticks = board::WATCHDOG_TIMEOUT_TICKS;
     config.action_during_debug_halt = wdt::HaltConfig::Pause;
-    match Watchdog::try_new::<_, 2>(wdt, config) {
-        Ok((_watchdog, [input, live])) => [Some(input), Some(live)],
+    match Watchdog::try_new::<_, 1>(wdt, config) {
+        Ok((_watchdog, [handle])) => Some(handle),
         Err(_) => {
-            // Already running with another configuration (it survives some
-            // resets): it will reset us, and the next boot configures it.
+            // Already running with another configuration (it survives a soft
+            // reset, e.g. an older firmware's): it will reset us, and the
+            // next boot configures it.
             defmt::error!("watchdog already running with another configuration");
-            [None, None]
+            None
         }
     }
 }
@@ -113,7 +136,7 @@ async fn main(spawner: Spawner) {
     let p = embassy_nrf::init(Default::default());
     defmt::info!("Marble Rolling on micro:bit v2");
 
-    let [wdt_input, wdt_live] = start_watchdog(p.WDT);
+    let wdt = start_watchdog(p.WDT);
 
     // LED matrix: rows P0.21, P0.22, P0.15, P0.24, P0.19; columns P0.28,
     // P0.11, P0.31, P1.05, P0.30.
@@ -132,25 +155,21 @@ async fn main(spawner: Spawner) {
             hw::Matrix::col_pin(p.P1_05),
             hw::Matrix::col_pin(p.P0_30),
         ],
+        &HEARTBEATS,
     );
 
-    // Internal I²C: SDA P0.16, SCL P0.08. Every write the driver does comes
-    // from RAM, so no flash-to-RAM copy buffer is needed.
-    let i2c = Twim::new(
-        p.TWISPI0,
-        Irqs,
-        p.P0_16,
-        p.P0_08,
-        hw::twim_config(),
-        &mut [],
-    );
-    let sensor = Lsm303agr::new_with_i2c(i2c);
+    // Internal I²C: SDA P0.16, SCL P0.08. The driver writes register
+    // addresses from flash, so the bus gives its TWIM a RAM copy buffer
+    // (board::TWIM_COPY_BUFFER_BYTES), a deadline per transfer and a bus
+    // clear (hw::Bus).
+    let bus = hw::Bus::new(p.TWISPI0, p.P0_16.into(), p.P0_08.into());
+    let sensor = Lsm303agr::new_with_i2c(bus);
     // Buttons A P0.14, B P0.23.
     let input_dev = hw::MicrobitInput::new(
         sensor,
         hw::MicrobitInput::button_pin(p.P0_14),
         hw::MicrobitInput::button_pin(p.P0_23),
-        wdt_input,
+        &HEARTBEATS,
     );
 
     interrupt::EGU0_SWI0.set_priority(Priority::P6);
@@ -167,10 +186,10 @@ async fn main(spawner: Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
     }
-    if let Some(handle) = wdt_live {
-        match liveness(handle) {
+    if let Some(handle) = wdt {
+        match watchdog(handle) {
             Ok(token) => spawner.spawn(token),
-            Err(_) => defmt::error!("liveness task already running"),
+            Err(_) => defmt::error!("watchdog task already running"),
         }
     }
 }
