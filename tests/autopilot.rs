@@ -127,8 +127,9 @@ fn wins_every_builtin_level_with_the_sensor_tilt_path() {
 
 #[test]
 fn wins_with_other_tilt_paths() {
-    // No filter at all (gravity = −reading), a quick filter, a sluggish one, and a
-    // wide dead zone: more or less lag and friction than the gains were tuned for.
+    // No filter at all (gravity = −reading), a quick filter, a sluggish one, and
+    // (ramped) dead zones, which the default path no longer has: more or less lag
+    // and friction than the gains were tuned for.
     let paths = [
         None,
         Some(TiltConfig {

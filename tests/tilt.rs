@@ -1,11 +1,11 @@
-//! The tilt input path (src/tilt.rs): accelerometer reading → gravity.
+//! The tilt input path (src/input/tilt.rs): accelerometer reading → gravity.
 
 use marble_rolling::input::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
 use marble_rolling::input::tilt::{TiltConfig, TiltError, TiltFilter};
 use marble_rolling::physics::world::MAX_MG;
 use proptest::prelude::*;
 
-/// Tiny in-plane noise (±2 mg, well inside the dead zone) so that a long run
+/// Tiny zero-mean in-plane noise (±2 mg, a period of 5 samples) so that a long run
 /// of a steady pose is not taken for a stuck sensor, as on real hardware.
 fn noisy(r: [i32; 3], n: usize) -> [i32; 3] {
     const NOISE: [i32; 5] = [0, 1, -2, 2, -1];
@@ -59,7 +59,7 @@ fn negative_x_reading_rolls_towards_plus_x() {
     let mut f = TiltFilter::default();
     let g = settle(&mut f, [-300, 950, 0], 100);
     assert!(g[0] > 0, "{g:?}");
-    assert_eq!(g[0], 300 - 20, "minus the dead zone");
+    assert_eq!(g[0], 300, "the reading itself: no dead zone");
     assert_eq!(g[2], 0);
     assert_eq!(g[1], -950);
     let g = settle(&mut f, [300, 950, 0], 100);
@@ -96,7 +96,7 @@ fn calibrating_a_tilted_board_makes_it_level() {
     assert_eq!(settle(&mut f, tilted, 100), [0, -966, 0]);
     // Tilting further from the new level rolls as usual.
     let g = settle(&mut f, [-459, 900, 150], 100);
-    assert_eq!(g[0], 200 - 20);
+    assert_eq!(g[0], 200);
     // Calibrating again replaces the offset instead of stacking it.
     f.calibrate([0, 1000, 0]).unwrap();
     assert_eq!(f.calibration(), Calibration::NONE);
@@ -139,32 +139,58 @@ fn calibration_is_clamped_and_refuses_garbage() {
 }
 
 #[test]
-fn dead_zone_zeroes_small_tilts_and_is_continuous() {
-    let cfg = TiltConfig {
+fn default_path_passes_every_tilt_unchanged() {
+    // No dead zone by default: every in-plane reading, however small, reaches the
+    // physics as it is (a resting marble is held by rolling resistance instead).
+    assert_eq!(TiltConfig::DEFAULT.dead_zone_mg, 0);
+    let mut f = TiltFilter::new(TiltConfig {
         filter_shift: 0,
         stuck_samples: 0,
         ..TiltConfig::DEFAULT
+    });
+    for x in -600..=600 {
+        let g = f.push([x, 1000, -x]).unwrap();
+        assert_eq!(g, [-x, -1000, x], "x = {x}");
+    }
+}
+
+#[test]
+fn dead_zone_zeroes_small_tilts_and_ramps_back_to_identity() {
+    let cfg = TiltConfig {
+        filter_shift: 0,
+        stuck_samples: 0,
+        dead_zone_mg: 20,
+        ..TiltConfig::DEFAULT
     };
-    assert_eq!(cfg.dead_zone_mg, 20);
     let mut f = TiltFilter::new(cfg);
     let mut prev: Option<i32> = None;
-    for x in -60..=60 {
+    for x in -100..=100i32 {
         let g = f.push([x, 1000, -x]).unwrap();
-        let expect = if x.abs() <= 20 {
-            0
-        } else {
-            -(x - 20 * x.signum())
+        // 0 inside ±20, 2(|x| − 20) from 20 to 40, the reading itself beyond.
+        let mag = match x.abs() {
+            a if a <= 20 => 0,
+            a if a < 40 => 2 * (a - 20),
+            a => a,
         };
+        let expect = -x.signum() * mag;
         assert_eq!(g[0], expect, "x = {x}");
         assert_eq!(g[2], -expect, "z = {}", -x);
+        if x.abs() >= 40 {
+            assert_eq!(g[0], -x, "identity beyond twice the width, x = {x}");
+        }
+        // Never further from the identity than the width.
+        assert!((g[0] + x).abs() <= 20, "x = {x}");
+        // Continuous: the ramp's slope is 2, so 1 mg in moves at most 2 mg out.
         if let Some(p) = prev {
-            assert!((g[0] - p).abs() <= 1, "jump at x = {x}");
+            assert!((g[0] - p).abs() <= 2, "jump at x = {x}");
         }
         prev = Some(g[0]);
     }
-    // Just inside / outside the edge.
+    // Just inside / outside the edges.
     assert_eq!(f.push([-20, 1000, 0]).unwrap()[0], 0);
-    assert_eq!(f.push([-21, 1000, 0]).unwrap()[0], 1);
+    assert_eq!(f.push([-21, 1000, 0]).unwrap()[0], 2);
+    assert_eq!(f.push([-39, 1000, 0]).unwrap()[0], 38);
+    assert_eq!(f.push([-40, 1000, 0]).unwrap()[0], 40);
 }
 
 /// Samples until the output first reaches 63.2 % of a step from 0 to 1000.
@@ -423,7 +449,7 @@ fn garbage_interleaved_with_good_samples_keeps_last_good() {
             assert_eq!(f.gravity_mg(), want, "after {g:?}");
         }
     }
-    assert_eq!(f.gravity_mg(), [400 - 20, -900, -(200 - 20)]);
+    assert_eq!(f.gravity_mg(), [400, -900, -200]);
 }
 
 #[test]

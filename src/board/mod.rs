@@ -11,3 +11,5 @@ pub mod qemu;
 // The micro:bit v2 board module: pure (pin-free) code, compiled everywhere so
 // that plain host `cargo test` covers it.
 pub mod microbit;
+// The micro:bit v1 board module (nRF51822): pure code, host-tested.
+pub mod microbit_v1;

@@ -39,8 +39,9 @@
 //! never through a float) to 1/4096 pitch, so every backend runs the same integer
 //! controller, and a given backend is bit-for-bit deterministic.
 //!
-//! Per axis, a velocity loop `tilt = KV·(v_want − v)` plus a step over the tilt
-//! path's dead zone and the rolling resistance. Along the straight run the marble is
+//! Per axis, a velocity loop `tilt = KV·(v_want − v)` plus a step: the level's
+//! rolling resistance (`c_rr`·1000 mg with `friction`) and 10 mg more, which sharpens
+//! the loop against the tilt path's lag. Along the straight run the marble is
 //! on, `v_want` is `K_POS·d` (capped at a top speed) for the distance `d` to the run's
 //! end, a corner where it must stop; when the run ends in a goal it is the top speed
 //! (the goal only has to be entered). Across the run the same loop keeps the marble on
@@ -51,8 +52,8 @@
 //!   the slot and cannot climb out below ~300 mg, so runs over a gap are taken at
 //!   6 pitch/s at least, and a marble that stopped in one anyway is tilted out with
 //!   [`Autopilot::ESCAPE_TILT_MG`] towards the side nearer the goal.
-//! * **Stalls.** A marble asked to move that does not move (a larger dead zone or
-//!   resistance than planned for) gets 1 mg more tilt per frame, up to 120 mg.
+//! * **Stalls.** A marble asked to move that does not move (a tilt path with a dead
+//!   zone, or more resistance than planned for) gets 1 mg more tilt per frame, up to 120 mg.
 //! * **Patience.** No step nearer the goal for 3 s (a tilt path with more lag than
 //!   planned for makes the marble overshoot and oscillate): the gains go down in
 //!   turn to ¾·KV and ½·K_POS, then ½·KV and ¼·K_POS, with the top speed.
@@ -68,6 +69,7 @@
 
 use crate::physics::geometry::grid::{Tiles, MAX_TILES_XZ};
 use crate::physics::geometry::tiles::TileIndex;
+use crate::physics::world::PhysicsSpec;
 use crate::physics::Scalar;
 
 use super::level::LevelView;
@@ -81,8 +83,9 @@ const FIELD_BYTES: usize = (MAX_CELLS_XZ * MAX_CELLS_XZ).div_ceil(4);
 const Q: u32 = 12;
 const ONE: i64 = 1 << Q;
 
-// Tuning. Tried on every built-in level and backend through the default tilt path,
-// and also without a filter, with filter shifts 1–5 and dead zones 0–40 mg.
+// Tuning. Tried on every built-in level and backend through the default tilt path
+// (low-pass, no dead zone), and also without a filter, with filter shifts 1–5 and
+// (ramped) dead zones of 10–40 mg.
 
 /// Tilt gain: milli-g per pitch/s of speed error.
 const KV: i64 = 12;
@@ -93,9 +96,15 @@ const V_MAX: i64 = 6 * ONE;
 /// Least speed over a gap (a short tile without floor), pitch/s (q12): a marble
 /// much slower than about 4 pitch/s drops into the 2 mm slot and stays there.
 const V_GAP: i64 = 6 * ONE;
-/// Added to a non-zero tilt: the tilt path's 20 mg dead zone plus rolling resistance.
-const COMP_MG: i64 = 30;
-/// The tilt over which [`COMP_MG`] ramps in (avoids chatter around zero).
+/// Added to a non-zero tilt on top of what rolling resistance takes
+/// (see [`step_mg`]), mg: a small relay step that makes the loop brake and correct
+/// sooner than the tilt path's low-pass lag alone allows (without it the marble
+/// overshoots corner's first run into the end wall: 334 frames instead of 241).
+/// (Before the tilt path lost its 20 mg dead zone, the whole step was a flat 30 mg,
+/// 20 of which the dead zone ate.)
+const STEP_MG: i64 = 10;
+/// The tilt over which the step ([`STEP_MG`] plus the resistance) ramps in (avoids
+/// chatter around zero).
 const COMP_RAMP_MG: i64 = 4;
 /// Below this speed (pitch/s, q12) a marble asked to move counts as stalled…
 const V_STALL: i64 = ONE / 4;
@@ -170,7 +179,7 @@ impl Autopilot {
     /// The largest tilt the autopilot asks for (per in-plane axis), milli-g.
     pub const TILT_LIMIT_MG: i32 = 250;
     /// The tilt used only to lift a marble out of a gap it has stopped in (the slot's
-    /// edges need about 300 mg after the dead zone).
+    /// edges need about 300 mg).
     pub const ESCAPE_TILT_MG: i32 = 450;
     /// Its size in RAM, bytes.
     pub const RAM_BYTES: usize = core::mem::size_of::<Autopilot>();
@@ -349,18 +358,18 @@ impl Autopilot {
                 if gap && sign * want < V_GAP {
                     want = sign * V_GAP;
                 }
-                tilt(k.kv * (want - vel))
+                k.tilt(k.kv * (want - vel))
             };
         } else {
             // In a goal already, or nowhere to go: stay in the cell.
             cmd = [0, 1].map(|a| k.hold(me.centre[a] - me.pos[a], me.vel[a]));
         }
-        // A marble asked to move that does not (more dead zone or resistance than
-        // planned for): lean in a little more each frame.
+        // A marble asked to move that does not (a dead zone in the tilt path, or more
+        // resistance than planned for): lean in a little more each frame.
         for a in 0..2 {
             let sign: i64 = if cmd[a] > 0 { 1 } else { -1 };
             let b = self.boost[a] as i64;
-            self.boost[a] = if cmd[a].abs() >= COMP_MG + COMP_RAMP_MG && moved[a] < V_STALL {
+            self.boost[a] = if cmd[a].abs() >= k.comp + COMP_RAMP_MG && moved[a] < V_STALL {
                 (b + 1).min(BOOST_MAX_MG)
             } else {
                 b - (b + 7) / 8
@@ -387,7 +396,7 @@ impl Autopilot {
                     } else {
                         (1, dz as i64)
                     };
-                    let h = Gains::at(0).hold(q.centre[a] - q.pos[a], q.vel[a]);
+                    let h = Gains::at(0, k.comp).hold(q.centre[a] - q.pos[a], q.vel[a]);
                     if toward * cmd[a] > toward * h {
                         cmd[a] = h;
                     }
@@ -464,7 +473,10 @@ impl Autopilot {
         } else {
             self.stalled = self.stalled.saturating_add(1);
         }
-        Gains::at((self.stalled / PATIENCE_FRAMES) % 3)
+        Gains::at(
+            (self.stalled / PATIENCE_FRAMES) % 3,
+            step_mg(&level.info.spec),
+        )
     }
 
     /// Whether there is a gap between cell `(cx, cz)` and its neighbour `dir` whose
@@ -576,10 +588,12 @@ struct Gains {
     k_pos4: i64,
     /// Top speed (q12).
     v_max: i64,
+    /// Added to a non-zero tilt, mg ([`step_mg`]).
+    comp: i64,
 }
 
 impl Gains {
-    fn at(level: u16) -> Gains {
+    fn at(level: u16, comp: i64) -> Gains {
         let (kv, kp, vm) = match level {
             0 => (4, 4, 4),
             1 => (3, 2, 2),
@@ -589,12 +603,13 @@ impl Gains {
             kv: KV * kv / 4,
             k_pos4: K_POS * kp,
             v_max: V_MAX * vm / 4,
+            comp,
         }
     }
 
     /// The tilt that brings the marble to rest `e` ahead (q12 pitch) at speed `v`.
     fn hold(&self, e: i64, v: i64) -> i64 {
-        tilt(self.kv * (self.approach_speed(e) - v))
+        self.tilt(self.kv * (self.approach_speed(e) - v))
     }
 
     /// The speed wanted `e` before a stop (signed like `e`): `K_POS·e`, at most
@@ -607,18 +622,31 @@ impl Gains {
             v
         }
     }
+
+    /// A raw tilt `KV·Δv` (mg · 2^Q) → mg, with the step [`Gains::comp`] ramped in
+    /// over the first [`COMP_RAMP_MG`].
+    fn tilt(&self, raw_q: i64) -> i64 {
+        let raw = raw_q >> Q;
+        let step = (raw.abs() * self.comp / COMP_RAMP_MG).min(self.comp);
+        if raw < 0 {
+            raw - step
+        } else {
+            raw + step
+        }
+    }
 }
 
-/// A raw tilt `KV·Δv` (mg · 2^Q) → mg, with the dead-zone / rolling-resistance step
-/// ramped in over the first [`COMP_RAMP_MG`].
-fn tilt(raw_q: i64) -> i64 {
-    let raw = raw_q >> Q;
-    let step = (raw.abs() * COMP_MG / COMP_RAMP_MG).min(COMP_MG);
-    if raw < 0 {
-        raw - step
+/// The step added to a non-zero tilt on a level's board, mg: [`STEP_MG`] plus what
+/// balances rolling resistance — with `friction`, a marble keeps rolling (or starts)
+/// only while the in-plane pull is over `c_rr·g_n` (≈ `c_rr` · 1000 mg near level;
+/// see [`crate::physics::dynamics::effects::Drag`]), rounded up.
+fn step_mg(spec: &PhysicsSpec) -> i64 {
+    let resistance = if spec.effects.friction {
+        (spec.rolling_resistance_ppm as i64 + 999) / 1000
     } else {
-        raw + step
-    }
+        0
+    };
+    STEP_MG + resistance
 }
 
 /// A [`Scalar`] as a q12 integer, exactly rounded down: the integer part by the

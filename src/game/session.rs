@@ -3,9 +3,14 @@
 //! sequence, which is why their `state_hash`es agree for the same inputs:
 //!
 //! ```text
-//! reading (mg, board frame) ─→ tilt path (filter, dead zone, plausibility)
+//! reading (mg, board frame) ─→ tilt path (plausibility, low-pass, calibration)
 //!                           ─→ gravity ─→ Game::set_gravity_mg ─→ Game::frame
 //! ```
+//!
+//! Once the low-pass has settled, the gravity is the calibrated reading itself: a
+//! board held at θ rolls the marble at 5/7·g·sin θ (`tests/tilt_path.rs`). Nothing
+//! is cut off near level; a resting marble is held by rolling resistance (effect
+//! `friction`), see [`crate::input::tilt`].
 //!
 //! The reading comes from the caller (sensor, keys, trace) or from the autopilot.
 
@@ -18,7 +23,8 @@ use super::level::LevelView;
 use super::rules::{Game, GameConfig, Phase};
 
 /// The tilt path's settings for synthetic inputs (keys, traces, autopilot):
-/// identical consecutive readings are normal there, so the stuck-sensor check is off.
+/// [`TiltConfig::DEFAULT`] (low-pass, no dead zone) except that identical
+/// consecutive readings are normal there, so the stuck-sensor check is off.
 pub const SYNTHETIC_TILT: TiltConfig = TiltConfig {
     stuck_samples: 0,
     ..TiltConfig::DEFAULT

@@ -2,8 +2,40 @@
 //! apparent gravity the physics consumes ([`crate::physics::world::World::set_gravity_mg`]).
 //!
 //! ```text
-//! reading ─▶ plausibility ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ dead zone (x, z) ─▶ negate ─▶ clamp ±8 g
+//! reading ─▶ plausibility ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ [dead zone (x, z), off by default] ─▶ negate ─▶ clamp ±8 g
 //! ```
+//!
+//! # What reaches the physics
+//!
+//! Once the low-pass has settled, the gravity handed on is exactly the negated,
+//! calibrated, filtered reading (rounded to the nearest mg): a board held still at
+//! 10° (reading `(−174, 985, 0)`) rolls the marble at 5/7 · 174 mg = 1 219 mm/s²,
+//! as a real one does (`tests/tilt_path.rs` measures this through the whole
+//! session for 1° to 60°). Nothing is taken off small tilts.
+//!
+//! # Why no dead zone, and what holds a resting marble
+//!
+//! A near-level board must hold a resting marble still. That is the job of the
+//! physics, not of the input: with the `friction` effect, rolling resistance has a
+//! static threshold ([`crate::physics::dynamics::effects::Drag`]): a resting marble
+//! stays put while the in-plane pull is at most `c_rr` times the normal one, i.e.
+//! for tilts with `tan θ ≤ c_rr` — 10 mg (0.57°) at the default `c_rr` = 0.01, 15 mg
+//! at grand-tour's 0.015. The low-pass (τ ≈ 7.5 samples by default) divides white
+//! sensor noise's standard deviation by √(2^(k+1) − 1) ≈ 3.9, so the few-mg noise of
+//! a MEMS accelerometer at rest stays under that threshold and the marble does not
+//! creep (`tests/tilt_path.rs` feeds ±5 mg of noise). Without `friction` a marble on
+//! a board 5 mg off level does roll, slowly — that is the physics of a frictionless
+//! marble, and what calibration is for.
+//!
+//! A dead zone would have to be sized from the accelerometer's measured noise:
+//! the LSM303AGR's noise density, or the micro:bit v2's reading noise at rest.
+//! We have no sourced figure for either — we could not find an accelerometer
+//! noise figure to cite for the LSM303AGR (ST datasheet DocID027765), and the
+//! board's noise has not been measured (no micro:bit has run this firmware yet,
+//! see the README) — so the default width is 0: no dead zone, and no number made
+//! up. The knob ([`TiltConfig::dead_zone_mg`]) stays for a board that proves
+//! noisier once measured; it is a ramped zone that gives the input back
+//! unchanged beyond twice its width (see there), never a bias on every reading.
 //!
 //! # Frames and signs
 //!
@@ -13,7 +45,8 @@
 //! reads the reaction to gravity, so a flat board reads `(0, +1000, 0)` and the
 //! gravity handed to the physics is its negation, `(0, −1000, 0)` (down = −y).
 //! A reading with `x < 0` gives gravity `x > 0`: the marble rolls towards `+x`;
-//! likewise `z < 0` rolls it towards `+z` (the player).
+//! likewise `z < 0` rolls it towards `+z` (the player). A board tilted by `θ`
+//! towards `+x` reads `(−1000 sin θ, 1000 cos θ, 0)`.
 //!
 //! # Fit with [`crate::sensor`]
 //!
@@ -109,12 +142,20 @@ pub struct TiltConfig {
     /// mg) while the marble still answers a tilt within a tenth of a second.
     /// 0 disables the filter; clamped to [`MAX_FILTER_SHIFT`].
     pub filter_shift: u8,
-    /// Dead zone on the in-plane components (`x`, `z`) after filtering and
-    /// calibration, mg: `out = sign(v) · max(|v| − dead_zone, 0)` — exactly 0
-    /// for small tilts, continuous at the edge. Default 20 mg (about 1.1°):
-    /// above the filtered noise and a sloppy calibration, so a board resting
-    /// on a table does not creep, yet small next to the ~100 mg of a
-    /// deliberate tilt. Capped at [`MAX_FULL_SCALE_MG`].
+    /// Width `w` of an optional dead zone on the in-plane components (`x`,
+    /// `z`) after filtering and calibration, mg. Per component `v`:
+    ///
+    /// ```text
+    /// |v| ≤ w        out = 0
+    /// w < |v| < 2w   out = sign(v) · 2(|v| − w)   (ramps back to the identity)
+    /// |v| ≥ 2w       out = v                       (untouched)
+    /// ```
+    ///
+    /// Continuous, odd, and off by at most `w` (at `|v| = w`); beyond `2w` the
+    /// tilt reaches the physics unchanged. **Default 0: no dead zone** — a
+    /// resting marble is held by rolling resistance's static threshold, and no
+    /// sourced noise figure of the accelerometer justifies a width (see the
+    /// module documentation). Capped at [`MAX_FULL_SCALE_MG`].
     pub dead_zone_mg: u32,
     /// Identical consecutive raw samples after which [`TiltError::Stuck`] is
     /// reported (that sample and the following identical ones are rejected).
@@ -131,7 +172,7 @@ impl TiltConfig {
     pub const DEFAULT: Self = Self {
         plausibility: Plausibility::DEFAULT,
         filter_shift: 3,
-        dead_zone_mg: 20,
+        dead_zone_mg: 0,
         stuck_samples: 50,
         calibration: Calibration::NONE,
     };
@@ -154,7 +195,7 @@ impl Default for TiltConfig {
 }
 
 /// The tilt filter: plausibility and stuck-sensor rejection, a first-order
-/// low-pass, "level" calibration, a dead zone and the output clamp.
+/// low-pass, "level" calibration, an optional dead zone and the output clamp.
 ///
 /// Until its first accepted sample its gravity is level, `(0, −1000, 0)`; the
 /// first accepted sample initialises the low-pass (no start-up transient).
@@ -216,14 +257,14 @@ impl TiltFilter {
         Ok(self.gravity_mg())
     }
 
-    /// [`TiltFilter::push`] for a [`crate::sensor`] sample.
+    /// [`TiltFilter::push`] for a [`crate::input::sensor`] sample.
     pub fn push_sample(&mut self, s: AccelMg) -> Result<[i32; 3], TiltError> {
         self.push([s.x, s.y, s.z])
     }
 
     /// The gravity to hand to `World::set_gravity_mg` (mg, tile frame,
     /// down = −y): the negated filtered reading minus the calibration, with
-    /// the dead zone on `x` and `z`, each axis clamped to ±[`MAX_MG`]. Level,
+    /// the dead zone (if any) on `x` and `z`, each axis clamped to ±[`MAX_MG`]. Level,
     /// `(0, −1000, 0)`, until the first good sample.
     pub fn gravity_mg(&self) -> [i32; 3] {
         if !self.primed {
@@ -353,14 +394,22 @@ fn lowpass(s: i32, target: i32, k: u32) -> i32 {
     s + step
 }
 
-/// `sign(v) · max(|v| − dz, 0)`, for `dz ≥ 0` (fixed point).
+/// The ramped dead zone of [`TiltConfig::dead_zone_mg`] (fixed point, `dz ≥ 0`):
+/// 0 for `|v| ≤ dz`, `sign(v) · 2(|v| − dz)` up to `2·dz`, `v` beyond. With
+/// `|v| < 2^27` and `dz ≤ 16 000 · 2^12 < 2^26`, nothing overflows.
 fn dead_zone(v: i32, dz: i32) -> i32 {
-    if v > dz {
-        v - dz
-    } else if v < -dz {
-        v + dz
-    } else {
+    let a = v.abs();
+    if a >= 2 * dz {
+        v
+    } else if a <= dz {
         0
+    } else {
+        let out = 2 * (a - dz);
+        if v < 0 {
+            -out
+        } else {
+            out
+        }
     }
 }
 

@@ -8,6 +8,7 @@ mod demo;
 mod error;
 mod firmware;
 mod game;
+mod microbit_v1;
 mod process;
 mod profile;
 mod properties;
@@ -61,6 +62,16 @@ enum Task {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<String>,
     },
+    /// Build the micro:bit v1 firmware and run it on the board (probe-rs), or
+    /// with --demo / --qemu in QEMU microbit.
+    MicrobitV1 {
+        /// Firmware or probe-rs arguments.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// The micro:bit v1 demo in QEMU against the simulator, its LEDs rebuilt
+    /// from the GPIO trace, and its budgets (V1_FLASH_BUDGET, V1_RAM_BUDGET…).
+    CheckMicrobitV1,
     /// The study's Cortex-M4F benchmark in QEMU mps2-an386 (defmt log on stdout).
     BenchM4 {
         /// Benchmark arguments, e.g. --rates=MASK --backends=MASK.
@@ -109,6 +120,8 @@ impl Task {
             Task::Setup { .. } => "setup",
             Task::Qemu { .. } => "qemu",
             Task::Microbit { .. } => "microbit",
+            Task::MicrobitV1 { .. } => "microbit-v1",
+            Task::CheckMicrobitV1 => "check-microbit-v1",
             Task::BenchM4 { .. } => "bench-m4",
             Task::BenchM0 { .. } => "bench-m0",
             Task::CheckDemo => "check-demo",
@@ -124,6 +137,8 @@ impl Task {
             Task::Setup { all } => setup::run(all),
             Task::Qemu { demo, args } => game::qemu(&with_demo(demo, args)),
             Task::Microbit { args } => game::microbit(&args),
+            Task::MicrobitV1 { args } => microbit_v1::run(&args),
+            Task::CheckMicrobitV1 => microbit_v1::check(),
             Task::BenchM4 { args } => study::bench_m4(&args),
             Task::BenchM0 { args } => study::bench_m0(&args),
             Task::CheckDemo => demo::run(),

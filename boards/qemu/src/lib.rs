@@ -372,10 +372,12 @@ pub mod uart {
 /// 25 MHz [`clock`] (see `marble_rolling::board::qemu::cpu_meter` for the
 /// arithmetic and caveats).
 ///
-/// The executor loop reports its WFI sleeps to [`record_sleep`]; [`sample`]
-/// gives total and idle ticks; [`calibrate`] times a NOP loop of known
-/// length; [`count_instructions`] counts the instructions of a closure (e.g.
-/// one physics step) with interrupts off.
+/// The executor loop reports its WFI sleeps to
+/// [`record_sleep`](cpu_meter::record_sleep); [`sample`](cpu_meter::sample)
+/// gives total and idle ticks; [`calibrate`](cpu_meter::calibrate) times a NOP
+/// loop of known length; [`count_instructions`](cpu_meter::count_instructions)
+/// counts the instructions of a closure (e.g. one physics step) with
+/// interrupts off.
 pub mod cpu_meter {
     use core::cell::Cell;
 

@@ -10,15 +10,28 @@
 //! a panic. The runner is `cargo qemu` (xtask); it tells the firmware its mode
 //! on the semihosting command line (see `marble_rolling::board::qemu::Options`).
 //!
+//! The tilt comes from a virtual LSM303AGR on a virtual TWIM, read through the
+//! micro:bit's driver and sensor supervision ([`sensor`]): the terminal's keys
+//! set the chip's tilt and inject faults (`1` NAK, `2` stuck bus, `3` frozen
+//! data, `4` garbage, `5` chip reset, `0` healthy). `--fault-script` runs the
+//! headless [`fault_script`] instead of the demo (exit 0 only if every
+//! expectation held); `--no-copy-buffer` builds the virtual TWIM without a
+//! copy buffer, which the micro:bit's TWIM needs for the driver's reads.
+//!
 //! The tasks below are thin wrappers: the logic is in `marble_rolling::app`.
 #![no_std]
 #![no_main]
 
+mod fault_script;
+mod sensor;
+
 use defmt_semihosting as _;
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TerminalInput};
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
+use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
+use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr};
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
-use marble_rolling::board::qemu::{Options, HEIGHT, WIDTH};
+use marble_rolling::board::qemu::{Options, HEIGHT, QEMU_RAM, SENSOR_AXIS_MAP, WIDTH};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
@@ -28,9 +41,20 @@ use marble_rolling::matrix::{OnTimeIntegrator, Scanner};
 use marble_qemu as hw;
 
 use hw::uart::{UartConsole, UartRx};
+use sensor::{Bus, Keys, QemuInput, SensorReport};
 
 /// The links between the tasks.
 static LINKS: Links<WIDTH, HEIGHT> = Links::new();
+
+/// The virtual accelerometer's tilt and injected fault, shared by the keys,
+/// the fault script and its bus.
+static CHIP: ChipControl = ChipControl::new();
+
+/// What the sensor input did (for the fault script).
+static REPORT: SensorReport = SensorReport::new();
+
+/// The largest virtual TWIM copy buffer `--twim-copy-buffer=N` can ask for.
+const MAX_COPY_BUFFER: usize = 64;
 
 /// This board has the autopilot (the demo, the `p` key).
 const PILOT: bool = true;
@@ -72,26 +96,64 @@ fn main() -> ! {
 
     hw::executor::run(|spawner| {
         let display = display(options.interactive);
-        let game = game(options);
-        match (display, game) {
-            (Ok(display), Ok(game)) => {
+        let input = sensor_input(options);
+        match (display, input) {
+            (Ok(display), Ok(input)) => {
                 spawner.spawn(display);
-                spawner.spawn(game);
+                spawner.spawn(input);
             }
             _ => hw::fatal("cannot spawn tasks"),
         }
-        if options.interactive {
-            match terminal_input() {
+        if options.fault_script {
+            match fault_script_task(options) {
                 Ok(token) => spawner.spawn(token),
-                Err(_) => hw::fatal("cannot spawn the input task"),
+                Err(_) => hw::fatal("cannot spawn the fault script"),
+            }
+        } else {
+            match game(options) {
+                Ok(token) => spawner.spawn(token),
+                Err(_) => hw::fatal("cannot spawn the game"),
             }
         }
     })
 }
 
+/// The tilt from the virtual LSM303AGR through the micro:bit's driver and
+/// supervision, with the terminal's keys when interactive.
+///
+/// In the demo the game ignores the tilt (the autopilot reads the game
+/// itself, and `app::demo` feeds the session the autopilot's reading) and a
+/// healthy virtual chip never reports the sensor down, so the demo plays
+/// exactly as the host simulator does: same steps, same state hashes. The
+/// polling only costs CPU time.
 #[embassy_executor::task]
-async fn terminal_input() -> ! {
-    app::input_task(&LINKS, &mut TerminalInput::new(UartRx)).await
+async fn sensor_input(options: Options) -> ! {
+    // embassy-nrf's `tx_ram_buffer`: in this task's state, so in RAM.
+    let mut copy = [0u8; MAX_COPY_BUFFER];
+    let len = options.twim_copy_buffer.min(MAX_COPY_BUFFER);
+    let copy = match copy.get_mut(..len) {
+        Some(copy) => copy,
+        None => &mut [],
+    };
+    let twim = VirtualTwim::new(
+        VirtualLsm303agr::new(SENSOR_AXIS_MAP),
+        &CHIP,
+        copy,
+        sensor::now_us as fn() -> u64,
+        QEMU_RAM,
+    );
+    let sensor = lsm303agr::Lsm303agr::new_with_i2c(Bus::new(twim));
+    let keys = options.interactive.then(|| Keys::new(UartRx, UartConsole));
+    let mut input = QemuInput::new(sensor, keys, &CHIP, &REPORT);
+    app::input_task(&LINKS, &mut input).await
+}
+
+/// `--fault-script`: the script instead of the game; exits with its verdict.
+#[embassy_executor::task]
+async fn fault_script_task(options: Options) {
+    let copy_buffer = options.twim_copy_buffer.min(MAX_COPY_BUFFER);
+    let verdict = fault_script::run(&LINKS, &CHIP, &REPORT, copy_buffer).await;
+    hw::exit(if verdict.passed() { 0 } else { 1 })
 }
 
 #[embassy_executor::task]

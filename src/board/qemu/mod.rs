@@ -2,16 +2,25 @@
 //!
 //! This part is plain, host-testable code: memory map constants, the
 //! firmware's command-line options, the CPU-load arithmetic
-//! ([`cpu_meter`]) and the virtual LED matrix that shows the scanned frames on
+//! ([`cpu_meter`]), the virtual LED matrix that shows the scanned frames on
 //! an ANSI terminal (`virtual_matrix`, with feature `app` only: it needs
-//! embassy). The register-level half (UART and TIMER0 drivers, the WFI
+//! embassy), and the virtual accelerometer the firmware reads its tilt from:
+//! a [`virtual_lsm303agr`] on a [`virtual_i2c`] bus that behaves like the
+//! micro:bit's TWIM, driven by the terminal's keys ([`fault_keys`]) or the
+//! fault script. The register-level half (UART and TIMER0 drivers, the WFI
 //! executor, interrupt handlers, the time driver, semihosting exit) is the
 //! firmware crate `boards/qemu`; it needs `unsafe`, which this library
 //! forbids. `cargo qemu` (xtask) builds it and runs it in qemu-system-arm.
 
 pub mod cpu_meter;
+pub mod fault_keys;
+pub mod virtual_i2c;
+pub mod virtual_lsm303agr;
 #[cfg(feature = "app")]
 pub mod virtual_matrix;
+
+use crate::input::sensor::{AxisMap, SupervisorConfig};
+use virtual_i2c::RamRange;
 
 /// Virtual matrix width in pixels: as wide as the widest built-in maze
 /// (`grand-tour`, 19 tiles), so no built-in level scrolls.
@@ -37,6 +46,33 @@ pub const ICOUNT_SHIFT: u32 = 7;
 
 /// Start of RAM (memory.x): with flip-link the stack grows down towards it.
 pub const RAM_BASE: usize = 0x2000_0000;
+/// One past the end of RAM (memory.x: 128 KiB).
+pub const RAM_END: usize = 0x2002_0000;
+/// RAM for the virtual TWIM's DMA rule: what its DMA could reach.
+pub const QEMU_RAM: RamRange = RamRange {
+    start: RAM_BASE,
+    end: RAM_END,
+};
+
+// The virtual accelerometer is a micro:bit's: the same axis table, polling,
+// rate and supervision, so the QEMU board runs the micro:bit's input stack.
+
+/// How the virtual LSM303AGR is mounted: the micro:bit's [`AXIS_MAP`](crate::board::microbit::AXIS_MAP).
+pub const SENSOR_AXIS_MAP: AxisMap = crate::board::microbit::AXIS_MAP;
+/// Sensor polling period, ms (the micro:bit's).
+pub const INPUT_PERIOD_MS: u64 = crate::board::microbit::INPUT_PERIOD_MS;
+/// Accelerometer output data rate, Hz (the micro:bit's).
+pub const ACCEL_ODR_HZ: u32 = crate::board::microbit::ACCEL_ODR_HZ;
+/// Wait after (re)configuring the accelerometer, ms (the micro:bit's).
+pub const ACCEL_SETTLE_MS: u64 = crate::board::microbit::ACCEL_SETTLE_MS;
+/// Fault supervision (the micro:bit's).
+pub const SUPERVISOR: SupervisorConfig = crate::board::microbit::SUPERVISOR;
+/// The longest one I²C transfer may take before it counts as a hung bus,
+/// ms (the micro:bit's [`I2C_TIMEOUT_MS`](crate::board::microbit::I2C_TIMEOUT_MS)).
+pub const TRANSFER_TIMEOUT_MS: u64 = crate::board::microbit::I2C_TIMEOUT_MS;
+/// The virtual TWIM's copy buffer for write buffers outside RAM, bytes (the
+/// micro:bit's [`TWIM_COPY_BUFFER_BYTES`](crate::board::microbit::TWIM_COPY_BUFFER_BYTES)).
+pub const DEFAULT_COPY_BUFFER: usize = crate::board::microbit::TWIM_COPY_BUFFER_BYTES;
 /// The word the firmware paints its free stack with at boot, to measure the
 /// stack's high-water mark at the end of the demo.
 pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
@@ -50,28 +86,61 @@ pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
 /// present (e.g. QEMU started by hand without `-semihosting-config arg=...`)
 /// the firmware assumes headless: the demo needs no input and always ends,
 /// whereas an interactive game with nobody at the UART would never quit.
-#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+///
+/// `--fault-script` runs the headless fault script instead of the demo (the
+/// virtual accelerometer's faults against the game's pause and resume);
+/// `--no-copy-buffer` (or `--twim-copy-buffer=N`, bytes) sets the virtual
+/// TWIM's copy buffer for write buffers outside RAM (default
+/// [`DEFAULT_COPY_BUFFER`]; 0: none, as the micro:bit's bug had it).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Options {
-    /// Play on the UART terminal (else run the headless demo).
+    /// Play on the UART terminal (else run the headless demo or script).
     pub interactive: bool,
+    /// Run the fault script (headless).
+    pub fault_script: bool,
+    /// The virtual TWIM's copy buffer, bytes.
+    pub twim_copy_buffer: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            interactive: false,
+            fault_script: false,
+            twim_copy_buffer: DEFAULT_COPY_BUFFER,
+        }
+    }
 }
 
 impl Options {
     /// Parses the command-line words (the first, the program name, included
-    /// or not: unknown words are ignored). `--demo` forces headless.
+    /// or not: unknown words, and a malformed copy buffer size, are ignored).
+    /// `--demo` and `--fault-script` force headless.
     pub fn parse<'a>(args: impl IntoIterator<Item = &'a str>) -> Options {
         let mut options = Options::default();
-        let mut demo = false;
+        let mut headless = false;
         for arg in args {
             match arg {
                 "--interactive" => options.interactive = true,
                 "--headless" => options.interactive = false,
-                "--demo" => demo = true,
-                _ => {}
+                "--demo" => headless = true,
+                "--fault-script" => {
+                    options.fault_script = true;
+                    headless = true;
+                }
+                "--no-copy-buffer" => options.twim_copy_buffer = 0,
+                _ => {
+                    if let Some(Ok(bytes)) = arg
+                        .strip_prefix("--twim-copy-buffer=")
+                        .map(str::parse::<usize>)
+                    {
+                        options.twim_copy_buffer = bytes;
+                    }
+                }
             }
         }
-        if demo {
+        if headless {
             options.interactive = false;
         }
         options
@@ -88,5 +157,19 @@ mod tests {
         assert!(Options::parse(["qemu", "--interactive"]).interactive);
         assert!(!Options::parse(["qemu", "--interactive", "--demo"]).interactive);
         assert!(!Options::parse(["--headless", "--whatever"]).interactive);
+        let script = Options::parse(["qemu", "--interactive", "--fault-script"]);
+        assert!(script.fault_script && !script.interactive);
+        assert_eq!(script.twim_copy_buffer, DEFAULT_COPY_BUFFER);
+        assert_eq!(
+            Options::parse(["--fault-script", "--no-copy-buffer"]).twim_copy_buffer,
+            0
+        );
+        assert_eq!(Options::parse(["--twim-copy-buffer=0"]).twim_copy_buffer, 0);
+        assert_eq!(Options::parse(["--twim-copy-buffer=3"]).twim_copy_buffer, 3);
+        assert_eq!(
+            Options::parse(["--twim-copy-buffer=x"]).twim_copy_buffer,
+            DEFAULT_COPY_BUFFER
+        );
+        assert!(!Options::parse(["--demo"]).fault_script);
     }
 }

@@ -1,0 +1,537 @@
+//! The nRF51822's register-level half: emulation detection, the clock and
+//! embassy time driver on TIMER0, the CPU meter, stack painting, the WFI
+//! executor, semihosting (QEMU only), and the fault and panic handlers.
+//!
+//! # Time: TIMER0 on hardware too (one code path)
+//!
+//! embassy-nrf's time driver counts RTC1 ticks. QEMU's `microbit` machine
+//! (7.2) has no RTC (its registers read 0), so under emulation that clock
+//! never advances; its TIMERs are emulated (16 MHz, prescaler, compare
+//! interrupts, capture). This driver uses TIMER0 at 1 MHz (prescaler 4,
+//! 32 bits, extended to 64 bits in software) everywhere — in QEMU and on the
+//! board. The alternative, RTC on hardware and TIMER in QEMU, would let the
+//! board sleep with only the 32 kHz clock running; the TIMER keeps the
+//! 16 MHz clock (HFCLK) requested while the CPU sleeps, a fraction of a
+//! milliampere by the nRF51822 product specification's current tables (not
+//! measured here). We pay it, because:
+//!
+//! * the LED matrix never sleeps: it is scanned with BCM at 4.5 kHz
+//!   (TIMER1, `display.rs`), so HFCLK runs most of the time anyway, and the
+//!   LEDs themselves draw milliamperes;
+//! * the 32 768 Hz RTC cannot place BCM slices of 222 µs exactly (6.8 RTC
+//!   ticks), the 1 MHz TIMER can;
+//! * one code path: the time driver that QEMU verifies in CI (the demo's
+//!   frame pacing, the GPIO check of the display timing) is the one the board
+//!   runs. A second, RTC-based driver would only ever be tested on a board.
+//!
+//! # QEMU or a board?
+//!
+//! The same ELF runs in both. At boot [`detect_emulation`] starts the
+//! low-frequency clock and RTC0 and waits 2 ms on TIMER0: a real RTC has
+//! counted ~65 ticks, QEMU's reads 0. Under emulation the firmware uses
+//! semihosting (command line, defmt log, exit status); on a board it never
+//! executes a semihosting call (a `BKPT` without a debugger would fault) and
+//! logs over RTT (`log.rs`).
+//!
+//! # Why no embassy-nrf
+//!
+//! Its nRF51 support has no UART or TWI driver and its time driver is the
+//! RTC's; the GPIO and TIMER writes this board needs are a few registers,
+//! written through `nrf-pac` (the PAC embassy-nrf itself uses).
+
+use core::cell::RefCell;
+use core::sync::atomic::{AtomicBool, Ordering};
+use core::task::Waker;
+
+use cortex_m::peripheral::NVIC;
+use cortex_m_rt::{exception, ExceptionFrame};
+use critical_section::Mutex;
+use embassy_time_queue_utils::Queue;
+use marble_rolling::board::microbit_v1::{Options, RAM_BASE};
+use nrf_pac as pac;
+use pac::Interrupt;
+
+/// Whether we run in QEMU (set once by [`detect_emulation`]).
+static EMULATED: AtomicBool = AtomicBool::new(false);
+
+/// Whether the firmware runs in QEMU (see the module doc).
+pub fn emulated() -> bool {
+    EMULATED.load(Ordering::Relaxed)
+}
+
+/// NVIC priorities (the M0 has four levels, in the top two bits): the
+/// display's TIMER1 above everything else, so that no other interrupt
+/// stretches a BCM slice.
+const PRIORITY_DISPLAY: u8 = 0x40;
+/// TIMER0 (time driver) and the rest.
+const PRIORITY_TIMER: u8 = 0x80;
+
+/// Sets `irq`'s priority and unmasks it.
+pub fn enable_irq(irq: Interrupt, display: bool) {
+    // SAFETY: priorities and masks are set once at boot, before the
+    // executor runs; the handlers are defined in this crate.
+    unsafe {
+        let mut nvic = cortex_m::Peripherals::steal().NVIC;
+        nvic.set_priority(
+            irq,
+            if display {
+                PRIORITY_DISPLAY
+            } else {
+                PRIORITY_TIMER
+            },
+        );
+        NVIC::unpend(irq);
+        NVIC::unmask(irq);
+    }
+}
+
+/// Finds out whether the RTC runs (a board) or not (QEMU), see the module
+/// doc. Call after [`clock::start`], before anything logs.
+pub fn detect_emulation() -> bool {
+    let clock = pac::CLOCK;
+    // The low-frequency clock from its RC oscillator (the v1 has no 32 kHz
+    // crystal).
+    clock.lfclksrc().write_value(pac::clock::regs::Lfclksrc(0));
+    clock.events_lfclkstarted().write_value(0);
+    clock.tasks_lfclkstart().write_value(1);
+    let start = clock::now();
+    while clock.events_lfclkstarted().read() == 0 && clock::now() - start < 5_000 {}
+    let rtc = pac::RTC0;
+    rtc.prescaler().write_value(pac::rtc::regs::Prescaler(0));
+    rtc.tasks_clear().write_value(1);
+    rtc.tasks_start().write_value(1);
+    let start = clock::now();
+    while clock::now() - start < 2_000 {}
+    let counted = rtc.counter().read().0 & 0x00ff_ffff;
+    rtc.tasks_stop().write_value(1);
+    rtc.tasks_clear().write_value(1);
+    clock.tasks_lfclkstop().write_value(1);
+    let emulated = counted == 0;
+    EMULATED.store(emulated, Ordering::Relaxed);
+    emulated
+}
+
+/// Ends the run: under QEMU, exits with `code` (semihosting
+/// SYS_EXIT_EXTENDED); on a board, stops here (a debugger sees the core
+/// spin in WFI).
+pub fn exit(code: i32) -> ! {
+    cortex_m::interrupt::disable();
+    if emulated() {
+        semihosting::process::exit(code)
+    }
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// Logs `what` and ends the run with a failure status.
+pub fn fatal(what: &str) -> ! {
+    defmt::error!("fatal: {=str}", what);
+    exit(1)
+}
+
+/// The firmware's options: the semihosting command line under QEMU,
+/// defaults (play) on a board.
+pub fn options() -> Options {
+    if !emulated() {
+        return Options::default();
+    }
+    match semihosting::experimental::env::args::<256>() {
+        Ok(args) => Options::parse((&args).filter_map(Result::ok)),
+        Err(_) => Options::default(),
+    }
+}
+
+/// Logs the panic once and ends the run (status 101 under QEMU). On a board
+/// with probe-rs attached the log shows over RTT; without one the core
+/// stops in [`exit`].
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    static PANICKED: AtomicBool = AtomicBool::new(false);
+    cortex_m::interrupt::disable();
+    // Load and store, not swap: the M0 has no atomic read-modify-write
+    // (interrupts are off, so nothing can run in between).
+    if !PANICKED.load(Ordering::Relaxed) {
+        PANICKED.store(true, Ordering::Relaxed);
+        defmt::error!("panic: {}", defmt::Display2Format(info));
+    }
+    exit(101)
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    defmt::error!(
+        "HardFault: pc {=u32:#010x} lr {=u32:#010x}",
+        frame.pc(),
+        frame.lr()
+    );
+    exit(1)
+}
+
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    defmt::error!("unexpected interrupt or exception {}", irqn);
+    exit(1)
+}
+
+// ---------------------------------------------------------------------------
+// Clock: TIMER0, 1 MHz, 32 bits, extended to 64
+// ---------------------------------------------------------------------------
+
+/// TIMER0 as the board's free-running 1 MHz clock.
+///
+/// CC\[0\] is the time driver's alarm, CC\[1\] and CC\[2\] compare at 0 and
+/// at 2³¹ so that the clock is read (and extended) at least twice per
+/// 32-bit wrap (71.6 minutes) whatever else runs, CC\[3\] takes the
+/// captures that read the counter. Every capture is also a line of QEMU's
+/// `nrf51_timer_set_count` trace: the xtask's clock for the GPIO trace.
+pub mod clock {
+    use core::cell::Cell;
+
+    use critical_section::Mutex;
+    use marble_rolling::board::microbit_v1::TIMER_PRESCALER;
+    use nrf_pac as pac;
+
+    /// The capture register.
+    const CAPTURE: usize = 3;
+
+    /// Counter value at the last read, and the wraps counted up to it.
+    static STATE: Mutex<Cell<(u32, u32)>> = Mutex::new(Cell::new((0, 0)));
+
+    /// Starts TIMER0 from 0, 1 MHz, 32 bits, no interrupt yet.
+    pub fn start() {
+        let timer = pac::TIMER0;
+        timer.tasks_stop().write_value(1);
+        timer.mode().write_value(pac::timer::regs::Mode(0));
+        timer.bitmode().write_value(pac::timer::regs::Bitmode(3));
+        timer
+            .prescaler()
+            .write_value(pac::timer::regs::Prescaler(u32::from(TIMER_PRESCALER)));
+        timer.cc(1).write_value(0);
+        timer.cc(2).write_value(1 << 31);
+        timer.tasks_clear().write_value(1);
+        timer.tasks_start().write_value(1);
+    }
+
+    /// The raw 32-bit counter (a capture).
+    #[inline(always)]
+    fn raw() -> u32 {
+        let timer = pac::TIMER0;
+        timer.tasks_capture(CAPTURE).write_value(1);
+        timer.cc(CAPTURE).read()
+    }
+
+    /// µs since [`start`].
+    pub fn now() -> u64 {
+        critical_section::with(|cs| {
+            let state = STATE.borrow(cs);
+            let (last, wraps) = state.get();
+            let raw = raw();
+            let wraps = if raw < last {
+                wraps.wrapping_add(1)
+            } else {
+                wraps
+            };
+            state.set((raw, wraps));
+            (u64::from(wraps) << 32) | u64::from(raw)
+        })
+    }
+}
+
+/// The embassy time driver: [`clock`] for `now()`, TIMER0's compare 0 for
+/// wake-ups, the timer queue from `embassy-time-queue-utils`.
+struct Driver {
+    /// Timer queue and its earliest deadline (µs).
+    queue: Mutex<RefCell<(Queue, u64)>>,
+}
+
+impl embassy_time_driver::Driver for Driver {
+    fn now(&self) -> u64 {
+        clock::now()
+    }
+
+    fn schedule_wake(&self, at: u64, waker: &Waker) {
+        critical_section::with(|cs| {
+            let mut state = self.queue.borrow(cs).borrow_mut();
+            let (queue, next) = &mut *state;
+            if queue.schedule_wake(at, waker) && at < *next {
+                *next = at;
+                arm(at);
+            }
+        });
+    }
+}
+
+embassy_time_driver::time_driver_impl!(static DRIVER: Driver = Driver {
+    queue: Mutex::new(RefCell::new((Queue::new(), u64::MAX))),
+});
+
+/// Sets the alarm (CC\[0\]) for `at`, or fires it at once when `at` has
+/// passed; an alarm more than 2³¹ µs away is left to the half-wrap
+/// interrupts, which re-arm it in time. Called with interrupts disabled.
+fn arm(at: u64) {
+    let timer = pac::TIMER0;
+    if at == u64::MAX {
+        timer.intenclr().write_value(pac::timer::regs::Int(1 << 16));
+        return;
+    }
+    let now = clock::now();
+    if at <= now {
+        NVIC::pend(Interrupt::TIMER0);
+        return;
+    }
+    if at - now >= 1 << 31 {
+        timer.intenclr().write_value(pac::timer::regs::Int(1 << 16));
+        return;
+    }
+    timer.events_compare(0).write_value(0);
+    timer.cc(0).write_value(at as u32);
+    timer.intenset().write_value(pac::timer::regs::Int(1 << 16));
+    // A compare only fires when the counter *becomes* CC: if it got there
+    // while we wrote it, fire now.
+    if clock::now() >= at {
+        NVIC::pend(Interrupt::TIMER0);
+    }
+}
+
+/// Starts the clock and its interrupt (compare 0: alarm, 1 and 2: the
+/// half-wrap reads).
+pub fn start_time() {
+    clock::start();
+    pac::TIMER0
+        .intenset()
+        .write_value(pac::timer::regs::Int((1 << 17) | (1 << 18)));
+    enable_irq(Interrupt::TIMER0, false);
+}
+
+#[unsafe(no_mangle)]
+extern "C" fn TIMER0() {
+    let timer = pac::TIMER0;
+    for n in 0..3 {
+        if timer.events_compare(n).read() != 0 {
+            timer.events_compare(n).write_value(0);
+        }
+    }
+    critical_section::with(|cs| {
+        let now = clock::now();
+        let mut state = DRIVER.queue.borrow(cs).borrow_mut();
+        let (queue, next) = &mut *state;
+        if now >= *next {
+            *next = queue.next_expiration(now);
+        }
+        arm(*next);
+    });
+}
+
+// ---------------------------------------------------------------------------
+// CPU meter
+// ---------------------------------------------------------------------------
+
+/// Busy time, i.e. executed instructions under `-icount`, from the 1 MHz
+/// [`clock`] and the WFI sleeps the [`executor`] reports (see
+/// `marble_rolling::board::microbit_v1::LoadReport`).
+pub mod cpu_meter {
+    use core::cell::Cell;
+
+    use critical_section::Mutex;
+    use marble_rolling::board::microbit_v1::{Calibration, Sample};
+
+    use super::clock;
+
+    /// µs spent in WFI since the clock started.
+    static IDLE: Mutex<Cell<u64>> = Mutex::new(Cell::new(0));
+    static CALIBRATION: Mutex<Cell<Calibration>> = Mutex::new(Cell::new(Calibration::NOMINAL));
+
+    /// Records a WFI sleep from `before` to `after` (µs).
+    pub fn record_sleep(before: u64, after: u64) {
+        critical_section::with(|cs| {
+            let idle = IDLE.borrow(cs);
+            idle.set(idle.get() + after.saturating_sub(before));
+        });
+    }
+
+    /// Total and idle µs so far.
+    pub fn sample() -> Sample {
+        critical_section::with(|cs| Sample {
+            total_us: clock::now(),
+            idle_us: IDLE.borrow(cs).get(),
+        })
+    }
+
+    /// Runs `iterations` (≥ 1) of a loop of exactly 8 instructions.
+    #[inline(never)]
+    fn nop_loop(iterations: u32) {
+        let iterations = iterations.max(1);
+        // SAFETY: touches only the register it declares.
+        unsafe {
+            core::arch::asm!(
+                "2:",
+                "nop", "nop", "nop", "nop", "nop", "nop",
+                "subs {n}, {n}, #1",
+                "bne 2b",
+                n = inout(reg) iterations => _,
+                options(nomem, nostack),
+            );
+        }
+    }
+
+    /// µs taken by `f`, interrupts off.
+    fn time(f: impl FnOnce()) -> u32 {
+        critical_section::with(|_| {
+            let before = clock::now();
+            f();
+            (clock::now() - before) as u32
+        })
+    }
+
+    /// Measures µs per instruction with two NOP loops (1 000 and 11 000
+    /// iterations: their difference, 80 000 instructions, cancels the call
+    /// and clock-read overhead), as `study/bench-m0` does. Stores and
+    /// returns it.
+    pub fn calibrate() -> Calibration {
+        const SHORT: u32 = 1_000;
+        const LONG: u32 = 11_000;
+        let short = time(|| nop_loop(SHORT));
+        let long = time(|| nop_loop(LONG));
+        let overhead = time(|| core::hint::black_box(()));
+        let calibration = Calibration {
+            instructions: 8 * (LONG - SHORT),
+            us: long.saturating_sub(short),
+            overhead_us: overhead,
+        };
+        critical_section::with(|cs| CALIBRATION.borrow(cs).set(calibration));
+        calibration
+    }
+
+    /// The last [`calibrate`] result.
+    pub fn calibration() -> Calibration {
+        critical_section::with(|cs| CALIBRATION.borrow(cs).get())
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Stack high-water mark
+// ---------------------------------------------------------------------------
+
+/// Stack painting. Without flip-link (the workspace links only the M4
+/// firmware through it) cortex-m-rt puts the statics at the bottom of RAM
+/// and the stack at the top, growing down towards `_stack_end` (the end of
+/// the statics): [`paint`](stack::paint) fills that gap at boot, [`high_water`](stack::high_water) finds the
+/// deepest word overwritten since.
+pub mod stack {
+    use marble_rolling::board::microbit_v1::STACK_PAINT;
+
+    /// Bytes below the SP left unpainted.
+    const RED_ZONE: usize = 64;
+
+    extern "C" {
+        static _stack_start: u32;
+        static _stack_end: u32;
+    }
+
+    fn top() -> usize {
+        core::ptr::addr_of!(_stack_start) as usize
+    }
+
+    fn bottom() -> usize {
+        core::ptr::addr_of!(_stack_end) as usize
+    }
+
+    /// Paints the free stack. Call first thing in `main`.
+    #[inline(never)]
+    pub fn paint() {
+        cortex_m::interrupt::free(|_| {
+            let sp = cortex_m::register::msp::read() as usize;
+            let end = sp.saturating_sub(RED_ZONE) & !3;
+            let mut addr = bottom();
+            while addr < end {
+                // SAFETY: between the end of the statics and below the SP:
+                // RAM nothing uses yet.
+                unsafe { core::ptr::write_volatile(addr as *mut u32, STACK_PAINT) };
+                addr += 4;
+            }
+        });
+    }
+
+    /// Stack use so far.
+    #[derive(Clone, Copy, defmt::Format)]
+    pub struct StackUse {
+        /// Deepest use, bytes.
+        pub used: usize,
+        /// Room the stack has (top of RAM down to the statics), bytes.
+        pub size: usize,
+        /// The statics (data + bss + uninit), bytes.
+        pub statics: usize,
+    }
+
+    /// The high-water mark since [`paint`].
+    pub fn high_water() -> StackUse {
+        let top = top();
+        let mut addr = bottom();
+        // SAFETY: word reads of RAM between the statics and the stack top.
+        while addr < top && unsafe { core::ptr::read_volatile(addr as *const u32) } == STACK_PAINT {
+            addr += 4;
+        }
+        StackUse {
+            used: top.saturating_sub(addr),
+            size: top.saturating_sub(bottom()),
+            statics: bottom().saturating_sub(super::RAM_BASE),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Executor
+// ---------------------------------------------------------------------------
+
+/// An embassy raw executor that sleeps with WFI (as the QEMU board's, and
+/// for the same reason: QEMU treats WFE as a no-op, so the stock thread
+/// executor would spin through every idle period), its sleeps timed for the
+/// [`cpu_meter`]. The M0 has no compare-and-swap: flags are plain loads and
+/// stores, with interrupts masked where it matters.
+pub mod executor {
+    use core::mem::MaybeUninit;
+    use core::sync::atomic::Ordering;
+
+    use embassy_executor::{raw, Spawner};
+
+    use super::{clock, cpu_meter, PENDED};
+
+    /// Runs the executor forever; `init` spawns the first tasks. Call once.
+    /// Not inlined, and `init` a plain function, so that nothing of the
+    /// spawning stays on the stack below the tasks for good.
+    #[inline(never)]
+    pub fn run(init: fn(Spawner)) -> ! {
+        static mut EXECUTOR: MaybeUninit<raw::Executor> = MaybeUninit::uninit();
+        // SAFETY: `run` is called once, from `main`, which never returns:
+        // this is the only reference to EXECUTOR ever made.
+        let executor: &'static raw::Executor = unsafe {
+            let slot = &mut *core::ptr::addr_of_mut!(EXECUTOR);
+            slot.write(raw::Executor::new(core::ptr::null_mut()))
+        };
+        init(executor.spawner());
+        loop {
+            PENDED.store(false, Ordering::SeqCst);
+            // SAFETY: never re-entered: the pender only sets a flag.
+            unsafe { executor.poll() };
+            cortex_m::interrupt::disable();
+            if !PENDED.load(Ordering::SeqCst) {
+                let before = clock::now();
+                cortex_m::asm::wfi();
+                let after = clock::now();
+                cpu_meter::record_sleep(before, after);
+            }
+            // SAFETY: re-enables the interrupts disabled just above.
+            unsafe { cortex_m::interrupt::enable() };
+        }
+    }
+}
+
+/// Set by the pender when a task is woken; cleared before each poll.
+static PENDED: AtomicBool = AtomicBool::new(false);
+
+/// The pender embassy's raw executor calls when a task becomes ready.
+#[unsafe(export_name = "__pender")]
+fn pender(_context: *mut ()) {
+    PENDED.store(true, Ordering::SeqCst);
+}

@@ -1,0 +1,223 @@
+//! Marble Rolling firmware for the BBC micro:bit v1 (nRF51822, Cortex-M0,
+//! 16 KiB RAM, 256 KiB flash) — and, the very same ELF, in QEMU's
+//! `microbit` machine.
+//!
+//! * On a board (`cargo microbit-v1`: `probe-rs run --chip nRF51822_xxAA`):
+//!   tilt to play; the accelerometer is found by its `WHO_AM_I`
+//!   ([`sensor`]); the log goes over RTT.
+//! * In QEMU (`cargo microbit-v1 -- --demo`): the semihosting command line
+//!   picks the mode (`marble_rolling::board::microbit_v1::Options`). With
+//!   `--demo` the autopilot plays every built-in level and the firmware logs
+//!   per level `demo <n>/<total> level=<name> outcome=<..> steps=<..>
+//!   state_hash=<16 hex>` (as the mps2 board, so `cargo sim` can be compared
+//!   with it), every frame that stays on the LEDs for 80 ms or more with its
+//!   time span (`display frame …`, for the GPIO check), then the CPU load,
+//!   the RAM use (statics + stack high-water mark) and a summary, and exits
+//!   0 only if every level was won (101 on a panic). Without `--demo` it
+//!   plays: QEMU's TWI is a stub with no accelerometer behind it, so the
+//!   sensor supervision reports the sensor down and the game waits, showing
+//!   the fault cross, as on a board with a broken sensor (`--seconds=N`
+//!   ends such a run).
+//!
+//! # Time: TIMER0, on the board as in QEMU
+//!
+//! embassy-nrf's time driver counts the RTC, which QEMU's `microbit` machine
+//! does not emulate (it reads 0): this crate brings its own driver on TIMER0
+//! (1 MHz, 32 bits extended to 64, compare interrupts), and uses it on the
+//! board too rather than the RTC there — one code path, the one CI runs in
+//! QEMU. The cost is the 16 MHz clock staying requested while the core
+//! sleeps, small next to the LEDs' milliamperes, and the LED scan (4.5 kHz
+//! BCM slices on TIMER1) keeps it running most of the time anyway. The full
+//! argument is in [`hw`].
+//!
+//! # Memory map
+//!
+//! The micro:bit v1's nRF51822 has 256 KiB of flash in **1 KiB pages** and
+//! 16 KiB of RAM (`memory.x`). embassy-nrf 0.11 declares its `nrf51` target
+//! with 4 KiB pages and 128 KiB of flash: whoever adds flash storage (not
+//! built here) must use 1 KiB pages and may use all 256 KiB.
+//!
+//! The tasks are the shared ones of `marble_rolling::app` (input, game via
+//! `app::game_task::<5, 5, PILOT>`, display); this crate is the wiring:
+//! [`hw`] (time driver on TIMER0, executor, CPU meter, stack, emulation
+//! detection), [`display`] (the 3 × 9 matrix on TIMER1), [`sensor`] (TWI and
+//! accelerometers), [`log`] (defmt over semihosting or RTT).
+#![no_std]
+#![no_main]
+
+mod display;
+mod hw;
+mod log;
+mod sensor;
+
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links};
+use marble_rolling::board::microbit_v1::{
+    LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WIDTH,
+};
+use marble_rolling::input::tilt::TiltConfig;
+
+/// The links between the tasks.
+static LINKS: Links<WIDTH, HEIGHT> = Links::new();
+
+/// The autopilot is linked: the demo needs it.
+const PILOT: bool = true;
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    hw::stack::paint();
+    hw::start_time();
+    let emulated = hw::detect_emulation();
+    let options = hw::options();
+    defmt::info!(
+        "Marble Rolling on micro:bit v1 ({=str}): {}, {=u32} frames/s",
+        if emulated { "QEMU" } else { "nRF51822" },
+        options,
+        app::FRAME_HZ
+    );
+    let calibration = hw::cpu_meter::calibrate();
+    if emulated {
+        defmt::info!(
+            "cpu meter calibration: {=u32} instructions in {=u32} us = {=u64} milli-us per instruction (icount shift=7 gives 128: {=bool})",
+            calibration.instructions,
+            calibration.us,
+            calibration.milli_us_per_instruction(),
+            calibration.matches_icount()
+        );
+    }
+    display::start();
+    hw::executor::run(spawn)
+}
+
+/// Spawns the tasks for the [`Options`] of this run.
+#[inline(never)]
+fn spawn(spawner: embassy_executor::Spawner) {
+    let options = hw::options();
+    match display_task(options.headless() && options.frame_log) {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => hw::fatal("cannot spawn the display"),
+    }
+    match game(options) {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => hw::fatal("cannot spawn the game"),
+    }
+    if !options.demo {
+        match input() {
+            Ok(token) => spawner.spawn(token),
+            Err(_) => hw::fatal("cannot spawn the input"),
+        }
+    }
+    if let Some(seconds) = options.seconds {
+        match stop_after(seconds) {
+            Ok(token) => spawner.spawn(token),
+            Err(_) => hw::fatal("cannot spawn the stopper"),
+        }
+    }
+}
+
+#[embassy_executor::task]
+async fn display_task(log_frames: bool) -> ! {
+    let mut matrix = display::Matrix::new(&LINKS.status, log_frames);
+    app::display_task(&LINKS, &mut matrix).await
+}
+
+/// The accelerometer and its supervision (not in the demo: the autopilot
+/// needs no tilt, and a sensor going down would pause the demo).
+#[embassy_executor::task]
+async fn input() -> ! {
+    let mut input = sensor::Input::new();
+    app::input_task(&LINKS, &mut input).await
+}
+
+/// `--seconds=N`: ends a headless play after `N` seconds, with the game's
+/// status.
+#[embassy_executor::task]
+async fn stop_after(seconds: u32) {
+    embassy_time::Timer::after_secs(u64::from(seconds)).await;
+    let status = LINKS.status.get();
+    defmt::info!(
+        "stop after {=u32} s: level {=u8}, {} after {=u32} frames, sensor down: {=bool}",
+        seconds,
+        status.level,
+        status.phase,
+        status.frames,
+        status.sensor_down
+    );
+    report_memory();
+    hw::exit(0)
+}
+
+/// Logs RAM use: statics + stack high-water mark against the budget.
+fn report_memory() {
+    let stack = hw::stack::high_water();
+    defmt::info!(
+        "ram: statics {=usize} B + stack high-water {=usize} B = {=usize} B of {=u32} B (budget {=u32} B)",
+        stack.statics,
+        stack.used,
+        stack.statics + stack.used,
+        RAM_BYTES,
+        RAM_BUDGET_BYTES
+    );
+}
+
+#[embassy_executor::task]
+async fn game(options: Options) {
+    let mode = if options.demo {
+        GameMode::Demo
+    } else {
+        GameMode::Play {
+            tilt: TiltConfig::DEFAULT,
+        }
+    };
+    if options.demo {
+        // The baseline: display scanning and timers, no game.
+        let before = hw::cpu_meter::sample();
+        embassy_time::Timer::after_secs(1).await;
+        let after = hw::cpu_meter::sample();
+        if let Some(load) = LoadReport::between(&hw::cpu_meter::calibration(), before, after) {
+            defmt::info!(
+                "baseline load (display scanning, timers, no game): {=u64} instructions/s = {=u64}.{=u64:02} % of 16 MHz",
+                load.instructions_per_second,
+                load.centipercent_of_16mhz / 100,
+                load.centipercent_of_16mhz % 100
+            );
+        }
+        defmt::info!(
+            "stack high-water before the game: {=usize} B",
+            hw::stack::high_water().used
+        );
+    }
+    let start = hw::cpu_meter::sample();
+    let exit = app::game_task::<WIDTH, HEIGHT, PILOT>(&LINKS, mode).await;
+    let end = hw::cpu_meter::sample();
+    let summary = match exit {
+        GameExit::Quit => DemoSummary::default(),
+        GameExit::DemoDone(summary) => summary,
+        GameExit::SetupFailed(e) => {
+            defmt::error!("cannot set up a level: {}", e);
+            hw::exit(1)
+        }
+    };
+    report_memory();
+    match LoadReport::between(&hw::cpu_meter::calibration(), start, end) {
+        Some(load) => defmt::info!(
+            "cpu load: {=u64} busy instructions in {=u64} us of firmware time = {=u64} instructions/s = {=u64}.{=u64:02} % of a 16 MHz Cortex-M0 ({=u32} frames/s, {=u32} refreshes/s)",
+            load.busy_instructions,
+            load.firmware_us,
+            load.instructions_per_second,
+            load.centipercent_of_16mhz / 100,
+            load.centipercent_of_16mhz % 100,
+            app::FRAME_HZ,
+            app::REFRESH_HZ,
+        ),
+        None => defmt::warn!("cpu load: no time elapsed"),
+    }
+    defmt::info!(
+        "demo summary: {=u8}/{=u8} levels won, {=u64} physics steps in {=u64} frames: {=str}",
+        summary.won,
+        summary.levels,
+        summary.steps,
+        summary.frames,
+        if summary.all_won() { "PASS" } else { "FAIL" }
+    );
+    hw::exit(if summary.all_won() { 0 } else { 1 })
+}

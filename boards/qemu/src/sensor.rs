@@ -1,0 +1,457 @@
+//! The QEMU board's accelerometer input: the micro:bit's input stack — the
+//! `lsm303agr` 1.1 async driver, a per-transfer timeout, the
+//! [`TiltPipeline`] supervision — running on a virtual LSM303AGR on a virtual
+//! TWIM (`marble_rolling::board::qemu::{virtual_lsm303agr, virtual_i2c}`).
+//!
+//! The terminal's arrow keys no longer hand the game a tilt: they set the
+//! virtual chip's tilt, and the game gets what the driver reads back through
+//! the pipeline, with the sensor's down/up transitions; the digit keys inject
+//! faults (see `fault_keys`). Commands from keys pass through as before. The
+//! headless runs (demo, fault script) have no keys; the fault script drives
+//! the chip through the same [`ChipControl`].
+//!
+//! Like `boards/microbit/src/hw.rs`'s `MicrobitInput`, which this follows
+//! step for step (configure, read, poll, ticker reset after slow work), the
+//! board only forwards: the pipeline decides.
+
+use core::pin::pin;
+use core::sync::atomic::{AtomicU32, Ordering};
+use core::task::Poll;
+
+use embassy_futures::poll_once;
+use embassy_futures::select::{select, Either};
+use embassy_time::{with_timeout, Duration, Instant, Ticker, Timer};
+use embedded_hal_async::i2c::{ErrorKind, ErrorType, I2c, Operation};
+use heapless::Deque;
+use lsm303agr::interface::I2cInterface;
+use lsm303agr::mode::MagOneShot;
+use lsm303agr::{AccelMode, AccelOutputDataRate, Lsm303agr};
+
+use marble_rolling::app::{ByteSource, Console, TiltInput};
+use marble_rolling::board::qemu::fault_keys::{FaultKeys, QemuKey, FAULT_KEYS_HELP};
+use marble_rolling::board::qemu::virtual_i2c::{RamRange, TwimError, VirtualTwim};
+use marble_rolling::board::qemu::virtual_lsm303agr::ChipControl;
+use marble_rolling::board::qemu::{
+    ACCEL_ODR_HZ, ACCEL_SETTLE_MS, HEIGHT, INPUT_PERIOD_MS, SENSOR_AXIS_MAP, SUPERVISOR,
+    TRANSFER_TIMEOUT_MS,
+};
+use marble_rolling::input::event::{InputEvent, Tilt};
+use marble_rolling::input::sensor::{AccelMg, Action, Fault, Read, TiltPipeline};
+
+// The driver is configured for the rate the board constants name.
+const _: () = assert!(
+    ACCEL_ODR_HZ == 200,
+    "configure() sets AccelOutputDataRate::Hz200"
+);
+
+/// The firmware's clock for the virtual chip, µs.
+pub fn now_us() -> u64 {
+    Instant::now().as_micros()
+}
+
+/// The virtual TWIM as the firmware builds it: embassy-time's clock, QEMU's
+/// RAM for the DMA rule.
+pub type QemuTwim<'a> = VirtualTwim<'a, fn() -> u64, RamRange>;
+
+/// What the sensor input did, for the fault script and the logs.
+pub struct SensorReport {
+    samples: AtomicU32,
+    reinits: AtomicU32,
+    failed_reinits: AtomicU32,
+}
+
+impl SensorReport {
+    /// Nothing yet.
+    pub const fn new() -> Self {
+        Self {
+            samples: AtomicU32::new(0),
+            reinits: AtomicU32::new(0),
+            failed_reinits: AtomicU32::new(0),
+        }
+    }
+
+    /// Good samples used so far.
+    pub fn samples(&self) -> u32 {
+        self.samples.load(Ordering::Relaxed)
+    }
+
+    /// (Re)configurations so far, the first included.
+    pub fn reinits(&self) -> u32 {
+        self.reinits.load(Ordering::Relaxed)
+    }
+
+    /// Of those, the failed ones.
+    pub fn failed_reinits(&self) -> u32 {
+        self.failed_reinits.load(Ordering::Relaxed)
+    }
+
+    fn bump(counter: &AtomicU32) {
+        // One writer (the input task): a load and a store suffice.
+        counter.store(
+            counter.load(Ordering::Relaxed).wrapping_add(1),
+            Ordering::Relaxed,
+        );
+    }
+}
+
+impl Default for SensorReport {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The bus: the virtual TWIM with a deadline per transfer
+// ---------------------------------------------------------------------------
+
+/// Why a transfer on [`Bus`] failed.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, defmt::Format)]
+pub enum BusError {
+    /// The TWIM refused or failed it.
+    Twim(TwimError),
+    /// It did not finish within [`TRANSFER_TIMEOUT_MS`] (a stuck bus).
+    Timeout,
+}
+
+impl embedded_hal_async::i2c::Error for BusError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            BusError::Twim(e) => embedded_hal_async::i2c::Error::kind(e),
+            BusError::Timeout => ErrorKind::Other,
+        }
+    }
+}
+
+/// The virtual TWIM with a deadline on every transfer: a stuck transfer is
+/// dropped after [`TRANSFER_TIMEOUT_MS`] (the virtual bus needs no bus clear:
+/// it is free again as soon as the fault is). Logs the first failure of each
+/// kind in a row.
+pub struct Bus<'a> {
+    twim: QemuTwim<'a>,
+    last_logged: Option<BusError>,
+}
+
+impl<'a> Bus<'a> {
+    /// `twim` with deadlines.
+    pub fn new(twim: QemuTwim<'a>) -> Self {
+        Self {
+            twim,
+            last_logged: None,
+        }
+    }
+}
+
+impl ErrorType for Bus<'_> {
+    type Error = BusError;
+}
+
+impl I2c for Bus<'_> {
+    async fn transaction(
+        &mut self,
+        address: u8,
+        operations: &mut [Operation<'_>],
+    ) -> Result<(), BusError> {
+        let copy_buffer = self.twim.copy_buffer_len();
+        let mut transfer = pin!(self.twim.transaction(address, operations));
+        // A virtual transfer normally completes at its first poll: the
+        // deadline (a clock read and a timer) is armed only for one that does
+        // not, from that moment on — a stuck bus is caught just the same, and
+        // the demo's CPU load does not pay for a timer per transfer.
+        let outcome = match poll_once(transfer.as_mut()) {
+            Poll::Ready(outcome) => Ok(outcome),
+            Poll::Pending => {
+                with_timeout(Duration::from_millis(TRANSFER_TIMEOUT_MS), transfer).await
+            }
+        };
+        let result = match outcome {
+            Ok(Ok(())) => Ok(()),
+            Ok(Err(e)) => Err(BusError::Twim(e)),
+            Err(_) => Err(BusError::Timeout),
+        };
+        match result {
+            Ok(()) => self.last_logged = None,
+            Err(e) if self.last_logged != Some(e) => {
+                self.last_logged = Some(e);
+                defmt::warn!(
+                    "i2c: transfer to {=u8:#04x} failed: {} (copy buffer {=usize} bytes)",
+                    address,
+                    e,
+                    copy_buffer
+                );
+            }
+            Err(_) => {}
+        }
+        result
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The driver
+// ---------------------------------------------------------------------------
+
+/// The LSM303AGR driver on the virtual bus.
+pub type Sensor<'a> = Lsm303agr<I2cInterface<Bus<'a>>, MagOneShot>;
+
+/// The driver's mode changes take a blocking delay; we wait asynchronously
+/// afterwards instead ([`ACCEL_SETTLE_MS`]).
+struct NoDelay;
+
+impl embedded_hal::delay::DelayNs for NoDelay {
+    fn delay_ns(&mut self, _ns: u32) {}
+}
+
+/// The supervisor's name for a driver error (as the micro:bit's).
+fn fault(e: lsm303agr::Error<BusError>) -> Fault {
+    match e {
+        lsm303agr::Error::Comm(BusError::Timeout) => Fault::Timeout,
+        lsm303agr::Error::Comm(BusError::Twim(_)) => Fault::Bus,
+        lsm303agr::Error::InvalidInputData => Fault::Implausible,
+    }
+}
+
+/// (Re)configures the accelerometer as the micro:bit does: identity check,
+/// init (block data update), high resolution at [`ACCEL_ODR_HZ`], then waits
+/// until the output is valid.
+async fn configure(sensor: &mut Sensor<'_>) -> Result<(), Fault> {
+    let id = sensor.accelerometer_id().await.map_err(fault)?;
+    if !id.is_correct() {
+        return Err(Fault::Implausible);
+    }
+    sensor.init().await.map_err(fault)?;
+    sensor
+        .set_accel_mode_and_odr(
+            &mut NoDelay,
+            AccelMode::HighResolution,
+            AccelOutputDataRate::Hz200,
+        )
+        .await
+        .map_err(fault)?;
+    Timer::after_millis(ACCEL_SETTLE_MS).await;
+    Ok(())
+}
+
+/// One poll in the sensor frame, milli-g.
+async fn read(sensor: &mut Sensor<'_>) -> Read<AccelMg> {
+    match sensor.accel_status().await {
+        Ok(status) if !status.xyz_new_data() => return Read::NotReady,
+        Ok(_) => {}
+        Err(e) => return Read::Failed(fault(e)),
+    }
+    match sensor.acceleration().await {
+        Ok(a) => {
+            let (x, y, z) = a.xyz_mg();
+            Read::Sample(AccelMg::new(x, y, z))
+        }
+        Err(e) => Read::Failed(fault(e)),
+    }
+}
+
+fn saturate(v: i32) -> i16 {
+    v.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16
+}
+
+fn to_tilt(s: AccelMg) -> Tilt {
+    Tilt {
+        x: saturate(s.x),
+        y: saturate(s.y),
+        z: saturate(s.z),
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The input
+// ---------------------------------------------------------------------------
+
+/// Terminal row of the sensor's status line (the fault keys' help below it):
+/// below the virtual matrix's title, blank line, matrix, blank line, level,
+/// tilt and two key lines.
+const STATUS_ROW: usize = HEIGHT + 8;
+
+/// Redraw the status line at least this often, polls (a full redraw of the
+/// matrix clears the screen once, at its first draw).
+const STATUS_EVERY_POLLS: u32 = 100;
+
+/// The terminal's keys: a byte source, its decoder, and the console for the
+/// fault keys' status line.
+pub struct Keys<S, C> {
+    source: S,
+    decoder: FaultKeys,
+    console: C,
+}
+
+impl<S, C> Keys<S, C> {
+    /// Keys from `source`, the status line on `console`.
+    pub fn new(source: S, console: C) -> Self {
+        Self {
+            source,
+            decoder: FaultKeys::new(),
+            console,
+        }
+    }
+}
+
+/// Polls the virtual accelerometer every [`INPUT_PERIOD_MS`] through the
+/// driver and the pipeline, and (interactive) takes the terminal's keys
+/// meanwhile. See the module doc.
+pub struct QemuInput<'a, S, C> {
+    sensor: Sensor<'a>,
+    keys: Option<Keys<S, C>>,
+    chip: &'static ChipControl,
+    report: &'static SensorReport,
+    pipeline: TiltPipeline,
+    ticker: Option<Ticker>,
+    /// Events of this poll still to hand out, in order.
+    pending: Deque<InputEvent, 4>,
+    polls: u32,
+}
+
+impl<'a, S: ByteSource, C: Console> QemuInput<'a, S, C> {
+    /// Reads `sensor`; `keys` for an interactive terminal.
+    pub fn new(
+        sensor: Sensor<'a>,
+        keys: Option<Keys<S, C>>,
+        chip: &'static ChipControl,
+        report: &'static SensorReport,
+    ) -> Self {
+        Self {
+            sensor,
+            keys,
+            chip,
+            report,
+            pipeline: TiltPipeline::new(SENSOR_AXIS_MAP, SUPERVISOR),
+            ticker: None,
+            pending: Deque::new(),
+            polls: 0,
+        }
+    }
+
+    /// (Re)configures the sensor and tells the pipeline how it went.
+    async fn reinit(&mut self) {
+        SensorReport::bump(&self.report.reinits);
+        let outcome = configure(&mut self.sensor).await;
+        if let Err(fault) = outcome {
+            SensorReport::bump(&self.report.failed_reinits);
+            defmt::warn!("accelerometer: (re)init failed: {}", fault);
+        }
+        self.pipeline.reinit_done(outcome);
+    }
+
+    /// One polling period: the sensor through the pipeline. Returns whether
+    /// it took long (a re-init with its settling time, a timed-out transfer):
+    /// the only slow work here, as a virtual transfer takes no time.
+    async fn poll(&mut self) -> bool {
+        let read = read(&mut self.sensor).await;
+        let step = self.pipeline.feed(read);
+        let mut slow = read == Read::Failed(Fault::Timeout);
+        match step.action {
+            Action::Use(_) => SensorReport::bump(&self.report.samples),
+            Action::KeepLast(_) | Action::ShowFault => {}
+            Action::Reinit => {
+                defmt::warn!("accelerometer: re-initialising");
+                self.reinit().await;
+                slow = true;
+            }
+        }
+        if let Some(transition) = step.transition {
+            defmt::warn!(
+                "accelerometer: {} (injected: {=str})",
+                transition,
+                self.chip.fault().name()
+            );
+            let _ = self.pending.push_back(transition.event());
+            self.draw_status();
+        }
+        slow
+    }
+
+    /// A key: a tilt goes to the chip, a digit injects a fault, a command
+    /// goes to the game.
+    fn key(&mut self, byte: u8) -> Option<InputEvent> {
+        let key = self.keys.as_mut()?.decoder.feed(byte)?;
+        match key {
+            QemuKey::Input(InputEvent::Tilt(tilt)) => {
+                self.chip.set_tilt(tilt);
+                None
+            }
+            QemuKey::Input(event) => Some(event),
+            QemuKey::Inject(fault) => {
+                defmt::info!("keys: inject {=str}", fault.name());
+                self.chip.inject(fault);
+                self.draw_status();
+                None
+            }
+        }
+    }
+
+    /// The sensor's status line and the fault keys' help (interactive only).
+    fn draw_status(&mut self) {
+        let down = self.pipeline.supervisor().down_fault();
+        let fault = self.chip.fault();
+        let Some(keys) = self.keys.as_mut() else {
+            return;
+        };
+        let mut line = heapless::String::<192>::new();
+        let _ = core::fmt::write(
+            &mut line,
+            format_args!(
+                "\x1b7\x1b[{};1H  sensor {}, injected fault: {}\x1b[K\r\n  {}\x1b[K\x1b8",
+                STATUS_ROW,
+                match down {
+                    None => "up",
+                    Some(Fault::Bus) => "DOWN (bus)",
+                    Some(Fault::Timeout) => "DOWN (timeout)",
+                    Some(Fault::NoData) => "DOWN (no data)",
+                    Some(Fault::Implausible) => "DOWN (implausible)",
+                },
+                fault.name(),
+                FAULT_KEYS_HELP
+            ),
+        );
+        keys.console.write(line.as_bytes());
+    }
+}
+
+impl<S: ByteSource, C: Console> TiltInput for QemuInput<'_, S, C> {
+    async fn next_event(&mut self) -> InputEvent {
+        let period = Duration::from_millis(INPUT_PERIOD_MS);
+        loop {
+            if let Some(event) = self.pending.pop_front() {
+                return event;
+            }
+            let Some(ticker) = self.ticker.as_mut() else {
+                // First call: bring the sensor up (a failure is handled by
+                // the supervisor like any other).
+                self.reinit().await;
+                self.ticker = Some(Ticker::every(period));
+                continue;
+            };
+            if let Some(keys) = self.keys.as_mut() {
+                let woke = select(ticker.next(), keys.source.read_byte()).await;
+                if let Either::Second(byte) = woke {
+                    if let Some(event) = self.key(byte) {
+                        return event;
+                    }
+                    continue;
+                }
+            } else {
+                ticker.next().await;
+            }
+            if self.poll().await {
+                // Slow work: start the period over rather than poll back to
+                // back (as the micro:bit does).
+                if let Some(ticker) = &mut self.ticker {
+                    ticker.reset();
+                }
+            }
+            self.polls = self.polls.wrapping_add(1);
+            if self.polls.is_multiple_of(STATUS_EVERY_POLLS) {
+                self.draw_status();
+            }
+            // After this poll's transition, if any (as the micro:bit).
+            let tilt = InputEvent::Tilt(to_tilt(self.pipeline.tilt()));
+            if self.pending.push_back(tilt).is_err() {
+                return tilt;
+            }
+        }
+    }
+}

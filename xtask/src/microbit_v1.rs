@@ -1,0 +1,994 @@
+//! The micro:bit v1 tasks (`boards/microbit-v1`, nRF51822, thumbv6m-none-eabi):
+//!
+//! * [`run`] — `cargo microbit-v1`: build, then `probe-rs run --chip
+//!   nRF51822_xxAA` on a board (probe-rs is never installed for you:
+//!   `cargo install probe-rs-tools --locked`); with `--demo` (or `--qemu`)
+//!   the same ELF runs headless in `qemu-system-arm -M microbit` instead,
+//!   its defmt log (semihosting) decoded by defmt-print.
+//! * [`check`] — `cargo xtask check-microbit-v1`: the QEMU demo against the
+//!   host simulator (outcome, steps and `state_hash` per level), the LEDs
+//!   rebuilt from QEMU's GPIO trace against the frames the firmware says it
+//!   showed, a two-second play without the demo (QEMU's TWI is a stub: the
+//!   sensor must go down, the game wait, the LEDs show the fault cross), and
+//!   the budgets (RAM: statics + stack high-water ≤ V1_RAM_BUDGET, 12 KiB;
+//!   flash ≤ V1_FLASH_BUDGET, 64 KiB, with the code bytes per module when
+//!   over; CPU ≤ V1_CPU_BUDGET_CENTIPERCENT, 20 % of 16 MHz).
+//!
+//! # The display, rebuilt from the GPIO trace
+//!
+//! QEMU runs with `-trace nrf51_gpio_update_output_irq -trace
+//! nrf51_timer_set_count -D FILE`: one line per pin change (the firmware
+//! writes the 12 matrix pins with one `OUT` write per BCM slice) and one
+//! per TIMER capture. The firmware's display interrupt captures TIMER0 (its
+//! 1 MHz clock) right before each `OUT` write, so the latest capture before
+//! a pin change is that change's time in µs ([`Timeline`]; the 32-bit
+//! counter is extended across wraps). The firmware logs each frame that
+//! stayed on the LEDs for 80 ms or more as `display frame level=L t0=T0
+//! t1=T1 rows=R0 R1 R2 R3 R4` (five hex digits per row, brightness 0..=15),
+//! [`Timeline::perceived`] integrates the pin levels over `[T0, T1)`: each
+//! LED's lit time (its row pin high and its column pin low, through the
+//! DAL's table in `src/board/microbit_v1/leds.rs`, included here) over the
+//! time its row was driven, × 15, rounded — what a viewer sees, as the
+//! mps2 board's virtual matrix computes it. The check wants every logged
+//! frame matched within one level per pixel (interrupt latency moves slice
+//! edges by a microsecond or two), and per level at least one frame that
+//! shows the maze and the marble (not blank, not the all-on win flash).
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use crate::demo::{self, Level, Verdict};
+use crate::error::{say, Failure, Outcome};
+use crate::firmware::{self, Artifact};
+use crate::process;
+use crate::runner;
+use crate::setup::{self, M0};
+use crate::workspace;
+
+/// The firmware's own LED table (`leds::LED_MAP`, `decode_levels`), the very
+/// file the firmware compiles: the check and the firmware cannot disagree
+/// on the wiring (the table itself is tested against the DAL's in the core's
+/// tests).
+#[allow(dead_code)]
+#[path = "../../src/board/microbit_v1/leds.rs"]
+mod leds;
+
+/// The firmware crate and binary.
+pub const PACKAGE: &str = "marble-microbit-v1";
+/// The firmware binary.
+pub const BIN: &str = "microbit-v1";
+/// probe-rs's name for the micro:bit v1's chip.
+pub const CHIP: &str = "nRF51822_xxAA";
+
+/// Budgets (bytes, hundredths of a percent), overridable from the environment.
+const RAM_BUDGET: u64 = 12 * 1024;
+const FLASH_BUDGET: u64 = 64 * 1024;
+const CPU_BUDGET_CENTIPERCENT: u64 = 2000;
+
+/// Tolerance of the rebuilt frames, brightness levels per pixel.
+const FRAME_TOLERANCE: u8 = 1;
+
+/// `cargo microbit-v1 [ARGS]`: on a board with probe-rs, or in QEMU with
+/// `--demo` / `--qemu` (the rest of ARGS go to the firmware's semihosting
+/// command line there, to probe-rs after the ELF otherwise).
+pub fn run(args: &[String]) -> Outcome {
+    let args = runner::drop_separators(args);
+    let qemu = args.iter().any(|arg| arg == "--demo" || arg == "--qemu");
+    setup::target(M0)?;
+    if qemu {
+        let limit = runner::timeout(600)?;
+        let tools = setup::m4_qemu()?;
+        let elf = build()?;
+        let firmware_args: Vec<String> = args.into_iter().filter(|arg| arg != "--qemu").collect();
+        say!("running it headless in QEMU microbit (defmt log below)");
+        let (status, _) = qemu_run(&tools, &elf, &firmware_args, None, Sink::Terminal, limit)?;
+        return Ok(status);
+    }
+    let elf = build()?;
+    let probe = setup::probe_rs()?;
+    say!("running it on the micro:bit v1 with probe-rs");
+    let mut cmd = Command::new(probe);
+    cmd.args(["run", "--chip", CHIP]).arg(&elf).args(&args);
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt;
+        let error = cmd.exec();
+        Err(Failure::new(format!("cannot run `{}`: {error}", process::shown(&cmd))).status(127))
+    }
+    #[cfg(not(unix))]
+    Ok(process::code(process::status(&mut cmd)?))
+}
+
+/// Builds the firmware (`-p marble-microbit-v1 --target thumbv6m-none-eabi
+/// --release`).
+fn build() -> Result<PathBuf, Failure> {
+    firmware::build(&Artifact::firmware(PACKAGE, BIN, M0))
+}
+
+/// Where a QEMU run's decoded log goes.
+enum Sink<'a> {
+    Terminal,
+    File(&'a File),
+}
+
+impl Sink<'_> {
+    fn stdio(&self) -> Result<Stdio, Failure> {
+        match self {
+            Sink::Terminal => Ok(Stdio::inherit()),
+            Sink::File(file) => Ok(file
+                .try_clone()
+                .map_err(|e| Failure::new(format!("cannot share the log file: {e}")))?
+                .into()),
+        }
+    }
+}
+
+/// The QEMU command line (without the trace options).
+pub fn qemu_command(qemu: &Path, elf: &Path, args: &[String]) -> Command {
+    let program = elf
+        .file_name()
+        .map(|name| name.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut cmd = Command::new(qemu);
+    cmd.args([
+        "-M",
+        "microbit",
+        "-display",
+        "none",
+        "-monitor",
+        "none",
+        "-nodefaults",
+    ])
+    .args(runner::ICOUNT)
+    .arg("-semihosting-config")
+    .arg(runner::semihosting_config(&program, args))
+    .arg("-kernel")
+    .arg(elf);
+    cmd
+}
+
+/// Runs the ELF in QEMU microbit, headless, `trace` (if any) receiving the
+/// GPIO and TIMER-capture trace; the defmt log (QEMU's stdout) through
+/// defmt-print to `sink`. QEMU's status (the firmware's), else defmt-print's.
+fn qemu_run(
+    tools: &setup::Qemu,
+    elf: &Path,
+    args: &[String],
+    trace: Option<&Path>,
+    sink: Sink,
+    limit: Duration,
+) -> Result<(u8, Duration), Failure> {
+    let mut qemu = qemu_command(&tools.qemu, elf, args);
+    if let Some(trace) = trace {
+        qemu.args(["-trace", "nrf51_gpio_update_output_irq"])
+            .args(["-trace", "nrf51_timer_set_count"])
+            .arg("-D")
+            .arg(trace);
+    }
+    qemu.stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(sink.stdio()?);
+    let started = Instant::now();
+    let mut child = process::spawn(&mut qemu)?;
+    let Some(pipe) = child.stdout.take() else {
+        return Err(Failure::new("QEMU's stdout was not piped"));
+    };
+    let mut decode = Command::new(&tools.defmt_print);
+    decode
+        .arg("-e")
+        .arg(elf)
+        .stdin(pipe)
+        .stdout(sink.stdio()?)
+        .stderr(sink.stdio()?);
+    let mut decoder = process::spawn(&mut decode).inspect_err(|_| {
+        let _ = child.kill();
+    })?;
+    let qemu_status = wait_at_most(&mut child, limit);
+    let decoder_status = decoder
+        .wait()
+        .map_err(|e| Failure::new(format!("waiting for defmt-print: {e}")))?;
+    let qemu_status = qemu_status?;
+    let status = match process::code(qemu_status) {
+        0 => process::code(decoder_status),
+        code => code,
+    };
+    Ok((status, started.elapsed()))
+}
+
+/// Waits for `child`, killing it after `limit` (status 124).
+fn wait_at_most(child: &mut Child, limit: Duration) -> Result<ExitStatus, Failure> {
+    let start = Instant::now();
+    loop {
+        match child.try_wait() {
+            Ok(Some(status)) => return Ok(status),
+            Ok(None) if start.elapsed() < limit => thread::sleep(Duration::from_millis(20)),
+            Ok(None) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(Failure::new(format!(
+                    "QEMU timed out after {} s (raise QEMU_TIMEOUT if the firmware is not hung)",
+                    limit.as_secs()
+                ))
+                .status(124));
+            }
+            Err(e) => return Err(Failure::new(format!("waiting for QEMU: {e}"))),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The GPIO trace
+// ---------------------------------------------------------------------------
+
+/// One line of QEMU's trace that matters here.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TraceEvent {
+    /// TIMER0 was captured: its 32-bit counter (µs).
+    Time(u32),
+    /// GPIO `line` changed: driven high (`Some(true)`), low (`Some(false)`),
+    /// or released (`None`: QEMU's `-1`, an input or disconnected pin).
+    Pin { line: u8, level: Option<bool> },
+}
+
+/// Parses `nrf51_timer_set_count timer 0 counter N count 0xHEX` (timer 0
+/// only) and `nrf51_gpio_update_output_irq line N value V` (whatever QEMU
+/// puts before the event name, e.g. a pid and time stamp, is skipped).
+pub fn parse_trace_line(line: &str) -> Option<TraceEvent> {
+    if let Some(at) = line.find("nrf51_timer_set_count ") {
+        let mut words = line[at..].split_whitespace().skip(1);
+        let (Some("timer"), Some(timer), Some("counter"), Some(_), Some("count"), Some(count)) = (
+            words.next(),
+            words.next(),
+            words.next(),
+            words.next(),
+            words.next(),
+            words.next(),
+        ) else {
+            return None;
+        };
+        if timer != "0" {
+            return None;
+        }
+        let hex = count.strip_prefix("0x").unwrap_or(count);
+        return u32::from_str_radix(hex, 16).ok().map(TraceEvent::Time);
+    }
+    let at = line.find("nrf51_gpio_update_output_irq ")?;
+    let mut words = line[at..].split_whitespace().skip(1);
+    let (Some("line"), Some(pin), Some("value"), Some(value)) =
+        (words.next(), words.next(), words.next(), words.next())
+    else {
+        return None;
+    };
+    let level = match value {
+        "1" => Some(true),
+        "0" => Some(false),
+        "-1" => None,
+        _ => return None,
+    };
+    Some(TraceEvent::Pin {
+        line: pin.parse().ok()?,
+        level,
+    })
+}
+
+/// The matrix pins' levels over time: `(µs, levels)` from that time on, in
+/// order. `levels` holds a bit per GPIO: 1 = high or released, except that
+/// a released row pin (never driven) counts as low — so that
+/// [`leds::decode_levels`] reads it as the firmware means it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Timeline {
+    changes: Vec<(u64, u32)>,
+}
+
+/// Row pins, as a GPIO bit mask.
+const ROW_BITS: u32 = leds::ROW_MASK << leds::FIRST_ROW_PIN;
+
+impl Timeline {
+    /// Builds the timeline from trace lines. Pin changes before the first
+    /// time stamp are dated 0; the 32-bit clock is extended across wraps.
+    pub fn from_lines<'a>(lines: impl IntoIterator<Item = &'a str>) -> Timeline {
+        let mut changes: Vec<(u64, u32)> = Vec::new();
+        // Everything dark: rows low, columns high.
+        let mut levels = leds::DARK | !leds::MATRIX_PINS;
+        let (mut now, mut last_raw) = (0u64, 0u32);
+        for line in lines {
+            match parse_trace_line(line) {
+                Some(TraceEvent::Time(raw)) => {
+                    let wrapped = u64::from(raw < last_raw) << 32;
+                    now = ((now & !0xffff_ffff) + wrapped) | u64::from(raw);
+                    last_raw = raw;
+                }
+                Some(TraceEvent::Pin { line, level }) if line < 32 => {
+                    let bit = 1u32 << line;
+                    let high = match level {
+                        Some(high) => high,
+                        None => bit & ROW_BITS == 0,
+                    };
+                    levels = if high { levels | bit } else { levels & !bit };
+                    match changes.last_mut() {
+                        Some((at, last)) if *at == now => *last = levels,
+                        _ => changes.push((now, levels)),
+                    }
+                }
+                _ => {}
+            }
+        }
+        Timeline { changes }
+    }
+
+    /// The number of level changes.
+    pub fn len(&self) -> usize {
+        self.changes.len()
+    }
+
+    /// Whether no pin ever changed.
+    pub fn is_empty(&self) -> bool {
+        self.changes.is_empty()
+    }
+
+    /// The 5×5 picture a viewer sees over `[t0, t1)`: per LED, the time its
+    /// row pin was high and its column pin low, over the time its row was
+    /// driven, × 15, rounded half up (0 for a row never driven).
+    pub fn perceived(&self, t0: u64, t1: u64) -> [[u8; leds::SIZE]; leds::SIZE] {
+        let mut lit = [[0u64; leds::COLS]; leds::ROWS];
+        let mut driven = [0u64; leds::ROWS];
+        // The level in force at t0: that of the last change at or before it.
+        let first = self.changes.partition_point(|&(at, _)| at <= t0);
+        let mut at = t0;
+        let mut levels = match first {
+            0 => leds::DARK | !leds::MATRIX_PINS,
+            n => self.changes[n - 1].1,
+        };
+        let mut add = |levels: u32, from: u64, to: u64| {
+            let span = to.saturating_sub(from);
+            let (rows, cols) = leds::decode_levels(levels);
+            for (row, time) in driven.iter_mut().enumerate() {
+                if rows & (1 << row) == 0 {
+                    continue;
+                }
+                *time += span;
+                for (col, on) in lit[row].iter_mut().enumerate() {
+                    if cols & (1 << col) != 0 {
+                        *on += span;
+                    }
+                }
+            }
+        };
+        for &(change, next) in &self.changes[first..] {
+            if change >= t1 {
+                break;
+            }
+            add(levels, at, change);
+            at = change;
+            levels = next;
+        }
+        add(levels, at, t1);
+        let mut picture = [[0u8; leds::SIZE]; leds::SIZE];
+        for (y, row) in leds::LED_MAP.iter().enumerate() {
+            for (x, &(r, c)) in row.iter().enumerate() {
+                let (r, c) = (usize::from(r), usize::from(c));
+                let (on, period) = (lit[r][c], driven[r]);
+                if period > 0 {
+                    picture[y][x] = ((2 * on * 15 + period) / (2 * period)).min(15) as u8;
+                }
+            }
+        }
+        picture
+    }
+}
+
+/// One `display frame` line of the firmware's log.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LoggedFrame {
+    /// Index of the level (0-based) when it went up.
+    pub level: u8,
+    /// On the LEDs from (µs, TIMER0 time) …
+    pub t0: u64,
+    /// … until (exclusive).
+    pub t1: u64,
+    /// Brightness, `rows[y][x]`.
+    pub rows: [[u8; leds::SIZE]; leds::SIZE],
+}
+
+impl LoggedFrame {
+    /// Whether the frame shows the maze (not blank, not uniformly lit like
+    /// the win flash).
+    pub fn shows_the_maze(&self) -> bool {
+        let first = self.rows[0][0];
+        self.rows.iter().flatten().any(|&level| level != first)
+    }
+}
+
+/// Parses `display frame level=L t0=T0 t1=T1 rows=R0 R1 R2 R3 R4` anywhere
+/// in a line.
+pub fn parse_frame(line: &str) -> Option<LoggedFrame> {
+    let rest = &line[line.find("display frame level=")? + "display frame level=".len()..];
+    let (level, rest) = rest.split_once(" t0=")?;
+    let (t0, rest) = rest.split_once(" t1=")?;
+    let (t1, rest) = rest.split_once(" rows=")?;
+    let mut rows = [[0u8; leds::SIZE]; leds::SIZE];
+    let mut words = rest.split_whitespace();
+    for row in rows.iter_mut() {
+        let word = words.next()?;
+        if word.len() != leds::SIZE {
+            return None;
+        }
+        for (level, digit) in row.iter_mut().zip(word.chars()) {
+            *level = digit.to_digit(16)? as u8;
+        }
+    }
+    Some(LoggedFrame {
+        level: level.parse().ok()?,
+        t0: t0.parse().ok()?,
+        t1: t1.parse().ok()?,
+        rows,
+    })
+}
+
+/// The largest per-pixel difference of two pictures.
+pub fn max_difference(
+    a: &[[u8; leds::SIZE]; leds::SIZE],
+    b: &[[u8; leds::SIZE]; leds::SIZE],
+) -> u8 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
+/// A picture as five rows of hex digits (as the firmware logs it).
+pub fn hex_rows(rows: &[[u8; leds::SIZE]; leds::SIZE]) -> String {
+    rows.iter()
+        .map(|row| {
+            row.iter()
+                .map(|&level| format!("{level:x}"))
+                .collect::<String>()
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+// ---------------------------------------------------------------------------
+// Budgets in the log
+// ---------------------------------------------------------------------------
+
+/// `ram: statics S B + stack high-water H B = T B …` → (statics, stack).
+pub fn parse_ram(log: &str) -> Option<(u64, u64)> {
+    log.lines().find_map(|line| {
+        let rest = &line[line.find("ram: statics ")? + "ram: statics ".len()..];
+        let (statics, rest) = rest.split_once(" B + stack high-water ")?;
+        let (stack, _) = rest.split_once(" B")?;
+        Some((statics.parse().ok()?, stack.parse().ok()?))
+    })
+}
+
+/// `cpu load: … = X.YY % of a 16 MHz …` → hundredths of a percent.
+pub fn parse_cpu(log: &str) -> Option<u64> {
+    log.lines().find_map(|line| {
+        let rest = &line[line.find("cpu load: ")?..];
+        let end = rest.find(" % of a 16 MHz")?;
+        let number = rest[..end].rsplit(' ').next()?;
+        let (whole, cents) = number.split_once('.')?;
+        if cents.len() != 2 {
+            return None;
+        }
+        Some(whole.parse::<u64>().ok()? * 100 + cents.parse::<u64>().ok()?)
+    })
+}
+
+/// Code bytes per crate and top module (`marble_rolling::physics`,
+/// `core::fmt`, …), largest first: where the flash goes.
+pub fn bloat(elf: &[u8]) -> Result<Vec<(String, u64)>, String> {
+    let mut totals: std::collections::BTreeMap<String, u64> = std::collections::BTreeMap::new();
+    for symbol in crate::symbols::code_symbols(elf)? {
+        let name = crate::symbols::readable(&symbol.mangled);
+        *totals.entry(module_of(&name)).or_default() += symbol.size;
+    }
+    let mut list: Vec<(String, u64)> = totals.into_iter().collect();
+    list.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+    Ok(list)
+}
+
+/// The first two path segments of a demangled name (the type's, for an
+/// `<impl …>` or `<T as Trait>` name).
+pub fn module_of(name: &str) -> String {
+    let name = name.trim_start_matches('<').trim_start_matches("impl ");
+    let path: String = name
+        .chars()
+        .take_while(|&c| c.is_alphanumeric() || c == '_' || c == ':')
+        .collect();
+    let mut segments = path.split("::").filter(|s| !s.is_empty());
+    match (segments.next(), segments.next()) {
+        (Some(first), Some(second)) => format!("{first}::{second}"),
+        (Some(first), None) if path.contains("::") => first.to_string(),
+        _ => "(symbols without a path: vectors, handlers, builtins)".to_string(),
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The check
+// ---------------------------------------------------------------------------
+
+/// Collects the problems; each is reported when found.
+#[derive(Default)]
+struct Problems(Vec<String>);
+
+impl Problems {
+    fn report(&mut self, message: String) {
+        say!("{message}");
+        self.0.push(message);
+    }
+}
+
+/// `cargo xtask check-microbit-v1`: see the module doc.
+pub fn check() -> Outcome {
+    let target = workspace::target_dir()?;
+    let log_path = workspace::env_path("CHECK_V1_LOG", target.join("check-microbit-v1.log"));
+    let trace_path = workspace::env_path("CHECK_V1_TRACE", target.join("check-microbit-v1.trace"));
+    let ram_budget = workspace::env_number("V1_RAM_BUDGET", RAM_BUDGET)?;
+    let flash_budget = workspace::env_number("V1_FLASH_BUDGET", FLASH_BUDGET)?;
+    let cpu_budget = workspace::env_number("V1_CPU_BUDGET_CENTIPERCENT", CPU_BUDGET_CENTIPERCENT)?;
+    let limit = runner::timeout(600)?;
+    let mut problems = Problems::default();
+
+    setup::target(M0)?;
+    let tools = setup::m4_qemu()?;
+    let elf = build()?;
+    if let Some(dir) = log_path.parent() {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let file = File::create(&log_path)
+        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
+    say!("running the demo in QEMU microbit with the GPIO trace…");
+    let demo_args = ["--demo".to_string()];
+    let (status, took) = match qemu_run(
+        &tools,
+        &elf,
+        &demo_args,
+        Some(&trace_path),
+        Sink::File(&file),
+        limit,
+    ) {
+        Ok(done) => done,
+        Err(failure) if failure.status == 124 => (124, limit),
+        Err(failure) => return Err(failure),
+    };
+    let text = std::fs::read(&log_path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", log_path.display())))?;
+    let text = demo::strip_colours(&String::from_utf8_lossy(&text));
+    let _ = std::fs::write(&log_path, &text);
+    say!("QEMU ran for {:.1} s of host time", took.as_secs_f64());
+    if status != 0 {
+        problems.report(format!(
+            "the demo exited with status {status} (log: {})",
+            log_path.display()
+        ));
+    }
+
+    // 1. Every level as the simulator plays it.
+    let (levels, total) = demo::parse_levels(&text);
+    if levels.is_empty() {
+        return Err(Failure::new(format!(
+            "no per-level lines in the log ({})",
+            log_path.display()
+        )));
+    }
+    if let Some(total) = total.filter(|&total| total != levels.len()) {
+        problems.report(format!(
+            "the demo reported {} of {total} levels",
+            levels.len()
+        ));
+    }
+    compare_with_sim(&levels, &mut problems)?;
+
+    // 2. The LEDs, rebuilt from the GPIO trace.
+    let trace = std::fs::read(&trace_path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", trace_path.display())))?;
+    let trace = String::from_utf8_lossy(&trace);
+    let timeline = Timeline::from_lines(trace.lines());
+    let frames: Vec<LoggedFrame> = text.lines().filter_map(parse_frame).collect();
+    check_frames(&timeline, &frames, levels.len(), &mut problems);
+
+    // 3. Without the demo, QEMU's stub accelerometer takes the sensor down:
+    //    the game must wait, showing the fault cross.
+    check_sensor_down(&tools, &elf, &target, limit, &mut problems)?;
+
+    // 4. Budgets.
+    match parse_ram(&text) {
+        Some((statics, stack)) => {
+            let used = statics + stack;
+            let verdict = if used <= ram_budget { "ok" } else { "OVER" };
+            say!(
+                "RAM: statics {statics} B + stack high-water {stack} B = {used} B of 16384 (budget {ram_budget} B): {verdict}"
+            );
+            if used > ram_budget {
+                problems.report(format!(
+                    "RAM {used} B is over the budget of {ram_budget} B by {} B",
+                    used - ram_budget
+                ));
+            }
+        }
+        None => problems.report("no `ram:` line in the log".into()),
+    }
+    match parse_cpu(&text) {
+        Some(load) => {
+            say!(
+                "CPU load {} % of a 16 MHz Cortex-M0 (budget {} %)",
+                demo::centi(load),
+                demo::centi(cpu_budget)
+            );
+            if load > cpu_budget {
+                problems.report(format!(
+                    "CPU load {} % is over the budget of {} %",
+                    demo::centi(load),
+                    demo::centi(cpu_budget)
+                ));
+            }
+        }
+        None => problems.report("no `cpu load:` line in the log".into()),
+    }
+    let size = crate::size::measure(&elf)?;
+    say!(
+        "flash: {} B (text {} + data {}) of 262144 (budget {flash_budget} B)",
+        size.flash(),
+        size.text,
+        size.data
+    );
+    if size.flash() > flash_budget {
+        let data = std::fs::read(&elf)
+            .map_err(|e| Failure::new(format!("cannot read {}: {e}", elf.display())))?;
+        match bloat(&data) {
+            Ok(list) => {
+                say!("where the code goes (bytes of code symbols by module):");
+                for (module, bytes) in list.iter().take(12) {
+                    eprintln!("  {bytes:>7}  {module}");
+                }
+            }
+            Err(e) => say!("cannot read the symbols: {e}"),
+        }
+        problems.report(format!(
+            "flash {} B is over the budget of {flash_budget} B by {} B",
+            size.flash(),
+            size.flash() - flash_budget
+        ));
+    }
+
+    if !problems.0.is_empty() {
+        return Err(Failure::new(format!(
+            "FAILED: {} problem(s) (log {}, trace {})",
+            problems.0.len(),
+            log_path.display(),
+            trace_path.display()
+        )));
+    }
+    say!(
+        "OK: {} levels won as the simulator plays them, the LEDs show what the game drew, within budgets",
+        levels.len()
+    );
+    Ok(0)
+}
+
+/// The fault picture the game shows while the sensor is down (a cross from
+/// corner to corner, `game::player::fault_frame`), full brightness.
+pub const FAULT_CROSS: [[u8; leds::SIZE]; leds::SIZE] = [
+    [15, 0, 0, 0, 15],
+    [0, 15, 0, 15, 0],
+    [0, 0, 15, 0, 0],
+    [0, 15, 0, 15, 0],
+    [15, 0, 0, 0, 15],
+];
+
+/// Plays (no demo) for two seconds in QEMU: its TWI stub has no
+/// accelerometer behind it, so the supervision must take the sensor down,
+/// the game must stay paused, and the LEDs (from the GPIO trace, over the
+/// second second) must show the fault cross.
+fn check_sensor_down(
+    tools: &setup::Qemu,
+    elf: &Path,
+    target: &Path,
+    limit: Duration,
+    problems: &mut Problems,
+) -> Result<(), Failure> {
+    let log_path = target.join("check-microbit-v1-sensor.log");
+    let trace_path = target.join("check-microbit-v1-sensor.trace");
+    let file = File::create(&log_path)
+        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
+    say!("playing 2 s in QEMU without an accelerometer (its TWI is a stub)…");
+    let args = ["--seconds=2".to_string(), "--no-frame-log".to_string()];
+    let (status, _) = qemu_run(
+        tools,
+        elf,
+        &args,
+        Some(&trace_path),
+        Sink::File(&file),
+        limit,
+    )?;
+    let text = std::fs::read(&log_path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", log_path.display())))?;
+    let text = demo::strip_colours(&String::from_utf8_lossy(&text));
+    let _ = std::fs::write(&log_path, &text);
+    let trace = std::fs::read(&trace_path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", trace_path.display())))?;
+    let timeline = Timeline::from_lines(String::from_utf8_lossy(&trace).lines());
+    let seen = timeline.perceived(1_000_000, 2_000_000);
+    let paused = text
+        .lines()
+        .any(|line| line.contains("stop after 2 s") && line.contains("sensor down: true"));
+    if status != 0 || !paused || seen != FAULT_CROSS {
+        problems.report(format!(
+            "sensor down: status {status}, game paused with the sensor down: {paused}, \
+             LEDs {} (want the cross {}); log {}",
+            hex_rows(&seen),
+            hex_rows(&FAULT_CROSS),
+            log_path.display()
+        ));
+    } else {
+        say!("sensor down: reported, the game waits, the LEDs show the fault cross");
+    }
+    Ok(())
+}
+
+/// Compares each level with `sim --level NAME --autopilot --json`.
+fn compare_with_sim(levels: &[Level], problems: &mut Problems) -> Result<(), Failure> {
+    say!("building the host simulator (cargo sim)…");
+    let sim = firmware::build(&Artifact {
+        package: "marble-rolling",
+        bin: "sim",
+        target: None,
+        features: Some("tools"),
+        quiet: true,
+    })?;
+    println!(
+        "{}",
+        demo::row(["level", "v1", "sim", "v1.steps", "s.steps", "v1 hash", "sim hash", "result"])
+    );
+    for level in levels {
+        let out = Command::new(&sim)
+            .args(["--level", &level.name, "--autopilot", "--json"])
+            .current_dir(workspace::root())
+            .stdin(Stdio::null())
+            .stderr(Stdio::null())
+            .output()
+            .ok();
+        let result = out.and_then(|out| demo::parse_sim(&String::from_utf8_lossy(&out.stdout)));
+        let verdict = demo::verdict(level, result.as_ref());
+        let result = result.unwrap_or_default();
+        let or_dash = |field: &Option<String>| field.clone().unwrap_or_else(|| "-".into());
+        println!(
+            "{}",
+            demo::row([
+                &level.name,
+                &level.outcome,
+                &or_dash(&result.outcome),
+                &level.steps,
+                &or_dash(&result.steps),
+                &level.hash,
+                &or_dash(&result.hash),
+                match verdict {
+                    Verdict::Ok => "ok",
+                    Verdict::SimFailed => "SIM FAILED",
+                    Verdict::NotWon => "NOT WON",
+                    Verdict::Mismatch => "MISMATCH",
+                },
+            ])
+        );
+        if verdict != Verdict::Ok {
+            problems.report(format!("level {}: {verdict:?}", level.name));
+        }
+    }
+    Ok(())
+}
+
+/// Checks the logged frames against the trace (see the module doc).
+fn check_frames(
+    timeline: &Timeline,
+    frames: &[LoggedFrame],
+    levels: usize,
+    problems: &mut Problems,
+) {
+    if timeline.is_empty() {
+        problems.report("the GPIO trace has no pin changes".into());
+        return;
+    }
+    let mut maze_frames = vec![0usize; levels];
+    let mut worst = 0u8;
+    for frame in frames {
+        let seen = timeline.perceived(frame.t0, frame.t1);
+        let difference = max_difference(&seen, &frame.rows);
+        worst = worst.max(difference);
+        if difference > FRAME_TOLERANCE {
+            problems.report(format!(
+                "level {}: the LEDs showed {} over [{}, {}) µs, the game drew {}",
+                usize::from(frame.level) + 1,
+                hex_rows(&seen),
+                frame.t0,
+                frame.t1,
+                hex_rows(&frame.rows)
+            ));
+        } else if frame.shows_the_maze() {
+            if let Some(count) = maze_frames.get_mut(usize::from(frame.level)) {
+                *count += 1;
+            }
+        }
+    }
+    say!(
+        "display: {} frames rebuilt from {} GPIO level changes, largest difference {worst} level(s); maze frames per level {maze_frames:?}",
+        frames.len(),
+        timeline.len()
+    );
+    for (level, &count) in maze_frames.iter().enumerate() {
+        if count == 0 {
+            problems.report(format!(
+                "level {}: no frame showing the maze was matched on the LEDs",
+                level + 1
+            ));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trace_lines() {
+        assert_eq!(
+            parse_trace_line("nrf51_timer_set_count timer 0 counter 3 count 0x1fa9c49"),
+            Some(TraceEvent::Time(0x1fa9c49))
+        );
+        assert_eq!(
+            parse_trace_line("1234@1.5:nrf51_timer_set_count timer 0 counter 3 count 0x10"),
+            Some(TraceEvent::Time(16))
+        );
+        assert_eq!(
+            parse_trace_line("nrf51_timer_set_count timer 1 counter 3 count 0x10"),
+            None
+        );
+        assert_eq!(
+            parse_trace_line("nrf51_gpio_update_output_irq line 13 value 1"),
+            Some(TraceEvent::Pin {
+                line: 13,
+                level: Some(true)
+            })
+        );
+        assert_eq!(
+            parse_trace_line("nrf51_gpio_update_output_irq line 4 value -1"),
+            Some(TraceEvent::Pin {
+                line: 4,
+                level: None
+            })
+        );
+        assert_eq!(
+            parse_trace_line("nrf51_gpio_update_output_irq line x value 1"),
+            None
+        );
+        assert_eq!(parse_trace_line("something else"), None);
+    }
+
+    /// Trace lines for one `OUT` word at time `t`.
+    fn write(lines: &mut Vec<String>, t: u32, out: u32) {
+        lines.push(format!(
+            "nrf51_timer_set_count timer 0 counter 3 count {t:#x}"
+        ));
+        for pin in 4..16 {
+            let value = (out >> pin) & 1;
+            lines.push(format!(
+                "nrf51_gpio_update_output_irq line {pin} value {value}"
+            ));
+        }
+    }
+
+    /// One BCM refresh of `picture` as trace lines from `t`, slice lengths
+    /// in µs of `base` per tick; returns the end time.
+    fn refresh(lines: &mut Vec<String>, mut t: u32, picture: &[[u8; 5]; 5], base: u32) -> u32 {
+        for row in 0..leds::ROWS {
+            for bit in (0..4).rev() {
+                let mut lit = 0;
+                for (y, line) in leds::LED_MAP.iter().enumerate() {
+                    for (x, &(r, c)) in line.iter().enumerate() {
+                        if usize::from(r) == row && picture[y][x] >> bit & 1 != 0 {
+                            lit |= 1 << c;
+                        }
+                    }
+                }
+                write(lines, t, leds::out_word(row, lit));
+                t += base << bit;
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn a_bcm_scan_is_perceived_as_its_picture() {
+        let picture = [
+            [0, 1, 2, 3, 4],
+            [5, 6, 7, 8, 9],
+            [10, 11, 12, 13, 14],
+            [15, 0, 15, 0, 15],
+            [3, 3, 3, 3, 3],
+        ];
+        let mut lines = Vec::new();
+        let mut t = 1_000;
+        for _ in 0..10 {
+            t = refresh(&mut lines, t, &picture, 222);
+        }
+        write(&mut lines, t, leds::DARK);
+        let timeline = Timeline::from_lines(lines.iter().map(String::as_str));
+        assert_eq!(timeline.perceived(1_000, t as u64), picture);
+        // Jitter of a few µs at the edges stays within one level.
+        let shifted = timeline.perceived(1_003, t as u64 + 2);
+        assert!(max_difference(&shifted, &picture) <= 1);
+        // Nothing was lit before the first write.
+        assert_eq!(timeline.perceived(0, 1_000), [[0; 5]; 5]);
+    }
+
+    #[test]
+    fn the_clock_is_extended_across_wraps() {
+        let mut lines = Vec::new();
+        write(&mut lines, 0xffff_ff00, leds::out_word(0, 1));
+        write(&mut lines, 0x0000_0100, leds::DARK);
+        let timeline = Timeline::from_lines(lines.iter().map(String::as_str));
+        assert_eq!(timeline.changes[1].0, 0x1_0000_0100);
+        // LED (row 0, column 0) is pixel (0, 0): lit all the time its row was.
+        assert_eq!(timeline.perceived(0xffff_ff00, 0x1_0000_0100)[0][0], 15);
+    }
+
+    #[test]
+    fn frame_lines() {
+        let line = "26.1 INFO  display frame level=7 t0=26062629 t1=26192553 rows=33343 115b1 33333 01111 33333";
+        let frame = parse_frame(line).unwrap();
+        assert_eq!(frame.level, 7);
+        assert_eq!((frame.t0, frame.t1), (26_062_629, 26_192_553));
+        assert_eq!(frame.rows[1], [1, 1, 5, 11, 1]);
+        assert!(frame.shows_the_maze());
+        assert_eq!(hex_rows(&frame.rows), "33343 115b1 33333 01111 33333");
+        let flash =
+            parse_frame("display frame level=0 t0=1 t1=2 rows=fffff fffff fffff fffff fffff")
+                .unwrap();
+        assert!(!flash.shows_the_maze());
+        assert!(parse_frame("display frame level=0 t0=1 t1=2 rows=fffff").is_none());
+    }
+
+    #[test]
+    fn budget_lines() {
+        let log = "x INFO  ram: statics 5084 B + stack high-water 8364 B = 13448 B of 16384 B (budget 12288 B)\n\
+                   x INFO  cpu load: 75141188 busy instructions in 25267360 us of firmware time = 2973844 instructions/s = 18.58 % of a 16 MHz Cortex-M0 (128 frames/s, 100 refreshes/s)\n";
+        assert_eq!(parse_ram(log), Some((5084, 8364)));
+        assert_eq!(parse_cpu(log), Some(1858));
+        assert_eq!(parse_cpu("cpu load: x = 1.5 % of a 16 MHz"), None);
+    }
+
+    #[test]
+    fn modules_of_symbols() {
+        assert_eq!(
+            module_of("marble_rolling::physics::world::events::<impl marble_rolling::physics::world::World<S, _>>::step_events"),
+            "marble_rolling::physics"
+        );
+        assert_eq!(module_of("<core::fmt::Formatter>::pad"), "core::fmt");
+        assert_eq!(
+            module_of("TIMER0"),
+            "(symbols without a path: vectors, handlers, builtins)"
+        );
+    }
+
+    #[test]
+    fn the_qemu_command_line() {
+        let cmd = qemu_command(
+            Path::new("qemu-system-arm"),
+            Path::new("/t/microbit-v1"),
+            &["--demo".into()],
+        );
+        assert_eq!(
+            process::shown(&cmd),
+            "qemu-system-arm -M microbit -display none -monitor none -nodefaults -icount \
+             shift=7,align=off,sleep=off -semihosting-config \
+             enable=on,target=native,arg=microbit-v1,arg=--demo -kernel /t/microbit-v1"
+        );
+    }
+}
