@@ -39,7 +39,7 @@
 //!
 //! # Frames and signs
 //!
-//! Readings are in the **board frame** of [`crate::sensor`] (after its
+//! Readings are in the **board frame** of [`crate::input::sensor`] (after its
 //! [`AxisMap`](crate::input::sensor::AxisMap)): `x` right (grid columns), `y` up out of
 //! the board, `z` towards the player (grid rows downwards). An accelerometer
 //! reads the reaction to gravity, so a flat board reads `(0, +1000, 0)` and the
@@ -48,11 +48,12 @@
 //! likewise `z < 0` rolls it towards `+z` (the player). A board tilted by `θ`
 //! towards `+x` reads `(−1000 sin θ, 1000 cos θ, 0)`.
 //!
-//! # Fit with [`crate::sensor`]
+//! # Fit with [`crate::input::sensor`]
 //!
-//! The plausibility bounds are a [`Plausibility`] and the "level" offset is a
-//! [`Calibration`], with exactly the rules of [`crate::input::sensor::TiltPipeline`],
-//! so both paths accept the same samples and calibrate the same way. A
+//! The plausibility bounds are a [`Plausibility`], as in the sensor's
+//! [`TiltPipeline`](crate::input::sensor::TiltPipeline), so both accept the same
+//! samples; the "level" offset is a [`Calibration`], applied here and nowhere
+//! else (a board's buttons and the keys send `Command::Calibrate` to the game). A
 //! [`TiltError`] converts into a [`Fault`] (`Stuck` → [`Fault::NoData`], the
 //! rest → [`Fault::Implausible`]), so a [`SensorSupervisor`](crate::input::sensor::SensorSupervisor)
 //! over gravity can run the re-init / fault-display policy:

@@ -3,7 +3,7 @@
 //! (`-d in_asm,exec,nochain`: every executed block is logged, chaining off so
 //! none is skipped) and attributes every executed instruction to the function
 //! holding it (see trace.rs). The trace is large (about 2 GB for the whole
-//! demo, in PROFILE_DIR, default <target>/qemu-profile; deleted afterwards
+//! demo, in PROFILE_DIR, default `<target>/qemu-profile`; deleted afterwards
 //! unless KEEP_TRACE=1), so it is streamed, never loaded whole.
 
 use std::fs::File;
