@@ -17,7 +17,7 @@ use crate::game::levels::by_name;
 use crate::game::rules::cell_centre;
 use crate::physics::geometry::grid::{words_for, TileGrid, Tiles, MAX_TILES_XZ};
 use crate::physics::{
-    BoardMotion, Effects, MicroF32, Params, PhysicsSpec, Scalar, SetupError, Vec3, World,
+    BoardMotion, Effects, MicroF32, Params, PhysicsSpec, Scalar, SetupError, Stepping, Vec3, World,
 };
 
 /// `log2` of the frame rate at which the tilt trace changes (128 Hz).
@@ -26,6 +26,12 @@ pub const FRAME_LOG2: u32 = 7;
 pub const STEP_LOG2: [u32; 6] = [7, 8, 9, 10, 11, 12];
 /// The firmware default: 1024 steps/s.
 pub const DEFAULT_STEP_LOG2: u32 = 10;
+/// Event stepping ([`Stepping::Events`]) where a `step_log2` or a rate mask's bit
+/// is asked for: `0` (bit 0), a rate no fixed step runs at. Its steps are the
+/// frames themselves (`2^FRAME_LOG2` per second), each flown event by event.
+pub const EVENTS_LOG2: u32 = 0;
+/// The configurations studied: events, then the fixed step rates.
+pub const STEPPINGS: [u32; 7] = [EVENTS_LOG2, 7, 8, 9, 10, 11, 12];
 /// The reference run's rate: 2^14 steps/s (in `f64`).
 pub const REFERENCE_STEP_LOG2: u32 = 14;
 /// Simulated seconds per scene.
@@ -263,10 +269,16 @@ impl Scene {
     }
 
     /// The spec at `2^step_log2` steps/s with `effects`.
+    /// ([`EVENTS_LOG2`]: event stepping at the frame rate).
     pub fn spec_at(&self, step_log2: u32, effects: Effects) -> PhysicsSpec {
+        let (step_log2, stepping) = match step_log2 {
+            EVENTS_LOG2 => (FRAME_LOG2, Stepping::Events),
+            k => (k, Stepping::Fixed),
+        };
         PhysicsSpec {
             step_log2,
             effects,
+            stepping,
             ..self.spec
         }
     }
@@ -338,7 +350,10 @@ pub const EFFECT_VARIANTS: [(&str, Effects); 6] = [
 
 /// Steps of a run of [`SECONDS`] at `2^step_log2` steps/s.
 pub const fn steps(step_log2: u32) -> u32 {
-    SECONDS << step_log2
+    match step_log2 {
+        EVENTS_LOG2 => SECONDS << FRAME_LOG2,
+        k => SECONDS << k,
+    }
 }
 
 /// Advances `w` from step `from` to step `to` (steps counted from the start of the
@@ -419,7 +434,7 @@ pub fn bench_plan(backends: u32, rates: u32, mut f: impl FnMut(BenchItem)) {
             if backends & (1 << backend) == 0 {
                 continue;
             }
-            for k in STEP_LOG2 {
+            for k in STEPPINGS {
                 if rates & (1 << k) != 0 {
                     f(BenchItem {
                         scene,

@@ -11,13 +11,16 @@ fn g_pitch(pitch_um: u32) -> f64 {
 
 /// Down a constant incline (0.05 g along x'): sliding covers ½·g·sinθ·t², rolling
 /// 5/7 of that. Both within 0.01 mm after 1 s in every backend.
-fn incline<S: Scalar>() {
+fn incline<S: Scalar>(st: Stepping) {
     let floor = open_floor(127);
     for rolling in [false, true] {
-        let p = params::<S>(spec(Effects {
-            rolling,
-            ..Effects::NONE
-        }));
+        let p = params::<S>(spec_in(
+            st,
+            Effects {
+                rolling,
+                ..Effects::NONE
+            },
+        ));
         let start = cell_centre(&p, 3, 63);
         let mut w: World<'_, S, 4> = world(p, &floor, &[start]);
         w.set_gravity_mg([50, -999, 0]);
@@ -40,15 +43,18 @@ fn incline<S: Scalar>() {
         assert_eq!(w.marbles()[0].pos.z, start.1, "no sideways drift");
     }
 }
-for_each_backend!(incline_sliding_and_rolling, incline);
+for_each_backend_and_mode!(incline_sliding_and_rolling, incline);
 
-fn space_spec(restitution_milli: u32) -> PhysicsSpec {
+fn space_spec(st: Stepping, restitution_milli: u32) -> PhysicsSpec {
     PhysicsSpec {
         restitution_milli,
-        ..spec(Effects {
-            holes: true,
-            ..Effects::NONE
-        })
+        ..spec_in(
+            st,
+            Effects {
+                holes: true,
+                ..Effects::NONE
+            },
+        )
     }
 }
 
@@ -61,9 +67,9 @@ fn energy<S: Scalar>(w: &World<'_, S, 4>) -> f64 {
 }
 
 /// Dropped from `h0`, the apex after bounce `n` is `e^(2n)·h0`.
-fn bounce_heights<S: Scalar>() {
+fn bounce_heights<S: Scalar>(st: Stepping) {
     let floor = open_floor(15);
-    let p = params::<S>(space_spec(500));
+    let p = params::<S>(space_spec(st, 500));
     let start = cell_centre(&p, 7, 7);
     let mut w: World<'_, S, 4> = world(p, &floor, &[start]);
     // Below the lid (the wall tops, l = 0.83 pitch): the centre may rise to l − r.
@@ -73,15 +79,24 @@ fn bounce_heights<S: Scalar>() {
     let g = g_pitch(p.layout.pitch_um);
     let mut apexes = Vec::new();
     let mut last_vy = 0.0;
-    for _ in 0..(4 << p.k) {
-        w.step();
-        let m = w.marbles()[0];
-        let vy = m.vel.y.to_f64();
+    let mut bounced = |y: S, vy: f64, apexes: &mut Vec<f64>| {
         if last_vy < 0.0 && vy > 0.0 {
             // Just bounced: the apex of the coming flight, exactly (ballistic).
-            apexes.push(m.pos.y.to_f64() - p.radius.to_f64() + vy * vy / (2.0 * g));
+            apexes.push(y.to_f64() - p.radius.to_f64() + vy * vy / (2.0 * g));
         }
         last_vy = vy;
+    };
+    for _ in 0..(4 << p.k) {
+        // With events several bounces fit in one step: every flight's start.
+        let mut flights = Flights::default();
+        w.step_observed(&mut flights);
+        for (_, from, to, seg) in &flights.flights {
+            bounced(seg.p.y, seg.v.y.to_f64(), &mut apexes);
+            let len = *to - *from;
+            bounced(seg.pos_at(len).y, seg.vel_at(len).y.to_f64(), &mut apexes);
+        }
+        let m = w.marbles()[0];
+        bounced(m.pos.y, m.vel.y.to_f64(), &mut apexes);
     }
     println!("{}: apexes {apexes:?}", S::NAME);
     assert!(
@@ -109,13 +124,13 @@ fn bounce_heights<S: Scalar>() {
         );
     }
 }
-for_each_backend!(bounce_heights_follow_e_to_the_2n, bounce_heights);
+for_each_backend_and_mode!(bounce_heights_follow_e_to_the_2n, bounce_heights);
 
 /// Bounce-to-rest ends in finite time (no Zeno): below the restitution threshold the
 /// impact becomes a contact and the marble then rests exactly.
-fn bounce_to_rest<S: Scalar>() {
+fn bounce_to_rest<S: Scalar>(st: Stepping) {
     let floor = open_floor(15);
-    let p = params::<S>(space_spec(700));
+    let p = params::<S>(space_spec(st, 700));
     let start = cell_centre(&p, 7, 7);
     let mut w: World<'_, S, 4> = world(p, &floor, &[start]);
     w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.2);
@@ -140,16 +155,16 @@ fn bounce_to_rest<S: Scalar>() {
     assert_eq!(m.pos.y, p.radius, "{} resting height", S::NAME);
     assert_eq!(m.vel.y, S::ZERO);
 }
-for_each_backend!(bounce_to_rest_terminates, bounce_to_rest);
+for_each_backend_and_mode!(bounce_to_rest_terminates, bounce_to_rest);
 
 /// With `e = 1`, energy never increases over 10⁴ bounces. Rounding may only leak
 /// energy (see `integrate::PullScale::kick` and the clamp in `respond::resolve`); the
 /// accurate backends must still be bouncing after 10⁴ bounces, while I16F16 and
 /// micromath leak enough to settle earlier — which is the study's business, not a
 /// stability failure.
-fn elastic_energy<S: Scalar>() {
+fn elastic_energy<S: Scalar>(st: Stepping) {
     let floor = open_floor(15);
-    let p = params::<S>(space_spec(1000));
+    let p = params::<S>(space_spec(st, 1000));
     let start = cell_centre(&p, 7, 7);
     let mut w: World<'_, S, 4> = world(p, &floor, &[start]);
     w.marbles_mut()[0].pos.y = p.radius + S::from_f64(0.02);
@@ -198,20 +213,23 @@ fn elastic_energy<S: Scalar>() {
         );
     }
 }
-for_each_backend!(elastic_bounces_never_gain_energy, elastic_energy);
+for_each_backend_and_mode!(elastic_bounces_never_gain_energy, elastic_energy);
 
 /// A marble at rest on a flat board stays exactly still for 10⁵ steps, in the plane
 /// and in 3-D (where the floor contact runs every step).
-fn rest<S: Scalar>() {
+fn rest<S: Scalar>(st: Stepping) {
     let floor = closed_box(3);
     for holes in [false, true] {
         for friction in [false, true] {
-            let p = params::<S>(spec(Effects {
-                holes,
-                friction,
-                rolling: true,
-                ..Effects::NONE
-            }));
+            let p = params::<S>(spec_in(
+                st,
+                Effects {
+                    holes,
+                    friction,
+                    rolling: true,
+                    ..Effects::NONE
+                },
+            ));
             let mut w: World<'_, S, 4> = world(p, &floor, &[cell_centre(&p, 3, 3)]);
             w.set_sleeping(false); // step for real every time
             let before = w.marbles()[0];
@@ -227,11 +245,11 @@ fn rest<S: Scalar>() {
         }
     }
 }
-for_each_backend!(rest_on_flat_board_is_exact, rest);
+for_each_backend_and_mode!(rest_on_flat_board_is_exact, rest);
 
 /// A scene without an effect never runs its code; with it, it does; all together
 /// they compose.
-fn effects_run_only_when_asked<S: Scalar>() {
+fn effects_run_only_when_asked<S: Scalar>(st: Stepping) {
     let floor = closed_box(3);
     let cases = [
         Effects::NONE,
@@ -254,7 +272,7 @@ fn effects_run_only_when_asked<S: Scalar>() {
         Effects::ALL,
     ];
     for fx in cases {
-        let p = params::<S>(spec(fx));
+        let p = params::<S>(spec_in(st, fx));
         let starts = [cell_centre(&p, 1, 1), cell_centre(&p, 5, 5)];
         let mut w: World<'_, S, 4> = World::new(p, floor.view(), &starts).unwrap();
         w.set_gravity_mg([300, -950, 200]);
@@ -280,18 +298,23 @@ fn effects_run_only_when_asked<S: Scalar>() {
         assert_eq!(s.reverts, 0);
     }
 }
-for_each_backend!(effects_off_never_run, effects_run_only_when_asked);
+for_each_backend_and_mode!(effects_off_never_run, effects_run_only_when_asked);
 
 /// A wall of the thinnest kind (0.2 mm against 10 mm cells), hit at the speed cap
 /// under an 8 g pull, at every step rate the engine accepts: the marble never
 /// crosses it and never gets closer than the resting tolerance.
-fn no_tunnelling<S: Scalar>() {
+fn no_tunnelling<S: Scalar>(st: Stepping) {
     let g = closed_box(1);
-    for step_log2 in 6..=14 {
+    let rates = match st {
+        Stepping::Fixed => 6..=14,
+        Stepping::Events => 7..=10,
+    };
+    for step_log2 in rates {
         let spec = PhysicsSpec {
             short_um: 200,
             long_um: 10_000,
             step_log2,
+            stepping: st,
             ..spec(Effects::NONE)
         };
         let p = params::<S>(spec);
@@ -317,21 +340,24 @@ fn no_tunnelling<S: Scalar>() {
         assert_eq!(w.stats.reverts, 0, "{} 2^{step_log2}", S::NAME);
     }
 }
-for_each_backend!(thin_wall_is_never_tunnelled, no_tunnelling);
+for_each_backend_and_mode!(thin_wall_is_never_tunnelled, no_tunnelling);
 
 /// Skipping resting marbles is exact: a scene that rests, is tilted, bounces, rests
 /// again and is shaken gives bit-identical states with and without skipping, step
 /// for step, and the skipping actually happens.
-fn sleeping_is_exact<S: Scalar>() {
+fn sleeping_is_exact<S: Scalar>(st: Stepping) {
     let g = closed_box(3);
     for holes in [false, true] {
-        let p = params::<S>(spec(Effects {
-            holes,
-            friction: true,
-            rolling: true,
-            marbles: true,
-            ..Effects::NONE
-        }));
+        let p = params::<S>(spec_in(
+            st,
+            Effects {
+                holes,
+                friction: true,
+                rolling: true,
+                marbles: true,
+                ..Effects::NONE
+            },
+        ));
         let starts = [cell_centre(&p, 1, 1), cell_centre(&p, 5, 5)];
         let mut a: World<'_, S, 4> = World::new(p, g.view(), &starts).unwrap();
         let mut b: World<'_, S, 4> = World::new(p, g.view(), &starts).unwrap();
@@ -364,4 +390,4 @@ fn sleeping_is_exact<S: Scalar>() {
         assert!(slept > 1000, "{}: skipping never kicked in", S::NAME);
     }
 }
-for_each_backend!(sleeping_resting_marbles_is_exact, sleeping_is_exact);
+for_each_backend_and_mode!(sleeping_resting_marbles_is_exact, sleeping_is_exact);

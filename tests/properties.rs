@@ -107,13 +107,11 @@ fn clearance<S: Scalar>(w: &World<'_, S, 4>, idx: usize) -> f64 {
 }
 
 /// Runs a shot, checking `check` after every step; returns the final state hash.
-fn run<S: Scalar>(s: &Shot, mut check: impl FnMut(&World<'_, S, 4>)) -> u64 {
+/// Each tilt lasts its `n` steps at 1024 steps/s (fewer, longer steps with events).
+fn run<S: Scalar>(s: &Shot, st: Stepping, mut check: impl FnMut(&World<'_, S, 4>)) -> u64 {
     let rows: Vec<&str> = s.maze.rows.iter().map(String::as_str).collect();
     let g = grid(&rows);
-    let p = params::<S>(PhysicsSpec {
-        effects: s.effects,
-        ..PhysicsSpec::DEFAULT
-    });
+    let p = params::<S>(spec_in(st, s.effects));
     let mut starts = vec![cell_centre(&p, s.start.0, s.start.1)];
     if s.effects.marbles {
         starts.push(cell_centre(&p, 1, 1));
@@ -126,7 +124,7 @@ fn run<S: Scalar>(s: &Shot, mut check: impl FnMut(&World<'_, S, 4>)) -> u64 {
         Vec3::new(S::from_int(s.v0.0), S::ZERO, S::from_int(s.v0.1)).clamp_abs(p.v_max);
     for &(n, g) in &s.tilts {
         w.set_gravity_mg(g);
-        for _ in 0..n {
+        for _ in 0..steps_of(&p, n as u32) {
             w.step();
             check(&w);
         }
@@ -138,8 +136,8 @@ fn tolerance<S: Scalar>(r: f64) -> f64 {
     loose::<S>() * r
 }
 
-fn never_inside_a_tile<S: Scalar>(s: &Shot) {
-    run::<S>(s, |w| {
+fn never_inside_a_tile<S: Scalar>(s: &Shot, st: Stepping) {
+    run::<S>(s, st, |w| {
         let r = w.params().radius.to_f64();
         for (n, m) in w.marbles().iter().enumerate() {
             if !m.out {
@@ -155,8 +153,8 @@ fn never_inside_a_tile<S: Scalar>(s: &Shot) {
     });
 }
 
-fn never_escapes<S: Scalar>(s: &Shot) {
-    run::<S>(s, |w| {
+fn never_escapes<S: Scalar>(s: &Shot, st: Stepping) {
+    run::<S>(s, st, |w| {
         let (ex, ez) = w.extent();
         for m in w.marbles() {
             assert!(!m.out, "{}: escaped a closed maze", S::NAME);
@@ -181,7 +179,7 @@ fn plane_energy<S: Scalar>(w: &World<'_, S, 4>, g: [i32; 3]) -> f64 {
         .sum()
 }
 
-fn energy_never_grows<S: Scalar>(s: &Shot) {
+fn energy_never_grows<S: Scalar>(s: &Shot, st: Stepping) {
     // One constant tilt, no holes (plane): no input after the start.
     let tilt = s.tilts[0].1;
     let flat = Shot {
@@ -194,10 +192,7 @@ fn energy_never_grows<S: Scalar>(s: &Shot) {
     };
     let rows: Vec<&str> = flat.maze.rows.iter().map(String::as_str).collect();
     let g = grid(&rows);
-    let p = params::<S>(PhysicsSpec {
-        effects: flat.effects,
-        ..PhysicsSpec::DEFAULT
-    });
+    let p = params::<S>(spec_in(st, flat.effects));
     // The velocity update a·dt rounds to ±½ LSB each step; its energy effect sums to
     // ε·Σv = ε·(distance travelled)/dt, bounded by the board's size: that is the
     // whole allowance for fixed point. Floating point adds its rounding per step.
@@ -210,14 +205,14 @@ fn energy_never_grows<S: Scalar>(s: &Shot) {
     };
     let span = (rows.len() + rows[0].len()) as f64;
     let allowance = lsb * span * (1u64 << p.k) as f64 * 4.0 + lsb * 1e3 * 600.0;
-    let _ = run::<S>(&flat, |_| {});
+    let _ = run::<S>(&flat, st, |_| {});
     let mut w: World<'_, S, 4> =
         World::new(p, g.view(), &[cell_centre(&p, flat.start.0, flat.start.1)]).unwrap();
     w.marbles_mut()[0].vel =
         Vec3::new(S::from_int(flat.v0.0), S::ZERO, S::from_int(flat.v0.1)).clamp_abs(p.v_max);
     w.set_gravity_mg(tilt);
     let e0 = plane_energy(&w, tilt);
-    for _ in 0..600 {
+    for _ in 0..steps_of(&p, 600) {
         w.step();
         let e = plane_energy(&w, tilt);
         assert!(
@@ -228,41 +223,51 @@ fn energy_never_grows<S: Scalar>(s: &Shot) {
     }
 }
 
-fn deterministic<S: Scalar>(s: &Shot) {
+fn deterministic<S: Scalar>(s: &Shot, st: Stepping) {
     assert_eq!(
-        run::<S>(s, |_| {}),
-        run::<S>(s, |_| {}),
+        run::<S>(s, st, |_| {}),
+        run::<S>(s, st, |_| {}),
         "{}: same inputs, different states",
         S::NAME
     );
 }
 
+const MODES: [Stepping; 2] = [Stepping::Fixed, Stepping::Events];
+
 proptest! {
     #[test]
     fn marble_never_comes_closer_than_r_to_a_tile(s in shot(true)) {
-        never_inside_a_tile::<fixed::types::I8F24>(&s);
-        never_inside_a_tile::<f32>(&s);
-        never_inside_a_tile::<f64>(&s);
+        for st in MODES {
+            never_inside_a_tile::<fixed::types::I8F24>(&s, st);
+            never_inside_a_tile::<f32>(&s, st);
+            never_inside_a_tile::<f64>(&s, st);
+        }
     }
 
     #[test]
     fn marble_never_escapes_a_closed_maze(s in shot(false)) {
-        never_escapes::<fixed::types::I8F24>(&s);
-        never_escapes::<fixed::types::I16F16>(&s);
-        never_escapes::<MicroF32>(&s);
+        for st in MODES {
+            never_escapes::<fixed::types::I8F24>(&s, st);
+            never_escapes::<fixed::types::I16F16>(&s, st);
+            never_escapes::<MicroF32>(&s, st);
+        }
     }
 
     #[test]
     fn energy_never_increases_without_input(s in shot(false)) {
-        energy_never_grows::<fixed::types::I8F24>(&s);
-        energy_never_grows::<fixed::types::I32F32>(&s);
-        energy_never_grows::<f64>(&s);
+        for st in MODES {
+            energy_never_grows::<fixed::types::I8F24>(&s, st);
+            energy_never_grows::<fixed::types::I32F32>(&s, st);
+            energy_never_grows::<f64>(&s, st);
+        }
     }
 
     #[test]
     fn same_inputs_give_bit_identical_states(s in shot(true)) {
-        deterministic::<fixed::types::I8F24>(&s);
-        deterministic::<f32>(&s);
+        for st in MODES {
+            deterministic::<fixed::types::I8F24>(&s, st);
+            deterministic::<f32>(&s, st);
+        }
     }
 
     /// Extreme inputs never overflow (debug builds check every operation).
@@ -273,12 +278,14 @@ proptest! {
         v in (any::<bool>(), any::<bool>()),
     ) {
         let extreme = Shot { tilts: vec![(400, [g.0, g.1, g.2]), (200, [i32::MAX, i32::MIN, 0])], ..s };
-        for backend in 0..3 {
-            let probe = |w: &World<'_, _, 4>| { let _ = w.state_hash(); };
-            match backend {
-                0 => { run::<fixed::types::I8F24>(&extreme, probe); }
-                1 => { run::<fixed::types::I16F16>(&extreme, |w| { let _ = w.state_hash(); }); }
-                _ => { run::<fixed::types::I32F32>(&extreme, |w| { let _ = w.state_hash(); }); }
+        for st in MODES {
+            for backend in 0..3 {
+                let probe = |w: &World<'_, _, 4>| { let _ = w.state_hash(); };
+                match backend {
+                    0 => { run::<fixed::types::I8F24>(&extreme, st, probe); }
+                    1 => { run::<fixed::types::I16F16>(&extreme, st, |w| { let _ = w.state_hash(); }); }
+                    _ => { run::<fixed::types::I32F32>(&extreme, st, |w| { let _ = w.state_hash(); }); }
+                }
             }
         }
         let _ = v;
@@ -344,7 +351,8 @@ proptest! {
         let rows: Vec<&str> = s.maze.rows.iter().map(String::as_str).collect();
         let grid = grid(&rows);
         let effects = Effects { board_motion: spin.3, ..s.effects };
-        let p = params::<S>(PhysicsSpec { effects, ..PhysicsSpec::DEFAULT });
+        for st in MODES {
+        let p = params::<S>(spec_in(st, effects));
         let mut w: World<'_, S, 4> = World::new(p, grid.view(), &[cell_centre(&p, 1, 1)]).unwrap();
         let m = &mut w.marbles_mut()[0];
         m.pos = Vec3::new(S::from_int(pos.0) / S::from_int(100), S::from_int(pos.1) / S::from_int(1000), S::from_int(pos.2) / S::from_int(100));
@@ -359,6 +367,7 @@ proptest! {
         let m = w.marbles()[0];
         let lim = S::from_int(120);
         prop_assert!(m.pos.x.abs() < lim && m.pos.y.abs() < lim && m.pos.z.abs() < lim);
+        }
     }
 
     /// Sensor faults through the whole input path: errors, dropouts, garbage and
@@ -393,5 +402,95 @@ proptest! {
             prop_assert!(g.iter().all(|v| v.abs() <= 8000));
         }
         prop_assert!(frames > 0);
+    }
+}
+
+/// A maze of one-cell corridors (random walls and posts), its marble 2 to 50 µm
+/// narrower than a cell, `e` from 0.9 to 1, launched at up to the top speed and
+/// shaken by tilts up to ±4 g: with events, never closer than `r·(1 − 10⁻³)` to a
+/// tile after a step or at the start or middle of any flight inside one, never out,
+/// never undone.
+#[derive(Clone, Debug)]
+struct Narrow {
+    maze: Maze,
+    short_um: u32,
+    long_um: u32,
+    slack_um: u32,
+    e_milli: u32,
+    v0: (i32, i32),
+    tilts: Vec<(u16, [i32; 3])>,
+    friction: bool,
+}
+
+fn narrow() -> impl Strategy<Value = Narrow> {
+    let tilt =
+        (8u16..200, -4000i32..=4000, -4000i32..=4000).prop_map(|(n, x, z)| (n, [x, -1000, z]));
+    (
+        maze(false),
+        1000u32..=3000,
+        8000u32..=16000,
+        1u32..=25,
+        900u32..=1000,
+        (-127i32..=127, -127i32..=127),
+        prop::collection::vec(tilt, 1..5),
+        any::<bool>(),
+    )
+        .prop_map(
+            |(maze, short_um, long_um, half, e_milli, v0, tilts, friction)| Narrow {
+                maze,
+                short_um,
+                long_um,
+                slack_um: 2 * half,
+                e_milli,
+                v0,
+                tilts,
+                friction,
+            },
+        )
+}
+
+fn narrow_never_sinks<S: Scalar>(c: &Narrow) {
+    let rows: Vec<&str> = c.maze.rows.iter().map(String::as_str).collect();
+    let g = grid(&rows);
+    let p = params::<S>(PhysicsSpec {
+        short_um: c.short_um,
+        long_um: c.long_um,
+        radius_um: (c.long_um - c.slack_um) / 2,
+        restitution_milli: c.e_milli,
+        ..spec_in(
+            Stepping::Events,
+            Effects {
+                rolling: true,
+                friction: c.friction,
+                ..Effects::NONE
+            },
+        )
+    });
+    let mut w: World<'_, S, 4> = World::new(p, g.view(), &[cell_centre(&p, 1, 1)]).unwrap();
+    // Along the direction asked, at most the top speed.
+    let (vx, vz) = (c.v0.0 as f64, c.v0.1 as f64);
+    let f = (127.0 / (vx * vx + vz * vz).sqrt()).min(1.0);
+    w.marbles_mut()[0].vel = Vec3::new(S::from_f64(vx * f), S::ZERO, S::from_f64(vz * f));
+    let floor = p.radius.to_f64() * (1.0 - 1e-3);
+    for &(n, tilt) in &c.tilts {
+        w.set_gravity_mg(tilt);
+        for step in 0..steps_of(&p, n as u32) {
+            let clearance = step_checked(&mut w, 0);
+            assert!(
+                clearance >= floor,
+                "{} tilt {tilt:?} step {step}: clearance {clearance} < {floor}",
+                S::NAME
+            );
+            assert!(!w.marbles()[0].out, "{}: escaped", S::NAME);
+        }
+    }
+    assert_eq!(w.stats.reverts, 0, "{}", S::NAME);
+}
+
+proptest! {
+    #[test]
+    fn narrow_corridors_never_sink_with_events(c in narrow()) {
+        narrow_never_sinks::<fixed::types::I8F24>(&c);
+        narrow_never_sinks::<f64>(&c);
     }
 }

@@ -19,11 +19,14 @@ pub mod vec;
 pub mod world;
 
 pub use dynamics::effects::{BoardMotion, Effects};
+pub use dynamics::toi::Segment;
 pub use geometry::grid::{TileGrid, Tiles};
 pub use geometry::tiles::{TileIndex, TileLayout};
 pub use scalar::{MicroF32, Scalar};
 pub use vec::Vec3;
-pub use world::{Marble, Params, PhysicsSpec, SetupError, StepStats, World};
+pub use world::{
+    Marble, Params, PhysicsSpec, SetupError, StepObserver, StepStats, Stepping, World, MAX_EVENTS,
+};
 
 /// The firmware's default scalar (see [`scalar`] for why).
 pub type Fx = fixed::types::I8F24;

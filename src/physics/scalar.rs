@@ -55,6 +55,8 @@ pub trait Scalar:
     const ONE: Self;
     /// A short stable name, used by tools and reports.
     const NAME: &'static str;
+    /// Whether [`Scalar::sqrt`] is correctly rounded (all but micromath's).
+    const EXACT_SQRT: bool = true;
     /// The integer `n`, exactly (`|n| < 128` for the narrowest format).
     fn from_int(n: i32) -> Self;
     /// `self · rhs`: the value of `*`, bit for bit, and its overflow check in debug
@@ -111,8 +113,41 @@ pub trait Scalar:
             Self::ONE.div(self.sqrt())
         }
     }
+    /// [`Scalar::sqrt`] to the format's precision: itself when exact, two Newton
+    /// steps on an approximate one (event stepping's times and speeds).
+    #[inline]
+    fn sqrt_fine(self) -> Self {
+        let mut s = self.sqrt();
+        if !Self::EXACT_SQRT && s > Self::ZERO {
+            for _ in 0..2 {
+                s = (s + self.div(s)).half();
+            }
+        }
+        s
+    }
+    /// [`Scalar::rsqrt`] to the format's precision: itself when exact, two Newton
+    /// steps `y·(3 − x·y²)/2` on an approximate one (event stepping's normals).
+    #[inline]
+    fn rsqrt_fine(self) -> Self {
+        let mut y = self.rsqrt();
+        if !Self::EXACT_SQRT && y > Self::ZERO {
+            for _ in 0..2 {
+                y = y * (Self::from_int(3) - self * y * y).half();
+            }
+        }
+        y
+    }
     /// The next representable value below `self` (tests probe tile boundaries with it).
     fn next_down(self) -> Self;
+    /// `⌊log2 |self|⌋` (`i32::MIN` for zero): the event step scales its quadratics by
+    /// a power of two with it, so that their squares keep every bit.
+    fn ilog2(self) -> i32;
+    /// `self + o`, saturating at the type's range (fixed point): the event step's
+    /// velocity update, where the speed's only limit is the format's range.
+    #[inline]
+    fn sat_add(self, o: Self) -> Self {
+        self + o
+    }
     /// Bits of the exact value, for state hashing.
     fn hash_bits(self) -> u64;
     /// Absolute value.
@@ -296,6 +331,19 @@ macro_rules! fixed_scalar {
                 <$t>::from_bits(self.to_bits().saturating_sub(1))
             }
             #[inline]
+            fn sat_add(self, o: Self) -> Self {
+                self.saturating_add(o)
+            }
+            #[inline]
+            fn ilog2(self) -> i32 {
+                let m = self.to_bits().unsigned_abs();
+                if m == 0 {
+                    i32::MIN
+                } else {
+                    m.ilog2() as i32 - <$t>::FRAC_NBITS as i32
+                }
+            }
+            #[inline]
             fn hash_bits(self) -> u64 {
                 self.to_bits() as i64 as u64
             }
@@ -349,6 +397,23 @@ impl Scalar for f32 {
     fn hash_bits(self) -> u64 {
         self.to_bits() as u64
     }
+    fn ilog2(self) -> i32 {
+        ilog2_f32(self)
+    }
+}
+
+/// `⌊log2 |x|⌋` of an `f32` from its exponent field (subnormals: their bit length).
+fn ilog2_f32(x: f32) -> i32 {
+    let b = x.to_bits() & 0x7fff_ffff;
+    if b == 0 {
+        return i32::MIN;
+    }
+    let e = (b >> 23) as i32;
+    if e == 0 {
+        (31 - b.leading_zeros() as i32) - 149
+    } else {
+        e - 127
+    }
 }
 
 impl Scalar for f64 {
@@ -392,6 +457,18 @@ impl Scalar for f64 {
     }
     fn hash_bits(self) -> u64 {
         self.to_bits()
+    }
+    fn ilog2(self) -> i32 {
+        let b = self.to_bits() & 0x7fff_ffff_ffff_ffff;
+        if b == 0 {
+            return i32::MIN;
+        }
+        let e = (b >> 52) as i32;
+        if e == 0 {
+            (63 - b.leading_zeros() as i32) - 1074
+        } else {
+            e - 1023
+        }
     }
 }
 
@@ -627,6 +704,7 @@ impl Scalar for MicroF32 {
     const ZERO: Self = MicroF32(0.0);
     const ONE: Self = MicroF32(1.0);
     const NAME: &'static str = "f32-micromath";
+    const EXACT_SQRT: bool = false;
     fn from_int(n: i32) -> Self {
         MicroF32(n as f32)
     }
@@ -666,6 +744,9 @@ impl Scalar for MicroF32 {
     }
     fn hash_bits(self) -> u64 {
         self.0.to_bits() as u64
+    }
+    fn ilog2(self) -> i32 {
+        ilog2_f32(self.0)
     }
 }
 
@@ -871,6 +952,22 @@ mod tests {
                 check(x);
             }
         }
+    }
+
+    #[test]
+    fn ilog2_is_the_exponent() {
+        for x in [1e-7, 0.001, 0.25, 0.3, 1.0, 1.5, 2.0, 100.0, -0.75] {
+            let want = (x as f64).abs().log2().floor() as i32;
+            assert_eq!(x.ilog2(), want, "f64 {x}");
+            assert_eq!((x as f32).ilog2(), want, "f32 {x}");
+            if x.abs() > 1e-6 {
+                assert_eq!(I8F24::from_f64(x).ilog2(), want, "i8f24 {x}");
+                assert_eq!(I32F32::from_f64(x).ilog2(), want, "i32f32 {x}");
+            }
+        }
+        assert_eq!(I8F24::from_bits(1).ilog2(), -24);
+        assert_eq!(I8F24::ZERO.ilog2(), i32::MIN);
+        assert_eq!(0.0f32.ilog2(), i32::MIN);
     }
 
     #[test]

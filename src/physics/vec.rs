@@ -94,6 +94,16 @@ impl<S: Scalar> Vec3<S> {
             self.z.clamp(-limit, limit),
         )
     }
+    /// Component-wise sum saturating at the type's range (equal to `+` whenever
+    /// that does not overflow).
+    #[inline]
+    pub fn sat_add(self, o: Self) -> Self {
+        Vec3::new(
+            self.x.sat_add(o.x),
+            self.y.sat_add(o.y),
+            self.z.sat_add(o.z),
+        )
+    }
     /// The components as `f64`.
     pub fn to_f64(self) -> [f64; 3] {
         [self.x.to_f64(), self.y.to_f64(), self.z.to_f64()]

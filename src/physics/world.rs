@@ -19,12 +19,32 @@ use heapless::Vec as HVec;
 use super::dynamics::effects::{marble_pair, BoardMotion, Drag, Effects};
 use super::dynamics::integrate::{advance, advance_plane, Kick, PullScale};
 use super::dynamics::respond::{resolve, Impact, Outcome, T_LOG2};
+
+mod events;
 use super::geometry::broadphase::{candidates, candidates_plane, TileRange};
 use super::geometry::grid::Tiles;
 use super::geometry::narrowphase::{contact, lid_contact, out_of_reach, Contact, Feature};
 use super::geometry::tiles::{LayoutError, TileIndex, TileLayout};
 use super::scalar::Scalar;
 use super::vec::Vec3;
+pub use events::{StepObserver, MAX_EVENTS};
+
+/// How [`World::step`] crosses its interval `dt`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Stepping {
+    /// Discrete steps: the closed form over `dt`, then the contact passes at its end
+    /// (time of impact solved inside the step); no tunnelling by the step bound, so
+    /// the speed is capped at `min(r/4 per step, 64 pitch/s)` per axis.
+    #[default]
+    Fixed,
+    /// Events: each marble flies the closed form to its next event — the end of the
+    /// step, the instant it touches a tile, the lid or another marble, loses a
+    /// face's support or stops under rolling resistance — as many as the physics
+    /// has, in time order (see [`events`]). No speed cap but the number format's.
+    /// `dt` is then the frame (2^7 ..= 2^10 steps/s).
+    Events,
+}
 
 /// The physical description of a scene, in integers (independent of the scalar).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,6 +66,8 @@ pub struct PhysicsSpec {
     pub step_log2: u32,
     /// The effects the scene needs.
     pub effects: Effects,
+    /// Fixed steps or events.
+    pub stepping: Stepping,
 }
 
 impl PhysicsSpec {
@@ -66,6 +88,7 @@ impl PhysicsSpec {
             holes: false,
             marbles: false,
         },
+        stepping: Stepping::Fixed,
     };
 }
 
@@ -83,7 +106,8 @@ pub enum SetupError {
     Layout(LayoutError),
     /// The marble does not fit in a cell (`2r ≥ l`) or has zero radius.
     MarbleSize,
-    /// `e` over 1, or the step rate outside 2^6 ..= 2^14 steps/s.
+    /// `e` over 1, or the step rate outside 2^6 ..= 2^14 steps/s (events: 2^7 ..=
+    /// 2^10).
     Parameter,
     /// More marbles than the world has room for, or none.
     MarbleCount,
@@ -102,8 +126,13 @@ pub struct Params<S> {
     pub restitution: S,
     /// Restitution threshold (pitch/T, the contact solver's unit).
     pub threshold: S,
-    /// Per-axis speed cap (pitch/s).
+    /// Per-axis speed cap (pitch/s): the step bound in fixed steps, the number
+    /// format's range (128 pitch/s) with events.
     pub v_max: S,
+    /// The largest pull per axis (milli-g): [`MAX_MG`], or with events less when a
+    /// step's `a·dt` would not fit the number format (a pitch under 9.8 mm at 2^7
+    /// steps/s).
+    pub mg_max: i32,
     /// `dt = 2^-k` s.
     pub k: u32,
     /// Where the integers came from.
@@ -118,7 +147,9 @@ impl<S: Scalar> Params<S> {
         if spec.radius_um == 0 || 2 * spec.radius_um as u64 >= spec.long_um as u64 {
             return Err(SetupError::MarbleSize);
         }
-        if spec.restitution_milli > 1000 || !(6..=14).contains(&spec.step_log2) {
+        let events = spec.stepping == Stepping::Events;
+        let rates = if events { 7..=10 } else { 6..=14 };
+        if spec.restitution_milli > 1000 || !rates.contains(&spec.step_log2) {
             return Err(SetupError::Parameter);
         }
         let k = spec.step_log2;
@@ -127,14 +158,23 @@ impl<S: Scalar> Params<S> {
             spec.rest_threshold_um_s as i64,
             (layout.pitch_um as i64) << T_LOG2,
         );
-        let cap = S::from_int(64);
-        let v_max = radius.shr(2).shl(k).min(cap);
+        let (v_max, mg_max) = if events {
+            // The format's range: 128 pitch/s (saturating at I8F24's largest value),
+            // and a pull whose a·dt stays within it: mg ≤ 127 pitch/s · 2^k / (g per
+            // mg in pitch/s²) = 127·2^k·pitch_um / 9806.65.
+            let fits = (127i64 << k) * layout.pitch_um as i64 * 100 / 980_665;
+            (S::from_int(128), fits.min(MAX_MG as i64) as i32)
+        } else {
+            let cap = S::from_int(64);
+            (radius.shr(2).shl(k).min(cap), MAX_MG)
+        };
         Ok(Params {
             layout,
             radius,
             restitution: S::ratio(spec.restitution_milli as i64, 1000),
             threshold,
             v_max,
+            mg_max,
             k,
             spec,
         })
@@ -143,6 +183,11 @@ impl<S: Scalar> Params<S> {
     /// The step `dt` in seconds.
     pub fn dt(&self) -> f64 {
         1.0 / (1u64 << self.k) as f64
+    }
+
+    /// Whether the world steps by events.
+    pub fn events(&self) -> bool {
+        self.spec.stepping == Stepping::Events
     }
 }
 
@@ -199,6 +244,24 @@ pub struct StepStats {
     pub space_runs: u32,
     /// Steps that ran the marble–marble code.
     pub pair_runs: u32,
+    /// Events stepping: events handled (impacts, contacts, a face's support
+    /// ending, stops, re-checks; not the step's end).
+    pub events: u32,
+    /// Events stepping: discrete slices flown instead of a closed form (a marble
+    /// rolling around an edge, pressed against another marble, or starting inside
+    /// a tile), see [`events`].
+    pub slices: u32,
+    /// Events stepping: marble-steps that ran out of events ([`events::MAX_EVENTS`])
+    /// and finished in slices. Physics does not get there: 0 in every test.
+    pub event_limits: u32,
+}
+
+/// The contact solver's view of a step (see [`respond`](super::dynamics::respond)):
+/// the pull as `a·T²` (pitch/T²) and the step's length in `T`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Solver<S> {
+    acc: Vec3<S>,
+    dt: S,
 }
 
 /// A board of tiles with up to `M` marbles on it.
@@ -325,7 +388,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// `(0, -1000, 0)`: down). Clamped to ±[`MAX_MG`] per axis. Computes the kicks
     /// once, so the steps that follow only add.
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
-        let g = g.map(|v| v.clamp(-MAX_MG, MAX_MG));
+        let lim = self.params.mg_max;
+        let g = g.map(|v| v.clamp(-lim, lim));
         // Per axis: each axis of the kicks depends on that axis of the pull alone
         // (the displacement clamp is per axis too), and a tilt usually moves one
         // axis at a time — the others keep their kicks, bit for bit.
@@ -341,7 +405,13 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             m.asleep = false;
         }
         let k = self.params.k;
-        let reach = self.params.radius.shr(3);
+        // Fixed steps bound the kick's displacement (no tunnelling); events need no
+        // bound (|½·a·dt²| < 1 pitch by `mg_max`).
+        let reach = if self.params.events() {
+            S::from_int(64)
+        } else {
+            self.params.radius.shr(3)
+        };
         let [full, roll, resist] = self.pulls;
         for axis in (0..3).filter(|&a| changed[a]) {
             let free = Kick::axis_of(g[axis], full, reach, k);
@@ -389,8 +459,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         }
     }
 
-    /// Advances the world by one step `dt`.
+    /// Advances the world by one step `dt` (fixed, or by events: see [`Stepping`]).
     pub fn step(&mut self) {
+        if self.params.events() {
+            self.step_events(&mut ());
+            return;
+        }
         self.stats.steps = self.stats.steps.wrapping_add(1);
         if self.params.spec.effects.holes {
             self.step_marbles::<true>();
@@ -525,7 +599,22 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             // What the passes return when the first touches nothing.
             return !SPACE;
         }
-        self.contact_passes::<SPACE>(m, kick, start)
+        let solver = self.solver(kick.dv, self.params.k);
+        self.contact_passes::<SPACE>(m, &solver, start)
+    }
+
+    /// The contact solver's view of a step of `2^-k` s whose pull adds `dv` (pitch/s)
+    /// to the velocity: the acceleration `a·T² = dv · 2^(k−10)` and the step's length
+    /// in `T`.
+    pub(crate) fn solver(&self, dv: Vec3<S>, k: u32) -> Solver<S> {
+        Solver {
+            acc: if k >= 2 * T_LOG2 {
+                dv.shl(k - 2 * T_LOG2)
+            } else {
+                dv.shr(2 * T_LOG2 - k)
+            },
+            dt: S::ONE.shr(k - T_LOG2),
+        }
     }
 
     /// The contact passes of [`World::collide_tiles`].
@@ -533,12 +622,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     fn contact_passes<const SPACE: bool>(
         &mut self,
         m: &mut Marble<S>,
-        kick: &Kick<S>,
+        kick: &Solver<S>,
         start: Vec3<S>,
     ) -> bool {
         let (r, tiles) = (self.params.radius, self.tiles);
         let layout = self.params.layout;
-        // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
         let mut supported = !SPACE;
         for pass in 0..3 {
             let range = if SPACE {
@@ -607,7 +695,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         &mut self,
         m: &mut Marble<S>,
         c: &Contact<S>,
-        kick: &Kick<S>,
+        kick: &Solver<S>,
         pass: u32,
         start: Vec3<S>,
         supported: &mut bool,
@@ -639,7 +727,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// these failing releases the face (the contact passes take over again). Returns
     /// whether it is held on the floor.
     fn hold<const SPACE: bool>(&self, m: &mut Marble<S>, kick: &mut Kick<S>) -> bool {
-        let (r, layout) = (self.params.radius, &self.params.layout);
+        let r = self.params.radius;
         let mut on_floor = false;
         // The set bits only, lowest first (the same order as a scan of all six: the
         // body clears no bit but its own).
@@ -653,23 +741,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             let pull = kick.dv.axis(axis);
             let presses = if up { pull < S::ZERO } else { pull > S::ZERO };
             let mut keep = m.pos.axis(axis) == at && m.vel.axis(axis) == S::ZERO && presses;
-            let lid = axis == 1 && !up;
-            if keep && !lid {
-                // The tile behind the contact point (the lid, −y, is always there).
-                let behind = if up { plane.next_down() } else { plane };
-                // Eq. 6 for the other two axes of the centre (the flat maze's walls
-                // are layer 1).
-                let j = || if SPACE { layout.index_y(m.pos.y) } else { 1 };
-                let t = match axis {
-                    0 => TileIndex::new(layout.index_xz(behind), j(), layout.index_xz(m.pos.z)),
-                    1 => TileIndex::new(
-                        layout.index_xz(m.pos.x),
-                        layout.index_y(behind),
-                        layout.index_xz(m.pos.z),
-                    ),
-                    _ => TileIndex::new(layout.index_xz(m.pos.x), j(), layout.index_xz(behind)),
-                };
-                keep = self.tiles.is_solid(t);
+            if keep {
+                keep = self.behind_solid::<SPACE>(m.pos, axis, up, plane);
             }
             if keep {
                 kick.set_axis(axis, (S::ZERO, S::ZERO));
@@ -681,8 +754,33 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         on_floor
     }
 
+    /// Whether the tile behind the contact point of a marble centred at `c` resting
+    /// on the face at `plane` (axis `axis`, from above when `up`) is there (the lid,
+    /// −y, always is).
+    #[inline]
+    fn behind_solid<const SPACE: bool>(&self, c: Vec3<S>, axis: usize, up: bool, plane: S) -> bool {
+        if axis == 1 && !up {
+            return true;
+        }
+        let layout = &self.params.layout;
+        let behind = if up { plane.next_down() } else { plane };
+        // Eq. 6 for the other two axes of the centre (the flat maze's walls are
+        // layer 1).
+        let j = || if SPACE { layout.index_y(c.y) } else { 1 };
+        let t = match axis {
+            0 => TileIndex::new(layout.index_xz(behind), j(), layout.index_xz(c.z)),
+            1 => TileIndex::new(
+                layout.index_xz(c.x),
+                layout.index_y(behind),
+                layout.index_xz(c.z),
+            ),
+            _ => TileIndex::new(layout.index_xz(c.x), j(), layout.index_xz(behind)),
+        };
+        self.tiles.is_solid(t)
+    }
+
     /// Resolves one contact (eq. 1 at the instant of impact, see `respond`).
-    fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, kick: &Kick<S>) -> Outcome {
+    fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, kick: &Solver<S>) -> Outcome {
         let p = &self.params;
         let sub = p.k - T_LOG2;
         let v_board = if p.spec.effects.board_motion {
@@ -695,20 +793,13 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         } else {
             Vec3::ZERO
         };
-        // The kick's a·dt in the solver's units: a·T² = a·dt · 2^(k−10).
-        let k = p.k;
-        let acc = if k >= 2 * T_LOG2 {
-            kick.dv.shl(k - 2 * T_LOG2)
-        } else {
-            kick.dv.shr(2 * T_LOG2 - k)
-        };
         let imp = Impact {
             n: c.normal,
             depth: c.depth,
             v: m.vel.shr(T_LOG2),
             v_board,
-            acc,
-            dt: S::ONE.shr(sub),
+            acc: kick.acc,
+            dt: kick.dt,
         };
         let res = resolve(&imp, p.restitution, p.threshold);
         match c.feature {
@@ -746,8 +837,14 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             tangential = tangential.scale(keep.sqrt());
         }
         // A slanted normal can move speed between axes: keep every axis under the cap
-        // (the no-tunnelling bound is per axis).
-        m.vel = (tangential + c.normal.scale(vn_new)).clamp_abs(p.v_max);
+        // (the no-tunnelling bound is per axis). The sum saturates only past the
+        // range, at event stepping's speeds, which keeps its magnitude under it.
+        m.vel = tangential
+            .sat_add(c.normal.scale(vn_new))
+            .clamp_abs(p.v_max);
+        if p.events() {
+            m.vel = events::cap_speed(m.vel);
+        }
         self.stats.contacts = self.stats.contacts.wrapping_add(1);
         if res.outcome == Outcome::Collision {
             self.stats.collisions = self.stats.collisions.wrapping_add(1);
@@ -785,64 +882,74 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// of them inside it.
     fn collide_marbles<const SPACE: bool>(&mut self) {
         self.stats.pair_runs = self.stats.pair_runs.wrapping_add(1);
-        let p = self.params;
-        let r2 = p.radius + p.radius;
         for a in 0..self.marbles.len() {
             for b in a + 1..self.marbles.len() {
-                let (ma, mb) = (self.marbles[a], self.marbles[b]);
-                if ma.out || mb.out {
-                    continue;
-                }
-                let d = mb.pos - ma.pos;
-                if d.x.abs() >= r2 || d.y.abs() >= r2 || d.z.abs() >= r2 {
-                    continue;
-                }
-                let len2 = d.length_sq();
-                if len2 >= r2 * r2 {
-                    continue;
-                }
-                let inv = len2.rsqrt();
-                let (n, len) = if inv == S::ZERO {
-                    (Vec3::new(S::ONE, S::ZERO, S::ZERO), S::ZERO)
-                } else {
-                    (d.scale(inv), len2 * inv)
-                };
-                let push = (r2 - len).half();
-                let (va, vb) = marble_pair(
-                    ma.vel.shr(T_LOG2),
-                    mb.vel.shr(T_LOG2),
-                    n,
-                    p.restitution,
-                    p.threshold,
-                );
-                let mut na = Marble {
-                    asleep: false,
-                    ..ma
-                };
-                let mut nb = Marble {
-                    asleep: false,
-                    ..mb
-                };
-                na.pos -= n.scale(push);
-                nb.pos += n.scale(push);
-                let set = |m: &mut Marble<S>, v_step: Vec3<S>| {
-                    let old = m.vel.dot(n);
-                    let new = v_step.dot(n).shl(T_LOG2).clamp(-p.v_max, p.v_max);
-                    m.vel = (m.vel - n.scale(old) + n.scale(new)).clamp_abs(p.v_max);
-                };
-                set(&mut na, va);
-                set(&mut nb, vb);
-                let still = Kick::default();
-                // The passes themselves (what `collide_tiles` comes to), without its
-                // inline shortcut for the common case: this one is rare.
-                na.supported =
-                    self.contact_passes::<SPACE>(&mut na, &still, ma.pos) || na.supported;
-                nb.supported =
-                    self.contact_passes::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
-                self.marbles[a] = na;
-                self.marbles[b] = nb;
+                self.collide_pair::<SPACE>(a, b);
             }
         }
+    }
+
+    /// One pair of [`World::collide_marbles`]: pushed apart when they overlap, eq. 1
+    /// between them, then the tile passes for both. Returns whether they touched.
+    fn collide_pair<const SPACE: bool>(&mut self, a: usize, b: usize) -> bool {
+        let p = self.params;
+        let r2 = p.radius + p.radius;
+        let (ma, mb) = (self.marbles[a], self.marbles[b]);
+        if ma.out || mb.out {
+            return false;
+        }
+        let d = mb.pos - ma.pos;
+        if d.x.abs() >= r2 || d.y.abs() >= r2 || d.z.abs() >= r2 {
+            return false;
+        }
+        let len2 = d.length_sq();
+        if len2 >= r2 * r2 {
+            return false;
+        }
+        let inv = len2.rsqrt();
+        let (n, len) = if inv == S::ZERO {
+            (Vec3::new(S::ONE, S::ZERO, S::ZERO), S::ZERO)
+        } else {
+            (d.scale(inv), len2 * inv)
+        };
+        let push = (r2 - len).half();
+        let (va, vb) = marble_pair(
+            ma.vel.shr(T_LOG2),
+            mb.vel.shr(T_LOG2),
+            n,
+            p.restitution,
+            p.threshold,
+        );
+        let mut na = Marble {
+            asleep: false,
+            ..ma
+        };
+        let mut nb = Marble {
+            asleep: false,
+            ..mb
+        };
+        na.pos -= n.scale(push);
+        nb.pos += n.scale(push);
+        let set = |m: &mut Marble<S>, v_step: Vec3<S>| {
+            let old = m.vel.dot(n);
+            let new = v_step.dot(n).shl(T_LOG2).clamp(-p.v_max, p.v_max);
+            m.vel = (m.vel - n.scale(old))
+                .sat_add(n.scale(new))
+                .clamp_abs(p.v_max);
+            if p.events() {
+                m.vel = events::cap_speed(m.vel);
+            }
+        };
+        set(&mut na, va);
+        set(&mut nb, vb);
+        let still = self.solver(Vec3::ZERO, p.k);
+        // The passes themselves (what `collide_tiles` comes to), without its
+        // inline shortcut for the common case: this one is rare.
+        na.supported = self.contact_passes::<SPACE>(&mut na, &still, ma.pos) || na.supported;
+        nb.supported = self.contact_passes::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
+        self.marbles[a] = na;
+        self.marbles[b] = nb;
+        true
     }
 
     /// A 64-bit FNV-1a digest of the exact state of every marble: equal on every

@@ -2,7 +2,10 @@
 #![allow(dead_code)]
 
 use marble_rolling::physics::geometry::grid::TileGrid;
-use marble_rolling::physics::{Effects, Params, PhysicsSpec, Scalar, TileIndex, World};
+pub use marble_rolling::physics::Stepping;
+use marble_rolling::physics::{
+    Effects, Params, PhysicsSpec, Scalar, Segment, StepObserver, TileIndex, Vec3, World,
+};
 
 /// Room for a 127 × 2 × 127 grid.
 pub const WORDS: usize = 1016;
@@ -40,6 +43,156 @@ macro_rules! for_each_backend {
             }
         }
     };
+}
+
+/// Runs `$body::<S>(stepping)` as one `#[test]` per scalar backend and stepping
+/// mode (`fixed::…`, `events::…`).
+#[macro_export]
+macro_rules! for_each_backend_and_mode {
+    ($name:ident, $body:ident) => {
+        mod $name {
+            use super::*;
+            mod fixed {
+                use super::*;
+                $crate::backend_tests!($body, Stepping::Fixed);
+            }
+            mod events {
+                use super::*;
+                $crate::backend_tests!($body, Stepping::Events);
+            }
+        }
+    };
+}
+
+/// One `#[test]` per backend calling `$body::<S>($arg)`.
+#[macro_export]
+macro_rules! backend_tests {
+    ($body:ident, $arg:expr) => {
+        #[test]
+        fn i8f24() {
+            $body::<::fixed::types::I8F24>($arg);
+        }
+        #[test]
+        fn i16f16() {
+            $body::<::fixed::types::I16F16>($arg);
+        }
+        #[test]
+        fn i32f32() {
+            $body::<::fixed::types::I32F32>($arg);
+        }
+        #[test]
+        fn f32() {
+            $body::<f32>($arg);
+        }
+        #[test]
+        fn f32_micromath() {
+            $body::<marble_rolling::physics::MicroF32>($arg);
+        }
+        #[test]
+        fn f64() {
+            $body::<f64>($arg);
+        }
+    };
+}
+
+/// The default spec in a stepping mode: fixed steps at 1024 steps/s, or events
+/// at the firmware's 128 frames/s.
+pub fn spec_in(stepping: Stepping, effects: Effects) -> PhysicsSpec {
+    PhysicsSpec {
+        stepping,
+        step_log2: match stepping {
+            Stepping::Fixed => 10,
+            Stepping::Events => 7,
+        },
+        ..spec(effects)
+    }
+}
+
+/// `n` steps at 1024 steps/s, as steps of `p` (at least 1).
+pub fn steps_of<S: Scalar>(p: &Params<S>, n: u32) -> u32 {
+    ((n << p.k) >> 10).max(1)
+}
+
+/// The centre's distance to the nearest solid tile (pitch), for a centre at `c`.
+pub fn clearance_at<S: Scalar>(w: &World<'_, S, 4>, c: Vec3<S>) -> f64 {
+    let p = w.params();
+    let c = c.to_f64();
+    let mut best = f64::INFINITY;
+    let t = w.tiles();
+    let (i0, i1) = (
+        p.layout.index_xz(S::from_f64(c[0]) - p.radius) - 1,
+        p.layout.index_xz(S::from_f64(c[0]) + p.radius) + 1,
+    );
+    let (k0, k1) = (
+        p.layout.index_xz(S::from_f64(c[2]) - p.radius) - 1,
+        p.layout.index_xz(S::from_f64(c[2]) + p.radius) + 1,
+    );
+    for k in k0..=k1 {
+        for j in 0..t.ny() as i32 {
+            for i in i0..=i1 {
+                let ti = TileIndex::new(i, j, k);
+                if !t.is_solid(ti) {
+                    continue;
+                }
+                let b = p.layout.tile_box(ti);
+                let (lo, hi) = (b.min.to_f64(), b.max.to_f64());
+                let mut d2 = 0.0;
+                for a in 0..3 {
+                    let v = if c[a] < lo[a] {
+                        lo[a] - c[a]
+                    } else if c[a] > hi[a] {
+                        c[a] - hi[a]
+                    } else {
+                        0.0
+                    };
+                    d2 += v * v;
+                }
+                best = best.min(d2.sqrt());
+            }
+        }
+    }
+    best
+}
+
+/// Records an event step's flights: the closed form between events, for checks
+/// at instants inside a step.
+#[derive(Default)]
+pub struct Flights<S> {
+    pub flights: Vec<(usize, S, S, Segment<S>)>,
+}
+
+impl<S: Scalar> StepObserver<S> for Flights<S> {
+    fn flight(&mut self, marble: usize, from: S, to: S, seg: &Segment<S>) {
+        self.flights.push((marble, from, to, *seg));
+    }
+}
+
+impl<S: Scalar> Flights<S> {
+    /// Every flight's centre at its start, middle and end (pitch), per marble.
+    pub fn samples(&self) -> Vec<(usize, Vec3<S>)> {
+        let mut v = Vec::new();
+        for &(n, from, to, seg) in &self.flights {
+            let len = to - from;
+            for s in [S::ZERO, len.half(), len] {
+                v.push((n, seg.pos_at(s)));
+            }
+        }
+        v
+    }
+}
+
+/// One step, and the smallest clearance (pitch) of marble `idx` at the end and —
+/// with events — at the start, middle and end of every flight inside the step.
+pub fn step_checked<S: Scalar>(w: &mut World<'_, S, 4>, idx: usize) -> f64 {
+    let mut obs = Flights::default();
+    w.step_observed(&mut obs);
+    let mut c = min_clearance(w, idx);
+    for (n, pos) in obs.samples() {
+        if n == idx {
+            c = c.min(clearance_at(w, pos));
+        }
+    }
+    c
 }
 
 /// A grid from a picture, one character per tile column `[i, *, k]` (row = k):

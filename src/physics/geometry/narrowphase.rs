@@ -177,6 +177,71 @@ pub fn contact<S: Scalar>(
     }
 }
 
+/// The ghost-bump rule on its own: whether the closest point of tile `t` to a centre
+/// at offset `d` (see [`offset`]) lies on a face shared with a solid neighbour, which
+/// then owns the contact ([`contact`] skips such tiles the same way).
+pub fn shadowed<S: Scalar>(t: TileIndex, d: Vec3<S>, tiles: Tiles<'_>) -> bool {
+    (0..3).any(|axis| {
+        let v = d.axis(axis);
+        v != S::ZERO && tiles.is_solid(neighbour(t, axis, v > S::ZERO))
+    })
+}
+
+/// A contact with tile `t` (box `b`) found at offset `d` from its closest point, as
+/// the solid tiles around it see it: the components of `d` that point into a solid
+/// neighbour lie inside the union of tiles and are dropped (the ghost-bump rule of
+/// [`contact`], applied to a touch rather than an overlap). What is left is a face
+/// of the union (one component), an edge (two or three), or nothing (a tile buried
+/// on that side). Event stepping uses it: two tiles of a wall both see a marble
+/// arriving on their seam as touching their rounded edge, and each edge is the
+/// other's face.
+pub fn owned<S: Scalar>(
+    t: TileIndex,
+    b: &Aabb<S>,
+    d: Vec3<S>,
+    r: S,
+    tiles: Tiles<'_>,
+) -> Option<Contact<S>> {
+    let mut e = Vec3::ZERO;
+    let mut nonzero = 0;
+    let mut axis = 0;
+    for a in 0..3 {
+        let v = d.axis(a);
+        if v != S::ZERO && !tiles.is_solid(neighbour(t, a, v > S::ZERO)) {
+            e.set_axis(a, v);
+            nonzero += 1;
+            axis = a;
+        }
+    }
+    match nonzero {
+        0 => None,
+        1 => {
+            let v = e.axis(axis);
+            let up = v > S::ZERO;
+            Some(Contact {
+                normal: unit(axis, up),
+                depth: r - v.abs(),
+                feature: Feature::Face(axis as u8),
+                plane: if up {
+                    b.max.axis(axis)
+                } else {
+                    b.min.axis(axis)
+                },
+            })
+        }
+        _ => {
+            let len2 = e.length_sq();
+            let inv = len2.rsqrt_fine();
+            (inv != S::ZERO).then(|| Contact {
+                normal: e.scale(inv),
+                depth: r - len2.times(inv),
+                feature: Feature::Edge,
+                plane: S::ZERO,
+            })
+        }
+    }
+}
+
 /// The centre is on or inside the box: leave through the nearest exposed face.
 fn inside<S: Scalar>(
     c: Vec3<S>,
