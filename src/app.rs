@@ -205,25 +205,26 @@ impl DemoSummary {
 /// Runs the game at [`FRAME_HZ`] in `mode` (see [`GameMode`]), publishing a
 /// frame on [`Links::frames`] and the [`Links::status`] every tick. Returns
 /// on [`Command::Quit`] or at the end of the demo. `PILOT` says whether the
-/// board has the autopilot (see [`Player`]).
-pub async fn game_task<const W: usize, const H: usize, const PILOT: bool>(
+/// board has the autopilot, `EVENTS` which physics stepper it links (see
+/// [`Player`]).
+pub async fn game_task<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
     links: &Links<W, H>,
     mode: GameMode,
 ) -> GameExit {
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
-        GameMode::Play { tilt } => play::<W, H, PILOT>(links, &mut ticker, tilt).await,
-        GameMode::Demo => demo::<W, H, PILOT>(links, &mut ticker).await,
+        GameMode::Play { tilt } => play::<W, H, PILOT, EVENTS>(links, &mut ticker, tilt).await,
+        GameMode::Demo => demo::<W, H, PILOT, EVENTS>(links, &mut ticker).await,
     }
 }
 
 /// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock.
-async fn play<const W: usize, const H: usize, const PILOT: bool>(
+async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
     links: &Links<W, H>,
     ticker: &mut Ticker,
     tilt: TiltConfig,
 ) -> GameExit {
-    let mut player = match Player::<W, H, PILOT>::new(&LEVELS, 0, tilt, false) {
+    let mut player = match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, 0, tilt, false) {
         Ok(player) => player,
         Err(e) => return GameExit::SetupFailed(e),
     };
@@ -263,10 +264,10 @@ async fn play<const W: usize, const H: usize, const PILOT: bool>(
 /// Waits for the next frame tick, taking the input events meanwhile: in the
 /// demo only the sensor's (a downed sensor pauses it like a game) and Quit.
 /// Returns `false` on Quit.
-async fn demo_tick<const W: usize, const H: usize, const PILOT: bool>(
+async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
     links: &Links<W, H>,
     ticker: &mut Ticker,
-    player: &mut Player<W, H, PILOT>,
+    player: &mut Player<W, H, PILOT, EVENTS>,
 ) -> bool {
     ticker.next().await;
     while let Ok(event) = links.events.try_receive() {
@@ -284,34 +285,41 @@ async fn demo_tick<const W: usize, const H: usize, const PILOT: bool>(
 }
 
 /// [`GameMode::Demo`]: each level exactly as the host simulator plays it
-/// with `--autopilot` (a fresh session with [`GAME_CONFIG`] and
+/// with `--autopilot` (a fresh session with the player's configuration and
 /// [`SYNTHETIC_TILT`], the autopilot's reading taken from the game before
 /// each frame, stopping at the first phase that is not
 /// [`Phase::Playing`]), one frame per tick, paused while the sensor is down;
 /// then the outcome is shown for [`WIN_PAUSE_FRAMES`].
-async fn demo<const W: usize, const H: usize, const PILOT: bool>(
+async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
     links: &Links<W, H>,
     ticker: &mut Ticker,
 ) -> GameExit {
     let mut summary = DemoSummary::default();
     let mut sensor = None;
+    // The checkers replay the demo with `cargo sim -- --stepping <this>`.
+    #[cfg(feature = "defmt")]
+    defmt::info!(
+        "demo stepping={=str}",
+        if EVENTS { "events" } else { "fixed" }
+    );
     for (index, level) in LEVELS.iter().enumerate() {
         summary.levels = summary.levels.saturating_add(1);
-        let mut player = match Player::<W, H, PILOT>::new(&LEVELS, index, SYNTHETIC_TILT, true) {
-            Ok(player) => player,
-            Err(e) => {
-                #[cfg(feature = "defmt")]
-                defmt::error!(
-                    "demo {=usize}/{=usize} level={=str} outcome=setup-error ({})",
-                    index + 1,
-                    LEVELS.len(),
-                    level.info.name,
-                    e
-                );
-                let _ = e;
-                continue;
-            }
-        };
+        let mut player =
+            match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, index, SYNTHETIC_TILT, true) {
+                Ok(player) => player,
+                Err(e) => {
+                    #[cfg(feature = "defmt")]
+                    defmt::error!(
+                        "demo {=usize}/{=usize} level={=str} outcome=setup-error ({})",
+                        index + 1,
+                        LEVELS.len(),
+                        level.info.name,
+                        e
+                    );
+                    let _ = e;
+                    continue;
+                }
+            };
         if let Some(fault) = sensor {
             player.handle(InputEvent::SensorDown(fault));
         }

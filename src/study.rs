@@ -547,12 +547,13 @@ mod tests {
                 );
             }
         }
-        // The bench plan covers every scene × backend × rate once, then the variants.
+        // The bench plan covers every scene × backend × stepping once, then the
+        // variants.
         let mut n = 0;
         bench_plan(u32::MAX, u32::MAX, |_| n += 1);
         assert_eq!(
             n,
-            4 * BACKENDS.len() * STEP_LOG2.len() + 2 * EFFECT_VARIANTS.len()
+            4 * BACKENDS.len() * STEPPINGS.len() + 2 * EFFECT_VARIANTS.len()
         );
     }
 }

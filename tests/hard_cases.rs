@@ -200,7 +200,11 @@ fn wedge<S: Scalar>(st: Stepping) {
     let quarter = steps_of(&p, 256);
     for n in 0..(4 << p.k) {
         if n % quarter == 0 {
-            let side = if (n / quarter) % 2 == 0 { 3000 } else { -3000 };
+            let side = if (n / quarter).is_multiple_of(2) {
+                3000
+            } else {
+                -3000
+            };
             w.set_gravity_mg([300, -1000, side]);
         }
         w.step();

@@ -10,7 +10,7 @@ use marble_rolling::input::event::{Command, InputEvent, Tilt};
 use marble_rolling::input::keys::KeyTilt;
 use marble_rolling::input::sensor::Fault;
 
-type FivePlayer = Player<5, 5, true>;
+type FivePlayer = Player<5, 5, true, false>;
 
 /// A reading that rolls the marble: 0.3 g towards +x.
 const TILTED: [i32; 3] = [-300, 954, 0];

@@ -30,10 +30,11 @@ use crate::physics::world::SetupError;
 use crate::physics::Fx;
 use crate::render::Renderer;
 
-/// The game's configuration: 128 frames/s × 8 physics steps (the same as the
-/// host tools, so that `state_hash`es agree).
+/// The game's configuration with fixed steps: 128 frames/s × 8 physics steps
+/// (the host tools' default, so that `state_hash`es agree). A player with the
+/// event stepper plays [`GameConfig::EVENTS`] (same frame rate, one step each).
 pub const GAME_CONFIG: GameConfig = GameConfig::DEFAULT;
-/// Game frames per second (each one is `2^substeps_log2` physics steps).
+/// Game frames per second, whatever the stepper.
 pub const FRAME_HZ: u32 = GAME_CONFIG.frame_hz();
 /// How long a won level is shown (flashing) before the next one, in frames.
 pub const WIN_PAUSE_FRAMES: u32 = FRAME_HZ;
@@ -88,8 +89,12 @@ pub struct Tick<const W: usize, const H: usize> {
 /// ([`Command::ToggleAutopilot`], the demo). It is a constant, not a flag, so
 /// that a board without it (the micro:bit: no button combination is left for
 /// it) does not link the controller: about 6 KiB of flash.
+///
+/// `EVENTS` picks the physics stepper ([`GameConfig::stepped_by`]), a constant for
+/// the same reason: the event stepper costs about 30 KiB of flash, which a board
+/// with a 64 KiB budget does not have, and the fixed step is then all it links.
 #[derive(Clone, Debug)]
-pub struct Player<const W: usize, const H: usize, const PILOT: bool> {
+pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool> {
     levels: &'static [LevelView<'static>],
     level: usize,
     session: Session<'static, Fx>,
@@ -104,7 +109,12 @@ pub struct Player<const W: usize, const H: usize, const PILOT: bool> {
     fault_shown: bool,
 }
 
-impl<const W: usize, const H: usize, const PILOT: bool> Player<W, H, PILOT> {
+impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
+    Player<W, H, PILOT, EVENTS>
+{
+    /// The game's configuration on this player: [`GameConfig::stepped_by`]`(EVENTS)`.
+    pub const CONFIG: GameConfig = GameConfig::stepped_by(EVENTS);
+
     /// Level `level` of `levels` (wrapped into range; `levels` must not be
     /// empty) with the tilt path `tilt`; the autopilot plays if `autopilot`
     /// (and the board has it, `PILOT`).
@@ -121,7 +131,7 @@ impl<const W: usize, const H: usize, const PILOT: bool> Player<W, H, PILOT> {
         Ok(Player {
             levels,
             level,
-            session: Session::new(*view, GAME_CONFIG, tilt)?,
+            session: Session::new(*view, Self::CONFIG, tilt)?,
             renderer: Renderer::new(),
             tilt,
             autopilot: (PILOT && autopilot).then(|| Autopilot::new(view)),
@@ -190,7 +200,7 @@ impl<const W: usize, const H: usize, const PILOT: bool> Player<W, H, PILOT> {
     /// the game loop.
     pub fn frame(&mut self, tilt_mg: [i32; 3]) -> Phase {
         let reading = self.reading(tilt_mg);
-        self.session.frame(reading)
+        self.session.frame_in::<EVENTS>(reading)
     }
 
     /// The current picture.

@@ -6,12 +6,12 @@
 use crate::physics::dynamics::effects::BoardMotion;
 use crate::physics::geometry::frame::Frame;
 use crate::physics::scalar::rsqrt_bits;
-use crate::physics::world::{Params, SetupError, World};
+use crate::physics::world::{Params, SetupError, Stepping, World};
 use crate::physics::{Scalar, Vec3};
 
 use super::level::{LevelView, MAX_MARBLES};
 
-/// Frame rate and substeps, both powers of two: `dt = 2^-(frame_log2 + substeps_log2)`.
+/// Frame rate, substeps and the stepper: `dt = 2^-(frame_log2 + substeps_log2)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct GameConfig {
@@ -19,14 +19,35 @@ pub struct GameConfig {
     pub frame_log2: u32,
     /// `log2` of the physics steps per frame.
     pub substeps_log2: u32,
+    /// Fixed steps, or events (then one step per frame is all it takes: the step
+    /// follows the physics, not the clock).
+    pub stepping: Stepping,
 }
 
 impl GameConfig {
-    /// 128 frames/s × 8 substeps = 1024 steps/s (see the accuracy study in `docs/`).
+    /// 128 frames/s × 8 fixed substeps = 1024 steps/s (see the accuracy study in
+    /// `docs/`): the boards whose flash has no room for the event stepper.
     pub const DEFAULT: GameConfig = GameConfig {
         frame_log2: 7,
         substeps_log2: 3,
+        stepping: Stepping::Fixed,
     };
+
+    /// 128 frames/s, each one event step (see [`Stepping::Events`]).
+    pub const EVENTS: GameConfig = GameConfig {
+        frame_log2: 7,
+        substeps_log2: 0,
+        stepping: Stepping::Events,
+    };
+
+    /// [`GameConfig::EVENTS`] if `events`, else [`GameConfig::DEFAULT`].
+    pub const fn stepped_by(events: bool) -> GameConfig {
+        if events {
+            GameConfig::EVENTS
+        } else {
+            GameConfig::DEFAULT
+        }
+    }
 
     /// Frames per second.
     pub const fn frame_hz(&self) -> u32 {
@@ -82,6 +103,7 @@ impl<'a, S: Scalar> Game<'a, S> {
     pub fn new(level: LevelView<'a>, config: GameConfig) -> Result<Self, SetupError> {
         let mut spec = level.info.spec;
         spec.step_log2 = config.frame_log2 + config.substeps_log2;
+        spec.stepping = config.stepping;
         let params = Params::<S>::new(spec)?;
         let mut starts = [(S::ZERO, S::ZERO); MAX_MARBLES];
         let n = level.info.starts().len();
@@ -181,11 +203,20 @@ impl<'a, S: Scalar> Game<'a, S> {
 
     /// Plays one frame (all its substeps) and judges it.
     pub fn frame(&mut self) -> Phase {
+        match self.config.stepping {
+            Stepping::Events => self.frame_in::<true>(),
+            Stepping::Fixed => self.frame_in::<false>(),
+        }
+    }
+
+    /// [`Game::frame`] with the stepper fixed at compile time ([`World::step_in`]):
+    /// `EVENTS` must match the configuration's [`Stepping`].
+    pub fn frame_in<const EVENTS: bool>(&mut self) -> Phase {
         if self.phase != Phase::Playing {
             return self.phase;
         }
         for _ in 0..(1u32 << self.config.substeps_log2) {
-            self.world.step();
+            self.world.step_in::<EVENTS>();
         }
         self.frames = self.frames.saturating_add(1);
         self.phase = self.judge();

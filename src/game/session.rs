@@ -86,6 +86,18 @@ impl<'a, S: Scalar> Session<'a, S> {
     /// Plays one frame with `reading_mg` from the accelerometer (or a stand-in). A
     /// rejected reading keeps the last good tilt: the game goes on.
     pub fn frame(&mut self, reading_mg: [i32; 3]) -> Phase {
+        self.take(reading_mg);
+        self.game.frame()
+    }
+
+    /// [`Session::frame`] with the stepper fixed at compile time (firmware:
+    /// [`Game::frame_in`]).
+    pub fn frame_in<const EVENTS: bool>(&mut self, reading_mg: [i32; 3]) -> Phase {
+        self.take(reading_mg);
+        self.game.frame_in::<EVENTS>()
+    }
+
+    fn take(&mut self, reading_mg: [i32; 3]) {
         self.reading = reading_mg;
         match self.tilt.push(reading_mg) {
             Ok(g) => self.game.set_gravity_mg(g),
@@ -94,7 +106,6 @@ impl<'a, S: Scalar> Session<'a, S> {
                 self.last_tilt_error = Some(e);
             }
         }
-        self.game.frame()
     }
 
     /// Plays one frame with the autopilot's reading: it looks at the game as it is

@@ -47,7 +47,7 @@ use crate::game::autopilot::Autopilot;
 use crate::game::level::{LevelError, LevelView};
 use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::{Session, SYNTHETIC_TILT};
-use crate::physics::{Marble, Scalar, SetupError};
+use crate::physics::{Marble, Scalar, SetupError, Stepping};
 
 /// Seconds the last GIF image is held before the animation loops.
 const GIF_HOLD_S: f64 = 1.5;
@@ -79,9 +79,14 @@ pub struct Args {
     /// Number type of the physics.
     #[arg(long, value_name = "NAME", default_value = "i8f24")]
     pub backend: String,
+    /// The physics stepper: `fixed` steps (the micro:bits' firmware) or `events`
+    /// (QEMU's firmware; one event step per frame).
+    #[arg(long, value_name = "MODE", default_value = "fixed", value_parser = parse_stepping)]
+    pub stepping: Stepping,
     /// Physics steps per frame: 1, 2, 4, 8 or 16 (the frame rate stays 128 Hz).
-    #[arg(long, value_name = "N", default_value_t = 1 << GameConfig::DEFAULT.substeps_log2, value_parser = parse_substeps)]
-    pub substeps: u32,
+    /// Default: 8 fixed steps, or 1 event step.
+    #[arg(long, value_name = "N", value_parser = parse_substeps)]
+    pub substeps: Option<u32>,
     /// Write one CSV row per physics step (first marble, mm and mm/s) to FILE.
     #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
@@ -109,6 +114,14 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() && x > 0.0 && x <= 86_400.0 => Ok(x),
         _ => Err(format!("`{s}` is not a number of seconds in (0, 86400]")),
+    }
+}
+
+fn parse_stepping(s: &str) -> Result<Stepping, String> {
+    match s {
+        "fixed" => Ok(Stepping::Fixed),
+        "events" => Ok(Stepping::Events),
+        _ => Err(format!("`{s}` is not `fixed` or `events`")),
     }
 }
 
@@ -526,9 +539,12 @@ pub fn run(args: &Args) -> i32 {
 pub fn simulate(args: &Args) -> Result<Report, String> {
     let backend = Backend::from_name(&args.backend)?;
     let level = load_level(args.level.as_deref().unwrap_or_default())?.view;
+    let base = GameConfig::stepped_by(args.stepping == Stepping::Events);
     let config = GameConfig {
-        substeps_log2: args.substeps.trailing_zeros(),
-        ..GameConfig::DEFAULT
+        substeps_log2: args
+            .substeps
+            .map_or(base.substeps_log2, |n| n.trailing_zeros()),
+        ..base
     };
     let input = if let Some(p) = &args.tilt_trace {
         let text = std::fs::read_to_string(p)

@@ -956,8 +956,8 @@ mod tests {
 
     #[test]
     fn ilog2_is_the_exponent() {
-        for x in [1e-7, 0.001, 0.25, 0.3, 1.0, 1.5, 2.0, 100.0, -0.75] {
-            let want = (x as f64).abs().log2().floor() as i32;
+        for x in [1e-7f64, 0.001, 0.25, 0.3, 1.0, 1.5, 2.0, 100.0, -0.75] {
+            let want = x.abs().log2().floor() as i32;
             assert_eq!(x.ilog2(), want, "f64 {x}");
             assert_eq!((x as f32).ilog2(), want, "f32 {x}");
             if x.abs() > 1e-6 {

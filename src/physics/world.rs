@@ -20,7 +20,7 @@ use super::dynamics::effects::{marble_pair, BoardMotion, Drag, Effects};
 use super::dynamics::integrate::{advance, advance_plane, Kick, PullScale};
 use super::dynamics::respond::{resolve, Impact, Outcome, T_LOG2};
 
-mod events;
+pub mod events;
 use super::geometry::broadphase::{candidates, candidates_plane, TileRange};
 use super::geometry::grid::Tiles;
 use super::geometry::narrowphase::{contact, lid_contact, out_of_reach, Contact, Feature};
@@ -460,11 +460,35 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     }
 
     /// Advances the world by one step `dt` (fixed, or by events: see [`Stepping`]).
+    ///
+    /// Both steppers are linked wherever this is called. Firmware, whose mode is
+    /// a constant, calls [`World::step_in`] and links only its own.
     pub fn step(&mut self) {
         if self.params.events() {
             self.step_events(&mut ());
-            return;
+        } else {
+            self.step_fixed();
         }
+    }
+
+    /// One step by the stepper chosen at compile time: events if `EVENTS`, fixed
+    /// steps otherwise. The other stepper is not linked (the event stepper is
+    /// about 30 KiB of Cortex-M4 code: more than a 64 KiB board can spare).
+    ///
+    /// `EVENTS` must agree with the world's [`Stepping`] (its `dt` was validated
+    /// for that mode); the game's [`Player`](crate::game::player::Player) sets up
+    /// both from one constant.
+    #[inline]
+    pub fn step_in<const EVENTS: bool>(&mut self) {
+        debug_assert_eq!(EVENTS, self.params.events(), "stepper and spec disagree");
+        if EVENTS {
+            self.step_events(&mut ());
+        } else {
+            self.step_fixed();
+        }
+    }
+
+    fn step_fixed(&mut self) {
         self.stats.steps = self.stats.steps.wrapping_add(1);
         if self.params.spec.effects.holes {
             self.step_marbles::<true>();

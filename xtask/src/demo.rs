@@ -102,6 +102,16 @@ pub fn parse_levels(log: &str) -> (Vec<Level>, Option<usize>) {
     (levels, total)
 }
 
+/// The stepper the demo ran (`demo stepping=<fixed|events>`, logged before the
+/// first level), which the simulator must use too.
+pub fn parse_stepping(log: &str) -> Option<&str> {
+    log.lines().find_map(|line| {
+        let (_, rest) = line.rsplit_once("demo stepping=")?;
+        let mode = rest.split_whitespace().next()?;
+        matches!(mode, "fixed" | "events").then_some(mode)
+    })
+}
+
 /// The rightmost occurrence of `marker` in `line` from which `parse` succeeds
 /// (what a sed pattern led by a greedy `.*` matches).
 fn rightmost<T>(line: &str, marker: &str, parse: impl Fn(&str) -> Option<T>) -> Option<T> {
@@ -269,6 +279,12 @@ pub fn run() -> Outcome {
             log.display()
         )));
     }
+    let stepping = parse_stepping(&text).ok_or_else(|| {
+        Failure::new(format!(
+            "the QEMU log names no stepper (`demo stepping=fixed|events`, {})",
+            log.display()
+        ))
+    })?;
     if let Some(total) = total.filter(|&total| total != levels.len()) {
         problems.report(format!(
             "the QEMU demo reported {} of {total} levels",
@@ -305,7 +321,7 @@ pub fn run() -> Outcome {
         ])
     );
     for level in &levels {
-        let sim = simulate(&sim, &level.name);
+        let sim = simulate(&sim, &level.name, stepping);
         let verdict = verdict(level, sim.as_ref());
         problems.0 |= verdict != Verdict::Ok;
         let sim = sim.unwrap_or_default();
@@ -373,10 +389,18 @@ fn run_demo(log: &Path) -> Outcome {
     }
 }
 
-/// The simulator's result for `level`, or `None` when it printed no JSON.
-fn simulate(sim: &PathBuf, level: &str) -> Option<Sim> {
+/// The simulator's result for `level` with the firmware's stepper, or `None`
+/// when it printed no JSON.
+pub fn simulate(sim: &PathBuf, level: &str, stepping: &str) -> Option<Sim> {
     let out = Command::new(sim)
-        .args(["--level", level, "--autopilot", "--json"])
+        .args([
+            "--level",
+            level,
+            "--autopilot",
+            "--json",
+            "--stepping",
+            stepping,
+        ])
         .current_dir(workspace::root())
         .stdin(Stdio::null())
         .stderr(Stdio::null())
@@ -404,6 +428,20 @@ INFO  cpu load: 123 busy instructions in 456 us of firmware time = 789 instructi
             steps: steps.into(),
             hash: hash.into(),
         }
+    }
+
+    #[test]
+    fn the_stepper_is_read_from_the_log() {
+        let log = "INFO  demo stepping=events\nINFO  demo 1/1 level=a outcome=won steps=1 state_hash=01\n";
+        assert_eq!(parse_stepping(log), Some("events"));
+        assert_eq!(
+            parse_stepping("x demo stepping=fixed └─ app"),
+            Some("fixed")
+        );
+        assert_eq!(parse_stepping("demo stepping=sideways"), None);
+        assert_eq!(parse_stepping(LOG), None);
+        // Not a level line: the total and the levels are unaffected.
+        assert_eq!(parse_levels(log).1, Some(1));
     }
 
     #[test]

@@ -585,7 +585,13 @@ pub fn check() -> Outcome {
             levels.len()
         ));
     }
-    compare_with_sim(&levels, &mut problems)?;
+    let stepping = demo::parse_stepping(&text).ok_or_else(|| {
+        Failure::new(format!(
+            "the log names no stepper (`demo stepping=fixed|events`, {})",
+            log_path.display()
+        ))
+    })?;
+    compare_with_sim(&levels, stepping, &mut problems)?;
 
     // 2. The LEDs, rebuilt from the GPIO trace.
     let trace = std::fs::read(&trace_path)
@@ -734,8 +740,12 @@ fn check_sensor_down(
     Ok(())
 }
 
-/// Compares each level with `sim --level NAME --autopilot --json`.
-fn compare_with_sim(levels: &[Level], problems: &mut Problems) -> Result<(), Failure> {
+/// Compares each level with `sim --level NAME --autopilot --json --stepping S`.
+fn compare_with_sim(
+    levels: &[Level],
+    stepping: &str,
+    problems: &mut Problems,
+) -> Result<(), Failure> {
     say!("building the host simulator (cargo sim)…");
     let sim = firmware::build(&Artifact {
         package: "marble-rolling",
@@ -749,14 +759,7 @@ fn compare_with_sim(levels: &[Level], problems: &mut Problems) -> Result<(), Fai
         demo::row(["level", "v1", "sim", "v1.steps", "s.steps", "v1 hash", "sim hash", "result"])
     );
     for level in levels {
-        let out = Command::new(&sim)
-            .args(["--level", &level.name, "--autopilot", "--json"])
-            .current_dir(workspace::root())
-            .stdin(Stdio::null())
-            .stderr(Stdio::null())
-            .output()
-            .ok();
-        let result = out.and_then(|out| demo::parse_sim(&String::from_utf8_lossy(&out.stdout)));
+        let result = demo::simulate(&sim, &level.name, stepping);
         let verdict = demo::verdict(level, result.as_ref());
         let result = result.unwrap_or_default();
         let or_dash = |field: &Option<String>| field.clone().unwrap_or_else(|| "-".into());

@@ -38,7 +38,7 @@
 //! built here) must use 1 KiB pages and may use all 256 KiB.
 //!
 //! The tasks are the shared ones of `marble_rolling::app` (input, game via
-//! `app::game_task::<5, 5, PILOT>`, display); this crate is the wiring:
+//! `app::game_task::<5, 5, PILOT, EVENTS>`, display); this crate is the wiring:
 //! [`hw`] (time driver on TIMER0, executor, CPU meter, stack, emulation
 //! detection), [`display`] (the 3 × 9 matrix on TIMER1), [`sensor`] (TWI and
 //! accelerometers), [`log`] (defmt over semihosting or RTT).
@@ -61,6 +61,10 @@ static LINKS: Links<WIDTH, HEIGHT> = Links::new();
 
 /// The autopilot is linked: the demo needs it.
 const PILOT: bool = true;
+
+/// Fixed physics steps: the event stepper (about 30 KiB of code) does not fit
+/// the flash (README, "Stepping: fixed or events").
+const EVENTS: bool = false;
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
@@ -187,7 +191,7 @@ async fn game(options: Options) {
         );
     }
     let start = hw::cpu_meter::sample();
-    let exit = app::game_task::<WIDTH, HEIGHT, PILOT>(&LINKS, mode).await;
+    let exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
     let end = hw::cpu_meter::sample();
     let summary = match exit {
         GameExit::Quit => DemoSummary::default(),

@@ -61,6 +61,10 @@ const STALL_LOG_CHECKS: u16 = 5;
 /// leaving it out saves about 6 KiB of flash.
 const PILOT: bool = false;
 
+/// Fixed physics steps: the event stepper (about 30 KiB of code) does not fit
+/// the 64 KiB flash budget (README, "Stepping: fixed or events").
+const EVENTS: bool = false;
+
 /// Runs the display above thread mode.
 static EXECUTOR_DISPLAY: InterruptExecutor = InterruptExecutor::new();
 
@@ -90,7 +94,12 @@ async fn game() {
         };
         // The game loop is app's; being polled (every frame tick, paused or
         // not) is its heartbeat.
-        let game = pin!(app::game_task::<{ board::WIDTH }, { board::HEIGHT }, PILOT>(&LINKS, mode));
+        let game = pin!(app::game_task::<
+            { board::WIDTH },
+            { board::HEIGHT },
+            PILOT,
+            EVENTS,
+        >(&LINKS, mode));
         let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
         defmt::warn!("game_task returned: {}", exit);
     }
