@@ -27,8 +27,8 @@
 //! RAM) and the one level typed into the editor, parsed in place. A
 //! `wasm32-unknown-unknown` module without the atomics feature runs on one
 //! thread, the page's, and every export runs to its end before the next one
-//! starts; [`Single`] states that and is the only `unsafe` besides the
-//! editor's level (see [`Custom`]). A wrong input — a malformed level, an
+//! starts; `Single` states that. The other `unsafe` code reads the text
+//! buffer the page writes and keeps the editor's level (see `Custom`). A wrong input — a malformed level, an
 //! out-of-range index — is an answer (an error message, a zero), never a trap.
 #![cfg_attr(target_arch = "wasm32", no_std)]
 
