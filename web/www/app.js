@@ -158,7 +158,9 @@ function onOrientation(e) {
   // Right edge down: gamma > 0; top edge raised (towards the player): beta > 0.
   const gx = Math.sin((e.gamma - orientation.neutral.gamma) * rad) * 1000;
   const gy = -Math.sin((e.beta - orientation.neutral.beta) * rad) * 1000;
-  const a = -angle * rad;
+  // The screen turned by `angle` (counter-clockwise) from the phone's natural
+  // orientation: its right is the phone's bottom at 90°, its up the phone's right.
+  const a = angle * rad;
   const right = gx * Math.cos(a) - gy * Math.sin(a);
   const up = gx * Math.sin(a) + gy * Math.cos(a);
   const clamp = (v) => Math.round(Math.max(-ORIENTATION_MAX_MG, Math.min(ORIENTATION_MAX_MG, v)));
@@ -604,23 +606,26 @@ function testHooks() {
         }
       }
       const times = t.subarray(0, counted).sort();
-      // Then blocks of 16 frames timed together, the clock's grain spread
-      // over 16: the median block / 16 is the typical frame.
+      // Then blocks of BLOCK frames timed together, the clock's grain spread
+      // over BLOCK (blocks in which an attempt ends are left out): the median
+      // block / BLOCK is the typical frame.
+      const BLOCK = 64;
       const blocks = [];
-      for (let b = 0; blocks.length < n / 16 && b < n; b++) {
+      for (let b = 0; blocks.length < n / BLOCK && b < n; b++) {
         const before = w.finished_count();
         const playing = w.phase() === 0;
         const t0 = performance.now();
-        for (let i = 0; i < 16; i++) {
+        for (let i = 0; i < BLOCK; i++) {
           const [right, up] = tilt();
           w.set_tilt(right, up);
           if (w.tick() & TICK_NEW_ATTEMPT) newAttempt();
         }
         const dt = performance.now() - t0;
-        if (playing && w.finished_count() === before) blocks.push(dt / 16);
+        if (playing && w.finished_count() === before) blocks.push(dt / BLOCK);
       }
       blocks.sort((a, b) => a - b);
       return {
+        block: BLOCK,
         block_median_us: blocks[blocks.length >> 1] * 1000,
         frames: counted,
         median_us: times[counted >> 1] * 1000,
