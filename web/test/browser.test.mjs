@@ -129,6 +129,15 @@ async function main() {
     // From here on the test steps the game itself, through the loop's own frame function.
     await page.evaluate(() => window.marbleTest.setRunning(false));
 
+    // The frame rate: the same game speed whatever the screen's refresh rate,
+    // and a bounded catch-up after a stall.
+    const rates = await page.evaluate(() =>
+      [30, 60, 144, 240].map((refresh) => [refresh, window.marbleTest.playAt(refresh, 2)]));
+    check(rates.every(([, frames]) => Math.abs(frames - 256) <= 1),
+      `2 s of animation frames play 256 game frames at 30, 60, 144 and 240 Hz`, JSON.stringify(rates));
+    const stalled = await page.evaluate(() => window.marbleTest.stall(500));
+    check(stalled === 8, 'an animation frame 500 ms late catches up 8 frames, no more', `${stalled}`);
+
     // 2. Keys and the mouse joystick tilt the board the right way.
     await page.fill('#source', OPEN_FIELD);
     await page.click('#play-source');

@@ -216,18 +216,23 @@ function frame() {
 let last = null;
 let acc = 0;
 
-function loop(now) {
-  if (last !== null && running) {
-    acc += now - last;
-    const period = 1000 / hz;
-    let n = 0;
-    while (acc >= period && n < MAX_CATCH_UP) {
-      frame();
-      acc -= period;
-      n++;
-    }
-    if (n === MAX_CATCH_UP) acc = Math.min(acc, period);
+// Plays the game frames `elapsed` ms of wall time are worth: the accumulator
+// keeps the remainder, so any refresh rate gives 128 frames a second.
+function advance(elapsed) {
+  acc += elapsed;
+  const period = 1000 / hz;
+  let n = 0;
+  while (acc >= period && n < MAX_CATCH_UP) {
+    frame();
+    acc -= period;
+    n++;
   }
+  if (n === MAX_CATCH_UP) acc = Math.min(acc, period);
+  return n;
+}
+
+function loop(now) {
+  if (last !== null && running) advance(now - last);
   last = now;
   draw();
   requestAnimationFrame(loop);
@@ -583,6 +588,19 @@ function testHooks() {
       return n;
     },
     finished: finishedRecord,
+    // Game frames played by `seconds` of animation frames at `refreshHz`
+    // (the loop's own accumulator, fed the timestamps such a screen gives).
+    playAt(refreshHz, seconds) {
+      acc = 0;
+      let played = 0;
+      for (let i = 0; i < Math.round(refreshHz * seconds); i++) played += advance(1000 / refreshHz);
+      return played;
+    },
+    // Game frames played by one animation frame that comes `ms` late.
+    stall(ms) {
+      acc = 0;
+      return advance(ms);
+    },
     // The cost of `n` frames in which the game plays (a finished attempt's
     // display frames, which do no physics, are played but not counted), each
     // timed alone with performance.now(), in µs. Chromium rounds that clock
