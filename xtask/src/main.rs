@@ -1,5 +1,5 @@
 //! The project's tasks (the cargo-xtask convention): `cargo xtask <task>`, or
-//! the aliases `cargo qemu`, `cargo microbit` and `cargo accuracy` from
+//! the aliases `cargo qemu`, `cargo microbit`, `cargo web` and `cargo accuracy` from
 //! .cargo/config.toml. Plain Rust instead of shell scripts, so that they run
 //! wherever cargo does, install what they need on first use, and fail with a
 //! message naming what and where.
@@ -19,6 +19,7 @@ mod study;
 mod symbols;
 mod trace;
 mod tty;
+mod web;
 mod workspace;
 
 use std::path::PathBuf;
@@ -106,6 +107,23 @@ enum Task {
         #[arg(default_value_t = 40)]
         top: usize,
     },
+    /// Build the game for the browser (wasm32-unknown-unknown) and serve the
+    /// page on 127.0.0.1 (`cargo web`).
+    Web {
+        /// Port to serve on; 0 picks a free one.
+        #[arg(long, default_value_t = web::DEFAULT_PORT)]
+        port: u16,
+        /// Only build: print the module's path and size.
+        #[arg(long)]
+        no_serve: bool,
+    },
+    /// The browser test: the page in headless Chromium (keys, autopilot hashes
+    /// against `cargo sim`, the editor's errors, the frame cost, a screenshot).
+    WebTest {
+        /// Also write the screenshot here (the README's is docs/web.png).
+        #[arg(long, value_name = "FILE")]
+        screenshot: Option<PathBuf>,
+    },
     /// The accuracy/cost study (writes docs/accuracy.md and docs/accuracy.png).
     Accuracy {
         /// The study's arguments (`cargo accuracy -- --help`).
@@ -128,6 +146,8 @@ impl Task {
             Task::SizeReport { .. } => "size-report",
             Task::Properties { .. } => "properties",
             Task::QemuProfile { .. } => "qemu-profile",
+            Task::Web { .. } => "web",
+            Task::WebTest { .. } => "web-test",
             Task::Accuracy { .. } => "accuracy",
         }
     }
@@ -145,6 +165,8 @@ impl Task {
             Task::SizeReport { no_build, elf } => size::run(no_build, elf),
             Task::Properties { cases } => properties::run(cases),
             Task::QemuProfile { top } => profile::run(top),
+            Task::Web { port, no_serve } => web::run(port, no_serve),
+            Task::WebTest { screenshot } => web::test(screenshot),
             Task::Accuracy { args } => study::accuracy(&args),
         }
     }
@@ -159,8 +181,20 @@ fn with_demo(demo: bool, mut args: Vec<String>) -> Vec<String> {
     args
 }
 
+/// The arguments without a `--` right after a task whose options are its own
+/// (`web`, `web-test`): the aliases put one there (`cargo web -- --port 0`).
+fn own_options(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let own = args
+        .get(1)
+        .is_some_and(|task| task == "web" || task == "web-test");
+    if own && args.get(2).is_some_and(|a| a == "--") {
+        args.remove(2);
+    }
+    args
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(own_options(std::env::args_os().collect()));
     let task = cli.task.name();
     error::set_task(task);
     match cli.task.run() {
@@ -233,6 +267,30 @@ mod tests {
                 no_build: true,
                 elf: None
             }
+        ));
+        assert!(matches!(
+            parse(&["web"]),
+            Task::Web {
+                port: web::DEFAULT_PORT,
+                no_serve: false
+            }
+        ));
+        assert!(matches!(
+            parse(&["web", "--port", "0", "--no-serve"]),
+            Task::Web {
+                port: 0,
+                no_serve: true
+            }
+        ));
+        assert!(Cli::try_parse_from(["xtask", "web", "--port", "70000"]).is_err());
+        let alias = own_options(
+            ["xtask", "web", "--", "--port", "0"]
+                .map(Into::into)
+                .to_vec(),
+        );
+        assert!(matches!(
+            Cli::try_parse_from(alias).expect("parses").task,
+            Task::Web { port: 0, .. }
         ));
         assert!(Cli::try_parse_from(["xtask", "size-report", "--bogus"]).is_err());
         assert!(Cli::try_parse_from(["xtask", "properties", "many"]).is_err());

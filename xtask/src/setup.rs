@@ -124,26 +124,8 @@ pub fn qemu() -> Result<PathBuf, Failure> {
     if let Some(path) = on_path("qemu-system-arm") {
         return Ok(path);
     }
-    if is_root() && on_path("apt-get").is_some() {
-        let mut update = Command::new("apt-get");
-        update.args(["update", "-qq"]);
-        let mut install = Command::new("apt-get");
-        install.env("DEBIAN_FRONTEND", "noninteractive").args([
-            "install",
-            "-y",
-            "-qq",
-            "qemu-system-arm",
-        ]);
-        process::quietly(
-            "installing qemu-system-arm with apt-get (once)…",
-            &mut [update, install],
-        )?;
-        if let Some(path) = on_path("qemu-system-arm") {
-            return Ok(path);
-        }
-        return Err(
-            Failure::new("apt-get installed qemu-system-arm but it is not on PATH").status(127),
-        );
+    if let Some(installed) = apt_install("qemu-system-arm", "qemu-system-arm") {
+        return installed;
     }
     Err(Failure::new(
         "qemu-system-arm not found. Install it, e.g.:\n\
@@ -152,6 +134,48 @@ pub fn qemu() -> Result<PathBuf, Failure> {
          \x20   brew install qemu                        (macOS)",
     )
     .status(127))
+}
+
+/// `binary` (chromium, node, npm for the browser test), installed from
+/// Debian's `package` with apt-get when missing and we can (root, Debian-like).
+pub fn apt_tool(binary: &str, package: &str) -> Result<PathBuf, Failure> {
+    if let Some(path) = on_path(binary) {
+        return Ok(path);
+    }
+    if let Some(installed) = apt_install(binary, package) {
+        return installed;
+    }
+    Err(Failure::new(format!(
+        "{binary} not found. Install it, e.g. `sudo apt-get install {package}` (Debian/Ubuntu)"
+    ))
+    .status(127))
+}
+
+/// `apt-get install package` for `binary`, where we are root on a system with
+/// apt-get (none elsewhere: the caller says what to install by hand).
+fn apt_install(binary: &str, package: &str) -> Option<Result<PathBuf, Failure>> {
+    if !is_root() || on_path("apt-get").is_none() {
+        return None;
+    }
+    let mut update = Command::new("apt-get");
+    update.args(["update", "-qq"]);
+    let mut install = Command::new("apt-get");
+    install
+        .env("DEBIAN_FRONTEND", "noninteractive")
+        .args(["install", "-y", "-qq", package]);
+    let installed = process::quietly(
+        &format!("installing {package} with apt-get (once)…"),
+        &mut [update, install],
+    )
+    .and_then(|()| {
+        on_path(binary).ok_or_else(|| {
+            Failure::new(format!(
+                "apt-get installed {package} but {binary} is not on PATH"
+            ))
+            .status(127)
+        })
+    });
+    Some(installed)
 }
 
 fn is_root() -> bool {

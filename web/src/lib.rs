@@ -1,0 +1,720 @@
+//! Marble Rolling in a browser: the library's game — its fixed-point physics,
+//! levels, level parser, tilt path, autopilot and renderer — compiled to
+//! `wasm32-unknown-unknown`, driven by `web/www/app.js`.
+//!
+//! This crate is only the glue. Each frame is one [`Player::tick`], the very
+//! step the firmware's game task, `cargo play` and the host tests call, fed a
+//! reading made by the library's [`Tilt::from_xz`] from the page's tilt
+//! (keys, mouse joystick or the phone's orientation) through
+//! [`SYNTHETIC_TILT`], the tilt path `cargo play` and `cargo sim` use. So a run
+//! here plays the same game as on the host and the boards, and the autopilot
+//! ends each built-in level with `cargo sim -- --autopilot`'s `state_hash`
+//! (the browser test checks that).
+//!
+//! # Why no wasm-bindgen
+//!
+//! The interface is a few dozen numbers and two byte buffers, so it is plain
+//! `extern "C"` functions over linear memory and a hand-written loader.
+//! wasm-bindgen would need its CLI at exactly the crate's version (a
+//! multi-minute `cargo install` on every fresh CI machine) and a generated JS
+//! glue file, for no gain here. Strings cross as UTF-8 bytes: the page writes
+//! a level's text into [`text_ptr`]'s buffer; answers (names, error messages)
+//! come back in [`out_ptr`]'s buffer, their length the function's result.
+//!
+//! # State without an allocator
+//!
+//! Everything lives in statics: the game (about what the firmware keeps in
+//! RAM) and the one level typed into the editor, parsed in place. A
+//! `wasm32-unknown-unknown` module without the atomics feature runs on one
+//! thread, the page's, and every export runs to its end before the next one
+//! starts; `Single` states that. The other `unsafe` code reads the text
+//! buffer the page writes and keeps the editor's level (see `Custom`). A wrong input — a malformed level, an
+//! out-of-range index — is an answer (an error message, a zero), never a trap.
+#![cfg_attr(target_arch = "wasm32", no_std)]
+
+use core::cell::{RefCell, UnsafeCell};
+use core::fmt::Write;
+
+use marble_rolling::board::microbit::{HEIGHT, WIDTH};
+use marble_rolling::game::level::{parse, Level, LevelError, LevelErrorKind, LevelView};
+use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::player::{Player, FRAME_HZ};
+use marble_rolling::game::rules::Phase;
+use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::input::event::Tilt;
+use marble_rolling::physics::geometry::grid::{words_for, MAX_TILES_XZ};
+use marble_rolling::physics::TileIndex;
+
+/// The micro:bit v2's player: its 5×5 matrix, with the autopilot (the page has
+/// a button for it, as the QEMU board has a key).
+type WebPlayer = Player<WIDTH, HEIGHT, true>;
+
+/// Occupancy words of the largest level the format allows: the editor's level
+/// is parsed into a grid of this size (as the host tools' run-time levels are).
+const MAX_WORDS: usize = words_for(MAX_TILES_XZ, 2, MAX_TILES_XZ);
+/// Bytes of level text the editor can hand over: a 127 × 127 grid with its
+/// line ends is 16 256, the header a few hundred more.
+const TEXT_CAPACITY: usize = 32 * 1024;
+/// Bytes of an answer (a name, an error message).
+const OUT_CAPACITY: usize = 1024;
+/// The editor's level, then the built-in ones (`next level` goes on there).
+const CUSTOM_LIST: usize = 1 + LEVELS.len();
+
+/// A value of this module's single thread (see the module doc).
+struct Single<T>(T);
+
+// SAFETY: wasm32-unknown-unknown without the `atomics` target feature has no
+// threads: the page calls one export at a time, each runs to its end. On the
+// host (where this crate only builds, for `cargo check` and clippy) nothing
+// calls these functions.
+unsafe impl<T> Sync for Single<T> {}
+
+/// Where the page writes level text for [`check_level`] and [`play_level`].
+static TEXT: Single<UnsafeCell<[u8; TEXT_CAPACITY]>> = Single(UnsafeCell::new([0; TEXT_CAPACITY]));
+/// Where answers are written for the page to read.
+static OUT: Single<RefCell<Out>> = Single(RefCell::new(Out {
+    bytes: [0; OUT_CAPACITY],
+    len: 0,
+}));
+/// The editor's level (see [`Custom`]).
+static CUSTOM: Single<UnsafeCell<Custom>> = Single(UnsafeCell::new(Custom {
+    text: [0; TEXT_CAPACITY],
+    level: None,
+    list: None,
+}));
+/// The game, set up by [`init`].
+static APP: Single<RefCell<Option<App>>> = Single(RefCell::new(None));
+
+/// The level the editor started, kept where the player can borrow it for as
+/// long as it plays it: the player takes `'static` levels (the firmware's are
+/// in flash). Its text is copied here from [`TEXT`], so that editing does not
+/// change the level in play (its name borrows the text).
+///
+/// It is rewritten only by [`install_custom`], and only after the player that
+/// borrowed the previous one has been replaced by one on a built-in level:
+/// no reference into it is alive while it changes.
+struct Custom {
+    text: [u8; TEXT_CAPACITY],
+    level: Option<Level<'static, MAX_WORDS>>,
+    list: Option<[LevelView<'static>; CUSTOM_LIST]>,
+}
+
+/// A fixed buffer that `write!` fills; what does not fit is dropped (an error
+/// message is a line; a cut one still names line and column first).
+struct Out {
+    bytes: [u8; OUT_CAPACITY],
+    len: usize,
+}
+
+impl Write for Out {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        let room = OUT_CAPACITY - self.len;
+        let mut take = s.len().min(room);
+        // Never cut a character in two: the page decodes UTF-8.
+        while !s.is_char_boundary(take) {
+            take -= 1;
+        }
+        self.bytes[self.len..self.len + take].copy_from_slice(&s.as_bytes()[..take]);
+        self.len += take;
+        Ok(())
+    }
+}
+
+/// Writes `args` as the answer; returns its length in bytes.
+fn answer(args: core::fmt::Arguments) -> u32 {
+    let mut out = OUT.0.borrow_mut();
+    out.len = 0;
+    let _ = out.write_fmt(args);
+    out.len as u32
+}
+
+/// The last attempt that finished (won, fell, timed out), for the page's best
+/// times and the browser test's hashes.
+#[derive(Clone, Copy)]
+struct Finished {
+    /// Attempts finished since [`init`]: the page notices a new one by it.
+    count: u32,
+    level: u32,
+    custom: bool,
+    phase: Phase,
+    frames: u32,
+    hash: u64,
+}
+
+struct App {
+    player: WebPlayer,
+    /// Whether the player's list starts with the editor's level.
+    custom: bool,
+    /// The page's tilt, as the accelerometer reading the player is fed.
+    reading: [i32; 3],
+    /// The matrix as the last frame drew it, row by row (brightness 0..=15).
+    led: [u8; WIDTH * HEIGHT],
+    finished: Finished,
+}
+
+impl App {
+    fn new() -> Option<App> {
+        let player = WebPlayer::new(&LEVELS, 0, SYNTHETIC_TILT, false).ok()?;
+        Some(App {
+            player,
+            custom: false,
+            reading: Tilt::FLAT.reading_mg(),
+            led: [0; WIDTH * HEIGHT],
+            finished: Finished {
+                count: 0,
+                level: 0,
+                custom: false,
+                phase: Phase::Playing,
+                frames: 0,
+                hash: 0,
+            },
+        })
+    }
+
+    /// Plays level `index` of `levels` from its start; the autopilot setting
+    /// carries over. False (and the game unchanged) if it cannot be set up.
+    fn start(&mut self, levels: &'static [LevelView<'static>], index: usize) -> bool {
+        let autopilot = self.player.autopilot();
+        match WebPlayer::new(levels, index, SYNTHETIC_TILT, autopilot) {
+            Ok(player) => {
+                self.player = player;
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    fn tick(&mut self) -> u32 {
+        let level = self.player.level_index();
+        let tick = self.player.tick(self.reading, true);
+        if let Some(frame) = tick.frame {
+            for (y, row) in frame.rows().iter().enumerate() {
+                self.led[y * WIDTH..(y + 1) * WIDTH].copy_from_slice(row);
+            }
+        }
+        let mut flags = 0;
+        if let Some(phase) = tick.finished {
+            let game = self.player.game();
+            self.finished = Finished {
+                count: self.finished.count.wrapping_add(1),
+                level: self.level_number(),
+                custom: self.is_custom_level(),
+                phase,
+                frames: game.frames(),
+                hash: self.player.session().state_hash(),
+            };
+            flags |= TICK_FINISHED;
+        }
+        if self.player.level_index() != level || self.player.game().frames() == 0 {
+            flags |= TICK_NEW_ATTEMPT;
+        }
+        flags
+    }
+
+    /// Whether the level in play is the editor's.
+    fn is_custom_level(&self) -> bool {
+        self.custom && self.player.level_index() == 0
+    }
+
+    /// The level in play as a built-in index (the editor's: the built-ins' count).
+    fn level_number(&self) -> u32 {
+        let index = self.player.level_index();
+        let builtin = if self.custom {
+            index.checked_sub(1)
+        } else {
+            Some(index)
+        };
+        builtin.unwrap_or(LEVELS.len()) as u32
+    }
+
+    fn level(&self) -> &LevelView<'static> {
+        self.player.game().level()
+    }
+}
+
+/// [`tick`]'s result bit: an attempt finished in this frame.
+const TICK_FINISHED: u32 = 1;
+/// [`tick`]'s result bit: a new attempt started (another level, or a restart).
+const TICK_NEW_ATTEMPT: u32 = 2;
+
+/// Runs `f` on the game; `default` before [`init`] (or if it failed).
+fn with_app<R>(default: R, f: impl FnOnce(&mut App) -> R) -> R {
+    match APP.0.borrow_mut().as_mut() {
+        Some(app) => f(app),
+        None => default,
+    }
+}
+
+/// Puts `text` in [`CUSTOM`] and returns the list it heads.
+///
+/// # Safety
+///
+/// No reference into [`CUSTOM`] may be alive: the player must be on a built-in
+/// level (see [`Custom`]).
+unsafe fn install_custom(text: &str) -> Result<&'static [LevelView<'static>], LevelError> {
+    // SAFETY: the caller guarantees nothing borrows CUSTOM; from here on the
+    // level and list borrow it for as long as the next player plays them, and
+    // the next install replaces that player first.
+    let Custom {
+        text: stored,
+        level,
+        list,
+    }: &'static mut Custom = unsafe { &mut *CUSTOM.0.get() };
+    *level = None;
+    *list = None;
+    // `text` comes from TEXT, which is no larger: this only keeps a slip from trapping.
+    let Some(stored) = stored.get_mut(..text.len()) else {
+        return Err(LevelError {
+            line: 1,
+            column: 1,
+            kind: LevelErrorKind::TooLarge,
+        });
+    };
+    stored.copy_from_slice(text.as_bytes());
+    let stored: &'static [u8] = stored;
+    // The bytes are `text`'s, which is UTF-8.
+    let stored = core::str::from_utf8(stored).unwrap_or_default();
+    let level: &'static Level<'static, MAX_WORDS> = level.insert(parse(stored)?);
+    let mut views = [level.view(); CUSTOM_LIST];
+    views[1..].copy_from_slice(&LEVELS);
+    Ok(list.insert(views))
+}
+
+/// Why text from the page is not even a level to parse.
+enum TextError {
+    /// More than [`TEXT_CAPACITY`] bytes.
+    TooLong,
+    /// Not UTF-8 from this line and column on (the page's `TextEncoder`
+    /// always sends UTF-8; a bug there is still only a message).
+    NotUtf8 { line: usize, column: usize },
+    /// The parser's error.
+    Level(LevelError),
+}
+
+impl core::fmt::Display for TextError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            TextError::TooLong => write!(f, "1:1: longer than {TEXT_CAPACITY} bytes"),
+            TextError::NotUtf8 { line, column } => write!(f, "{line}:{column}: not UTF-8"),
+            // `line:column: message`, as `cargo sim -- --check` prints it after the file name.
+            TextError::Level(error) => write!(f, "{error}"),
+        }
+    }
+}
+
+/// The first `len` bytes of [`TEXT`] as text, or where it stops being UTF-8.
+fn text(len: u32) -> Result<&'static str, TextError> {
+    // SAFETY: single thread (see `Single`); the page writes TEXT only between
+    // calls, and what is returned is used before this call returns.
+    let bytes: &'static [u8; TEXT_CAPACITY] = unsafe { &*TEXT.0.get() };
+    let Some(bytes) = bytes.get(..len as usize) else {
+        return Err(TextError::TooLong);
+    };
+    core::str::from_utf8(bytes).map_err(|e| {
+        let valid = &bytes[..e.valid_up_to()];
+        let start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        TextError::NotUtf8 {
+            line: valid.iter().filter(|&&b| b == b'\n').count() + 1,
+            // The valid prefix ends on a character boundary.
+            column: core::str::from_utf8(&valid[start..]).map_or(1, |s| s.chars().count() + 1),
+        }
+    })
+}
+
+/// The text as a valid level's source, or why it is not one.
+fn checked(len: u32) -> Result<&'static str, TextError> {
+    let source = text(len)?;
+    parse::<MAX_WORDS>(source).map_err(TextError::Level)?;
+    Ok(source)
+}
+
+/// Writes the error (`line:column: message`) as the answer; its length.
+fn error_answer(error: impl core::fmt::Display) -> u32 {
+    answer(format_args!("{error}"))
+}
+
+// ---------------------------------------------------------------------------
+// The exports. Numbers only; see the module doc for strings.
+// ---------------------------------------------------------------------------
+
+/// Sets the game up on the first built-in level; 1 on success.
+#[no_mangle]
+pub extern "C" fn init() -> u32 {
+    let mut app = APP.0.borrow_mut();
+    if app.is_none() {
+        *app = App::new();
+    }
+    app.is_some() as u32
+}
+
+/// Game frames per second (the firmware's: 128).
+#[no_mangle]
+pub extern "C" fn frame_hz() -> u32 {
+    FRAME_HZ
+}
+
+/// The LED matrix's width (the micro:bit's 5).
+#[no_mangle]
+pub extern "C" fn led_width() -> u32 {
+    WIDTH as u32
+}
+
+/// The LED matrix's height.
+#[no_mangle]
+pub extern "C" fn led_height() -> u32 {
+    HEIGHT as u32
+}
+
+/// Where the matrix's brightness values are (`led_width × led_height` bytes,
+/// row by row, 0..=15), as the last [`tick`] drew them.
+#[no_mangle]
+pub extern "C" fn led_ptr() -> *const u8 {
+    with_app(core::ptr::null(), |app| app.led.as_ptr())
+}
+
+/// One game frame at the current tilt: the loop's step ([`Player::tick`]).
+/// Bit 0: an attempt finished; bit 1: a new attempt started.
+#[no_mangle]
+pub extern "C" fn tick() -> u32 {
+    with_app(0, App::tick)
+}
+
+/// `n` frames (the browser test's fast-forward: the same step as [`tick`]);
+/// stops early after a frame that finished an attempt if `stop_on_finish`.
+/// Returns the frames played.
+#[no_mangle]
+pub extern "C" fn ticks(n: u32, stop_on_finish: u32) -> u32 {
+    with_app(0, |app| {
+        for done in 1..=n {
+            if app.tick() & TICK_FINISHED != 0 && stop_on_finish != 0 {
+                return done;
+            }
+        }
+        n
+    })
+}
+
+/// The page's tilt in milli-g: `right_mg` lowers the right edge (the marble
+/// rolls right), `up_mg` lowers the far edge (it rolls up the screen). Made a
+/// 1 g reading in the board frame by the library ([`Tilt::from_xz`]: x right,
+/// z towards the player, so both signs flip as the keys' do in
+/// `input::keys::KeyTilt`).
+#[no_mangle]
+pub extern "C" fn set_tilt(right_mg: i32, up_mg: i32) {
+    with_app((), |app| {
+        app.reading = Tilt::from_xz(right_mg.saturating_neg(), up_mg).reading_mg();
+    })
+}
+
+/// The reading fed to the game last, x (mg, board frame).
+#[no_mangle]
+pub extern "C" fn reading_x() -> i32 {
+    with_app(0, |app| app.player.session().reading()[0])
+}
+
+/// The reading fed to the game last, z (mg, board frame).
+#[no_mangle]
+pub extern "C" fn reading_z() -> i32 {
+    with_app(0, |app| app.player.session().reading()[2])
+}
+
+/// Built-in levels.
+#[no_mangle]
+pub extern "C" fn level_count() -> u32 {
+    LEVELS.len() as u32
+}
+
+/// Built-in level `index`'s name in the answer buffer; its length (0 if none).
+#[no_mangle]
+pub extern "C" fn builtin_name(index: u32) -> u32 {
+    match LEVELS.get(index as usize) {
+        Some(level) => answer(format_args!("{}", level.info.name)),
+        None => 0,
+    }
+}
+
+/// Plays built-in level `index` from its start; 1 on success.
+#[no_mangle]
+pub extern "C" fn select_level(index: u32) -> u32 {
+    with_app(0, |app| {
+        if index as usize >= LEVELS.len() {
+            return 0;
+        }
+        let ok = app.start(&LEVELS, index as usize);
+        if ok {
+            app.custom = false;
+        }
+        ok as u32
+    })
+}
+
+/// Starts the level over.
+#[no_mangle]
+pub extern "C" fn restart() {
+    with_app((), |app| app.player.restart())
+}
+
+/// Moves on to the next level (after the last built-in: the first).
+#[no_mangle]
+pub extern "C" fn next_level() {
+    with_app((), |app| app.player.next_level())
+}
+
+/// Hands the board to the autopilot (`on` ≠ 0) or takes it back.
+#[no_mangle]
+pub extern "C" fn set_autopilot(on: u32) {
+    with_app((), |app| app.player.set_autopilot(on != 0))
+}
+
+/// 1 while the autopilot plays.
+#[no_mangle]
+pub extern "C" fn autopilot() -> u32 {
+    with_app(0, |app| app.player.autopilot() as u32)
+}
+
+/// Where the page writes level text (UTF-8) for [`check_level`] and [`play_level`].
+#[no_mangle]
+pub extern "C" fn text_ptr() -> *mut u8 {
+    TEXT.0.get().cast()
+}
+
+/// How many bytes [`text_ptr`]'s buffer holds.
+#[no_mangle]
+pub extern "C" fn text_capacity() -> u32 {
+    TEXT_CAPACITY as u32
+}
+
+/// Where answers are (see the module doc).
+#[no_mangle]
+pub extern "C" fn out_ptr() -> *const u8 {
+    OUT.0.borrow().bytes.as_ptr()
+}
+
+/// Parses the `len` bytes of level text: 0 if it is a valid level, else the
+/// length of its `line:column: message` in the answer buffer.
+#[no_mangle]
+pub extern "C" fn check_level(len: u32) -> u32 {
+    match checked(len) {
+        Ok(_) => 0,
+        Err(error) => error_answer(error),
+    }
+}
+
+/// Plays the `len` bytes of level text, if valid (then `next level` goes on to
+/// the built-in ones): 0, or the error's length as [`check_level`]. A level the
+/// parser takes but the physics refuses (it cannot be: the parser checks the
+/// same rules) is reported too, and the game goes on where it was.
+#[no_mangle]
+pub extern "C" fn play_level(len: u32) -> u32 {
+    let source = match checked(len) {
+        Ok(source) => source,
+        Err(error) => return error_answer(error),
+    };
+    with_app(0, |app| {
+        let resume = app.level_number() as usize;
+        // First off the editor's old level: nothing may borrow it while it changes.
+        if !app.start(&LEVELS, 0) {
+            return answer(format_args!("1:1: the built-in levels cannot be set up"));
+        }
+        app.custom = false;
+        // SAFETY: the player is on a built-in level, so nothing borrows CUSTOM.
+        let list = match unsafe { install_custom(source) } {
+            Ok(list) => list,
+            Err(error) => return error_answer(TextError::Level(error)),
+        };
+        if app.start(list, 0) {
+            app.custom = true;
+            0
+        } else {
+            app.start(&LEVELS, resume.min(LEVELS.len() - 1));
+            answer(format_args!(
+                "1:1: the level cannot be set up by the physics"
+            ))
+        }
+    })
+}
+
+/// 1 while the editor's level is the one in play.
+#[no_mangle]
+pub extern "C" fn level_is_custom() -> u32 {
+    with_app(0, |app| app.is_custom_level() as u32)
+}
+
+/// The level in play: its built-in index, or the built-ins' count for the
+/// editor's level.
+#[no_mangle]
+pub extern "C" fn level_index() -> u32 {
+    with_app(0, |app| app.level_number())
+}
+
+/// The level in play's name in the answer buffer; its length.
+#[no_mangle]
+pub extern "C" fn level_name() -> u32 {
+    with_app(0, |app| answer(format_args!("{}", app.level().info.name)))
+}
+
+/// The time limit of the level in play, seconds.
+#[no_mangle]
+pub extern "C" fn time_limit_s() -> u32 {
+    with_app(0, |app| app.level().info.time_limit_s)
+}
+
+/// Where the attempt stands: 0 playing, 1 won, 2 fell, 3 time up.
+#[no_mangle]
+pub extern "C" fn phase() -> u32 {
+    with_app(0, |app| phase_code(app.player.game().phase()))
+}
+
+fn phase_code(phase: Phase) -> u32 {
+    match phase {
+        Phase::Playing => 0,
+        Phase::Won => 1,
+        Phase::Fell => 2,
+        Phase::TimeUp => 3,
+    }
+}
+
+/// Frames played in this attempt.
+#[no_mangle]
+pub extern "C" fn frames() -> u32 {
+    with_app(0, |app| app.player.game().frames())
+}
+
+/// The exact state's digest (`Session::state_hash`, as `cargo sim` prints it).
+#[no_mangle]
+pub extern "C" fn state_hash() -> u64 {
+    with_app(0, |app| app.player.session().state_hash())
+}
+
+/// Attempts finished so far (see the `finished_*` functions for the last one).
+#[no_mangle]
+pub extern "C" fn finished_count() -> u32 {
+    with_app(0, |app| app.finished.count)
+}
+
+/// The last finished attempt's level (as [`level_index`]).
+#[no_mangle]
+pub extern "C" fn finished_level() -> u32 {
+    with_app(0, |app| app.finished.level)
+}
+
+/// 1 if the last finished attempt was on the editor's level.
+#[no_mangle]
+pub extern "C" fn finished_custom() -> u32 {
+    with_app(0, |app| app.finished.custom as u32)
+}
+
+/// How the last finished attempt ended (as [`phase`]).
+#[no_mangle]
+pub extern "C" fn finished_phase() -> u32 {
+    with_app(0, |app| phase_code(app.finished.phase))
+}
+
+/// Frames the last finished attempt took.
+#[no_mangle]
+pub extern "C" fn finished_frames() -> u32 {
+    with_app(0, |app| app.finished.frames)
+}
+
+/// `state_hash` at the end of the last finished attempt.
+#[no_mangle]
+pub extern "C" fn finished_hash() -> u64 {
+    with_app(0, |app| app.finished.hash)
+}
+
+/// Tile columns of the level in play.
+#[no_mangle]
+pub extern "C" fn level_nx() -> u32 {
+    with_app(0, |app| u32::from(app.level().info.nx))
+}
+
+/// Tile rows of the level in play.
+#[no_mangle]
+pub extern "C" fn level_nz() -> u32 {
+    with_app(0, |app| u32::from(app.level().info.nz))
+}
+
+/// What tile `(i, k)` is: 0 floor, 1 wall, 2 hole, 3 goal, 4 start, 5 outside.
+#[no_mangle]
+pub extern "C" fn tile_kind(i: u32, k: u32) -> u32 {
+    with_app(5, |app| {
+        let level = app.level();
+        let info = &level.info;
+        if i >= u32::from(info.nx) || k >= u32::from(info.nz) {
+            return 5;
+        }
+        let cell = (i as u8, k as u8);
+        let solid = |j| level.tiles.is_solid(TileIndex::new(i as i32, j, k as i32));
+        if solid(1) {
+            1
+        } else if !solid(0) {
+            2
+        } else if info.goals().contains(&cell) {
+            3
+        } else if info.starts().contains(&cell) {
+            4
+        } else {
+            0
+        }
+    })
+}
+
+/// Where tile column (or row: the layout is the same along both) `i` begins,
+/// in mm; `i = nx` gives where the last one ends. Walls and cells differ in
+/// width, so the page draws them from these edges.
+#[no_mangle]
+pub extern "C" fn tile_edge_mm(i: i32) -> f64 {
+    with_app(0.0, |app| {
+        let layout = &app.player.game().world().params().layout;
+        layout.to_mm(layout.span_xz(i).0)
+    })
+}
+
+/// The marble radius, mm.
+#[no_mangle]
+pub extern "C" fn marble_radius_mm() -> f64 {
+    with_app(0.0, |app| {
+        f64::from(app.level().info.spec.radius_um) / 1000.0
+    })
+}
+
+/// Marbles in the level.
+#[no_mangle]
+pub extern "C" fn marble_count() -> u32 {
+    with_app(0, |app| app.player.game().world().marbles().len() as u32)
+}
+
+/// Coordinate `axis` (0 x right, 1 y up, 2 z towards the player) of marble
+/// `index`'s centre, mm in the tile frame (0 for no such marble).
+#[no_mangle]
+pub extern "C" fn marble_mm(index: u32, axis: u32) -> f64 {
+    with_app(0.0, |app| {
+        let world = app.player.game().world();
+        let Some(marble) = world.marbles().get(index as usize) else {
+            return 0.0;
+        };
+        let value = match axis {
+            0 => marble.pos.x,
+            1 => marble.pos.y,
+            _ => marble.pos.z,
+        };
+        world.params().layout.to_mm(value)
+    })
+}
+
+/// 1 if marble `index` is out of play (fell).
+#[no_mangle]
+pub extern "C" fn marble_out(index: u32) -> u32 {
+    with_app(1, |app| {
+        let marbles = app.player.game().world().marbles();
+        marbles.get(index as usize).is_none_or(|m| m.out) as u32
+    })
+}
+
+#[cfg(target_arch = "wasm32")]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    // No panic is expected (inputs are checked, the library reports errors as
+    // values); should one happen, the module traps and the page says so.
+    core::arch::wasm32::unreachable()
+}

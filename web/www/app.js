@@ -1,0 +1,697 @@
+// Marble Rolling's page: loads the game (marble_web.wasm, built from web/src by
+// `cargo web`), feeds it the tilt from the keys, a mouse/finger joystick or the
+// phone's orientation, runs it at its own frame rate, and draws the maze and the
+// micro:bit's LEDs. All game logic is the wasm module's, i.e. the library's:
+// this file only moves numbers and pixels. It loads the module by hand (see
+// web/src/lib.rs for why there is no wasm-bindgen glue).
+
+// Held keys tilt the board this far (milli-g, per axis): enough to roll
+// briskly, well short of the 500 mg the terminal's keys reach.
+const KEY_TILT_MG = 300;
+// The joystick's full deflection (px from where the drag began) and the tilt it gives.
+const STICK_RADIUS_PX = 80;
+const STICK_MAX_MG = 500;
+// The phone's tilt is clamped to this (a phone held at 40° would give 640 mg).
+const ORIENTATION_MAX_MG = 600;
+// Frames one animation frame may catch up on (at 128 frames/s, 62 ms): after a
+// longer stall (a hidden tab, a slow machine) the game slows down rather than
+// spiralling into ever longer catch-ups.
+const MAX_CATCH_UP = 8;
+// Frames whose mean cost the HUD shows.
+const COST_WINDOW = 256;
+
+const PHASES = ['playing', 'won', 'fell', 'timeout'];
+const PHASE_WON = 1;
+const TICK_FINISHED = 1;
+const TICK_NEW_ATTEMPT = 2;
+
+const $ = (id) => document.getElementById(id);
+const encoder = new TextEncoder();
+const decoder = new TextDecoder();
+
+let w; // the module's exports
+let hz; // game frames per second
+let running = true; // the rAF loop steps the game (the browser test stops it)
+const keys = new Set(); // held tilt keys: 'left', 'right', 'up', 'down'
+const stick = { active: false, x0: 0, y0: 0, x: 0, y: 0 };
+const orientation = { on: false, neutral: null, right: 0, up: 0 };
+const costs = new Float64Array(COST_WINDOW);
+let costCount = 0;
+let level = null; // geometry of the level in play, for drawing
+let boardCache = null; // the maze drawn at the canvas's size, redrawn on resize
+
+async function load() {
+  const response = fetch('marble_web.wasm');
+  let instance;
+  try {
+    ({ instance } = await WebAssembly.instantiateStreaming(response, {}));
+  } catch (e) {
+    // A server without application/wasm: compile from the bytes instead.
+    const bytes = await (await fetch('marble_web.wasm')).arrayBuffer();
+    ({ instance } = await WebAssembly.instantiate(bytes, {}));
+  }
+  return instance.exports;
+}
+
+// An answer the module wrote to its output buffer (`len` bytes of UTF-8).
+function answer(len) {
+  return decoder.decode(new Uint8Array(w.memory.buffer, w.out_ptr(), len));
+}
+
+// Puts `text` in the module's text buffer; returns the byte count to pass on
+// (one over the capacity when it does not fit: the module then says so).
+function putText(text) {
+  const cap = w.text_capacity();
+  const dst = new Uint8Array(w.memory.buffer, w.text_ptr(), cap);
+  const { read, written } = encoder.encodeInto(text, dst);
+  return read < text.length ? cap + 1 : written;
+}
+
+function hex(u64) {
+  return BigInt.asUintN(64, BigInt(u64)).toString(16).padStart(16, '0');
+}
+
+function levelName() {
+  return answer(w.level_name());
+}
+
+// --- input -------------------------------------------------------------------
+
+const KEY_DIRS = {
+  ArrowLeft: 'left', KeyA: 'left',
+  ArrowRight: 'right', KeyD: 'right',
+  ArrowUp: 'up', KeyW: 'up',
+  ArrowDown: 'down', KeyS: 'down',
+};
+
+function typing(event) {
+  const t = event.target;
+  return t && (t.tagName === 'TEXTAREA' || t.tagName === 'INPUT' || t.tagName === 'SELECT');
+}
+
+function onKey(event, down) {
+  if (typing(event)) return;
+  const dir = KEY_DIRS[event.code];
+  if (dir) {
+    if (down) keys.add(dir); else keys.delete(dir);
+    event.preventDefault();
+    return;
+  }
+  if (!down || event.repeat) return;
+  switch (event.code) {
+    case 'Space': keys.clear(); stick.active = false; orientation.neutral = null; break;
+    case 'KeyR': restart(); break;
+    case 'KeyN': nextLevel(); break;
+    case 'KeyP': toggleAutopilot(); break;
+    default: return;
+  }
+  event.preventDefault();
+}
+
+// The page's tilt, (right, up) in milli-g: the joystick while dragged, else
+// the keys while held, else the phone (if switched on), else flat.
+function tilt() {
+  if (stick.active) {
+    const dx = stick.x - stick.x0;
+    const dy = stick.y - stick.y0;
+    const d = Math.hypot(dx, dy);
+    const scale = STICK_MAX_MG / STICK_RADIUS_PX / Math.max(1, d / STICK_RADIUS_PX);
+    return [Math.round(dx * scale), Math.round(-dy * scale)];
+  }
+  if (keys.size) {
+    const right = (keys.has('right') - keys.has('left')) * KEY_TILT_MG;
+    const up = (keys.has('up') - keys.has('down')) * KEY_TILT_MG;
+    return [right, up];
+  }
+  if (orientation.on) return [orientation.right, orientation.up];
+  return [0, 0];
+}
+
+function setupStick(canvas) {
+  canvas.addEventListener('pointerdown', (e) => {
+    stick.active = true;
+    stick.x0 = stick.x = e.clientX;
+    stick.y0 = stick.y = e.clientY;
+    canvas.setPointerCapture(e.pointerId);
+    canvas.classList.add('dragging');
+  });
+  canvas.addEventListener('pointermove', (e) => {
+    if (!stick.active) return;
+    stick.x = e.clientX;
+    stick.y = e.clientY;
+  });
+  const end = () => {
+    stick.active = false;
+    canvas.classList.remove('dragging');
+  };
+  canvas.addEventListener('pointerup', end);
+  canvas.addEventListener('pointercancel', end);
+}
+
+// The phone's orientation as a tilt: gamma (left/right) and beta (front/back),
+// relative to how it was held when switched on, turned with the screen.
+function onOrientation(e) {
+  if (e.beta == null || e.gamma == null) return;
+  const angle = (screen.orientation && screen.orientation.angle) || 0;
+  if (!orientation.neutral) orientation.neutral = { beta: e.beta, gamma: e.gamma };
+  const rad = Math.PI / 180;
+  // Right edge down: gamma > 0; top edge raised (towards the player): beta > 0.
+  const gx = Math.sin((e.gamma - orientation.neutral.gamma) * rad) * 1000;
+  const gy = -Math.sin((e.beta - orientation.neutral.beta) * rad) * 1000;
+  // The screen turned by `angle` (counter-clockwise) from the phone's natural
+  // orientation: its right is the phone's bottom at 90°, its up the phone's right.
+  const a = angle * rad;
+  const right = gx * Math.cos(a) - gy * Math.sin(a);
+  const up = gx * Math.sin(a) + gy * Math.cos(a);
+  const clamp = (v) => Math.round(Math.max(-ORIENTATION_MAX_MG, Math.min(ORIENTATION_MAX_MG, v)));
+  orientation.right = clamp(right);
+  orientation.up = clamp(up);
+}
+
+async function toggleOrientation() {
+  const button = $('orientation');
+  if (orientation.on) {
+    orientation.on = false;
+    window.removeEventListener('deviceorientation', onOrientation);
+    button.setAttribute('aria-pressed', 'false');
+    return;
+  }
+  if (typeof DeviceOrientationEvent === 'undefined') {
+    status('this browser has no orientation sensor');
+    return;
+  }
+  // iOS asks the user, and only from a click.
+  if (typeof DeviceOrientationEvent.requestPermission === 'function') {
+    try {
+      if ((await DeviceOrientationEvent.requestPermission()) !== 'granted') {
+        status('tilt permission refused');
+        return;
+      }
+    } catch (err) {
+      status(`tilt permission: ${err.message}`);
+      return;
+    }
+  }
+  orientation.on = true;
+  orientation.neutral = null;
+  window.addEventListener('deviceorientation', onOrientation);
+  button.setAttribute('aria-pressed', 'true');
+  status('hold the phone as level, then tilt');
+}
+
+// --- the game loop ---------------------------------------------------------------
+
+// One game frame: the step the animation loop and the test's fast-forward share.
+function frame() {
+  const [right, up] = tilt();
+  w.set_tilt(right, up);
+  const t0 = performance.now();
+  const flags = w.tick();
+  costs[costCount++ % COST_WINDOW] = performance.now() - t0;
+  if (flags & TICK_FINISHED) finished();
+  if (flags & TICK_NEW_ATTEMPT) newAttempt();
+  return flags;
+}
+
+let last = null;
+let acc = 0;
+
+// Plays the game frames `elapsed` ms of wall time are worth: the accumulator
+// keeps the remainder, so any refresh rate gives 128 frames a second.
+function advance(elapsed) {
+  acc += elapsed;
+  const period = 1000 / hz;
+  let n = 0;
+  while (acc >= period && n < MAX_CATCH_UP) {
+    frame();
+    acc -= period;
+    n++;
+  }
+  if (n === MAX_CATCH_UP) acc = Math.min(acc, period);
+  return n;
+}
+
+function loop(now) {
+  if (last !== null && running) advance(now - last);
+  last = now;
+  draw();
+  requestAnimationFrame(loop);
+}
+
+function finished() {
+  const phase = w.finished_phase();
+  const seconds = w.finished_frames() / hz;
+  if (phase === PHASE_WON) {
+    // The best time is a person's: the autopilot's runs do not count.
+    if (!w.autopilot()) {
+      const key = bestKey();
+      const best = Number(localStorage.getItem(key));
+      if (!best || seconds < best) {
+        localStorage.setItem(key, seconds.toFixed(3));
+        status(`won in ${seconds.toFixed(2)} s: a new best!`);
+      } else {
+        status(`won in ${seconds.toFixed(2)} s (best ${best.toFixed(2)} s)`);
+      }
+    } else {
+      status(`the autopilot won in ${seconds.toFixed(2)} s`);
+    }
+  } else {
+    status(phase === 2 ? 'fell into a hole: again' : "time's up: again");
+  }
+}
+
+function bestKey() {
+  return `marble-rolling.best.${w.level_is_custom() ? 'editor:' : ''}${levelName()}`;
+}
+
+// A new level or a restart: its geometry, the picker, the best time.
+function newAttempt() {
+  const nx = w.level_nx();
+  const nz = w.level_nz();
+  const kinds = new Uint8Array(nx * nz);
+  for (let k = 0; k < nz; k++) for (let i = 0; i < nx; i++) kinds[k * nx + i] = w.tile_kind(i, k);
+  const edges = new Float64Array(Math.max(nx, nz) + 1);
+  for (let i = 0; i < edges.length; i++) edges[i] = w.tile_edge_mm(i);
+  level = {
+    nx, nz, kinds, edges,
+    radius: w.marble_radius_mm(),
+    name: levelName(),
+    // Where a marble rests on the floor: it starts there.
+    restY: w.marble_mm(0, 1),
+  };
+  boardCache = null;
+  const select = $('level');
+  const custom = w.level_is_custom();
+  select.querySelector('option[value="editor"]')?.remove();
+  if (custom) {
+    const option = new Option(`${level.name} (editor)`, 'editor');
+    select.add(option);
+  }
+  select.value = custom ? 'editor' : String(w.level_index());
+  const best = Number(localStorage.getItem(bestKey()));
+  $('hud-best').textContent = best ? `${best.toFixed(2)} s` : '–';
+}
+
+function restart() {
+  w.restart();
+  newAttempt();
+  status('');
+}
+
+function nextLevel() {
+  w.next_level();
+  newAttempt();
+  status('');
+}
+
+function toggleAutopilot() {
+  w.set_autopilot(w.autopilot() ? 0 : 1);
+  $('autopilot').setAttribute('aria-pressed', String(!!w.autopilot()));
+}
+
+function status(text) {
+  $('status').textContent = text;
+}
+
+// --- drawing --------------------------------------------------------------------
+
+const COLOURS = {
+  floor: '#d9cfbd', wall: '#6b5845', hole: '#0b0b0d',
+  goal: '#4fbf6f', start: '#cfc3ad', outside: '#16181d',
+};
+
+function fitCanvas(canvas) {
+  const dpr = window.devicePixelRatio || 1;
+  const rect = canvas.getBoundingClientRect();
+  const width = Math.max(1, Math.round(rect.width * dpr));
+  const height = Math.max(1, Math.round(rect.height * dpr));
+  if (canvas.width === width && canvas.height === height) return false;
+  canvas.width = width;
+  canvas.height = height;
+  return true;
+}
+
+// mm → canvas px for the level in play, centred in the canvas.
+function view(canvas) {
+  const widthMm = level.edges[level.nx];
+  const heightMm = level.edges[level.nz];
+  const scale = Math.min(canvas.width / widthMm, canvas.height / heightMm);
+  return {
+    scale,
+    // Whole pixels: tiles drawn side by side then meet without seams.
+    x0: Math.round((canvas.width - widthMm * scale) / 2),
+    y0: Math.round((canvas.height - heightMm * scale) / 2),
+  };
+}
+
+function drawMaze(canvas) {
+  const cache = document.createElement('canvas');
+  cache.width = canvas.width;
+  cache.height = canvas.height;
+  const g = cache.getContext('2d');
+  g.fillStyle = COLOURS.outside;
+  g.fillRect(0, 0, cache.width, cache.height);
+  const { scale, x0, y0 } = view(canvas);
+  const { nx, nz, kinds, edges } = level;
+  const px = (mm) => Math.round(mm * scale);
+  for (let k = 0; k < nz; k++) {
+    for (let i = 0; i < nx; i++) {
+      const kind = kinds[k * nx + i];
+      const x = x0 + px(edges[i]);
+      const y = y0 + px(edges[k]);
+      const wd = x0 + px(edges[i + 1]) - x;
+      const ht = y0 + px(edges[k + 1]) - y;
+      g.fillStyle = [COLOURS.floor, COLOURS.wall, COLOURS.hole, COLOURS.goal, COLOURS.start][kind]
+        ?? COLOURS.outside;
+      g.fillRect(x, y, wd, ht);
+      if (kind !== 1) {
+        // Walls above and to the left cast a shadow on the floor: they read as raised.
+        const shade = Math.max(1, Math.round(scale * 0.8));
+        g.fillStyle = 'rgba(0,0,0,0.22)';
+        if (k > 0 && kinds[(k - 1) * nx + i] === 1) g.fillRect(x, y, wd, shade);
+        if (i > 0 && kinds[k * nx + i - 1] === 1) g.fillRect(x, y, shade, ht);
+      }
+      if (kind === 2) {
+        const r = Math.min(wd, ht) / 2;
+        const grad = g.createRadialGradient(x + wd / 2, y + ht / 2, r * 0.2, x + wd / 2, y + ht / 2, r * 1.1);
+        grad.addColorStop(0, '#000');
+        grad.addColorStop(1, '#3a332b');
+        g.fillStyle = grad;
+        g.fillRect(x, y, wd, ht);
+      } else if (kind === 3) {
+        g.strokeStyle = '#e8ffe8';
+        g.lineWidth = Math.max(1, scale * 0.6);
+        g.strokeRect(x + wd * 0.2, y + ht * 0.2, wd * 0.6, ht * 0.6);
+      }
+    }
+  }
+  return cache;
+}
+
+function drawBoard() {
+  const canvas = $('board');
+  if (fitCanvas(canvas) || !boardCache) boardCache = drawMaze(canvas);
+  const g = canvas.getContext('2d');
+  g.drawImage(boardCache, 0, 0);
+  const { scale, x0, y0 } = view(canvas);
+  const r = level.radius * scale;
+  for (let m = 0; m < w.marble_count(); m++) {
+    if (w.marble_out(m)) continue;
+    const x = x0 + w.marble_mm(m, 0) * scale;
+    const z = y0 + w.marble_mm(m, 2) * scale;
+    // Below its height at the start (falling into a hole): drawn smaller.
+    const sink = Math.max(0, Math.min(1, (level.restY - w.marble_mm(m, 1)) / (2 * level.radius)));
+    const rr = r * (1 - 0.5 * sink);
+    g.fillStyle = 'rgba(0,0,0,0.25)';
+    g.beginPath();
+    g.arc(x + rr * 0.25, z + rr * 0.3, rr, 0, 2 * Math.PI);
+    g.fill();
+    const grad = g.createRadialGradient(x - rr * 0.35, z - rr * 0.35, rr * 0.1, x, z, rr);
+    grad.addColorStop(0, '#ffffff');
+    grad.addColorStop(0.35, '#b9c3d0');
+    grad.addColorStop(1, '#4b5563');
+    g.fillStyle = grad;
+    g.beginPath();
+    g.arc(x, z, rr, 0, 2 * Math.PI);
+    g.fill();
+  }
+  if (stick.active) {
+    const dpr = window.devicePixelRatio || 1;
+    const rect = canvas.getBoundingClientRect();
+    const cx = (stick.x0 - rect.left) * dpr;
+    const cy = (stick.y0 - rect.top) * dpr;
+    g.strokeStyle = 'rgba(255,176,40,0.8)';
+    g.lineWidth = 2 * dpr;
+    g.beginPath();
+    g.arc(cx, cy, STICK_RADIUS_PX * dpr, 0, 2 * Math.PI);
+    g.stroke();
+    const [right, up] = tilt();
+    g.fillStyle = 'rgba(255,176,40,0.8)';
+    g.beginPath();
+    g.arc(cx + (right / STICK_MAX_MG) * STICK_RADIUS_PX * dpr,
+      cy - (up / STICK_MAX_MG) * STICK_RADIUS_PX * dpr, 10 * dpr, 0, 2 * Math.PI);
+    g.fill();
+  }
+}
+
+function drawLeds() {
+  const canvas = $('leds');
+  fitCanvas(canvas);
+  const g = canvas.getContext('2d');
+  const lw = w.led_width();
+  const lh = w.led_height();
+  const leds = new Uint8Array(w.memory.buffer, w.led_ptr(), lw * lh);
+  g.fillStyle = '#0c0d10';
+  g.fillRect(0, 0, canvas.width, canvas.height);
+  const pitch = Math.min(canvas.width / lw, canvas.height / lh);
+  const r = pitch * 0.28;
+  for (let y = 0; y < lh; y++) {
+    for (let x = 0; x < lw; x++) {
+      const v = leds[y * lw + x] / 15;
+      const cx = (x + 0.5) * pitch;
+      const cy = (y + 0.5) * pitch;
+      if (v > 0) {
+        g.fillStyle = `rgba(255,40,20,${0.25 * v})`;
+        g.beginPath();
+        g.arc(cx, cy, r * 1.9, 0, 2 * Math.PI);
+        g.fill();
+      }
+      g.fillStyle = v > 0 ? `rgb(${Math.round(90 + 165 * v)},${Math.round(20 + 60 * v)},20)` : '#2a1c1a';
+      g.beginPath();
+      g.arc(cx, cy, r, 0, 2 * Math.PI);
+      g.fill();
+    }
+  }
+}
+
+function drawHud() {
+  const frames = w.frames();
+  $('hud-level').textContent = `${level.name}${w.level_is_custom() ? ' (editor)' : ` (${w.level_index() + 1})`}`;
+  $('hud-time').textContent = `${(frames / hz).toFixed(1)} / ${w.time_limit_s()} s`;
+  // The reading is the board's (x right, z towards the player): shown as the page's tilt.
+  $('hud-tilt').textContent = `→ ${-w.reading_x()} mg, ↑ ${w.reading_z()} mg`;
+  // The mean: Chromium's clock ticks in 5 µs or coarser, about a frame's cost.
+  const n = Math.min(costCount, COST_WINDOW);
+  if (n > 0) {
+    let sum = 0;
+    for (let i = 0; i < n; i++) sum += costs[i];
+    $('hud-cost').textContent = `${((sum / n) * 1000).toFixed(1)} µs`;
+  }
+}
+
+function draw() {
+  if (!level) return;
+  drawBoard();
+  drawLeds();
+  drawHud();
+}
+
+// --- the editor -----------------------------------------------------------------
+
+const TEMPLATE = `name: my-corner
+effects: rolling, friction
+time_limit_s: 30
+---
+#########
+#S......#
+#######.#
+#G......#
+#########
+`;
+
+function showCheck(len) {
+  const out = $('source-error');
+  if (len === 0) {
+    out.textContent = 'ok';
+    out.className = 'good';
+    return true;
+  }
+  // The parser's own `line:column: message`.
+  out.textContent = answer(len);
+  out.className = 'bad';
+  return false;
+}
+
+function setupEditor() {
+  const source = $('source');
+  source.value = localStorage.getItem('marble-rolling.editor') ?? TEMPLATE;
+  const check = () => showCheck(w.check_level(putText(source.value)));
+  source.addEventListener('input', () => {
+    localStorage.setItem('marble-rolling.editor', source.value);
+    check();
+  });
+  check();
+  $('play-source').addEventListener('click', () => {
+    if (showCheck(w.play_level(putText(source.value)))) {
+      newAttempt();
+      status(`playing ${level.name} from the editor`);
+    }
+  });
+  // Clicking the message puts the cursor on the line and column it names.
+  $('source-error').addEventListener('click', () => {
+    const m = /^(\d+):(\d+):/.exec($('source-error').textContent);
+    if (!m) return;
+    const lines = source.value.split('\n');
+    const line = Math.min(Number(m[1]), lines.length) - 1;
+    let at = 0;
+    for (let i = 0; i < line; i++) at += lines[i].length + 1;
+    at += Math.min(Number(m[2]) - 1, lines[line].length);
+    source.focus();
+    source.setSelectionRange(at, at + 1);
+  });
+}
+
+// --- start ----------------------------------------------------------------------
+
+// Read-only views and a fast-forward for the browser test (web/test); the
+// fast-forward runs the same `frame()` as the animation loop.
+function testHooks() {
+  const finishedRecord = () => ({
+    count: w.finished_count(),
+    level: w.finished_level(),
+    custom: !!w.finished_custom(),
+    phase: PHASES[w.finished_phase()],
+    frames: w.finished_frames(),
+    hash: hex(w.finished_hash()),
+  });
+  window.marbleState = () => ({
+    level: w.level_index(),
+    name: levelName(),
+    custom: !!w.level_is_custom(),
+    phase: PHASES[w.phase()],
+    frames: w.frames(),
+    hash: hex(w.state_hash()),
+    autopilot: !!w.autopilot(),
+    marbles: Array.from({ length: w.marble_count() }, (_, m) => ({
+      x: w.marble_mm(m, 0), y: w.marble_mm(m, 1), z: w.marble_mm(m, 2), out: !!w.marble_out(m),
+    })),
+    finished: finishedRecord(),
+  });
+  window.marbleTest = {
+    levels: () => Array.from({ length: w.level_count() }, (_, i) => answer(w.builtin_name(i))),
+    setRunning(on) { running = !!on; },
+    select(index) {
+      const ok = !!w.select_level(index);
+      newAttempt();
+      status('');
+      return ok;
+    },
+    setAutopilot(on) {
+      w.set_autopilot(on ? 1 : 0);
+      $('autopilot').setAttribute('aria-pressed', String(!!w.autopilot()));
+    },
+    // `n` frames, stopping after one that finished an attempt if `untilFinished`.
+    steps(n, untilFinished = false) {
+      for (let i = 0; i < n; i++) {
+        if (frame() & TICK_FINISHED && untilFinished) return i + 1;
+      }
+      return n;
+    },
+    finished: finishedRecord,
+    // Game frames played by `seconds` of animation frames at `refreshHz`
+    // (the loop's own accumulator, fed the timestamps such a screen gives).
+    playAt(refreshHz, seconds) {
+      acc = 0;
+      let played = 0;
+      for (let i = 0; i < Math.round(refreshHz * seconds); i++) played += advance(1000 / refreshHz);
+      return played;
+    },
+    // Game frames played by one animation frame that comes `ms` late.
+    stall(ms) {
+      acc = 0;
+      return advance(ms);
+    },
+    // The cost of `n` frames in which the game plays (a finished attempt's
+    // display frames, which do no physics, are played but not counted), each
+    // timed alone with performance.now(), in µs. Chromium rounds that clock
+    // to 5 µs in a cross-origin isolated page (100 µs otherwise), so
+    // `mean_us` (total / n) and `block_median_us` are the finer figures.
+    measure(n) {
+      const t = new Float64Array(n);
+      let total = 0;
+      let counted = 0;
+      for (let i = 0; counted < n && i < 16 * n; i++) {
+        const playing = w.phase() === 0;
+        const [right, up] = tilt();
+        w.set_tilt(right, up);
+        const t0 = performance.now();
+        const flags = w.tick();
+        const dt = performance.now() - t0;
+        if (flags & TICK_NEW_ATTEMPT) newAttempt();
+        if (playing) {
+          t[counted++] = dt;
+          total += dt;
+        }
+      }
+      const times = t.subarray(0, counted).sort();
+      // Then blocks of BLOCK frames timed together, the clock's grain spread
+      // over BLOCK (blocks in which an attempt ends are left out): the median
+      // block / BLOCK is the typical frame.
+      const BLOCK = 64;
+      const blocks = [];
+      for (let b = 0; blocks.length < n / BLOCK && b < n; b++) {
+        const before = w.finished_count();
+        const playing = w.phase() === 0;
+        const t0 = performance.now();
+        for (let i = 0; i < BLOCK; i++) {
+          const [right, up] = tilt();
+          w.set_tilt(right, up);
+          if (w.tick() & TICK_NEW_ATTEMPT) newAttempt();
+        }
+        const dt = performance.now() - t0;
+        if (playing && w.finished_count() === before) blocks.push(dt / BLOCK);
+      }
+      blocks.sort((a, b) => a - b);
+      return {
+        block: BLOCK,
+        block_median_us: blocks[blocks.length >> 1] * 1000,
+        frames: counted,
+        median_us: times[counted >> 1] * 1000,
+        p99_us: times[Math.floor(counted * 0.99)] * 1000,
+        max_us: times[counted - 1] * 1000,
+        mean_us: (total / counted) * 1000,
+        isolated: window.crossOriginIsolated,
+      };
+    },
+    draw,
+  };
+}
+
+async function main() {
+  try {
+    w = await load();
+  } catch (e) {
+    $('fatal').hidden = false;
+    $('fatal').textContent = `cannot load the game: ${e.message}`;
+    throw e;
+  }
+  if (!w.init()) throw new Error('the game could not be set up');
+  hz = w.frame_hz();
+  const select = $('level');
+  for (let i = 0; i < w.level_count(); i++) {
+    select.add(new Option(`${i + 1}. ${answer(w.builtin_name(i))}`, String(i)));
+  }
+  select.addEventListener('change', () => {
+    if (select.value === 'editor') return;
+    w.select_level(Number(select.value));
+    newAttempt();
+    status('');
+    select.blur();
+  });
+  $('restart').addEventListener('click', restart);
+  $('next').addEventListener('click', nextLevel);
+  $('autopilot').addEventListener('click', toggleAutopilot);
+  $('orientation').addEventListener('click', toggleOrientation);
+  window.addEventListener('keydown', (e) => onKey(e, true));
+  window.addEventListener('keyup', (e) => onKey(e, false));
+  // Keys held while the window loses focus never see their keyup.
+  window.addEventListener('blur', () => keys.clear());
+  setupStick($('board'));
+  setupEditor();
+  testHooks();
+  newAttempt();
+  document.body.dataset.ready = 'true';
+  requestAnimationFrame(loop);
+}
+
+main();
