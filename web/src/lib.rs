@@ -45,9 +45,11 @@ use marble_rolling::input::event::Tilt;
 use marble_rolling::physics::geometry::grid::{words_for, MAX_TILES_XZ};
 use marble_rolling::physics::TileIndex;
 
-/// The micro:bit v2's player: its 5×5 matrix, with the autopilot (the page has
-/// a button for it, as the QEMU board has a key).
-type WebPlayer = Player<WIDTH, HEIGHT, true>;
+/// The micro:bit v2's player: its 5×5 matrix and its fixed physics steps (so
+/// the page plays the micro:bit's game to the bit, and `cargo sim` with its
+/// defaults replays it), with the autopilot (the page has a button for it, as
+/// the QEMU board has a key).
+type WebPlayer = Player<WIDTH, HEIGHT, true, false>;
 
 /// Occupancy words of the largest level the format allows: the editor's level
 /// is parsed into a grid of this size (as the host tools' run-time levels are).
