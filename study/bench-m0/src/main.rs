@@ -9,6 +9,8 @@
 //! BENCH <scene> <backend> <variant> <step_log2> <steps> <instructions> <hash> <contacts> <collisions>
 //! ```
 //!
+//! (`<step_log2>` 0 is event stepping, `study::EVENTS_LOG2`: a step per frame.)
+//!
 //! No embassy, no defmt: cortex-m-rt's startup with this crate's own memory
 //! map (`memory.x`: the nRF51822's 256 KiB flash and 16 KiB RAM), and the
 //! `semihosting` crate for the console, the command line and the exit status.
