@@ -48,15 +48,26 @@ pub trait Job {
     fn run<S: Scalar>(self) -> Self::Output;
 }
 
+/// Every backend, as a mask for [`with_backend_in`].
+pub const ALL_BACKENDS: u32 = (1 << BACKENDS.len()) - 1;
+
 /// Runs `job` with backend number `index` of [`BACKENDS`] (`None` if out of range).
 pub fn with_backend<J: Job>(index: usize, job: J) -> Option<J::Output> {
+    with_backend_in::<ALL_BACKENDS, J>(index, job)
+}
+
+/// [`with_backend`] compiled for the backends in `MASK` only (bit `n` for
+/// [`BACKENDS`]`[n]`; `None` for the others): a benchmark whose flash cannot hold
+/// the code of every backend leaves the rest out of its binary.
+pub fn with_backend_in<const MASK: u32, J: Job>(index: usize, job: J) -> Option<J::Output> {
+    let has = |n: u32| MASK & (1 << n) != 0;
     Some(match index {
-        0 => job.run::<fixed::types::I8F24>(),
-        1 => job.run::<fixed::types::I16F16>(),
-        2 => job.run::<fixed::types::I32F32>(),
-        3 => job.run::<f32>(),
-        4 => job.run::<MicroF32>(),
-        5 => job.run::<f64>(),
+        0 if has(0) => job.run::<fixed::types::I8F24>(),
+        1 if has(1) => job.run::<fixed::types::I16F16>(),
+        2 if has(2) => job.run::<fixed::types::I32F32>(),
+        3 if has(3) => job.run::<f32>(),
+        4 if has(4) => job.run::<MicroF32>(),
+        5 if has(5) => job.run::<f64>(),
         _ => return None,
     })
 }
@@ -498,6 +509,14 @@ pub fn bench_one(
     item: &BenchItem,
     count: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
 ) -> Option<BenchResult> {
+    bench_one_in::<ALL_BACKENDS>(item, count)
+}
+
+/// [`bench_one`] compiled for the backends in `MASK` only (see [`with_backend_in`]).
+pub fn bench_one_in<const MASK: u32>(
+    item: &BenchItem,
+    count: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
+) -> Option<BenchResult> {
     struct One<'a> {
         item: BenchItem,
         count: &'a mut dyn FnMut(&mut dyn FnMut()) -> u64,
@@ -520,7 +539,7 @@ pub fn bench_one(
             })
         }
     }
-    with_backend(item.backend, One { item: *item, count })?
+    with_backend_in::<MASK, _>(item.backend, One { item: *item, count })?
 }
 
 #[cfg(test)]

@@ -26,7 +26,12 @@
 #![no_main]
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
-use marble_rolling::study::{bench_one, bench_plan, Scene, BACKENDS};
+use marble_rolling::study::{bench_one_in, bench_plan, Scene, BACKENDS};
+
+/// The backends this benchmark is built with (bit `n` for `BACKENDS[n]`): with
+/// event stepping the code of all six no longer fits the nRF51's 256 KiB of flash
+/// (170 KB over), so the M0 measures i8f24 (the firmware's), i16f16 and f32.
+const M0_BACKENDS: u32 = 0b00_1011;
 use semihosting::println;
 
 #[exception]
@@ -146,11 +151,11 @@ fn main() -> ! {
     let (_, empty) = time(|| core::hint::black_box(0u32));
     println!("EMPTY {}", to_instructions(empty));
 
-    let backends = mask_option("--backends", (1 << BACKENDS.len()) - 1);
+    let backends = mask_option("--backends", M0_BACKENDS) & M0_BACKENDS;
     let rates = mask_option("--rates", u32::MAX);
 
     bench_plan(backends, rates, |item| {
-        let result = bench_one(&item, &mut |f| to_instructions(time(f).1));
+        let result = bench_one_in::<M0_BACKENDS>(&item, &mut |f| to_instructions(time(f).1));
         match result {
             Some(r) => println!(
                 "BENCH {} {} {} {} {} {} {} {} {}",
