@@ -272,6 +272,10 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         }))
         .map_err(|e| e.to_string())?;
     }
+    ch.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+        .map_err(|e| e.to_string())?
+        .label("event stepping (triangles)")
+        .legend(|(x, y)| TriangleMarker::new((x + 9, y), 7, BLACK.filled()));
     ch.configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.4))
