@@ -48,15 +48,26 @@ pub trait Job {
     fn run<S: Scalar>(self) -> Self::Output;
 }
 
+/// Every backend, as a mask for [`with_backend_in`].
+pub const ALL_BACKENDS: u32 = (1 << BACKENDS.len()) - 1;
+
 /// Runs `job` with backend number `index` of [`BACKENDS`] (`None` if out of range).
 pub fn with_backend<J: Job>(index: usize, job: J) -> Option<J::Output> {
+    with_backend_in::<ALL_BACKENDS, J>(index, job)
+}
+
+/// [`with_backend`] compiled for the backends in `MASK` only (bit `n` for
+/// [`BACKENDS`]`[n]`; `None` for the others): a benchmark whose flash cannot hold
+/// the code of every backend leaves the rest out of its binary.
+pub fn with_backend_in<const MASK: u32, J: Job>(index: usize, job: J) -> Option<J::Output> {
+    let has = |n: u32| MASK & (1 << n) != 0;
     Some(match index {
-        0 => job.run::<fixed::types::I8F24>(),
-        1 => job.run::<fixed::types::I16F16>(),
-        2 => job.run::<fixed::types::I32F32>(),
-        3 => job.run::<f32>(),
-        4 => job.run::<MicroF32>(),
-        5 => job.run::<f64>(),
+        0 if has(0) => job.run::<fixed::types::I8F24>(),
+        1 if has(1) => job.run::<fixed::types::I16F16>(),
+        2 if has(2) => job.run::<fixed::types::I32F32>(),
+        3 if has(3) => job.run::<f32>(),
+        4 if has(4) => job.run::<MicroF32>(),
+        5 if has(5) => job.run::<f64>(),
         _ => return None,
     })
 }
@@ -350,11 +361,26 @@ pub const EFFECT_VARIANTS: [(&str, Effects); 6] = [
 
 /// Steps of a run of [`SECONDS`] at `2^step_log2` steps/s.
 pub const fn steps(step_log2: u32) -> u32 {
+    SECONDS * steps_per_second(step_log2)
+}
+
+/// Steps per simulated second of a configuration: `2^step_log2`, or the frame
+/// rate for [`EVENTS_LOG2`] (an event step is a whole 1/128 s frame). Costs per
+/// simulated time divide by this, never by `2^step_log2`.
+pub const fn steps_per_second(step_log2: u32) -> u32 {
     match step_log2 {
-        EVENTS_LOG2 => SECONDS << FRAME_LOG2,
-        k => SECONDS << k,
+        EVENTS_LOG2 => 1 << FRAME_LOG2,
+        k => 1 << k,
     }
 }
+
+/// Whether a configuration's `step_log2` is event stepping ([`EVENTS_LOG2`]).
+pub const fn is_events(step_log2: u32) -> bool {
+    step_log2 == EVENTS_LOG2
+}
+
+/// The rates the per-effect variants run at: the firmware default and events.
+pub const VARIANT_STEPPINGS: [u32; 2] = [DEFAULT_STEP_LOG2, EVENTS_LOG2];
 
 /// Advances `w` from step `from` to step `to` (steps counted from the start of the
 /// scene), setting the trace's gravity at each frame boundary when it changes, and
@@ -396,7 +422,7 @@ pub struct BenchItem {
     pub scene: SceneId,
     /// Index into [`BACKENDS`].
     pub backend: usize,
-    /// `log2` of the step rate.
+    /// `log2` of the step rate ([`EVENTS_LOG2`]: event stepping).
     pub step_log2: u32,
     /// Index into [`EFFECT_VARIANTS`], or `None` for the scene's own effects.
     pub variant: Option<usize>,
@@ -419,10 +445,12 @@ impl BenchItem {
     }
 }
 
-/// Calls `f` for every target measurement: each scene × backend × step rate with
-/// the scene's own effects, then the effect variants of the maze and of the
-/// bounce corridor at the default backend and rate. `backends` selects backends by index
-/// (bit `n` for [`BACKENDS`]`[n]`), `rates` step rates by `log2` (bit `k`).
+/// Calls `f` for every target measurement: each scene × backend × stepping
+/// ([`STEPPINGS`]: events, then the fixed rates) with the scene's own effects,
+/// then the effect variants of the maze and of the bounce corridor at the default
+/// backend, at the default rate and with events ([`VARIANT_STEPPINGS`]).
+/// `backends` selects backends by index (bit `n` for [`BACKENDS`]`[n]`), `rates`
+/// step rates by `log2` (bit `k`; bit 0 is [`EVENTS_LOG2`]); the variants always run.
 pub fn bench_plan(backends: u32, rates: u32, mut f: impl FnMut(BenchItem)) {
     for scene in [
         SceneId::Incline,
@@ -447,13 +475,15 @@ pub fn bench_plan(backends: u32, rates: u32, mut f: impl FnMut(BenchItem)) {
         }
     }
     for scene in [SceneId::Maze, SceneId::Bounce] {
-        for v in 0..EFFECT_VARIANTS.len() {
-            f(BenchItem {
-                scene,
-                backend: 0,
-                step_log2: DEFAULT_STEP_LOG2,
-                variant: Some(v),
-            });
+        for step_log2 in VARIANT_STEPPINGS {
+            for v in 0..EFFECT_VARIANTS.len() {
+                f(BenchItem {
+                    scene,
+                    backend: 0,
+                    step_log2,
+                    variant: Some(v),
+                });
+            }
         }
     }
 }
@@ -479,6 +509,14 @@ pub fn bench_one(
     item: &BenchItem,
     count: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
 ) -> Option<BenchResult> {
+    bench_one_in::<ALL_BACKENDS>(item, count)
+}
+
+/// [`bench_one`] compiled for the backends in `MASK` only (see [`with_backend_in`]).
+pub fn bench_one_in<const MASK: u32>(
+    item: &BenchItem,
+    count: &mut dyn FnMut(&mut dyn FnMut()) -> u64,
+) -> Option<BenchResult> {
     struct One<'a> {
         item: BenchItem,
         count: &'a mut dyn FnMut(&mut dyn FnMut()) -> u64,
@@ -501,7 +539,7 @@ pub fn bench_one(
             })
         }
     }
-    with_backend(item.backend, One { item: *item, count })?
+    with_backend_in::<MASK, _>(item.backend, One { item: *item, count })?
 }
 
 #[cfg(test)]
@@ -516,7 +554,7 @@ mod tests {
             let mut w = scene
                 .world::<S>(self.1, scene.spec.effects)
                 .expect("scene sets up");
-            drive(&mut w, &scene.trace, 0, 1 << self.1, |_, _| {});
+            drive(&mut w, &scene.trace, 0, steps_per_second(self.1), |_, _| {});
             (w.stats.steps, w.stats.reverts, w.marbles()[0].out)
         }
     }
@@ -525,11 +563,12 @@ mod tests {
     fn every_scene_sets_up_and_runs_a_second_in_every_backend() {
         for scene in Scene::all() {
             for (b, name) in BACKENDS.iter().enumerate() {
-                let (steps, reverts, out) =
-                    with_backend(b, Smoke(scene.id, DEFAULT_STEP_LOG2)).unwrap();
-                assert_eq!(steps, 1 << DEFAULT_STEP_LOG2, "{} {name}", scene.name);
-                assert_eq!(reverts, 0, "{} {name}", scene.name);
-                assert!(!out, "{} {name}", scene.name);
+                for k in [DEFAULT_STEP_LOG2, EVENTS_LOG2] {
+                    let (steps, reverts, out) = with_backend(b, Smoke(scene.id, k)).unwrap();
+                    assert_eq!(steps, steps_per_second(k), "{} {name} {k}", scene.name);
+                    assert_eq!(reverts, 0, "{} {name} {k}", scene.name);
+                    assert!(!out, "{} {name} {k}", scene.name);
+                }
             }
         }
     }
@@ -553,7 +592,12 @@ mod tests {
         bench_plan(u32::MAX, u32::MAX, |_| n += 1);
         assert_eq!(
             n,
-            4 * BACKENDS.len() * STEPPINGS.len() + 2 * EFFECT_VARIANTS.len()
+            4 * BACKENDS.len() * STEPPINGS.len()
+                + 2 * VARIANT_STEPPINGS.len() * EFFECT_VARIANTS.len()
         );
+        // Events are a configuration of their own: a frame per step.
+        assert_eq!(steps(EVENTS_LOG2), SECONDS * 128);
+        assert_eq!(steps_per_second(EVENTS_LOG2), 128);
+        assert_eq!(steps_per_second(DEFAULT_STEP_LOG2), 1024);
     }
 }

@@ -3,6 +3,7 @@
 //! ```text
 //! cargo sim -- --level corner --autopilot --json
 //! cargo sim -- --level my.level --tilt-trace tilt.csv --trace steps.csv
+//! cargo sim -- --level two-marbles --autopilot --stepping events --trace run.csv
 //! cargo sim -- --level corner --autopilot --gif docs/corner.gif
 //! cargo sim -- --check my.level
 //! ```
@@ -13,16 +14,34 @@
 //! then the judging). So the `state_hash` of a run is the firmware's for the same
 //! inputs and backend.
 //!
-//! # The per-step trace
+//! # The trace
 //!
-//! `--trace FILE` writes one row per physics step although the game steps a whole
-//! frame at a time: before each frame the marbles are saved; after it the frame is
-//! replayed step by step on a copy of the world that has the frame's gravity and
-//! board motion (everything a step reads except the marbles, which the frame
-//! changed, and the counters). The physics is deterministic, so the replay goes
-//! through exactly the frame's states; the tool checks that the replay ends where
-//! the frame did and fails loudly otherwise. The game itself, its judging and its
-//! hash are untouched by tracing.
+//! `--trace FILE` writes at least one row per 1/1024 s of simulated time (with
+//! fixed steps: see below), each with the exact state of **every** marble at that
+//! instant, although the game steps a whole frame at a time: before each frame
+//! the marbles are saved; after it the frame is replayed step by step on a copy
+//! of the world that has the frame's gravity and board motion (everything a step
+//! reads except the marbles, which the frame changed, and the counters). The
+//! physics is deterministic, so the replay goes through exactly the frame's
+//! states; the tool checks that the replay ends where the frame did and fails
+//! loudly otherwise. The game itself, its judging and its hash are untouched by
+//! tracing.
+//!
+//! * Fixed steps (`--stepping fixed`): one row per step, the state after it (at
+//!   the default 8 substeps that is one row per 1/1024 s; fewer substeps give
+//!   fewer rows — between two fixed steps the state is not defined).
+//! * Event steps (`--stepping events`, one step per 1/128 s frame by default):
+//!   the replay records every piece of closed-form flight
+//!   ([`World::step_observed`] into a [`FlightLog`]) and samples it at every
+//!   1/1024 s instant inside the step ([`sample`]); the row at the step's end is
+//!   the world's state after the step. A state jump at an event instant (a
+//!   bounce) belongs to the flight that starts there.
+//!
+//! Columns ([`trace_header`]): `step,t_s` (the step the instant ends or lies in,
+//! 1-based, and the simulated time), then `x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s`
+//! for marble 0 and `xN_mm,yN_mm,zN_mm,vxN_mm_s,vyN_mm_s,vzN_mm_s` for each
+//! further marble `N` — one row per instant, so marble–marble distances are read
+//! off a single row.
 //!
 //! # Exit status
 //!
@@ -47,7 +66,7 @@ use crate::game::autopilot::Autopilot;
 use crate::game::level::{LevelError, LevelView};
 use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::{Session, SYNTHETIC_TILT};
-use crate::physics::{Marble, Scalar, SetupError, Stepping};
+use crate::physics::{Marble, Scalar, Segment, SetupError, StepObserver, Stepping, Vec3, World};
 
 /// Seconds the last GIF image is held before the animation loops.
 const GIF_HOLD_S: f64 = 1.5;
@@ -79,15 +98,17 @@ pub struct Args {
     /// Number type of the physics.
     #[arg(long, value_name = "NAME", default_value = "i8f24")]
     pub backend: String,
-    /// The physics stepper: `fixed` steps (the micro:bits' firmware) or `events`
-    /// (QEMU's firmware; one event step per frame).
-    #[arg(long, value_name = "MODE", default_value = "fixed", value_parser = parse_stepping)]
-    pub stepping: Stepping,
     /// Physics steps per frame: 1, 2, 4, 8 or 16 (the frame rate stays 128 Hz).
-    /// Default: 8 fixed steps, or 1 event step.
+    /// Default: 8 with fixed steps, 1 (one step per frame) with events.
     #[arg(long, value_name = "N", value_parser = parse_substeps)]
     pub substeps: Option<u32>,
-    /// Write one CSV row per physics step (first marble, mm and mm/s) to FILE.
+    /// How a step is crossed: `fixed` (the closed form over the step, contacts at
+    /// its end, speed capped; the micro:bits' firmware) or `events` (each marble
+    /// flies its closed form from event to event; QEMU's firmware).
+    #[arg(long, value_name = "MODE", default_value = "fixed", value_parser = parse_stepping)]
+    pub stepping: Stepping,
+    /// Write every marble's position (mm) and velocity (mm/s) to FILE as CSV: a
+    /// row per 1/1024 s with events, a row per step with fixed steps.
     #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
     /// Print one JSON line instead of the human summary.
@@ -117,18 +138,26 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_stepping(s: &str) -> Result<Stepping, String> {
-    match s {
-        "fixed" => Ok(Stepping::Fixed),
-        "events" => Ok(Stepping::Events),
-        _ => Err(format!("`{s}` is not `fixed` or `events`")),
-    }
-}
-
 fn parse_substeps(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(n @ (1 | 2 | 4 | 8 | 16)) => Ok(n),
         _ => Err(format!("`{s}` is not one of 1, 2, 4, 8, 16")),
+    }
+}
+
+fn parse_stepping(s: &str) -> Result<Stepping, String> {
+    match s {
+        "fixed" => Ok(Stepping::Fixed),
+        "events" => Ok(Stepping::Events),
+        _ => Err(format!("`{s}` is not one of fixed, events")),
+    }
+}
+
+/// A stepping mode's name in the JSON and the summary.
+pub fn stepping_name(s: Stepping) -> &'static str {
+    match s {
+        Stepping::Fixed => "fixed",
+        Stepping::Events => "events",
     }
 }
 
@@ -166,10 +195,12 @@ pub struct Report {
     pub marble_radius_mm: f64,
     /// Marbles in the level.
     pub marbles: usize,
-    /// First marble at the start (mm, tile frame).
-    pub start_mm: [f64; 3],
-    /// First marble at the end (mm, tile frame).
-    pub final_mm: [f64; 3],
+    /// `fixed` or `events`.
+    pub stepping: &'static str,
+    /// Every marble at the start.
+    pub start: Vec<MarbleState>,
+    /// Every marble at the end.
+    pub end: Vec<MarbleState>,
     /// `Session::state_hash` at the end.
     pub state_hash: u64,
     /// Readings the tilt path rejected.
@@ -180,6 +211,42 @@ pub struct Report {
     pub trace_rows: u64,
     /// GIF frames written by `--gif`.
     pub gif_frames: usize,
+}
+
+/// One marble's state in the report (mm and mm/s, tile frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MarbleState {
+    /// Centre.
+    pub pos_mm: [f64; 3],
+    /// Velocity.
+    pub vel_mm_s: [f64; 3],
+    /// Fallen through a hole or off the board.
+    pub out: bool,
+}
+
+impl MarbleState {
+    fn json(&self) -> String {
+        let [x, y, z] = self.pos_mm.map(json_number);
+        let [vx, vy, vz] = self.vel_mm_s.map(json_number);
+        format!(
+            r#"{{"x_mm":{x},"y_mm":{y},"z_mm":{z},"vx_mm_s":{vx},"vy_mm_s":{vy},"vz_mm_s":{vz},"out":{}}}"#,
+            self.out
+        )
+    }
+}
+
+/// `start` and `final` in the JSON: marble 0's position at the top (the fields
+/// of old), every marble's state in `marbles`.
+fn marbles_json(ms: &[MarbleState]) -> String {
+    let [x, y, z] = ms
+        .first()
+        .map_or([f64::NAN; 3], |m| m.pos_mm)
+        .map(json_number);
+    let list: Vec<String> = ms.iter().map(MarbleState::json).collect();
+    format!(
+        r#"{{"x_mm":{x},"y_mm":{y},"z_mm":{z},"marbles":[{}]}}"#,
+        list.join(",")
+    )
 }
 
 impl Report {
@@ -194,19 +261,11 @@ impl Report {
 
     /// The `--json` line.
     pub fn json(&self) -> String {
-        let p = |v: [f64; 3]| {
-            format!(
-                "{{\"x_mm\":{},\"y_mm\":{},\"z_mm\":{}}}",
-                json_number(v[0]),
-                json_number(v[1]),
-                json_number(v[2])
-            )
-        };
         format!(
             "{{\"level\":{},\"outcome\":\"{}\",\"steps\":{},\"frames\":{},\"sim_seconds\":{},\"dt_s\":{},\
-             \"substeps\":{},\"backend\":\"{}\",\"short_mm\":{},\"long_mm\":{},\"marble_radius_mm\":{},\
-             \"marbles\":{},\"start\":{},\"final\":{},\"state_hash\":\"{:016x}\",\"tilt_errors\":{},\
-             \"wall_s\":{},\"speed_x\":{}}}",
+             \"substeps\":{},\"stepping\":\"{}\",\"backend\":\"{}\",\"short_mm\":{},\"long_mm\":{},\
+             \"marble_radius_mm\":{},\"marbles\":{},\"start\":{},\"final\":{},\"state_hash\":\"{:016x}\",\
+             \"tilt_errors\":{},\"wall_s\":{},\"speed_x\":{}}}",
             json_string(&self.level),
             self.outcome,
             self.steps,
@@ -214,13 +273,14 @@ impl Report {
             json_number(self.sim_seconds),
             json_number(self.dt_s),
             self.substeps,
+            self.stepping,
             self.backend,
             json_number(self.short_mm),
             json_number(self.long_mm),
             json_number(self.marble_radius_mm),
             self.marbles,
-            p(self.start_mm),
-            p(self.final_mm),
+            marbles_json(&self.start),
+            marbles_json(&self.end),
             self.state_hash,
             self.tilt_errors,
             json_number(self.wall_s),
@@ -230,11 +290,8 @@ impl Report {
 
     /// The human summary.
     pub fn summary(&self) -> String {
-        let f = self.final_mm;
         let mut s = format!(
-            "{}: {} after {:.3} s ({} frames, {} steps of 1/{} s, {} substeps, {})\n\
-             marble 0: start ({:.2}, {:.2}, {:.2}) mm → end ({:.2}, {:.2}, {:.2}) mm\n\
-             state_hash {:016x}; {:.0}× real time",
+            "{}: {} after {:.3} s ({} frames, {} steps of 1/{} s, {} substeps, {} stepping, {})\n",
             self.level,
             self.outcome,
             self.sim_seconds,
@@ -242,16 +299,27 @@ impl Report {
             self.steps,
             (1.0 / self.dt_s).round(),
             self.substeps,
+            self.stepping,
             self.backend,
-            self.start_mm[0],
-            self.start_mm[1],
-            self.start_mm[2],
-            f[0],
-            f[1],
-            f[2],
-            self.state_hash,
-            self.speed_x(),
         );
+        for (n, (a, b)) in self.start.iter().zip(&self.end).enumerate() {
+            let (p, q) = (a.pos_mm, b.pos_mm);
+            s.push_str(&format!(
+                "marble {n}: start ({:.2}, {:.2}, {:.2}) mm → end ({:.2}, {:.2}, {:.2}) mm{}\n",
+                p[0],
+                p[1],
+                p[2],
+                q[0],
+                q[1],
+                q[2],
+                if b.out { " (out)" } else { "" }
+            ));
+        }
+        s.push_str(&format!(
+            "state_hash {:016x}; {:.0}× real time",
+            self.state_hash,
+            self.speed_x()
+        ));
         if self.tilt_errors > 0 {
             s.push_str(&format!(
                 "\n{} readings rejected by the tilt path",
@@ -278,9 +346,124 @@ struct Job<'o> {
     gif: Option<(&'o Path, GifRecorder, u32)>,
 }
 
-fn mm<S: Scalar>(g: &Game<'_, S>, v: crate::physics::Vec3<S>) -> [f64; 3] {
-    let l = &g.world().params().layout;
-    [l.to_mm(v.x), l.to_mm(v.y), l.to_mm(v.z)]
+fn states<S: Scalar, const M: usize>(w: &World<'_, S, M>) -> Vec<MarbleState> {
+    let l = &w.params().layout;
+    let mm = |v: Vec3<S>| [l.to_mm(v.x), l.to_mm(v.y), l.to_mm(v.z)];
+    w.marbles()
+        .iter()
+        .map(|m| MarbleState {
+            pos_mm: mm(m.pos),
+            vel_mm_s: mm(m.vel),
+            out: m.out,
+        })
+        .collect()
+}
+
+/// The trace's header for `marbles` marbles (see the module docs).
+pub fn trace_header(marbles: usize) -> String {
+    let mut h = String::from("step,t_s");
+    for n in 0..marbles {
+        let n = if n == 0 { String::new() } else { n.to_string() };
+        for q in ["x", "y", "z"] {
+            h.push_str(&format!(",{q}{n}_mm"));
+        }
+        for q in ["vx", "vy", "vz"] {
+            h.push_str(&format!(",{q}{n}_mm_s"));
+        }
+    }
+    h
+}
+
+/// Every flight of one step, per marble, in time order (a [`StepObserver`]).
+#[derive(Clone, Debug)]
+pub struct FlightLog<S> {
+    /// Per marble: `(from, to, segment)`, fractions of the step.
+    pub flights: Vec<Vec<(S, S, Segment<S>)>>,
+}
+
+impl<S> Default for FlightLog<S> {
+    fn default() -> Self {
+        FlightLog {
+            flights: Vec::new(),
+        }
+    }
+}
+
+impl<S> FlightLog<S> {
+    /// Forgets the flights so far (keeps the room).
+    pub fn clear(&mut self) {
+        for f in &mut self.flights {
+            f.clear();
+        }
+    }
+    /// Marble `n`'s flights.
+    pub fn of(&self, n: usize) -> &[(S, S, Segment<S>)] {
+        self.flights.get(n).map_or(&[][..], |f| &f[..])
+    }
+}
+
+impl<S: Copy> StepObserver<S> for FlightLog<S> {
+    fn flight(&mut self, marble: usize, from: S, to: S, seg: &Segment<S>) {
+        if self.flights.len() <= marble {
+            self.flights.resize_with(marble + 1, Vec::new);
+        }
+        self.flights[marble].push((from, to, *seg));
+    }
+}
+
+/// A marble's position and velocity at `tau` (a fraction of the step) from its
+/// `flights` in that step: on the flight with `from ≤ tau < to` (a jump at a
+/// flight's end belongs to the next one); between flights (asleep for a while)
+/// where the last one ended; before any, `start` (its state before the step).
+pub fn sample<S: Scalar>(
+    flights: &[(S, S, Segment<S>)],
+    start: &Marble<S>,
+    tau: S,
+) -> (Vec3<S>, Vec3<S>) {
+    match flights.iter().rev().find(|(from, _, _)| *from <= tau) {
+        Some(&(from, to, ref seg)) => {
+            let s = if tau < to { tau - from } else { to - from };
+            (seg.pos_at(s), seg.vel_at(s))
+        }
+        None => (start.pos, start.vel),
+    }
+}
+
+/// Trace rows per step: one per 1/1024 s with events (at least one), one per
+/// step with fixed steps.
+pub fn samples_per_step<S: Scalar, const M: usize>(w: &World<'_, S, M>) -> u32 {
+    if w.params().events() {
+        1 << 10u32.saturating_sub(w.params().k)
+    } else {
+        1
+    }
+}
+
+/// Advances `w` by one step and returns `samples` rows: the instants `j/samples`
+/// of the step (`j = 1 ..= samples`), every marble's position and velocity at
+/// each (pitch, pitch/s). The last row is the world's state after the step; the
+/// others are sampled from the step's flights ([`sample`]; only event steps have
+/// flights, so with fixed steps ask for one sample).
+pub fn step_sampled<S: Scalar, const M: usize>(
+    w: &mut World<'_, S, M>,
+    log: &mut FlightLog<S>,
+    samples: u32,
+) -> Vec<Vec<(Vec3<S>, Vec3<S>)>> {
+    let before: Vec<Marble<S>> = w.marbles().to_vec();
+    log.clear();
+    w.step_observed(log);
+    let mut rows = Vec::with_capacity(samples as usize);
+    for j in 1..samples {
+        let tau = S::from_int(j as i32).div(S::from_int(samples as i32));
+        let row = before
+            .iter()
+            .enumerate()
+            .map(|(n, m)| sample(log.of(n), m, tau))
+            .collect();
+        rows.push(row);
+    }
+    rows.push(w.marbles().iter().map(|m| (m.pos, m.vel)).collect());
+    rows
 }
 
 impl WithScalar for Job<'_> {
@@ -295,18 +478,18 @@ impl WithScalar for Job<'_> {
         };
         let hz = self.config.frame_hz() as f64;
         let substeps = 1u32 << self.config.substeps_log2;
-        let start_mm = mm(session.game(), session.game().world().marbles()[0].pos);
+        let start = states(session.game().world());
         let mut trace_rows = 0u64;
         let write_err = |p: &Path, e: std::io::Error| format!("cannot write {}: {e}", p.display());
         if let Some((p, w)) = &mut self.trace_out {
-            writeln!(w, "step,t_s,x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s")
-                .map_err(|e| write_err(p, e))?;
+            writeln!(w, "{}", trace_header(start.len())).map_err(|e| write_err(p, e))?;
         }
         if let Some((p, gif, _)) = &mut self.gif {
             let (_, _, px) = super::level_picture(session.game());
             gif.push(&px, 0.0).map_err(|e| write_err(p, e))?;
         }
         let dt = session.game().world().params().dt();
+        let mut log = FlightLog::default();
         let started = Instant::now();
         let mut frames = 0u64;
         while session.game().phase() == Phase::Playing && frames < self.max_frames {
@@ -324,15 +507,14 @@ impl WithScalar for Job<'_> {
             session.frame(reading);
             frames += 1;
             if let (Some((p, w)), Some((marbles, stats))) = (&mut self.trace_out, before) {
-                trace_rows += replay_frame(&session, &marbles, stats, substeps, dt, w).map_err(
-                    |e| match e {
+                trace_rows += replay_frame(&session, &marbles, stats, substeps, dt, &mut log, w)
+                    .map_err(|e| match e {
                         ReplayError::Io(e) => write_err(p, e),
                         ReplayError::Diverged => {
                             "internal error: the per-step replay diverged from the frame"
                                 .to_string()
                         }
-                    },
-                )?;
+                    })?;
             }
             if let Some((p, gif, every)) = &mut self.gif {
                 if frames.is_multiple_of(*every as u64) || session.game().phase() != Phase::Playing
@@ -373,8 +555,9 @@ impl WithScalar for Job<'_> {
             long_mm: spec.long_um as f64 / 1000.0,
             marble_radius_mm: spec.radius_um as f64 / 1000.0,
             marbles: game.world().marbles().len(),
-            start_mm,
-            final_mm: mm(game, game.world().marbles()[0].pos),
+            stepping: stepping_name(self.config.stepping),
+            start,
+            end: states(game.world()),
             state_hash: session.state_hash(),
             tilt_errors: session.tilt_errors().0,
             wall_s,
@@ -389,14 +572,15 @@ enum ReplayError {
     Diverged,
 }
 
-/// Replays the frame just played step by step (see the module docs) and writes a
-/// row per step; returns the rows written.
+/// Replays the frame just played step by step (see the module docs) and writes
+/// its rows; returns the rows written.
 fn replay_frame<S: Scalar>(
     session: &Session<'_, S>,
     before: &[Marble<S>],
     stats: crate::physics::StepStats,
     substeps: u32,
     dt: f64,
+    log: &mut FlightLog<S>,
     out: &mut impl Write,
 ) -> Result<u64, ReplayError> {
     let game = session.game();
@@ -412,30 +596,36 @@ fn replay_frame<S: Scalar>(
     }
     w.stats = stats;
     let layout = after.params().layout;
+    let c = |v: S| layout.to_mm(v);
+    let samples = samples_per_step(&w);
     let first_step = game.steps() - substeps as u64;
+    let mut rows = 0u64;
+    let mut line = String::new();
     for n in 1..=substeps as u64 {
-        w.step();
-        let m = w.marbles()[0];
         let step = first_step + n;
-        let c = |v: S| layout.to_mm(v);
-        writeln!(
-            out,
-            "{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
-            step,
-            json_number(step as f64 * dt),
-            c(m.pos.x),
-            c(m.pos.y),
-            c(m.pos.z),
-            c(m.vel.x),
-            c(m.vel.y),
-            c(m.vel.z)
-        )
-        .map_err(ReplayError::Io)?;
+        for (j, row) in step_sampled(&mut w, log, samples).iter().enumerate() {
+            let t = (step - 1) as f64 * dt + (j + 1) as f64 / samples as f64 * dt;
+            line.clear();
+            line.push_str(&format!("{step},{}", json_number(t)));
+            for (p, v) in row {
+                line.push_str(&format!(
+                    ",{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+                    c(p.x),
+                    c(p.y),
+                    c(p.z),
+                    c(v.x),
+                    c(v.y),
+                    c(v.z)
+                ));
+            }
+            writeln!(out, "{line}").map_err(ReplayError::Io)?;
+            rows += 1;
+        }
     }
     if w.marbles() != after.marbles() {
         return Err(ReplayError::Diverged);
     }
-    Ok(substeps as u64)
+    Ok(rows)
 }
 
 /// `--check FILE`: 0 and `ok`, or 1 and `FILE:line:column: message`.

@@ -114,13 +114,15 @@ impl Job for Measure {
         let layout = w.params().layout;
         let mm = |v: S| layout.to_mm(v);
         let rolling = self.effects.rolling;
-        let one = 1u32 << self.step_log2;
+        // Steps per simulated second and per frame: events step once a frame.
+        let k = w.params().k;
+        let one = 1u32 << k;
         let pitch_mm = layout.pitch_um as f64 / 1000.0;
         let mut out = Outcome::default();
         let mut min_gap = f64::INFINITY;
         let mut cap_hits = 0u64;
         let trace: Trace = scene.trace;
-        let frame_mask = (1u32 << (self.step_log2 - FRAME_LOG2)) - 1;
+        let frame_mask = (1u32 << (k - FRAME_LOG2)) - 1;
         let m0 = w.marbles()[0];
         out.track.push([mm(m0.pos.x), mm(m0.pos.z)]);
         drive(&mut w, &trace, 0, steps(self.step_log2), |w, n| {
@@ -162,7 +164,8 @@ impl Job for Measure {
     }
 }
 
-/// An instrumented run of `scene` with backend `backend` at `2^step_log2` steps/s.
+/// An instrumented run of `scene` with backend `backend` at `2^step_log2` steps/s
+/// ([`marble_rolling::study::EVENTS_LOG2`]: event stepping, a step per frame).
 pub fn measure(
     scene: SceneId,
     backend: usize,

@@ -4,8 +4,9 @@
 //! One command runs the whole study:
 //!
 //! 1. accuracy on the host: every scene of [`marble_rolling::study`] × scalar
-//!    backend × step rate (2^7 … 2^12 steps/s), against an `f64` reference at
-//!    2^14 steps/s and against the analytic solution where one exists;
+//!    backend × stepping (event stepping at the frame rate, and fixed steps at
+//!    2^7 … 2^12 steps/s), against an `f64` reference at 2^14 steps/s and
+//!    against the analytic solution where one exists;
 //! 2. the peer: the same scenes in rapier2d (f32);
 //! 3. host cost: a timing loop (warm-up, repeated whole runs, minimum and median
 //!    ns/step) and `valgrind --tool=callgrind` instructions per step;
@@ -29,7 +30,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use marble_rolling::study::{
-    Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2, EFFECT_VARIANTS, REFERENCE_STEP_LOG2, STEP_LOG2,
+    is_events, Scene, SceneId, BACKENDS, DEFAULT_STEP_LOG2, EFFECT_VARIANTS, EVENTS_LOG2,
+    REFERENCE_STEP_LOG2, STEPPINGS, VARIANT_STEPPINGS,
 };
 
 use host::{Outcome, Timing};
@@ -73,7 +75,7 @@ pub struct Cell {
     pub energy_pct: f64,
     /// Host time per step.
     pub host: Timing,
-    /// Host instructions per step (callgrind; default rate only).
+    /// Host instructions per step (callgrind; default rate and events only).
     pub host_ir: Option<f64>,
     /// Cortex-M4F count.
     pub m4: Option<Count>,
@@ -84,13 +86,13 @@ pub struct Cell {
 /// Everything the report needs.
 #[derive(Default)]
 pub struct Study {
-    /// By (scene, engine, step_log2).
+    /// By (scene, engine, step_log2); `EVENTS_LOG2` for event stepping (ours only).
     pub cells: HashMap<(SceneId, Engine, u32), Cell>,
     /// The `f64` reference runs at 2^14 steps/s.
     pub reference: HashMap<SceneId, Outcome>,
-    /// Per-effect variants on the host, i8f24 at the default rate: (scene, variant) →
-    /// (outcome, timing).
-    pub variants: HashMap<(SceneId, usize), (Outcome, Timing)>,
+    /// Per-effect variants on the host, i8f24 at the default rate and with events:
+    /// (scene, variant, step_log2) → (outcome, timing).
+    pub variants: HashMap<(SceneId, usize, u32), (Outcome, Timing)>,
     /// Target runs.
     pub m4: Option<TargetRun>,
     /// Target runs.
@@ -105,6 +107,14 @@ pub struct Study {
     pub phases: Vec<(String, f64)>,
     /// Whether --quick was given.
     pub quick: bool,
+}
+
+/// The configurations an engine runs: ours every stepping, rapier2d the fixed
+/// rates (it has no event mode).
+fn steppings(e: Engine) -> impl Iterator<Item = u32> {
+    STEPPINGS
+        .into_iter()
+        .filter(move |&k| e != Engine::Rapier || !is_events(k))
 }
 
 /// Analytic position (mm) at `t` seconds, where the scene has one.
@@ -232,17 +242,17 @@ fn main() {
         study.reference.insert(s.id, r);
     }
     eprintln!(
-        "accuracy: {} scenes × {} engines × {} rates",
+        "accuracy: {} scenes × {} engines × {} steppings (events and fixed rates)",
         scenes.len(),
         engines.len(),
-        STEP_LOG2.len()
+        STEPPINGS.len()
     );
     for s in &scenes {
         let reference = study.reference[&s.id].clone();
         let ana1 = analytic(s.id, 1.0);
         let ana10 = analytic(s.id, 10.0);
         for &e in &engines {
-            for k in STEP_LOG2 {
+            for k in steppings(e) {
                 let out = match e {
                     Engine::Ours(b) => host::measure(s.id, b, k, None).expect("setup"),
                     Engine::Rapier => peer::measure(s.id, k),
@@ -278,7 +288,7 @@ fn main() {
     eprintln!("host time: timing loop ({reps} runs per configuration after a warm-up)");
     for s in &scenes {
         for &e in &engines {
-            for k in STEP_LOG2 {
+            for k in steppings(e) {
                 let timing = match e {
                     Engine::Ours(b) => host::time(s.id, b, k, None, reps, min_s).expect("setup"),
                     Engine::Rapier => peer::time(s.id, k, peer_reps, 0.0),
@@ -290,31 +300,39 @@ fn main() {
         }
     }
     for scene in [SceneId::Maze, SceneId::Bounce] {
-        for (v, (_, fx)) in EFFECT_VARIANTS.iter().enumerate() {
-            let out = host::measure(scene, 0, DEFAULT_STEP_LOG2, Some(*fx)).expect("setup");
-            let timing =
-                host::time(scene, 0, DEFAULT_STEP_LOG2, Some(*fx), reps, min_s).expect("setup");
-            study.variants.insert((scene, v), (out, timing));
+        for k in VARIANT_STEPPINGS {
+            for (v, (_, fx)) in EFFECT_VARIANTS.iter().enumerate() {
+                let out = host::measure(scene, 0, k, Some(*fx)).expect("setup");
+                let timing = host::time(scene, 0, k, Some(*fx), reps, min_s).expect("setup");
+                study.variants.insert((scene, v, k), (out, timing));
+            }
         }
     }
     study
         .phases
         .push(("host timing".into(), t.elapsed().as_secs_f64()));
 
-    // 3b. Callgrind at the default rate.
+    // 3b. Callgrind at the default rate (every engine) and with events (ours).
     let t = Instant::now();
     if no_callgrind {
         study.callgrind_note = Some("skipped (--no-callgrind)".into());
     } else if !callgrind::available() {
         study.callgrind_note = Some("valgrind is not installed (apt-get install valgrind)".into());
     } else {
-        eprintln!("host instructions: callgrind at 2^{DEFAULT_STEP_LOG2} steps/s");
+        eprintln!("host instructions: callgrind at 2^{DEFAULT_STEP_LOG2} steps/s and with events");
         let exe = std::env::current_exe().expect("own path");
         let work = std::env::temp_dir().join(format!("accuracy-callgrind-{}", std::process::id()));
         let _ = std::fs::create_dir_all(&work);
-        let jobs: Vec<(SceneId, Engine)> = scenes
+        let jobs: Vec<(SceneId, Engine, u32)> = scenes
             .iter()
-            .flat_map(|s| engines.iter().map(move |&e| (s.id, e)))
+            .flat_map(|s| {
+                engines.iter().flat_map(move |&e| {
+                    [DEFAULT_STEP_LOG2, EVENTS_LOG2]
+                        .into_iter()
+                        .filter(move |&k| e != Engine::Rapier || !is_events(k))
+                        .map(move |k| (s.id, e, k))
+                })
+            })
             .collect();
         let results = std::sync::Mutex::new(Vec::new());
         let next = std::sync::atomic::AtomicUsize::new(0);
@@ -326,34 +344,45 @@ fn main() {
             for _ in 0..threads {
                 sc.spawn(|| loop {
                     let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    let Some(&(id, e)) = jobs.get(i) else { break };
-                    let r = callgrind::count(&exe, id, e.name(), DEFAULT_STEP_LOG2, &work);
-                    results.lock().unwrap().push((id, e, r));
+                    let Some(&(id, e, k)) = jobs.get(i) else {
+                        break;
+                    };
+                    let r = callgrind::count(&exe, id, e.name(), k, &work);
+                    results.lock().unwrap().push((id, e, k, r));
                 });
             }
         });
         let mut failures = Vec::new();
-        for id in [SceneId::Maze, SceneId::Incline] {
+        for (id, k) in [
+            (SceneId::Maze, DEFAULT_STEP_LOG2),
+            (SceneId::Incline, DEFAULT_STEP_LOG2),
+            (SceneId::Maze, EVENTS_LOG2),
+        ] {
             let title = format!(
                 "{} {} @ {}",
                 Scene::get(id).name,
                 BACKENDS[0],
-                1u32 << DEFAULT_STEP_LOG2
+                report::label(k)
             );
-            match callgrind::profile(&exe, id, BACKENDS[0], DEFAULT_STEP_LOG2, &work, 12) {
+            match callgrind::profile(&exe, id, BACKENDS[0], k, &work, 12) {
                 Ok(rows) => study.profiles.push((title, rows)),
                 Err(e) => failures.push(format!("profile {title}: {e}")),
             }
         }
         let _ = std::fs::remove_dir_all(&work);
-        for (id, e, r) in results.into_inner().unwrap() {
+        for (id, e, k, r) in results.into_inner().unwrap() {
             match r {
                 Ok(ir) => {
-                    if let Some(c) = study.cells.get_mut(&(id, e, DEFAULT_STEP_LOG2)) {
+                    if let Some(c) = study.cells.get_mut(&(id, e, k)) {
                         c.host_ir = Some(ir);
                     }
                 }
-                Err(msg) => failures.push(format!("{} {}: {msg}", Scene::get(id).name, e.name())),
+                Err(msg) => failures.push(format!(
+                    "{} {} @ {}: {msg}",
+                    Scene::get(id).name,
+                    e.name(),
+                    report::label(k)
+                )),
             }
         }
         if !failures.is_empty() {
@@ -366,7 +395,8 @@ fn main() {
     ));
 
     // 4. Target.
-    let rates: u32 = STEP_LOG2.iter().map(|k| 1u32 << k).sum();
+    // Bit k for 2^k steps/s, bit 0 for events.
+    let rates: u32 = STEPPINGS.iter().map(|k| 1u32 << k).sum();
     if !no_target {
         // Both QEMU runs at once (one core each); cargo serialises their builds.
         let cpus: Vec<Cpu> = [Cpu::M4, Cpu::M0]
@@ -396,7 +426,7 @@ fn main() {
             }
             for s in &scenes {
                 for (b, backend) in BACKENDS.iter().enumerate() {
-                    for k in STEP_LOG2 {
+                    for k in STEPPINGS {
                         let key = (
                             s.name.to_string(),
                             backend.to_string(),

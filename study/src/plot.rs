@@ -7,9 +7,9 @@ use std::path::Path;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use marble_rolling::study::{SceneId, BACKENDS, DEFAULT_STEP_LOG2, STEP_LOG2};
+use marble_rolling::study::{is_events, SceneId, BACKENDS, DEFAULT_STEP_LOG2, STEP_LOG2};
 
-use super::report::{configs, sig, BUDGET_PER_MS, TARGET_MM};
+use super::report::{configs, label, per_second, sig, BUDGET_PER_MS, TARGET_MM};
 use super::{Engine, Study};
 
 const FLOOR: f64 = 1e-6;
@@ -138,16 +138,24 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
             .map(|c| (c.cost(), err(c.suite), c.k, c.pareto))
             .collect();
         let col = color(b);
+        // Fixed steps: circles; event stepping: its own series of triangles.
         ch.draw_series(
             pts.iter()
+                .filter(|p| !is_events(p.2))
                 .map(|&(x, y, _, p)| Circle::new((x, y), if p { 6 } else { 4 }, col.filled())),
         )
         .map_err(|e| e.to_string())?
         .label(*name)
         .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
+        ch.draw_series(
+            pts.iter().filter(|p| is_events(p.2)).map(|&(x, y, _, p)| {
+                TriangleMarker::new((x, y), if p { 9 } else { 7 }, col.filled())
+            }),
+        )
+        .map_err(|e| e.to_string())?;
         ch.draw_series(pts.iter().map(|&(x, y, k, _)| {
             Text::new(
-                format!("{}", 1u32 << k),
+                label(k),
                 (x * 1.06, y * 1.08),
                 ("sans-serif", 11).into_font().color(&col),
             )
@@ -163,6 +171,11 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
             .map_err(|e| e.to_string())?;
         }
     }
+    // The legend entry of the event-stepping series (drawn per backend above).
+    ch.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+        .map_err(|e| e.to_string())?
+        .label("event stepping (triangles)")
+        .legend(|(x, y)| TriangleMarker::new((x + 9, y), 7, BLACK.filled()));
     ch.configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.4))
@@ -171,10 +184,19 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         .draw()
         .map_err(|e| e.to_string())?;
 
-    // Right: host time, with rapier2d (same suite error, maze time).
+    // Right: host time per simulated ms (an event step is a whole frame), with
+    // rapier2d (same suite error, maze time).
+    let ms = |ns: f64, k: u32| ns * per_second(k) / 1000.0;
     let mut pts: Vec<(Engine, u32, f64, f64)> = configs
         .iter()
-        .map(|c| (Engine::Ours(c.backend), c.k, c.host_ns, err(c.suite)))
+        .map(|c| {
+            (
+                Engine::Ours(c.backend),
+                c.k,
+                ms(c.host_ns, c.k),
+                err(c.suite),
+            )
+        })
         .collect();
     for k in STEP_LOG2 {
         let cell = |id: SceneId| study.cells.get(&(id, Engine::Rapier, k));
@@ -185,7 +207,7 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
             cell(SceneId::Maze),
         ) {
             let suite = i.err10.max(b.err_max).max(c.ana10.unwrap_or(0.0));
-            pts.push((Engine::Rapier, k, m.host.min_ns, err(suite)));
+            pts.push((Engine::Rapier, k, ms(m.host.min_ns, k), err(suite)));
         }
     }
     let (x0, x1) = bounds(pts.iter().map(|p| p.2));
@@ -201,7 +223,7 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
         .map_err(|e| e.to_string())?;
     ch.configure_mesh()
-        .x_desc("host ns per step (flat maze)")
+        .x_desc("host ns per simulated ms (flat maze)")
         .y_desc("suite error (mm)")
         .label_style(("sans-serif", 13))
         .x_label_formatter(&|v| sig(*v))
@@ -229,20 +251,31 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         let mine: Vec<_> = pts.iter().filter(|p| p.0 == b).collect();
         ch.draw_series(
             mine.iter()
+                .filter(|p| !is_events(p.1))
                 .map(|p| Circle::new((p.2, p.3), 5, col.filled())),
         )
         .map_err(|e| e.to_string())?
         .label(name)
         .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
+        ch.draw_series(
+            mine.iter()
+                .filter(|p| is_events(p.1))
+                .map(|p| TriangleMarker::new((p.2, p.3), 7, col.filled())),
+        )
+        .map_err(|e| e.to_string())?;
         ch.draw_series(mine.iter().map(|p| {
             Text::new(
-                format!("{}", 1u32 << p.1),
+                label(p.1),
                 (p.2 * 1.05, p.3 * 1.08),
                 ("sans-serif", 11).into_font().color(&col),
             )
         }))
         .map_err(|e| e.to_string())?;
     }
+    ch.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+        .map_err(|e| e.to_string())?
+        .label("event stepping (triangles)")
+        .legend(|(x, y)| TriangleMarker::new((x + 9, y), 7, BLACK.filled()));
     ch.configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.4))

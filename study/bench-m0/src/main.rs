@@ -9,6 +9,8 @@
 //! BENCH <scene> <backend> <variant> <step_log2> <steps> <instructions> <hash> <contacts> <collisions>
 //! ```
 //!
+//! (`<step_log2>` 0 is event stepping, `study::EVENTS_LOG2`: a step per frame.)
+//!
 //! No embassy, no defmt: cortex-m-rt's startup with this crate's own memory
 //! map (`memory.x`: the nRF51822's 256 KiB flash and 16 KiB RAM), and the
 //! `semihosting` crate for the console, the command line and the exit status.
@@ -24,7 +26,12 @@
 #![no_main]
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
-use marble_rolling::study::{bench_one, bench_plan, Scene, BACKENDS};
+use marble_rolling::study::{bench_one_in, bench_plan, Scene, BACKENDS};
+
+/// The backends this benchmark is built with (bit `n` for `BACKENDS[n]`): with
+/// event stepping the code of all six no longer fits the nRF51's 256 KiB of flash
+/// (170 KB over), so the M0 measures i8f24 (the firmware's), i16f16 and f32.
+const M0_BACKENDS: u32 = 0b00_1011;
 use semihosting::println;
 
 #[exception]
@@ -144,11 +151,11 @@ fn main() -> ! {
     let (_, empty) = time(|| core::hint::black_box(0u32));
     println!("EMPTY {}", to_instructions(empty));
 
-    let backends = mask_option("--backends", (1 << BACKENDS.len()) - 1);
+    let backends = mask_option("--backends", M0_BACKENDS) & M0_BACKENDS;
     let rates = mask_option("--rates", u32::MAX);
 
     bench_plan(backends, rates, |item| {
-        let result = bench_one(&item, &mut |f| to_instructions(time(f).1));
+        let result = bench_one_in::<M0_BACKENDS>(&item, &mut |f| to_instructions(time(f).1));
         match result {
             Some(r) => println!(
                 "BENCH {} {} {} {} {} {} {} {} {}",

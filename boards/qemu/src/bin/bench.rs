@@ -14,7 +14,9 @@
 //! [--backends=MASK] [--rates=MASK]`.
 //!
 //! Options on the semihosting command line: `--backends=MASK` (bit n selects
-//! `study::BACKENDS[n]`), `--rates=MASK` (bit k selects 2^k steps/s).
+//! `study::BACKENDS[n]`), `--rates=MASK` (bit k selects 2^k steps/s; bit 0
+//! selects event stepping, `study::EVENTS_LOG2`, printed as `<step_log2>` 0:
+//! its `<steps>` are frames, 128 per simulated second).
 //!
 //! The instruction counter is the board's TIMER0 (25 MHz, 3.2 ticks per
 //! instruction at shift=7), calibrated against a NOP loop of known length
