@@ -294,7 +294,6 @@ pub fn run() -> Outcome {
 
     say!("building the host simulator (cargo sim)…");
     let sim = firmware::build(&Artifact {
-        profile: None,
         package: "marble-rolling",
         bin: "sim",
         target: None,

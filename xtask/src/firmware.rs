@@ -11,12 +11,10 @@ use crate::error::{say, Failure};
 use crate::process;
 use crate::workspace;
 
-/// A binary to build in the release profile (or another).
+/// A binary to build in the release profile.
 pub struct Artifact<'a> {
     pub package: &'a str,
     pub bin: &'a str,
-    /// A cargo profile other than `release` (`--profile NAME`).
-    pub profile: Option<&'a str>,
     /// Cross target; the host when `None`.
     pub target: Option<&'a str>,
     pub features: Option<&'a str>,
@@ -30,7 +28,6 @@ impl Artifact<'_> {
         Artifact {
             package,
             bin,
-            profile: None,
             target: Some(target),
             features: None,
             quiet: false,
@@ -41,11 +38,7 @@ impl Artifact<'_> {
 /// Builds `what` and returns its executable.
 pub fn build(what: &Artifact) -> Result<PathBuf, Failure> {
     let mut cmd = workspace::cargo();
-    match what.profile {
-        Some(profile) => cmd.args(["build", "--profile", profile]),
-        None => cmd.args(["build", "--release"]),
-    };
-    cmd.args(["-p", what.package, "--bin", what.bin]);
+    cmd.args(["build", "--release", "-p", what.package, "--bin", what.bin]);
     if let Some(target) = what.target {
         cmd.args(["--target", target]);
     }

@@ -102,17 +102,10 @@ pub fn run(args: &[String]) -> Outcome {
     Ok(process::code(process::status(&mut cmd)?))
 }
 
-/// The v1 firmware's cargo profile: the release profile optimised for size
-/// (root Cargo.toml), what fits its 64 KiB flash budget.
-pub const PROFILE: &str = "release-small";
-
 /// Builds the firmware (`-p marble-microbit-v1 --target thumbv6m-none-eabi
-/// --profile release-small`).
+/// --release`).
 fn build() -> Result<PathBuf, Failure> {
-    firmware::build(&Artifact {
-        profile: Some(PROFILE),
-        ..Artifact::firmware(PACKAGE, BIN, M0)
-    })
+    firmware::build(&Artifact::firmware(PACKAGE, BIN, M0))
 }
 
 /// Where a QEMU run's decoded log goes.
@@ -755,7 +748,6 @@ fn compare_with_sim(
 ) -> Result<(), Failure> {
     say!("building the host simulator (cargo sim)…");
     let sim = firmware::build(&Artifact {
-        profile: None,
         package: "marble-rolling",
         bin: "sim",
         target: None,
