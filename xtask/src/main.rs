@@ -97,9 +97,9 @@ enum Task {
         /// Measure this ELF instead of the micro:bit firmware.
         elf: Option<PathBuf>,
     },
-    /// The full property run (profile soak): CASES per property, 21 shots each.
+    /// The full property run (profile soak): CASES per property, 42 shots each (both steppers).
     Properties {
-        #[arg(default_value_t = 48000)]
+        #[arg(default_value_t = 24000)]
         cases: u64,
     },
     /// Where the QEMU firmware's instructions go, by function (top TOP).
