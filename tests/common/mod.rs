@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use marble_rolling::physics::geometry::grid::TileGrid;
+use marble_rolling::physics::geometry::tiles::Aabb;
 pub use marble_rolling::physics::Stepping;
 use marble_rolling::physics::{
     Effects, Params, PhysicsSpec, Scalar, Segment, StepObserver, TileIndex, Vec3, World,
@@ -113,6 +114,19 @@ pub fn steps_of<S: Scalar>(p: &Params<S>, n: u32) -> u32 {
     ((n << p.k) >> 10).max(1)
 }
 
+/// The distance from point `c` to box `b` (pitch, in f64: the reference the
+/// fixed-point geometry is checked against).
+fn box_distance<S: Scalar>(c: [f64; 3], b: &Aabb<S>) -> f64 {
+    let (lo, hi) = (b.min.to_f64(), b.max.to_f64());
+    let d2: f64 = (0..3)
+        .map(|a| {
+            let v = (lo[a] - c[a]).max(c[a] - hi[a]).max(0.0);
+            v * v
+        })
+        .sum();
+    d2.sqrt()
+}
+
 /// The centre's distance to the nearest solid tile (pitch), for a centre at `c`.
 pub fn clearance_at<S: Scalar>(w: &World<'_, S, 4>, c: Vec3<S>) -> f64 {
     let p = w.params();
@@ -134,20 +148,7 @@ pub fn clearance_at<S: Scalar>(w: &World<'_, S, 4>, c: Vec3<S>) -> f64 {
                 if !t.is_solid(ti) {
                     continue;
                 }
-                let b = p.layout.tile_box(ti);
-                let (lo, hi) = (b.min.to_f64(), b.max.to_f64());
-                let mut d2 = 0.0;
-                for a in 0..3 {
-                    let v = if c[a] < lo[a] {
-                        lo[a] - c[a]
-                    } else if c[a] > hi[a] {
-                        c[a] - hi[a]
-                    } else {
-                        0.0
-                    };
-                    d2 += v * v;
-                }
-                best = best.min(d2.sqrt());
+                best = best.min(box_distance(c, &p.layout.tile_box(ti)));
             }
         }
     }
@@ -279,20 +280,7 @@ pub fn min_clearance<S: Scalar>(w: &World<'_, S, 4>, idx: usize) -> f64 {
                 if !t.is_solid(ti) {
                     continue;
                 }
-                let b = p.layout.tile_box(ti);
-                let (lo, hi) = (b.min.to_f64(), b.max.to_f64());
-                let mut d2 = 0.0;
-                for a in 0..3 {
-                    let v = if c[a] < lo[a] {
-                        lo[a] - c[a]
-                    } else if c[a] > hi[a] {
-                        c[a] - hi[a]
-                    } else {
-                        0.0
-                    };
-                    d2 += v * v;
-                }
-                best = best.min(d2.sqrt());
+                best = best.min(box_distance(c, &p.layout.tile_box(ti)));
             }
         }
     }
