@@ -473,7 +473,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
 
     /// One step by the stepper chosen at compile time: events if `EVENTS`, fixed
     /// steps otherwise. The other stepper is not linked (the event stepper is
-    /// about 30 KiB of Cortex-M4 code: more than a 64 KiB board can spare).
+    /// about 24 KiB of Cortex-M4 code: more than a 64 KiB board can spare).
     ///
     /// `EVENTS` must agree with the world's [`Stepping`] (its `dt` was validated
     /// for that mode); the game's [`Player`](crate::game::player::Player) sets up

@@ -62,7 +62,7 @@ static LINKS: Links<WIDTH, HEIGHT> = Links::new();
 /// The autopilot is linked: the demo needs it.
 const PILOT: bool = true;
 
-/// Fixed physics steps: the event stepper (about 30 KiB of code) does not fit
+/// Fixed physics steps: the event stepper (about 24 KiB of code) does not fit
 /// the flash (README, "Stepping: fixed or events").
 const EVENTS: bool = false;
 
