@@ -255,7 +255,7 @@ mod tests {
     fn defaults_and_usage_errors() {
         assert!(matches!(
             parse(&["properties"]),
-            Task::Properties { cases: 48000 }
+            Task::Properties { cases: 24000 }
         ));
         assert!(matches!(
             parse(&["qemu-profile", "20"]),
