@@ -292,57 +292,9 @@ pub fn run() -> Outcome {
         ));
     }
 
-    say!("building the host simulator (cargo sim)…");
-    let sim = firmware::build(&Artifact {
-        package: "marble-rolling",
-        bin: "sim",
-        target: None,
-        features: Some("tools"),
-        quiet: true,
-    })
-    .map_err(|e| {
-        Failure::new(format!(
-            "cannot build the host simulator (bin sim, feature tools): {}",
-            e.message
-        ))
-    })?;
-
-    println!(
-        "{}",
-        row([
-            "level",
-            "qemu",
-            "sim",
-            "q.steps",
-            "s.steps",
-            "qemu hash",
-            "sim hash",
-            "result"
-        ])
-    );
-    for level in &levels {
-        let sim = simulate(&sim, &level.name, stepping);
-        let verdict = verdict(level, sim.as_ref());
-        problems.0 |= verdict != Verdict::Ok;
-        let sim = sim.unwrap_or_default();
-        let or_dash = |field: &Option<String>| match field.as_deref() {
-            Some(text) if !text.is_empty() => text.to_string(),
-            _ => "-".to_string(),
-        };
-        println!(
-            "{}",
-            row([
-                &level.name,
-                &level.outcome,
-                &or_dash(&sim.outcome),
-                &level.steps,
-                &or_dash(&sim.steps),
-                &level.hash,
-                &or_dash(&sim.hash),
-                verdict.text(),
-            ])
-        );
-    }
+    let sim = build_sim()?;
+    let failed = compare_levels(&sim, &levels, stepping, "qemu");
+    problems.0 |= !failed.is_empty();
 
     let budget = workspace::env_number("CPU_BUDGET_CENTIPERCENT", 300)?;
     match parse_cpu_load(&text) {
@@ -387,6 +339,67 @@ fn run_demo(log: &Path) -> Outcome {
         Err(failure) if failure.status == 124 => Ok(124),
         Err(failure) => Err(failure),
     }
+}
+
+/// Builds the host simulator (`cargo sim`) the demo checks compare with.
+pub fn build_sim() -> Result<PathBuf, Failure> {
+    say!("building the host simulator (cargo sim)…");
+    firmware::build(&Artifact {
+        package: "marble-rolling",
+        bin: "sim",
+        target: None,
+        features: Some("tools"),
+        quiet: true,
+    })
+    .map_err(|e| {
+        Failure::new(format!(
+            "cannot build the host simulator (bin sim, feature tools): {}",
+            e.message
+        ))
+    })
+}
+
+/// Prints a table of each level as the board (`board`: its column name)
+/// played it beside the simulator with the same stepper, and returns the levels
+/// that do not agree, with the verdict.
+pub fn compare_levels(
+    sim: &PathBuf,
+    levels: &[Level],
+    stepping: &str,
+    board: &str,
+) -> Vec<(String, Verdict)> {
+    let (steps, hash) = (format!("{board}.steps"), format!("{board} hash"));
+    println!(
+        "{}",
+        row(["level", board, "sim", &steps, "s.steps", &hash, "sim hash", "result"])
+    );
+    let mut failed = Vec::new();
+    for level in levels {
+        let sim = simulate(sim, &level.name, stepping);
+        let verdict = verdict(level, sim.as_ref());
+        let sim = sim.unwrap_or_default();
+        let or_dash = |field: &Option<String>| match field.as_deref() {
+            Some(text) if !text.is_empty() => text.to_string(),
+            _ => "-".to_string(),
+        };
+        println!(
+            "{}",
+            row([
+                &level.name,
+                &level.outcome,
+                &or_dash(&sim.outcome),
+                &level.steps,
+                &or_dash(&sim.steps),
+                &level.hash,
+                &or_dash(&sim.hash),
+                verdict.text(),
+            ])
+        );
+        if verdict != Verdict::Ok {
+            failed.push((level.name.clone(), verdict));
+        }
+    }
+    failed
 }
 
 /// The simulator's result for `level` with the firmware's stepper, or `None`

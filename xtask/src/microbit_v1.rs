@@ -36,11 +36,10 @@
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Stdio};
-use std::thread;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::demo::{self, Level, Verdict};
+use crate::demo::{self, Level};
 use crate::error::{say, Failure, Outcome};
 use crate::firmware::{self, Artifact};
 use crate::process;
@@ -186,7 +185,7 @@ fn qemu_run(
     let mut decoder = process::spawn(&mut decode).inspect_err(|_| {
         let _ = child.kill();
     })?;
-    let qemu_status = wait_at_most(&mut child, limit);
+    let qemu_status = runner::wait_at_most(&mut child, limit);
     let decoder_status = decoder
         .wait()
         .map_err(|e| Failure::new(format!("waiting for defmt-print: {e}")))?;
@@ -196,27 +195,6 @@ fn qemu_run(
         code => code,
     };
     Ok((status, started.elapsed()))
-}
-
-/// Waits for `child`, killing it after `limit` (status 124).
-fn wait_at_most(child: &mut Child, limit: Duration) -> Result<ExitStatus, Failure> {
-    let start = Instant::now();
-    loop {
-        match child.try_wait() {
-            Ok(Some(status)) => return Ok(status),
-            Ok(None) if start.elapsed() < limit => thread::sleep(Duration::from_millis(20)),
-            Ok(None) => {
-                let _ = child.kill();
-                let _ = child.wait();
-                return Err(Failure::new(format!(
-                    "QEMU timed out after {} s (raise QEMU_TIMEOUT if the firmware is not hung)",
-                    limit.as_secs()
-                ))
-                .status(124));
-            }
-            Err(e) => return Err(Failure::new(format!("waiting for QEMU: {e}"))),
-        }
-    }
 }
 
 // ---------------------------------------------------------------------------
@@ -746,44 +724,9 @@ fn compare_with_sim(
     stepping: &str,
     problems: &mut Problems,
 ) -> Result<(), Failure> {
-    say!("building the host simulator (cargo sim)…");
-    let sim = firmware::build(&Artifact {
-        package: "marble-rolling",
-        bin: "sim",
-        target: None,
-        features: Some("tools"),
-        quiet: true,
-    })?;
-    println!(
-        "{}",
-        demo::row(["level", "v1", "sim", "v1.steps", "s.steps", "v1 hash", "sim hash", "result"])
-    );
-    for level in levels {
-        let result = demo::simulate(&sim, &level.name, stepping);
-        let verdict = demo::verdict(level, result.as_ref());
-        let result = result.unwrap_or_default();
-        let or_dash = |field: &Option<String>| field.clone().unwrap_or_else(|| "-".into());
-        println!(
-            "{}",
-            demo::row([
-                &level.name,
-                &level.outcome,
-                &or_dash(&result.outcome),
-                &level.steps,
-                &or_dash(&result.steps),
-                &level.hash,
-                &or_dash(&result.hash),
-                match verdict {
-                    Verdict::Ok => "ok",
-                    Verdict::SimFailed => "SIM FAILED",
-                    Verdict::NotWon => "NOT WON",
-                    Verdict::Mismatch => "MISMATCH",
-                },
-            ])
-        );
-        if verdict != Verdict::Ok {
-            problems.report(format!("level {}: {verdict:?}", level.name));
-        }
+    let sim = demo::build_sim()?;
+    for (level, verdict) in demo::compare_levels(&sim, levels, stepping, "v1") {
+        problems.report(format!("level {level}: {verdict:?}"));
     }
     Ok(())
 }

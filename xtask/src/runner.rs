@@ -253,7 +253,7 @@ pub fn timeout(default: u64) -> Result<Duration, Failure> {
 }
 
 /// Waits for `child`, killing it after `limit` (status 124, as timeout(1) has).
-fn wait_at_most(child: &mut Child, limit: Duration) -> Result<ExitStatus, Failure> {
+pub fn wait_at_most(child: &mut Child, limit: Duration) -> Result<ExitStatus, Failure> {
     let start = Instant::now();
     loop {
         match child.try_wait() {
