@@ -49,7 +49,7 @@ use crate::input::tilt::TiltConfig;
 use crate::matrix::{Frame, ScanStep, Scanner};
 use crate::physics::world::SetupError;
 
-pub use crate::game::player::{FRAME_HZ, GAME_CONFIG};
+pub use crate::game::player::FRAME_HZ;
 
 /// Full LED-matrix refreshes per second.
 pub const REFRESH_HZ: u32 = 100;

@@ -30,12 +30,10 @@ use crate::physics::world::SetupError;
 use crate::physics::Fx;
 use crate::render::Renderer;
 
-/// The game's configuration with fixed steps: 128 frames/s × 8 physics steps
-/// (the host tools' default, so that `state_hash`es agree). A player with the
-/// event stepper plays [`GameConfig::EVENTS`] (same frame rate, one step each).
-pub const GAME_CONFIG: GameConfig = GameConfig::DEFAULT;
-/// Game frames per second, whatever the stepper.
-pub const FRAME_HZ: u32 = GAME_CONFIG.frame_hz();
+/// Game frames per second, whatever the stepper ([`Player::CONFIG`]: both
+/// configurations run at the same frame rate).
+pub const FRAME_HZ: u32 = GameConfig::DEFAULT.frame_hz();
+const _: () = assert!(GameConfig::EVENTS.frame_hz() == FRAME_HZ);
 /// How long a won level is shown (flashing) before the next one, in frames.
 pub const WIN_PAUSE_FRAMES: u32 = FRAME_HZ;
 /// How long a lost attempt (fell, time up) is shown before the restart.

@@ -13,7 +13,7 @@
 //! way, up to ±500 mg per axis; space levels the board. `r` restarts, `n` goes to the next
 //! level, `p` hands the board to the autopilot (and back), `q` / Esc / Ctrl-C quit.
 //!
-//! The game runs at its own frame rate (128 frames/s, [`GAME_CONFIG`]) in real
+//! The game runs at its own frame rate (128 frames/s, [`FRAME_HZ`]) in real
 //! time, through the firmware's own game loop step ([`Player::tick`]) and key
 //! code ([`KeyTilt`]), with [`SYNTHETIC_TILT`] (a held key repeats the same
 //! reading, which a real sensor never does): the same keys give the same
@@ -37,7 +37,7 @@ use crossterm::{cursor, execute, queue};
 use super::{load_level, Loaded};
 use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
-use crate::game::player::{Player, GAME_CONFIG};
+use crate::game::player::{Player, FRAME_HZ};
 use crate::game::rules::Phase;
 use crate::game::session::SYNTHETIC_TILT;
 use crate::input::event::InputEvent;
@@ -230,7 +230,7 @@ impl Game {
     }
 
     fn run(&mut self) -> io::Result<()> {
-        let period = Duration::from_secs(1) / GAME_CONFIG.frame_hz();
+        let period = Duration::from_secs(1) / FRAME_HZ;
         let mut next = Instant::now();
         let mut frame = 0u32;
         self.draw()?;

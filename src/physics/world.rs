@@ -465,9 +465,9 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// a constant, calls [`World::step_in`] and links only its own.
     pub fn step(&mut self) {
         if self.params.events() {
-            self.step_events(&mut ());
+            self.step_in::<true>();
         } else {
-            self.step_fixed();
+            self.step_in::<false>();
         }
     }
 
