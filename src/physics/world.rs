@@ -844,9 +844,14 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             Feature::Edge => m.pos += c.normal.scale(res.push),
         }
         let vn_now = m.vel.dot(c.normal);
+        // Under the format's top (127 pitch/s, the event step's limit; fixed steps
+        // cap lower): `normal × vn_new` below must fit, and a unit normal times 128
+        // does not — it wrapped to −128 in release builds (found by the property
+        // `step_survives_arbitrary_states`).
+        let top = p.v_max.min(S::from_int(127));
         let vn_new = (res.vn + v_board.dot(c.normal))
             .shl(T_LOG2)
-            .clamp(-p.v_max, p.v_max);
+            .clamp(-top, top);
         let mut tangential = m.vel - c.normal.scale(vn_now);
         if res.deficit > S::ZERO {
             // Pay the rest of the push-out's energy from the tangential speed (rare:
