@@ -564,7 +564,7 @@ impl MarbleQ {
         let vel = [to_q(vx), to_q(vz)];
         // Cell n's centre is n + (1 + s)/2; the boundary between n and n + 1 lies at
         // n + 1 + s/2, halfway between the centres.
-        let cell_of = |p: i64, n: u8| (((p - s / 2) >> Q) as i32).clamp(0, n as i32 - 1);
+        let cell_of = |p: i64, n: u8| (((p - s / 2) >> Q) as i32).min(n as i32 - 1).max(0);
         let cell = [cell_of(pos[0], ap.ncx), cell_of(pos[1], ap.ncz)];
         MarbleQ {
             pos,

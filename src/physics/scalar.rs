@@ -184,6 +184,69 @@ pub trait Scalar:
     }
 }
 
+/// The fixed-point product on a format's bits: bits `FRAC..FRAC + N` of the
+/// exact `2N`-bit product, wrapping.
+trait FracProduct {
+    fn mul_shr<const FRAC: u32>(self, rhs: Self) -> Self;
+}
+
+impl FracProduct for i32 {
+    #[inline(always)]
+    fn mul_shr<const FRAC: u32>(self, rhs: i32) -> i32 {
+        mul_shr::<FRAC>(self, rhs)
+    }
+}
+
+impl FracProduct for i64 {
+    #[inline(always)]
+    fn mul_shr<const FRAC: u32>(self, rhs: i64) -> i64 {
+        ((self as i128 * rhs as i128) >> FRAC) as i64
+    }
+}
+
+/// Bits `FRAC..FRAC + 32` of the exact product `a · b`, wrapping: the fixed-point
+/// product of two 32-bit formats with `FRAC` fraction bits. One `smull` and a
+/// shift where the core has a 32 × 32 → 64 multiply.
+#[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+#[inline(always)]
+fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
+    ((a as i64 * b as i64) >> FRAC) as i32
+}
+
+/// Bits `FRAC..FRAC + 32` of the exact product `a · b` on ARMv6-M (the
+/// Cortex-M0 of the micro:bit v1: recognised by its lack of 32-bit atomic
+/// read-modify-write, as the architecture's own `target_feature`s are unstable).
+///
+/// Its `muls` keeps the low 32 bits only, so LLVM builds an `i64` product from a
+/// call to the generic 64 × 64 library multiply (`__aeabi_lmul`, 37 instructions
+/// with its stack frame), which was 27 % of the v1 demo's instructions. Both
+/// operands are 32-bit here, which [`mul_shr_halves`] uses. Not inlined: one copy
+/// for all the step's products keeps the v1 within its flash.
+#[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+#[inline(never)]
+fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
+    mul_shr_halves::<FRAC>(a, b)
+}
+
+/// `mul_shr` from four 16 × 16 → 32 products, exact. With `a = ah·2¹⁶ + al`
+/// (`ah` signed, `al` in `0..2¹⁶`) and `b` likewise, `a·b = ah·bh·2³² +
+/// (ah·bl + al·bh)·2¹⁶ + al·bl`, and every partial product fits 32 bits:
+/// `|ah·bh| ≤ 2³⁰`, `ah·bl` and `al·bh` lie in `[−2³¹ + 2¹⁵, 2³¹)`, `al·bl < 2³²`
+/// unsigned. Only their sums need 64 bits, which are adds with carry.
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+fn mul_shr_halves<const FRAC: u32>(a: i32, b: i32) -> i32 {
+    let (ah, al) = (a >> 16, a & 0xffff);
+    let (bh, bl) = (b >> 16, b & 0xffff);
+    let low = (al as u32 * bl as u32) as i64;
+    let cross = (ah * bl) as i64 + (al * bh) as i64;
+    let high = (ah * bh) as i64;
+    (((high << 32) + (cross << 16) + low) >> FRAC) as i32
+}
+
 macro_rules! fixed_scalar {
     ($t:ty, $wide:ty, $name:literal) => {
         impl Scalar for $t {
@@ -195,10 +258,18 @@ macro_rules! fixed_scalar {
                 // The operator keeps bits NBITS..2·NBITS of `a · (b << INT_NBITS)`,
                 // wrapping; those are bits FRAC..FRAC+NBITS of the exact `a · b`
                 // (it fits the wide type), which is what this keeps.
-                let (a, b) = (self.to_bits() as $wide, rhs.to_bits() as $wide);
                 // The operator's own check: that shifted product must not wrap.
-                debug_assert!(!a.overflowing_mul(b << <$t>::INT_NBITS).1, "overflow");
-                <$t>::from_bits(((a * b) >> <$t>::FRAC_NBITS) as _)
+                debug_assert!(
+                    {
+                        let (a, b) = (self.to_bits() as $wide, rhs.to_bits() as $wide);
+                        !a.overflowing_mul(b << <$t>::INT_NBITS).1
+                    },
+                    "overflow"
+                );
+                <$t>::from_bits(
+                    self.to_bits()
+                        .mul_shr::<{ <$t>::FRAC_NBITS }>(rhs.to_bits()),
+                )
             }
             #[inline]
             fn from_int(n: i32) -> Self {
@@ -808,6 +879,44 @@ mod tests {
     }
 
     /// A small deterministic generator (xorshift64*) for the equivalence sweeps.
+    /// The Cortex-M0's product from 16-bit halves against the 64-bit one, bit for
+    /// bit: every sign and carry combination of the halves, the extremes, and
+    /// random operands (the M0 end-state hashes in the study check it on the chip).
+    #[test]
+    fn halves_product_is_the_wide_product() {
+        fn check(a: i32, b: i32) {
+            let wide = a as i64 * b as i64;
+            assert_eq!(mul_shr_halves::<24>(a, b), (wide >> 24) as i32, "{a} · {b}");
+            assert_eq!(mul_shr_halves::<16>(a, b), (wide >> 16) as i32, "{a} · {b}");
+            assert_eq!(mul_shr_halves::<0>(a, b), wide as i32, "{a} · {b}");
+        }
+        let edges = [
+            i32::MIN,
+            i32::MIN + 1,
+            -65_537,
+            -65_536,
+            -65_535,
+            -32_768,
+            -1,
+            0,
+            1,
+            0xffff,
+            0x1_0000,
+            0x7fff_0000,
+            0x7fff_ffff,
+            -0x7fff_0001,
+        ];
+        for a in edges {
+            for b in edges {
+                check(a, b);
+            }
+        }
+        let mut state = 0x9e37_79b9_7f4a_7c15;
+        for _ in 0..200_000 {
+            check(rng(&mut state) as i32, rng(&mut state) as i32);
+        }
+    }
+
     fn rng(state: &mut u64) -> u64 {
         *state ^= *state >> 12;
         *state ^= *state << 25;

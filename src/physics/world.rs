@@ -389,7 +389,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// once, so the steps that follow only add.
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
         let lim = self.params.mg_max;
-        let g = g.map(|v| v.clamp(-lim, lim));
+        // max then min, not `clamp`: its `min <= max` assertion would link core::fmt.
+        let g = g.map(|v| v.max(-lim).min(lim));
         // Per axis: each axis of the kicks depends on that axis of the pull alone
         // (the displacement clamp is per axis too), and a tilt usually moves one
         // axis at a time — the others keep their kicks, bit for bit.

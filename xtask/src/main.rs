@@ -106,6 +106,9 @@ enum Task {
     QemuProfile {
         #[arg(default_value_t = 40)]
         top: usize,
+        /// Profile the micro:bit v1 firmware in QEMU microbit instead.
+        #[arg(long)]
+        v1: bool,
     },
     /// Build the game for the browser (wasm32-unknown-unknown) and serve the
     /// page on 127.0.0.1 (`cargo web`).
@@ -164,7 +167,7 @@ impl Task {
             Task::CheckDemo => demo::run(),
             Task::SizeReport { no_build, elf } => size::run(no_build, elf),
             Task::Properties { cases } => properties::run(cases),
-            Task::QemuProfile { top } => profile::run(top),
+            Task::QemuProfile { top, v1 } => profile::run(top, v1),
             Task::Web { port, no_serve } => web::run(port, no_serve),
             Task::WebTest { screenshot } => web::test(screenshot),
             Task::Accuracy { args } => study::accuracy(&args),
@@ -259,7 +262,7 @@ mod tests {
         ));
         assert!(matches!(
             parse(&["qemu-profile", "20"]),
-            Task::QemuProfile { top: 20 }
+            Task::QemuProfile { top: 20, v1: false }
         ));
         assert!(matches!(
             parse(&["size-report", "--no-build"]),

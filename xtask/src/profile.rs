@@ -1,5 +1,6 @@
-//! `cargo xtask qemu-profile [TOP]`: where the QEMU firmware's instructions go,
-//! by function. Runs the headless demo with QEMU's translation-block trace on
+//! `cargo xtask qemu-profile [TOP] [--v1]`: where the QEMU firmware's
+//! instructions go, by function (the mps2-an386 board's, or with `--v1` the
+//! micro:bit v1's in QEMU microbit). Runs the headless demo with QEMU's translation-block trace on
 //! (`-d in_asm,exec,nochain`: every executed block is logged, chaining off so
 //! none is skipped) and attributes every executed instruction to the function
 //! holding it (see trace.rs). The trace is large (about 2 GB for the whole
@@ -12,19 +13,29 @@ use std::process::Stdio;
 
 use crate::error::{say, Failure, Outcome};
 use crate::firmware::{self, Artifact};
+use crate::microbit_v1;
 use crate::process;
 use crate::runner;
-use crate::setup::{self, M4};
+use crate::setup::{self, M0, M4};
 use crate::symbols::{self, Symbols};
 use crate::trace::Profile;
 use crate::workspace;
 
 /// Runs, attributes, prints the tables on stdout.
-pub fn run(top: usize) -> Outcome {
-    setup::target(M4)?;
-    setup::flip_link()?;
+pub fn run(top: usize, v1: bool) -> Outcome {
     let qemu = setup::qemu()?;
-    let elf = firmware::build(&Artifact::firmware("marble-qemu", "qemu", M4))?;
+    let elf = if v1 {
+        setup::target(M0)?;
+        firmware::build(&Artifact::firmware(
+            microbit_v1::PACKAGE,
+            microbit_v1::BIN,
+            M0,
+        ))?
+    } else {
+        setup::target(M4)?;
+        setup::flip_link()?;
+        firmware::build(&Artifact::firmware("marble-qemu", "qemu", M4))?
+    };
     let dir = workspace::env_path("PROFILE_DIR", workspace::target_dir()?.join("qemu-profile"));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
@@ -32,9 +43,16 @@ pub fn run(top: usize) -> Outcome {
     let defmt = File::create(dir.join("defmt.bin"))
         .map_err(|e| Failure::new(format!("cannot write in {}: {e}", dir.display())))?;
 
-    let mut cmd = runner::mps2(&qemu, &elf, "--headless", &["--demo".to_string()]);
-    cmd.args(runner::ICOUNT)
-        .args(["-serial", "null", "-d", "in_asm,exec,nochain", "-D"])
+    let demo = ["--demo".to_string()];
+    let mut cmd = if v1 {
+        // Its command line already counts instructions (`-icount`).
+        microbit_v1::qemu_command(&qemu, &elf, &demo)
+    } else {
+        let mut cmd = runner::mps2(&qemu, &elf, "--headless", &demo);
+        cmd.args(runner::ICOUNT).args(["-serial", "null"]);
+        cmd
+    };
+    cmd.args(["-d", "in_asm,exec,nochain", "-D"])
         .arg(&trace)
         .stdin(Stdio::null())
         .stdout(defmt);
