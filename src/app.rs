@@ -156,7 +156,7 @@ pub async fn input_task<I: TiltInput, const W: usize, const H: usize>(
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum GameMode {
-    /// A player with a tilt input: endless, levels in order, [`Links::commands`]
+    /// A player with a tilt input: endless, levels in order, commands ([`Links::events`])
     /// obeyed. `tilt` configures the game's tilt path:
     /// [`TiltConfig::DEFAULT`] for a real accelerometer, [`SYNTHETIC_TILT`]
     /// for keys.

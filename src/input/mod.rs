@@ -12,6 +12,8 @@
 
 pub mod event;
 pub mod keys;
+#[cfg(feature = "lsm303agr")]
+pub mod lsm303;
 pub mod buttons;
 pub mod sensor;
 pub mod tilt;

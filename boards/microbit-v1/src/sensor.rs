@@ -19,16 +19,15 @@
 //! hundred µs: it delays the input task only, the display runs on its own
 //! interrupt).
 
-use embassy_time::{Duration, Ticker, Timer};
+use embassy_time::{Duration, Ticker};
 use embedded_hal::i2c::{ErrorKind, ErrorType, NoAcknowledgeSource, Operation};
 use heapless::Deque;
-use lsm303agr::interface::I2cInterface;
-use lsm303agr::mode::MagOneShot;
-use lsm303agr::{AccelMode, AccelOutputDataRate, Lsm303agr};
+use lsm303agr::Lsm303agr;
 use marble_rolling::app::TiltInput;
 use marble_rolling::board::microbit as v2;
 use marble_rolling::board::microbit_v1::{identify, Accelerometer, PROBES};
-use marble_rolling::input::event::{InputEvent, Tilt};
+use marble_rolling::input::event::InputEvent;
+use marble_rolling::input::lsm303::{self, BusFault};
 use marble_rolling::input::sensor::{AccelMg, Action, Fault, Read, TiltPipeline};
 use nrf_pac as pac;
 
@@ -218,7 +217,7 @@ impl embedded_hal_async::i2c::I2c for AsyncTwi {
 }
 
 /// The LSM303AGR driver on the bus.
-type Lsm = Lsm303agr<I2cInterface<AsyncTwi>, MagOneShot>;
+type Lsm = lsm303::Sensor<AsyncTwi>;
 
 /// What is on the bus.
 enum Chip {
@@ -230,21 +229,13 @@ enum Chip {
     Lsm303agr(Lsm),
 }
 
-/// The supervisor's name for a driver error.
-fn fault(e: lsm303agr::Error<TwiError>) -> Fault {
-    match e {
-        lsm303agr::Error::Comm(TwiError::Timeout) => Fault::Timeout,
-        lsm303agr::Error::Comm(_) => Fault::Bus,
-        lsm303agr::Error::InvalidInputData => Fault::Implausible,
+impl BusFault for TwiError {
+    fn fault(&self) -> Fault {
+        match self {
+            TwiError::Timeout => Fault::Timeout,
+            _ => Fault::Bus,
+        }
     }
-}
-
-/// The driver's mode changes take a blocking delay; the input waits
-/// asynchronously afterwards instead (`ACCEL_SETTLE_MS`).
-struct NoDelay;
-
-impl embedded_hal::delay::DelayNs for NoDelay {
-    fn delay_ns(&mut self, _ns: u32) {}
 }
 
 /// Probes the bus for each accelerometer a v1 may carry.
@@ -281,44 +272,17 @@ async fn configure(chip: Chip) -> (Chip, Result<(), Fault>) {
     let Chip::Lsm303agr(mut sensor) = chip else {
         return (chip, Err(Fault::Implausible));
     };
-    let outcome = async {
-        sensor.init().await.map_err(fault)?;
-        sensor
-            .set_accel_mode_and_odr(
-                &mut NoDelay,
-                AccelMode::HighResolution,
-                AccelOutputDataRate::Hz200,
-            )
-            .await
-            .map_err(fault)?;
-        Timer::after_millis(v2::ACCEL_SETTLE_MS).await;
-        Ok(())
-    }
-    .await;
+    // Probing has just read WHO_AM_I.
+    let outcome = lsm303::configure(&mut sensor).await;
     (Chip::Lsm303agr(sensor), outcome)
 }
 
 /// One poll, sensor frame, milli-g.
 async fn read(chip: &mut Chip) -> Read<AccelMg> {
-    let Chip::Lsm303agr(sensor) = chip else {
-        return Read::Failed(Fault::Implausible);
-    };
-    match sensor.accel_status().await {
-        Ok(status) if !status.xyz_new_data() => return Read::NotReady,
-        Ok(_) => {}
-        Err(e) => return Read::Failed(fault(e)),
+    match chip {
+        Chip::Lsm303agr(sensor) => lsm303::read(sensor).await,
+        _ => Read::Failed(Fault::Implausible),
     }
-    match sensor.acceleration().await {
-        Ok(a) => {
-            let (x, y, z) = a.xyz_mg();
-            Read::Sample(AccelMg::new(x, y, z))
-        }
-        Err(e) => Read::Failed(fault(e)),
-    }
-}
-
-fn saturate(v: i32) -> i16 {
-    v.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16
 }
 
 /// The accelerometer as the app's tilt input, polled every
@@ -377,11 +341,6 @@ impl TiltInput for Input {
             defmt::warn!("accelerometer: {}", transition);
             let _ = self.pending.push_back(transition.event());
         }
-        let tilt = self.pipeline.tilt();
-        InputEvent::Tilt(Tilt {
-            x: saturate(tilt.x),
-            y: saturate(tilt.y),
-            z: saturate(tilt.z),
-        })
+        InputEvent::Tilt(lsm303::to_tilt(self.pipeline.tilt()))
     }
 }

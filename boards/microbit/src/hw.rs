@@ -23,15 +23,13 @@ use embassy_nrf::{peripherals, Peri};
 use embassy_time::{with_timeout, Duration, Instant, Ticker, Timer};
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 use heapless::Deque;
-use lsm303agr::interface::I2cInterface;
-use lsm303agr::mode::MagOneShot;
-use lsm303agr::{AccelMode, AccelOutputDataRate, Lsm303agr};
 
 use marble_rolling::app::{MatrixOutput, TiltInput, REFRESH_HZ};
 use marble_rolling::board::microbit::{self as board, BusClear, BusLines, Heartbeats, Task};
 use marble_rolling::input::buttons::{ButtonEvent, Buttons};
-use marble_rolling::input::event::{Command, InputEvent, Tilt};
-use marble_rolling::input::sensor::{AccelMg, Action, Fault, Read, TiltPipeline};
+use marble_rolling::input::event::{Command, InputEvent};
+use marble_rolling::input::lsm303::{self, BusFault};
+use marble_rolling::input::sensor::{Action, Fault, Read, TiltPipeline};
 use marble_rolling::matrix::ScanStep;
 
 /// RTC ticks per BCM base tick (4 → 109 Hz refresh; see the board module).
@@ -325,71 +323,14 @@ impl BusLines for GpioLines<'_> {
 // ---------------------------------------------------------------------------
 
 /// The LSM303AGR on the internal bus (address 0x19 for the accelerometer).
-pub type Sensor = Lsm303agr<I2cInterface<Bus>, MagOneShot>;
+pub type Sensor = lsm303::Sensor<Bus>;
 
-/// The driver's mode changes take a blocking delay; we wait asynchronously
-/// afterwards instead ([`board::ACCEL_SETTLE_MS`]).
-struct NoDelay;
-
-impl embedded_hal::delay::DelayNs for NoDelay {
-    fn delay_ns(&mut self, _ns: u32) {}
-}
-
-/// The supervisor's name for a driver error.
-fn fault(e: lsm303agr::Error<BusError>) -> Fault {
-    match e {
-        lsm303agr::Error::Comm(BusError::Timeout) => Fault::Timeout,
-        lsm303agr::Error::Comm(BusError::Twim(_)) => Fault::Bus,
-        lsm303agr::Error::InvalidInputData => Fault::Implausible,
-    }
-}
-
-/// (Re)configures the accelerometer: identity check, block data update,
-/// high-resolution mode at [`board::ACCEL_ODR_HZ`], then waits until the
-/// output is valid.
-async fn configure(sensor: &mut Sensor) -> Result<(), Fault> {
-    let id = sensor.accelerometer_id().await.map_err(fault)?;
-    if !id.is_correct() {
-        return Err(Fault::Implausible);
-    }
-    sensor.init().await.map_err(fault)?;
-    sensor
-        .set_accel_mode_and_odr(
-            &mut NoDelay,
-            AccelMode::HighResolution,
-            AccelOutputDataRate::Hz200,
-        )
-        .await
-        .map_err(fault)?;
-    Timer::after_millis(board::ACCEL_SETTLE_MS).await;
-    Ok(())
-}
-
-/// One poll in the sensor frame, milli-g.
-async fn read(sensor: &mut Sensor) -> Read<AccelMg> {
-    match sensor.accel_status().await {
-        Ok(status) if !status.xyz_new_data() => return Read::NotReady,
-        Ok(_) => {}
-        Err(e) => return Read::Failed(fault(e)),
-    }
-    match sensor.acceleration().await {
-        Ok(a) => {
-            let (x, y, z) = a.xyz_mg();
-            Read::Sample(AccelMg::new(x, y, z))
+impl BusFault for BusError {
+    fn fault(&self) -> Fault {
+        match self {
+            BusError::Timeout => Fault::Timeout,
+            BusError::Twim(_) => Fault::Bus,
         }
-        Err(e) => Read::Failed(fault(e)),
-    }
-}
-
-fn saturate(v: i32) -> i16 {
-    v.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16
-}
-
-fn to_tilt(s: AccelMg) -> Tilt {
-    Tilt {
-        x: saturate(s.x),
-        y: saturate(s.y),
-        z: saturate(s.z),
     }
 }
 
@@ -440,7 +381,10 @@ impl MicrobitInput {
 
     /// (Re)configures the sensor and tells the pipeline how it went.
     async fn reinit(&mut self) {
-        let outcome = configure(&mut self.sensor).await;
+        let outcome = match lsm303::check_identity(&mut self.sensor).await {
+            Ok(()) => lsm303::configure(&mut self.sensor).await,
+            Err(fault) => Err(fault),
+        };
         if let Err(fault) = outcome {
             defmt::warn!("accelerometer: (re)init failed: {}", fault);
         }
@@ -458,7 +402,7 @@ impl MicrobitInput {
             Some(ButtonEvent::Calibrate) => Some(Command::Calibrate),
             None => None,
         };
-        let read = read(&mut self.sensor).await;
+        let read = lsm303::read(&mut self.sensor).await;
         let step = self.pipeline.feed(read);
         match step.action {
             Action::Use(_) | Action::ShowFault => {}
@@ -510,7 +454,7 @@ impl TiltInput for MicrobitInput {
         if let Some(command) = command {
             let _ = self.pending.push_back(InputEvent::Command(command));
         }
-        let tilt = InputEvent::Tilt(to_tilt(self.pipeline.tilt()));
+        let tilt = InputEvent::Tilt(lsm303::to_tilt(self.pipeline.tilt()));
         let _ = self.pending.push_back(tilt);
         self.pending.pop_front().unwrap_or(tilt)
     }

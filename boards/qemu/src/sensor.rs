@@ -20,29 +20,20 @@ use core::task::Poll;
 
 use embassy_futures::poll_once;
 use embassy_futures::select::{select, Either};
-use embassy_time::{with_timeout, Duration, Instant, Ticker, Timer};
+use embassy_time::{with_timeout, Duration, Instant, Ticker};
 use embedded_hal_async::i2c::{ErrorKind, ErrorType, I2c, Operation};
 use heapless::Deque;
-use lsm303agr::interface::I2cInterface;
-use lsm303agr::mode::MagOneShot;
-use lsm303agr::{AccelMode, AccelOutputDataRate, Lsm303agr};
 
 use marble_rolling::app::{ByteSource, Console, TiltInput};
 use marble_rolling::board::qemu::fault_keys::{FaultKeys, QemuKey, FAULT_KEYS_HELP};
 use marble_rolling::board::qemu::virtual_i2c::{RamRange, TwimError, VirtualTwim};
 use marble_rolling::board::qemu::virtual_lsm303agr::ChipControl;
 use marble_rolling::board::qemu::{
-    ACCEL_ODR_HZ, ACCEL_SETTLE_MS, HEIGHT, INPUT_PERIOD_MS, SENSOR_AXIS_MAP, SUPERVISOR,
-    TRANSFER_TIMEOUT_MS,
+    HEIGHT, INPUT_PERIOD_MS, SENSOR_AXIS_MAP, SUPERVISOR, TRANSFER_TIMEOUT_MS,
 };
-use marble_rolling::input::event::{InputEvent, Tilt};
-use marble_rolling::input::sensor::{AccelMg, Action, Fault, Read, TiltPipeline};
-
-// The driver is configured for the rate the board constants name.
-const _: () = assert!(
-    ACCEL_ODR_HZ == 200,
-    "configure() sets AccelOutputDataRate::Hz200"
-);
+use marble_rolling::input::event::InputEvent;
+use marble_rolling::input::lsm303::{self, BusFault};
+use marble_rolling::input::sensor::{Action, Fault, Read, TiltPipeline};
 
 /// The firmware's clock for the virtual chip, µs.
 pub fn now_us() -> u64 {
@@ -190,71 +181,14 @@ impl I2c for Bus<'_> {
 // ---------------------------------------------------------------------------
 
 /// The LSM303AGR driver on the virtual bus.
-pub type Sensor<'a> = Lsm303agr<I2cInterface<Bus<'a>>, MagOneShot>;
+pub type Sensor<'a> = lsm303::Sensor<Bus<'a>>;
 
-/// The driver's mode changes take a blocking delay; we wait asynchronously
-/// afterwards instead ([`ACCEL_SETTLE_MS`]).
-struct NoDelay;
-
-impl embedded_hal::delay::DelayNs for NoDelay {
-    fn delay_ns(&mut self, _ns: u32) {}
-}
-
-/// The supervisor's name for a driver error (as the micro:bit's).
-fn fault(e: lsm303agr::Error<BusError>) -> Fault {
-    match e {
-        lsm303agr::Error::Comm(BusError::Timeout) => Fault::Timeout,
-        lsm303agr::Error::Comm(BusError::Twim(_)) => Fault::Bus,
-        lsm303agr::Error::InvalidInputData => Fault::Implausible,
-    }
-}
-
-/// (Re)configures the accelerometer as the micro:bit does: identity check,
-/// init (block data update), high resolution at [`ACCEL_ODR_HZ`], then waits
-/// until the output is valid.
-async fn configure(sensor: &mut Sensor<'_>) -> Result<(), Fault> {
-    let id = sensor.accelerometer_id().await.map_err(fault)?;
-    if !id.is_correct() {
-        return Err(Fault::Implausible);
-    }
-    sensor.init().await.map_err(fault)?;
-    sensor
-        .set_accel_mode_and_odr(
-            &mut NoDelay,
-            AccelMode::HighResolution,
-            AccelOutputDataRate::Hz200,
-        )
-        .await
-        .map_err(fault)?;
-    Timer::after_millis(ACCEL_SETTLE_MS).await;
-    Ok(())
-}
-
-/// One poll in the sensor frame, milli-g.
-async fn read(sensor: &mut Sensor<'_>) -> Read<AccelMg> {
-    match sensor.accel_status().await {
-        Ok(status) if !status.xyz_new_data() => return Read::NotReady,
-        Ok(_) => {}
-        Err(e) => return Read::Failed(fault(e)),
-    }
-    match sensor.acceleration().await {
-        Ok(a) => {
-            let (x, y, z) = a.xyz_mg();
-            Read::Sample(AccelMg::new(x, y, z))
+impl BusFault for BusError {
+    fn fault(&self) -> Fault {
+        match self {
+            BusError::Timeout => Fault::Timeout,
+            BusError::Twim(_) => Fault::Bus,
         }
-        Err(e) => Read::Failed(fault(e)),
-    }
-}
-
-fn saturate(v: i32) -> i16 {
-    v.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16
-}
-
-fn to_tilt(s: AccelMg) -> Tilt {
-    Tilt {
-        x: saturate(s.x),
-        y: saturate(s.y),
-        z: saturate(s.z),
     }
 }
 
@@ -328,7 +262,10 @@ impl<'a, S: ByteSource, C: Console> QemuInput<'a, S, C> {
     /// (Re)configures the sensor and tells the pipeline how it went.
     async fn reinit(&mut self) {
         SensorReport::bump(&self.report.reinits);
-        let outcome = configure(&mut self.sensor).await;
+        let outcome = match lsm303::check_identity(&mut self.sensor).await {
+            Ok(()) => lsm303::configure(&mut self.sensor).await,
+            Err(fault) => Err(fault),
+        };
         if let Err(fault) = outcome {
             SensorReport::bump(&self.report.failed_reinits);
             defmt::warn!("accelerometer: (re)init failed: {}", fault);
@@ -340,7 +277,7 @@ impl<'a, S: ByteSource, C: Console> QemuInput<'a, S, C> {
     /// it took long (a re-init with its settling time, a timed-out transfer):
     /// the only slow work here, as a virtual transfer takes no time.
     async fn poll(&mut self) -> bool {
-        let read = read(&mut self.sensor).await;
+        let read = lsm303::read(&mut self.sensor).await;
         let step = self.pipeline.feed(read);
         let mut slow = read == Read::Failed(Fault::Timeout);
         match step.action {
@@ -448,7 +385,7 @@ impl<S: ByteSource, C: Console> TiltInput for QemuInput<'_, S, C> {
                 self.draw_status();
             }
             // After this poll's transition, if any (as the micro:bit).
-            let tilt = InputEvent::Tilt(to_tilt(self.pipeline.tilt()));
+            let tilt = InputEvent::Tilt(lsm303::to_tilt(self.pipeline.tilt()));
             if self.pending.push_back(tilt).is_err() {
                 return tilt;
             }

@@ -1,0 +1,121 @@
+//! The LSM303AGR accelerometer as every board drives it, over whatever
+//! asynchronous I²C bus the board has: the micro:bit v2's TWIM, the QEMU
+//! board's virtual TWIM with its virtual chip, the micro:bit v1.5's TWI. One
+//! copy, so that what the fault script proves against the virtual chip in QEMU
+//! is the code the boards run.
+//!
+//! The boards keep the wiring (which bus, its error type, when to poll); the
+//! supervision that decides what a failed read means is [`super::sensor`]'s.
+//! Driver calls go through the `lsm303agr` crate; only the mode change's
+//! blocking delay is replaced: the caller waits asynchronously instead.
+
+use embassy_time::Timer;
+use embedded_hal_async::i2c::I2c;
+use lsm303agr::interface::I2cInterface;
+use lsm303agr::mode::MagOneShot;
+use lsm303agr::{AccelMode, AccelOutputDataRate, Error, Lsm303agr};
+
+use super::event::Tilt;
+use super::sensor::{AccelMg, Fault, Read};
+
+/// The driver on bus `I2C`.
+pub type Sensor<I2C> = Lsm303agr<I2cInterface<I2C>, MagOneShot>;
+
+/// How long the output takes to become valid after a mode change at 200 Hz
+/// (the datasheet's 1/ODR plus margin; `board::microbit` holds the figure).
+pub const SETTLE_MS: u64 = crate::board::microbit::ACCEL_SETTLE_MS;
+
+// The driver is configured for the rate the board constants name.
+const _: () = assert!(
+    crate::board::microbit::ACCEL_ODR_HZ == 200,
+    "configure() sets AccelOutputDataRate::Hz200"
+);
+
+/// What a board's bus error means to the supervisor: a timeout (a stuck bus,
+/// worth a bus clear) or any other bus error.
+pub trait BusFault {
+    /// The supervisor's name for this error.
+    fn fault(&self) -> Fault;
+}
+
+/// The supervisor's name for a driver error.
+pub fn fault<E: BusFault>(e: Error<E>) -> Fault {
+    match e {
+        Error::Comm(e) => e.fault(),
+        Error::InvalidInputData => Fault::Implausible,
+    }
+}
+
+/// The driver's mode changes take a blocking delay; [`configure`] waits
+/// asynchronously afterwards instead.
+struct NoDelay;
+
+impl embedded_hal::delay::DelayNs for NoDelay {
+    fn delay_ns(&mut self, _ns: u32) {}
+}
+
+/// Whether the chip on the bus says it is an LSM303AGR accelerometer.
+pub async fn check_identity<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
+where
+    I2C: I2c,
+    I2C::Error: BusFault,
+{
+    let id = sensor.accelerometer_id().await.map_err(fault)?;
+    if id.is_correct() {
+        Ok(())
+    } else {
+        Err(Fault::Implausible)
+    }
+}
+
+/// (Re)configures the accelerometer: init (block data update), high
+/// resolution at 200 Hz, then waits [`SETTLE_MS`] until the output is valid.
+pub async fn configure<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
+where
+    I2C: I2c,
+    I2C::Error: BusFault,
+{
+    sensor.init().await.map_err(fault)?;
+    sensor
+        .set_accel_mode_and_odr(
+            &mut NoDelay,
+            AccelMode::HighResolution,
+            AccelOutputDataRate::Hz200,
+        )
+        .await
+        .map_err(fault)?;
+    Timer::after_millis(SETTLE_MS).await;
+    Ok(())
+}
+
+/// One poll in the sensor's frame, milli-g: a new sample, none yet (not a
+/// fault), or the bus's fault.
+pub async fn read<I2C>(sensor: &mut Sensor<I2C>) -> Read<AccelMg>
+where
+    I2C: I2c,
+    I2C::Error: BusFault,
+{
+    match sensor.accel_status().await {
+        Ok(status) if !status.xyz_new_data() => return Read::NotReady,
+        Ok(_) => {}
+        Err(e) => return Read::Failed(fault(e)),
+    }
+    match sensor.acceleration().await {
+        Ok(a) => {
+            let (x, y, z) = a.xyz_mg();
+            Read::Sample(AccelMg::new(x, y, z))
+        }
+        Err(e) => Read::Failed(fault(e)),
+    }
+}
+
+/// The pipeline's tilt as the app's input event, each axis saturated to
+/// ±32 767 mg (the supervision bounds a plausible sample far inside that).
+pub fn to_tilt(s: AccelMg) -> Tilt {
+    let saturate = |v: i32| v.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16;
+    Tilt {
+        x: saturate(s.x),
+        y: saturate(s.y),
+        z: saturate(s.z),
+    }
+}
