@@ -9,7 +9,8 @@
 //!  input_task(TiltInput) ──tilt (latest)────────┐
 //!                       └─events (queue: commands, sensor down/up)┴─> game_task ──frames (latest)──> display_task(MatrixOutput)
 //!                                              │ Ticker at FRAME_HZ (128 Hz), each tick:
-//!                                              └ Player::handle(events), Player::tick(tilt) → Session::frame → render
+//!                                              │ Player::handle(events), Player::tick(tilt) → Session::frame → render
+//!                                              └──sounds (queue, dropped when full)──> sound_task(SoundOutput)
 //! ```
 //!
 //! * [`TiltInput`]: where tilt and commands come from (accelerometer and
@@ -22,6 +23,8 @@
 //!   level's outcome, physics steps and `state_hash` are logged.
 //! * [`MatrixOutput`]: how one BCM scan step of [`crate::matrix::Scanner`]
 //!   reaches LEDs (real pins, or QEMU's virtual matrix).
+//! * `SoundOutput` (feature `sound`): how a [`crate::sound::Sound`] is played (QEMU: a log line, the
+//!   terminal's bell on a win), from the game's queue by `sound_task`.
 //! * [`Console`]: a blocking byte sink for an interactive terminal.
 //!
 //! The display size `W`×`H` and whether the autopilot is linked (`PILOT`) are
@@ -48,6 +51,8 @@ use crate::input::keys::KeyTilt;
 use crate::input::tilt::TiltConfig;
 use crate::matrix::{Frame, ScanStep, Scanner};
 use crate::physics::world::SetupError;
+#[cfg(feature = "sound")]
+use crate::sound::Sound;
 
 pub use crate::game::player::FRAME_HZ;
 
@@ -114,6 +119,10 @@ pub struct Links<const W: usize, const H: usize> {
     pub frames: Signal<CriticalSectionRawMutex, Frame<W, H>>,
     /// The game's status after its latest frame.
     pub status: Latest<Status>,
+    /// Sounds from [`game_task`] to [`sound_task`], in order (the game never
+    /// waits: what does not fit is dropped). Feature `sound` only.
+    #[cfg(feature = "sound")]
+    pub sounds: Channel<CriticalSectionRawMutex, Sound, 8>,
 }
 
 impl<const W: usize, const H: usize> Links<W, H> {
@@ -124,6 +133,8 @@ impl<const W: usize, const H: usize> Links<W, H> {
             events: Channel::new(),
             frames: Signal::new(),
             status: Latest::new(Status::START),
+            #[cfg(feature = "sound")]
+            sounds: Channel::new(),
         }
     }
 }
@@ -257,6 +268,10 @@ async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
         links.status.set(player.status());
         if let Some(frame) = tick.frame {
             links.frames.signal(frame);
+        }
+        #[cfg(feature = "sound")]
+        for sound in tick.sounds.iter() {
+            let _ = links.sounds.try_send(sound);
         }
     }
 }
@@ -418,6 +433,52 @@ pub async fn display_task<O: MatrixOutput<W, H>, const W: usize, const H: usize>
             scanner.load(&frame);
         }
         output.show_refresh(&mut scanner).await;
+    }
+}
+
+/// Where a board plays a [`Sound`] (feature `sound`).
+#[cfg(feature = "sound")]
+pub trait SoundOutput {
+    /// Plays `sound`; returns when the next one may start (a speaker's
+    /// sequence may still be sounding: it must not block the game).
+    fn play(&mut self, sound: Sound) -> impl Future<Output = ()>;
+}
+
+/// Plays the sounds from [`Links::sounds`] on `output`, in order, forever.
+#[cfg(feature = "sound")]
+pub async fn sound_task<O: SoundOutput, const W: usize, const H: usize>(
+    links: &Links<W, H>,
+    output: &mut O,
+) -> ! {
+    loop {
+        let sound = links.sounds.receive().await;
+        output.play(sound).await;
+    }
+}
+
+/// [`SoundOutput`] for a terminal: each sound in the log, and the terminal's
+/// bell on a win (the one sound a terminal has).
+#[cfg(feature = "sound")]
+pub struct TerminalSound<C: Console> {
+    console: C,
+}
+
+#[cfg(feature = "sound")]
+impl<C: Console> TerminalSound<C> {
+    /// Rings `console`'s bell.
+    pub const fn new(console: C) -> Self {
+        Self { console }
+    }
+}
+
+#[cfg(feature = "sound")]
+impl<C: Console> SoundOutput for TerminalSound<C> {
+    async fn play(&mut self, sound: Sound) {
+        #[cfg(feature = "defmt")]
+        defmt::info!("sound {}", sound);
+        if sound == Sound::Win {
+            self.console.write(b"\x07");
+        }
     }
 }
 

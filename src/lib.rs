@@ -1,7 +1,7 @@
 //! Marble Rolling: the no_std core of a tilt-controlled marble maze.
 //!
 //! Data flows one way: board → [`input`] → [`game`] (with its [`physics`]) →
-//! [`render`] → [`matrix`] (the display). The [`board`] modules hold the safe,
+//! [`render`] → [`matrix`] (the display), and [`sound`] beside the picture. The [`board`] modules hold the safe,
 //! host-tested half of each board; the firmware's tasks are `app` (feature
 //! `app`).
 #![no_std]
@@ -13,6 +13,7 @@ pub mod game;
 pub mod input;
 pub mod render;
 pub mod matrix;
+pub mod sound;
 #[cfg(feature = "app")]
 pub mod app;
 pub mod board;

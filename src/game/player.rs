@@ -29,6 +29,7 @@ use crate::matrix::{Frame, MAX_BRIGHTNESS};
 use crate::physics::world::SetupError;
 use crate::physics::Fx;
 use crate::render::Renderer;
+use crate::sound::{self, Sounds};
 
 /// Game frames per second, whatever the stepper ([`Player::CONFIG`]: both
 /// configurations run at the same frame rate).
@@ -57,6 +58,8 @@ pub struct Status {
     pub autopilot: bool,
     /// Whether the game is paused because the sensor is down.
     pub sensor_down: bool,
+    /// Whether the sound is off.
+    pub muted: bool,
 }
 
 impl Status {
@@ -68,6 +71,7 @@ impl Status {
         reading: [0, 1000, 0],
         autopilot: false,
         sensor_down: false,
+        muted: false,
     };
 }
 
@@ -79,6 +83,9 @@ pub struct Tick<const W: usize, const H: usize> {
     pub frame: Option<Frame<W, H>>,
     /// The attempt finished in this frame, with this outcome.
     pub finished: Option<Phase>,
+    /// What to play for this frame: its bounces' clicks and the outcome
+    /// (none while muted, and none at all without the `sound` feature).
+    pub sounds: Sounds,
 }
 
 /// One player's game on a `W`×`H` display (see the module doc).
@@ -105,6 +112,8 @@ pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENT
     sensor_down: Option<Fault>,
     /// The fault picture has been handed out for this outage.
     fault_shown: bool,
+    /// Sound off ([`Command::ToggleMute`]).
+    muted: bool,
 }
 
 impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
@@ -136,6 +145,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             pause: None,
             sensor_down: None,
             fault_shown: false,
+            muted: false,
         })
     }
 
@@ -160,6 +170,10 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     /// The game.
     pub fn game(&self) -> &Game<'static, Fx> {
         self.session.game()
+    }
+    /// Whether the sound is off ([`Command::ToggleMute`]).
+    pub fn muted(&self) -> bool {
+        self.muted
     }
     /// Whether the autopilot plays.
     pub fn autopilot(&self) -> bool {
@@ -216,6 +230,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             reading: self.session.reading(),
             autopilot: self.autopilot(),
             sensor_down: self.sensor_down.is_some(),
+            muted: self.muted,
         }
     }
 
@@ -229,6 +244,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
                 Command::NextLevel => self.next_level(),
                 Command::Calibrate => self.calibrate(),
                 Command::ToggleAutopilot => self.set_autopilot(!self.autopilot()),
+                Command::ToggleMute => self.muted = !self.muted,
                 Command::Quit => return false,
             },
             InputEvent::SensorDown(fault) => {
@@ -255,6 +271,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             return Tick {
                 frame,
                 finished: None,
+                sounds: Sounds::NONE,
             };
         }
         if self.fault_shown {
@@ -262,9 +279,17 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             self.fault_shown = false;
         }
         let mut finished = None;
+        let mut sounds = Sounds::NONE;
         let frame = match self.pause {
             None => {
                 let phase = self.frame(tilt_mg);
+                if cfg!(feature = "sound") {
+                    let world = self.session.game_mut().world_mut();
+                    let impacts = world.take_impacts();
+                    let pitch_um = world.params().layout.pitch_um;
+                    let ended = (phase != Phase::Playing).then_some(phase);
+                    sounds = sound::frame_sounds(&impacts, pitch_um, ended, self.muted);
+                }
                 if phase != Phase::Playing {
                     finished = Some(phase);
                     let frames = if phase == Phase::Won {
@@ -296,7 +321,11 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
                 })
             }
         };
-        Tick { frame, finished }
+        Tick {
+            frame,
+            finished,
+            sounds,
+        }
     }
 
     /// Starts the level over (the tilt calibration is kept).

@@ -70,6 +70,8 @@ pub enum Command {
     Calibrate,
     /// Hand the board to the autopilot, or take it back.
     ToggleAutopilot,
+    /// Sound off, or back on.
+    ToggleMute,
     /// Leave the game (QEMU exits with status 0).
     Quit,
 }

@@ -32,6 +32,8 @@ pub enum Key {
     Calibrate,
     /// `p`: autopilot on / off.
     Autopilot,
+    /// `m`: sound off / on.
+    Mute,
     /// `q` or Ctrl-C.
     Quit,
 }
@@ -108,6 +110,7 @@ impl KeyDecoder {
             b'n' | b'N' => Some(Key::Next),
             b'c' | b'C' => Some(Key::Calibrate),
             b'p' | b'P' => Some(Key::Autopilot),
+            b'm' | b'M' => Some(Key::Mute),
             b'q' | b'Q' | 0x03 => Some(Key::Quit),
             _ => None,
         }
@@ -157,6 +160,7 @@ impl KeyTilt {
             Key::Next => return InputEvent::Command(Command::NextLevel),
             Key::Calibrate => return InputEvent::Command(Command::Calibrate),
             Key::Autopilot => return InputEvent::Command(Command::ToggleAutopilot),
+            Key::Mute => return InputEvent::Command(Command::ToggleMute),
             Key::Quit => return InputEvent::Command(Command::Quit),
         };
         let max = KEY_TILT_MAX_MG;

@@ -25,7 +25,8 @@ pub use geometry::tiles::{TileIndex, TileLayout};
 pub use scalar::{MicroF32, Scalar};
 pub use vec::Vec3;
 pub use world::{
-    Marble, Params, PhysicsSpec, SetupError, StepObserver, StepStats, Stepping, World, MAX_EVENTS,
+    Impacts, Marble, Params, PhysicsSpec, SetupError, StepObserver, StepStats, Stepping, World,
+    IMPACTS_KEPT, MAX_EVENTS,
 };
 
 /// The firmware's default scalar (see [`scalar`] for why).

@@ -256,6 +256,39 @@ pub struct StepStats {
     pub event_limits: u32,
 }
 
+/// How many bounces between two [`World::take_impacts`] keep their speed.
+pub const IMPACTS_KEPT: usize = 4;
+
+/// The bounces against tiles (eq. 1 with `e`, not the slow impacts that become
+/// contacts) since the last [`World::take_impacts`], for what a game plays or
+/// shows of them: a click per bounce, louder the harder it hits.
+///
+/// Kept like [`StepStats`]: each bounce adds a count and, for the first
+/// [`IMPACTS_KEPT`], its speed. No other code runs for it, whether anybody takes
+/// them or not; the physics never reads them.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Impacts<S> {
+    /// Bounces, all of them (saturating).
+    pub count: u16,
+    /// The normal speed at impact (pitch/s) of the first [`IMPACTS_KEPT`], in the
+    /// order they happened.
+    speeds: [S; IMPACTS_KEPT],
+}
+
+impl<S: Scalar> Impacts<S> {
+    fn record(&mut self, speed: S) {
+        if let Some(slot) = self.speeds.get_mut(self.count as usize) {
+            *slot = speed;
+        }
+        self.count = self.count.saturating_add(1);
+    }
+
+    /// The speeds kept (pitch/s), in order.
+    pub fn speeds(&self) -> &[S] {
+        &self.speeds[..(self.count as usize).min(IMPACTS_KEPT)]
+    }
+}
+
 /// The contact solver's view of a step (see [`respond`](super::dynamics::respond)):
 /// the pull as `a·T²` (pitch/T²) and the step's length in `T`.
 #[derive(Clone, Copy, Debug)]
@@ -286,6 +319,8 @@ pub struct World<'a, S: Scalar, const M: usize> {
     clear: [TileRange; M],
     /// What the steps did so far.
     pub stats: StepStats,
+    /// The bounces since [`World::take_impacts`].
+    impacts: Impacts<S>,
 }
 
 /// The largest acceleration the physics accepts per axis (milli-g); the tilt path
@@ -350,6 +385,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             },
             clear: [TileRange::EMPTY; M],
             stats: StepStats::default(),
+            impacts: Impacts::default(),
         };
         w.set_gravity_mg([0, -1000, 0]);
         Ok(w)
@@ -429,6 +465,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         if changed[1] && self.params.spec.effects.friction {
             self.drag = Drag::new(resist.kick::<S>((-g[1]).max(0), k).0, k);
         }
+    }
+
+    /// The bounces since the last call (see [`Impacts`]), and a fresh count.
+    pub fn take_impacts(&mut self) -> Impacts<S> {
+        core::mem::take(&mut self.impacts)
     }
 
     /// Turns skipping of resting marbles on (the default) or off. Off, every marble
@@ -878,6 +919,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         self.stats.contacts = self.stats.contacts.wrapping_add(1);
         if res.outcome == Outcome::Collision {
             self.stats.collisions = self.stats.collisions.wrapping_add(1);
+            self.impacts.record(res.impact.shl(T_LOG2));
         }
         res.outcome
     }

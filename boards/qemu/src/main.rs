@@ -26,7 +26,7 @@ mod fault_script;
 mod sensor;
 
 use defmt_semihosting as _;
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links};
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TerminalSound};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr};
@@ -109,6 +109,12 @@ fn main() -> ! {
             }
             _ => hw::fatal("cannot spawn tasks"),
         }
+        if options.interactive {
+            match sound() {
+                Ok(token) => spawner.spawn(token),
+                Err(_) => hw::fatal("cannot spawn the sound task"),
+            }
+        }
         if options.fault_script {
             match fault_script_task(options) {
                 Ok(token) => spawner.spawn(token),
@@ -173,6 +179,12 @@ async fn display(interactive: bool) -> ! {
         let mut matrix = VirtualMatrix::<UartConsole>::new(&LINKS.status, None, LOG_MATRIX_EVERY);
         app::display_task(&LINKS, &mut matrix).await
     }
+}
+
+/// The game's sounds: logged, and the terminal's bell on a win.
+#[embassy_executor::task]
+async fn sound() -> ! {
+    app::sound_task(&LINKS, &mut TerminalSound::new(UartConsole)).await
 }
 
 #[embassy_executor::task]

@@ -170,7 +170,7 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
     let [x, _, z] = status.reading;
     let _ = write!(
         out,
-        "\r\n  level {}/{} {}: {} {}.{} s{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
+        "\r\n  level {}/{} {}: {} {}.{} s{}{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
         usize::from(status.level) + 1,
         LEVELS.len(),
         LEVELS
@@ -184,12 +184,13 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
         } else {
             ""
         },
+        if status.muted { "  (sound off)" } else { "" },
         x,
         z
     );
     let _ = write!(
         out,
-        "  arrows/WASD tilt, space level, c calibrate, r restart, n next level,\x1b[K\r\n  p autopilot, q quit\x1b[K\r\n"
+        "  arrows/WASD tilt, space level, c calibrate, r restart, n next level,\x1b[K\r\n  p autopilot, m sound, q quit\x1b[K\r\n"
     );
 }
 

@@ -79,6 +79,9 @@ pub struct Resolution<S> {
     pub deficit: S,
     /// New normal velocity relative to the board (pitch/T).
     pub vn: S,
+    /// A bounce's normal speed at the instant of impact, relative to the board
+    /// (pitch/T; zero for the other outcomes): what the game's click follows.
+    pub impact: S,
     /// Which case applied.
     pub outcome: Outcome,
 }
@@ -110,6 +113,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
             push: delta,
             lift: S::ZERO,
             vn: out,
+            impact: S::ZERO,
             outcome: Outcome::Separating,
             deficit,
         };
@@ -133,6 +137,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
             push: delta,
             lift: S::ZERO,
             vn: S::ZERO,
+            impact: S::ZERO,
             outcome: Outcome::Contact,
             deficit,
         };
@@ -148,6 +153,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
             push: delta,
             lift: S::ZERO,
             vn: S::ZERO,
+            impact: S::ZERO,
             outcome: Outcome::Contact,
             deficit: S::ZERO,
         };
@@ -184,6 +190,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         push: delta + u,
         lift: u,
         vn,
+        impact: wc,
         outcome: Outcome::Collision,
         deficit: S::ZERO,
     }

@@ -764,6 +764,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             no_faster(cap_speed(out), v_c)
         };
         self.stats.collisions = self.stats.collisions.wrapping_add(1);
+        self.impacts.record(wc);
         if SPACE && n.y > S::ONE.half() {
             m.supported = false;
         }
