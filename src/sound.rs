@@ -122,6 +122,99 @@ pub fn frame_sounds<S: Scalar>(
     out
 }
 
+/// One tone of a speaker's rendition: a square wave of `hz` for `ms`, at
+/// `level` (1..=255, the share of the loudest the speaker gives).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Note {
+    /// Pitch, Hz.
+    pub hz: u16,
+    /// Length, ms.
+    pub ms: u16,
+    /// 1..=255.
+    pub level: u8,
+}
+
+/// A click: one short burst, shorter than a frame (1/128 s), so that the
+/// next frame's click is not delayed.
+const CLICK: Note = Note {
+    hz: 2_000,
+    ms: 4,
+    level: 255,
+};
+
+/// The win: C6 E6 G6 C7 rising.
+const WIN: [Note; 4] = [
+    Note {
+        hz: 1047,
+        ms: 90,
+        level: 200,
+    },
+    Note {
+        hz: 1319,
+        ms: 90,
+        level: 200,
+    },
+    Note {
+        hz: 1568,
+        ms: 90,
+        level: 200,
+    },
+    Note {
+        hz: 2093,
+        ms: 180,
+        level: 200,
+    },
+];
+
+/// The loss: G5 to E4 falling.
+const LOSS: [Note; 5] = [
+    Note {
+        hz: 784,
+        ms: 80,
+        level: 180,
+    },
+    Note {
+        hz: 659,
+        ms: 80,
+        level: 180,
+    },
+    Note {
+        hz: 523,
+        ms: 80,
+        level: 180,
+    },
+    Note {
+        hz: 440,
+        ms: 80,
+        level: 180,
+    },
+    Note {
+        hz: 330,
+        ms: 200,
+        level: 180,
+    },
+];
+
+/// What a speaker plays for `sound`, in order.
+pub fn notes(sound: Sound) -> heapless::Vec<Note, 5> {
+    let mut out = heapless::Vec::new();
+    let tune: &[Note] = match sound {
+        Sound::Click { loudness } => {
+            let _ = out.push(Note {
+                level: loudness,
+                ..CLICK
+            });
+            &[]
+        }
+        Sound::Win => &WIN,
+        Sound::Loss => &LOSS,
+    };
+    for &n in tune {
+        let _ = out.push(n);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -143,6 +236,22 @@ mod tests {
             assert!(loudness > last, "{v} mm/s: {loudness} after {last}");
             last = loudness;
         }
+    }
+
+    #[test]
+    fn the_win_rises_the_loss_falls_a_click_fits_a_frame() {
+        let win = notes(Sound::Win);
+        assert!(win.windows(2).all(|w| w[1].hz > w[0].hz));
+        let loss = notes(Sound::Loss);
+        assert!(loss.windows(2).all(|w| w[1].hz < w[0].hz));
+        let soft = notes(Sound::Click { loudness: 10 });
+        let hard = notes(Sound::Click { loudness: 200 });
+        assert_eq!((soft.len(), hard.len()), (1, 1));
+        assert!(hard[0].level > soft[0].level);
+        assert!(
+            u32::from(hard[0].ms) * 128 < 1000,
+            "a click outlasts a frame"
+        );
     }
 
     #[test]

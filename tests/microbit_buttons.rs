@@ -18,6 +18,24 @@ fn b_alone_is_next_level_on_release() {
 }
 
 #[test]
+fn b_held_alone_toggles_the_sound_once_and_is_not_next_level() {
+    let mut b = Buttons::new(BUTTONS);
+    // Just short of the 1 s hold: a plain NextLevel on release.
+    let mut events = hold(&mut b, false, true, 95);
+    events.extend(hold(&mut b, false, false, 10));
+    assert_eq!(events, vec![ButtonEvent::NextLevel]);
+    // Held on: one ToggleMute at 1 s, nothing more while held or on release.
+    let mut events = hold(&mut b, false, true, 400);
+    events.extend(hold(&mut b, false, false, 10));
+    assert_eq!(events, vec![ButtonEvent::ToggleMute]);
+    // A held B that becomes A+B is a calibration, never a mute.
+    let mut events = hold(&mut b, false, true, 50);
+    events.extend(hold(&mut b, true, true, 120));
+    events.extend(hold(&mut b, false, false, 10));
+    assert_eq!(events, vec![ButtonEvent::Calibrate]);
+}
+
+#[test]
 fn a_alone_is_restart_on_release() {
     let mut b = Buttons::new(BUTTONS);
     assert_eq!(hold(&mut b, true, false, 10), vec![]);

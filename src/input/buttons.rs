@@ -8,6 +8,10 @@
 //! * **A** pressed and released alone → [`ButtonEvent::Restart`].
 //! * **A+B** held together for [`ButtonConfig::hold_samples`] →
 //!   [`ButtonEvent::Calibrate`] (once per hold).
+//! * **B** held alone for [`ButtonConfig::hold_samples`] →
+//!   [`ButtonEvent::ToggleMute`] (once per hold; its release is then not
+//!   NextLevel): the micro:bit has two buttons, and a long press is the one
+//!   gesture left.
 //!
 //! Single-button events fire on *release*, and never once both buttons have
 //! been down together during that press: pressing A then B to calibrate does
@@ -29,6 +33,8 @@ pub enum ButtonEvent {
     Restart,
     /// A+B held: the current orientation becomes "level".
     Calibrate,
+    /// B held alone: sound off, or back on.
+    ToggleMute,
 }
 
 /// Timing of [`Buttons`], in samples.
@@ -37,7 +43,8 @@ pub enum ButtonEvent {
 pub struct ButtonConfig {
     /// Consecutive identical raw samples needed to accept a change (≥ 1).
     pub debounce_samples: u8,
-    /// Samples both buttons must be (debounced) down to calibrate (≥ 1).
+    /// Samples both buttons must be (debounced) down to calibrate, or B
+    /// alone to toggle the sound (≥ 1).
     pub hold_samples: u16,
 }
 
@@ -92,7 +99,9 @@ pub struct Buttons {
     combo: bool,
     /// Samples both have been down in a row (saturating).
     both_held: u16,
-    /// Calibrate already fired for this hold.
+    /// Samples B has been down alone in a row (saturating).
+    b_held: u16,
+    /// A hold (Calibrate or ToggleMute) already fired for this press.
     fired: bool,
 }
 
@@ -111,6 +120,7 @@ impl Buttons {
             },
             combo: false,
             both_held: 0,
+            b_held: 0,
             fired: false,
         }
     }
@@ -141,7 +151,16 @@ impl Buttons {
             }
         } else {
             self.both_held = 0;
-            if !self.combo {
+            if b && !self.combo {
+                self.b_held = self.b_held.saturating_add(1);
+                if !self.fired && self.b_held >= self.config.hold_samples.max(1) {
+                    self.fired = true;
+                    event = Some(ButtonEvent::ToggleMute);
+                }
+            } else {
+                self.b_held = 0;
+            }
+            if !self.combo && !self.fired {
                 if a_edge == Some(false) {
                     event = Some(ButtonEvent::Restart);
                 } else if b_edge == Some(false) {
@@ -152,6 +171,7 @@ impl Buttons {
         if !a && !b {
             self.combo = false;
             self.fired = false;
+            self.b_held = 0;
         }
         event
     }

@@ -18,19 +18,21 @@ use core::future::Future;
 use core::pin::Pin;
 
 use embassy_nrf::gpio::{AnyPin, Flex, Input, Level, Output, OutputDrive, Pull};
+use embassy_nrf::pwm::{DutyCycle, Prescaler, SimpleConfig, SimplePwm};
 use embassy_nrf::twim::{self, Twim};
 use embassy_nrf::{peripherals, Peri};
 use embassy_time::{with_timeout, Duration, Instant, Ticker, Timer};
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 use heapless::Deque;
 
-use marble_rolling::app::{MatrixOutput, TiltInput, REFRESH_HZ};
+use marble_rolling::app::{MatrixOutput, SoundOutput, TiltInput, REFRESH_HZ};
 use marble_rolling::board::microbit::{self as board, BusClear, BusLines, Heartbeats, Task};
 use marble_rolling::input::buttons::{ButtonEvent, Buttons};
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::input::lsm303::{self, BusFault};
 use marble_rolling::input::sensor::{Action, Fault, Read, TiltPipeline};
 use marble_rolling::matrix::ScanStep;
+use marble_rolling::sound::{self, Sound};
 
 /// RTC ticks per BCM base tick (4 → 109 Hz refresh; see the board module).
 const RTC_TICKS_PER_BASE_TICK: u64 = board::rtc_ticks_per_base_tick(REFRESH_HZ) as u64;
@@ -319,6 +321,51 @@ impl BusLines for GpioLines<'_> {
 }
 
 // ---------------------------------------------------------------------------
+// Speaker
+// ---------------------------------------------------------------------------
+
+/// The speaker on P0.00, driven by PWM0: each [`sound::Note`] is a square
+/// wave the PWM makes by itself while the task awaits the note's end, so
+/// nothing busy-waits and the game never waits for a sound (its queue drops
+/// what does not fit). The level sets the duty cycle: 50 % is the loudest a
+/// square wave gets.
+pub struct Speaker {
+    pwm: SimplePwm<'static>,
+}
+
+impl Speaker {
+    /// PWM0 on `pin`, silent.
+    pub fn new(
+        pwm: Peri<'static, peripherals::PWM0>,
+        pin: Peri<'static, peripherals::P0_00>,
+    ) -> Self {
+        let mut config = SimpleConfig::default();
+        // 1 MHz: 330 Hz .. 2 kHz tones have a top of 500 .. 3 030.
+        config.prescaler = Prescaler::Div16;
+        let pwm = SimplePwm::new_1ch(pwm, pin, &config);
+        pwm.disable();
+        Speaker { pwm }
+    }
+}
+
+impl SoundOutput for Speaker {
+    async fn play(&mut self, sound: Sound) {
+        for note in sound::notes(sound) {
+            // Set up while stopped: embassy-nrf's `set_duty` on a running PWM
+            // spins until the period ends (up to 3 ms at 330 Hz).
+            self.pwm.disable();
+            self.pwm.set_period(u32::from(note.hz).max(1));
+            let top = u32::from(self.pwm.max_duty());
+            let high = top * u32::from(note.level) / 510;
+            self.pwm.set_duty(0, DutyCycle::normal((top - high) as u16));
+            self.pwm.enable();
+            Timer::after_millis(u64::from(note.ms)).await;
+        }
+        self.pwm.disable();
+    }
+}
+
+// ---------------------------------------------------------------------------
 // Accelerometer
 // ---------------------------------------------------------------------------
 
@@ -400,6 +447,7 @@ impl MicrobitInput {
             Some(ButtonEvent::NextLevel) => Some(Command::NextLevel),
             Some(ButtonEvent::Restart) => Some(Command::Restart),
             Some(ButtonEvent::Calibrate) => Some(Command::Calibrate),
+            Some(ButtonEvent::ToggleMute) => Some(Command::ToggleMute),
             None => None,
         };
         let read = lsm303::read(&mut self.sensor).await;

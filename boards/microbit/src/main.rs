@@ -80,6 +80,12 @@ async fn display(mut matrix: hw::Matrix) -> ! {
     app::display_task(&LINKS, &mut matrix).await
 }
 
+/// The game's sounds on the speaker (hw::Speaker).
+#[embassy_executor::task]
+async fn sound(mut speaker: hw::Speaker) -> ! {
+    app::sound_task(&LINKS, &mut speaker).await
+}
+
 #[embassy_executor::task]
 async fn input(mut input: hw::MicrobitInput) -> ! {
     app::input_task(&LINKS, &mut input).await
@@ -181,6 +187,9 @@ async fn main(spawner: Spawner) {
         &HEARTBEATS,
     );
 
+    // Speaker: P0.00, PWM0.
+    let speaker = hw::Speaker::new(p.PWM0, p.P0_00);
+
     interrupt::EGU0_SWI0.set_priority(Priority::P6);
     let display_spawner = EXECUTOR_DISPLAY.start(interrupt::EGU0_SWI0);
     match display(matrix) {
@@ -194,6 +203,10 @@ async fn main(spawner: Spawner) {
     match game() {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
+    }
+    match sound(speaker) {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => defmt::error!("sound task already running"),
     }
     if let Some(handle) = wdt {
         match watchdog(handle) {
