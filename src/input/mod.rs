@@ -15,5 +15,6 @@ pub mod keys;
 #[cfg(feature = "lsm303agr")]
 pub mod lsm303;
 pub mod buttons;
+pub mod idle;
 pub mod sensor;
 pub mod tilt;
