@@ -494,3 +494,35 @@ proptest! {
         narrow_never_sinks::<f64>(&c);
     }
 }
+
+/// Found by the full property run (`cargo xtask properties`, CI, session 5): a
+/// marble 2 µm narrower than its 16 mm corridor, `e = 0.975`, rolling at 42
+/// pitch/s past a side opening with friction, ends a step 47 µm (0.6 % of r)
+/// inside the wall opposite a post it bounced off, in slices (8 in that step).
+/// Not fixed yet (issue 13): more contact passes and ending a slice cut short
+/// by the step's end were tried and changed nothing. Ignored so that CI stays
+/// meaningful; `cargo test --test properties -- --ignored` runs it.
+#[test]
+#[ignore = "known defect, issue 13: see the doc comment"]
+fn narrow_corridor_regression_top_speed_with_friction() {
+    let rows = [
+        "###########",
+        "#.........#",
+        "#..###.#..#",
+        "#.#.....#.#",
+        "###########",
+    ];
+    let c = Narrow {
+        maze: Maze {
+            rows: rows.iter().map(|r| r.to_string()).collect(),
+        },
+        short_um: 1096,
+        long_um: 15979,
+        slack_um: 2,
+        e_milli: 975,
+        v0: (83, -71),
+        tilts: vec![(128, [447, -1000, 2])],
+        friction: true,
+    };
+    narrow_never_sinks::<fixed::types::I8F24>(&c);
+}
