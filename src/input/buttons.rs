@@ -135,6 +135,14 @@ impl Buttons {
         self.b.pressed
     }
 
+    /// Whether a hold of `held` samples fires now: once it reaches
+    /// [`ButtonConfig::hold_samples`], and only once per press.
+    fn hold_fires(&mut self, held: u16) -> bool {
+        let fires = !self.fired && held >= self.config.hold_samples.max(1);
+        self.fired |= fires;
+        fires
+    }
+
     /// Feeds one raw sample (`true` = pressed; the board handles polarity).
     pub fn update(&mut self, a_raw: bool, b_raw: bool) -> Option<ButtonEvent> {
         let a_edge = self.a.update(a_raw, self.config.debounce_samples);
@@ -145,16 +153,14 @@ impl Buttons {
         if a && b {
             self.combo = true;
             self.both_held = self.both_held.saturating_add(1);
-            if !self.fired && self.both_held >= self.config.hold_samples.max(1) {
-                self.fired = true;
+            if self.hold_fires(self.both_held) {
                 event = Some(ButtonEvent::Calibrate);
             }
         } else {
             self.both_held = 0;
             if b && !self.combo {
                 self.b_held = self.b_held.saturating_add(1);
-                if !self.fired && self.b_held >= self.config.hold_samples.max(1) {
-                    self.fired = true;
+                if self.hold_fires(self.b_held) {
                     event = Some(ButtonEvent::ToggleMute);
                 }
             } else {
