@@ -497,17 +497,13 @@ proptest! {
 
 /// Found by the full property run (`cargo xtask properties`, CI, session 5): a
 /// marble 2 µm narrower than its 16 mm corridor, `e = 0.975`, rolling at 42
-/// pitch/s past a side opening with friction. In step 15 (8 slices) it dips
+/// pitch/s past a side opening with friction. In step 15 (8 slices) it dipped
 /// 0.0028 pitch (47 µm, 0.6 % of r) into the left wall, tile [0, 1, 3], inside a
-/// flight, and ends the step still 7 µm in. What was seen: the dip happens in a
-/// slice, whose search leaves out the slice's own tile; after bouncing off
-/// the post on the right the marble flies back towards the left wall at about
-/// 1 pitch/s, far faster than the slow contact a slice is meant for. Not fixed
-/// yet (issue 13). More contact passes and ending a slice that the step's end
-/// cut short were tried, and neither changed anything. Ignored so that CI
-/// stays meaningful; `cargo test --test properties -- --ignored` runs it.
+/// flight, and ended the step still 7 µm in: a slice's search left out the
+/// slice's own tile, and after bouncing off the post on the right the marble
+/// flew back to it at about 1 pitch/s. A slice now leaves its tile out only while
+/// the marble rests on it (`World::still_skipped`).
 #[test]
-#[ignore = "known defect, issue 13: see the doc comment"]
 fn narrow_corridor_regression_top_speed_with_friction() {
     let rows = [
         "###########",

@@ -60,7 +60,7 @@
 use super::super::dynamics::integrate::Kick;
 use super::super::dynamics::respond::T_LOG2;
 use super::super::dynamics::toi::{entry, impact_speed, toi_box, Segment, Toi};
-use super::super::geometry::narrowphase::{owned, shadowed, Contact, Feature};
+use super::super::geometry::narrowphase::{offset, owned, shadowed, Contact, Feature};
 use super::super::geometry::sweep::{reach, swept};
 use super::super::geometry::tiles::{Aabb, TileIndex};
 use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
@@ -487,6 +487,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 }
             }
         }
+        let skip = if skip == EVERY || skip == LID || self.still_skipped(seg, skip) {
+            skip
+        } else {
+            EVERY
+        };
         // Tiles in reach (plain loops: iterator adapters cost more than the test).
         let range = reach(layout, &path, r + tol, SPACE);
         let mut k = range.lo.k;
@@ -551,6 +556,37 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
         }
         best
+    }
+
+    /// Whether a slice still leaves its own tile `skip` out of the flight `seg`:
+    /// only while the marble rests on it, at most two tolerances off and not
+    /// closing faster than the restitution threshold. A marble that has left it
+    /// (bounced off the wall across a narrow corridor, say) and flies back is
+    /// searched against it like against any tile: the passes at the slice's end
+    /// are for the slow contact the slice was begun for, and a return at speed
+    /// would sink into the tile until then (the narrow-corridor regression, 47 µm
+    /// at 1 pitch/s).
+    fn still_skipped(&self, seg: &Segment<S>, skip: TileIndex) -> bool {
+        let p = &self.params;
+        let (r, tol) = (p.radius, self.tol());
+        let d = offset(seg.p, &p.layout.tile_box(skip));
+        let near = r + tol + tol;
+        if d.x.abs() > near || d.y.abs() > near || d.z.abs() > near {
+            return false;
+        }
+        let d2 = d.length_sq();
+        if d2 > near.times(near) {
+            return false;
+        }
+        // Closing at `w = −u·d/|d|` (pitch/step) faster than the threshold, in
+        // squares: (u·d)² > w_t²·|d|².
+        let ud = seg.u.dot(d);
+        let w_t = if p.k >= T_LOG2 {
+            p.threshold.shr(p.k - T_LOG2)
+        } else {
+            p.threshold.shl(T_LOG2 - p.k)
+        };
+        !(ud < S::ZERO && ud.times(ud) > w_t.times(w_t).times(d2))
     }
 
     /// When the centre, flying `seg`, first enters a column whose tile behind held
