@@ -3,7 +3,7 @@
 //! Data flows one way: board → [`input`] → [`game`] (with its [`physics`]) →
 //! [`render`] → [`matrix`] (the display), and [`sound`] beside the picture. The [`board`] modules hold the safe,
 //! host-tested half of each board; the firmware's tasks are `app` (feature
-//! `app`).
+//! `app`); best times live in flash through `records` (feature `records`).
 #![no_std]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -14,6 +14,8 @@ pub mod input;
 pub mod render;
 pub mod matrix;
 pub mod sound;
+#[cfg(feature = "records")]
+pub mod records;
 #[cfg(feature = "app")]
 pub mod app;
 pub mod board;
