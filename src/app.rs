@@ -51,8 +51,12 @@ use crate::input::keys::KeyTilt;
 use crate::input::tilt::TiltConfig;
 use crate::matrix::{Frame, ScanStep, Scanner};
 use crate::physics::world::SetupError;
+#[cfg(feature = "records")]
+use crate::records::{Offer, Records};
 #[cfg(feature = "sound")]
 use crate::sound::Sound;
+#[cfg(feature = "records")]
+use embedded_storage_async::nor_flash::NorFlash;
 
 pub use crate::game::player::FRAME_HZ;
 
@@ -123,7 +127,32 @@ pub struct Links<const W: usize, const H: usize> {
     /// waits: what does not fit is dropped). Feature `sound` only.
     #[cfg(feature = "sound")]
     pub sounds: Channel<CriticalSectionRawMutex, Sound, 8>,
+    /// Levels won by the player (not the autopilot), from [`game_task`] to
+    /// `records_task`. Feature `records` only.
+    #[cfg(feature = "records")]
+    pub wins: Channel<CriticalSectionRawMutex, Win, 2>,
+    /// Every level's record as `records_task` last read or wrote it.
+    #[cfg(feature = "records")]
+    pub bests: Latest<Bests>,
+    /// The level whose win `records_task` has just stored as a new record.
+    #[cfg(feature = "records")]
+    pub new_record: Signal<CriticalSectionRawMutex, u8>,
 }
+
+/// A level won by the player, in game frames ([`FRAME_HZ`] per second).
+#[cfg(feature = "records")]
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Win {
+    /// Index of the level in [`LEVELS`].
+    pub level: u8,
+    /// The time it took.
+    pub frames: u32,
+}
+
+/// Each built-in level's record in frames, if it has one.
+#[cfg(feature = "records")]
+pub type Bests = [Option<u32>; LEVELS.len()];
 
 impl<const W: usize, const H: usize> Links<W, H> {
     /// Nothing sent yet: a flat board, no command, no frame.
@@ -135,6 +164,12 @@ impl<const W: usize, const H: usize> Links<W, H> {
             status: Latest::new(Status::START),
             #[cfg(feature = "sound")]
             sounds: Channel::new(),
+            #[cfg(feature = "records")]
+            wins: Channel::new(),
+            #[cfg(feature = "records")]
+            bests: Latest::new([None; LEVELS.len()]),
+            #[cfg(feature = "records")]
+            new_record: Signal::new(),
         }
     }
 }
@@ -177,7 +212,13 @@ pub enum GameMode {
     },
     /// The headless demo: the autopilot plays each built-in level once, in
     /// order, then [`game_task`] returns.
-    Demo,
+    Demo {
+        /// Offer the autopilot's wins to the records task (feature
+        /// `records`) as if they were a player's: the records check, which
+        /// runs the demo twice and reads the first run's records back in the
+        /// second. A player's game never records the autopilot's wins.
+        records: bool,
+    },
 }
 
 /// Why [`game_task`] returned.
@@ -225,7 +266,9 @@ pub async fn game_task<const W: usize, const H: usize, const PILOT: bool, const 
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
         GameMode::Play { tilt } => play::<W, H, PILOT, EVENTS>(links, &mut ticker, tilt).await,
-        GameMode::Demo => demo::<W, H, PILOT, EVENTS>(links, &mut ticker).await,
+        GameMode::Demo { records } => {
+            demo::<W, H, PILOT, EVENTS>(links, &mut ticker, records).await
+        }
     }
 }
 
@@ -263,9 +306,34 @@ async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
                 phase.as_str(),
                 player.game().steps()
             );
+            #[cfg(feature = "records")]
+            if phase == Phase::Won && !player.autopilot() {
+                // The records task writes the flash while the win is on show,
+                // between levels; a full queue drops the win, never the game.
+                let _ = links.wins.try_send(Win {
+                    level: player.level_index().min(usize::from(u8::MAX)) as u8,
+                    frames: player.game().frames(),
+                });
+            }
             let _ = phase;
         }
-        links.status.set(player.status());
+        #[cfg(feature = "records")]
+        if links.new_record.try_take() == Some(player.level_index() as u8) {
+            player.announce_record();
+        }
+        #[cfg(feature = "records")]
+        let status = Status {
+            best: links
+                .bests
+                .get()
+                .get(player.level_index())
+                .copied()
+                .flatten(),
+            ..player.status()
+        };
+        #[cfg(not(feature = "records"))]
+        let status = player.status();
+        links.status.set(status);
         if let Some(frame) = tick.frame {
             links.frames.signal(frame);
         }
@@ -308,6 +376,7 @@ async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVEN
 async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
     links: &Links<W, H>,
     ticker: &mut Ticker,
+    records: bool,
 ) -> GameExit {
     let mut summary = DemoSummary::default();
     let mut sensor = None;
@@ -364,7 +433,18 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
         summary.frames = summary.frames.saturating_add(u64::from(game.frames()));
         if phase == Phase::Won {
             summary.won = summary.won.saturating_add(1);
+            #[cfg(feature = "records")]
+            if records {
+                links
+                    .wins
+                    .send(Win {
+                        level: index.min(usize::from(u8::MAX)) as u8,
+                        frames: game.frames(),
+                    })
+                    .await;
+            }
         }
+        let _ = records;
         #[cfg(feature = "defmt")]
         defmt::info!(
             "demo {=usize}/{=usize} level={=str} outcome={=str} steps={=u64} state_hash={=u64:016x}",
@@ -433,6 +513,95 @@ pub async fn display_task<O: MatrixOutput<W, H>, const W: usize, const H: usize>
             scanner.load(&frame);
         }
         output.show_refresh(&mut scanner).await;
+    }
+}
+
+/// Keeps the best times (feature `records`): reads every level's record into
+/// [`Links::bests`], then offers each [`Win`] from [`Links::wins`] to
+/// `records` and, on a new record, tells the game ([`Links::new_record`]).
+/// `written` runs after each update that wrote (QEMU saves its flash image to
+/// a host file there). Flash errors are logged and the game goes on without
+/// the record.
+#[cfg(feature = "records")]
+pub async fn records_task<F: NorFlash, const W: usize, const H: usize>(
+    links: &Links<W, H>,
+    records: &mut Records<F>,
+    mut written: impl FnMut(&mut F),
+) -> ! {
+    let mut bests: Bests = [None; LEVELS.len()];
+    read_bests(records, &mut bests).await;
+    links.bests.set(bests);
+    loop {
+        let win = links.wins.receive().await;
+        let offer = records.offer(win.level, win.frames).await;
+        #[cfg(feature = "defmt")]
+        log_offer(win, offer);
+        if let Ok(Offer::Kept { .. }) = offer {
+            continue;
+        }
+        // Something was written (a record, or an erase of a corrupted
+        // region): every level's record again, as the flash now holds them.
+        read_bests(records, &mut bests).await;
+        links.bests.set(bests);
+        if let Ok(Offer::New { .. }) = offer {
+            links.new_record.signal(win.level);
+        }
+        written(records.flash());
+    }
+}
+
+/// Every level's record into `bests` (one that cannot be read: none).
+#[cfg(feature = "records")]
+async fn read_bests<F: NorFlash>(records: &mut Records<F>, bests: &mut Bests) {
+    for (level, best) in bests.iter_mut().enumerate() {
+        *best = match records.best(level as u8).await {
+            Ok(b) => b,
+            Err(e) => {
+                #[cfg(feature = "defmt")]
+                defmt::warn!("records: level {=usize}: {=str}", level + 1, e.as_str());
+                let _ = e;
+                None
+            }
+        };
+    }
+}
+
+/// The record news in the log: the time in seconds with hundredths.
+#[cfg(all(feature = "records", feature = "defmt"))]
+fn log_offer(win: Win, offer: Result<Offer, crate::records::RecordError>) {
+    let name = LEVELS
+        .get(usize::from(win.level))
+        .map_or("?", |level| level.info.name);
+    let cs = |frames: u32| frames.saturating_mul(100) / FRAME_HZ;
+    match offer {
+        Ok(Offer::New {
+            previous: Some(previous),
+        }) => defmt::info!(
+            "new record: level {=u8} {=str} in {=u32}.{=u32:02} s (was {=u32}.{=u32:02} s)",
+            win.level + 1,
+            name,
+            cs(win.frames) / 100,
+            cs(win.frames) % 100,
+            cs(previous) / 100,
+            cs(previous) % 100
+        ),
+        Ok(Offer::New { previous: None }) => defmt::info!(
+            "new record: level {=u8} {=str} in {=u32}.{=u32:02} s (the first)",
+            win.level + 1,
+            name,
+            cs(win.frames) / 100,
+            cs(win.frames) % 100
+        ),
+        Ok(Offer::Kept { best }) => defmt::info!(
+            "level {=u8} {=str} in {=u32}.{=u32:02} s: the record stays {=u32}.{=u32:02} s",
+            win.level + 1,
+            name,
+            cs(win.frames) / 100,
+            cs(win.frames) % 100,
+            cs(best) / 100,
+            cs(best) % 100
+        ),
+        Err(e) => defmt::warn!("records: {=str}", e.as_str()),
     }
 }
 

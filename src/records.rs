@@ -147,12 +147,19 @@ impl<F: NorFlash> Records<F> {
         }
     }
 
-    /// A win of `level` in `frames`: stored if it beats the record.
+    /// A win of `level` in `frames`: stored if it beats the record. A region
+    /// found corrupted on the way is erased, and the win becomes its first
+    /// record (the other levels' records are gone: read them again).
     pub async fn offer(&mut self, level: u8, frames: u32) -> Result<Offer, RecordError> {
         if !plausible(frames) {
             return Err(RecordError::BadTime);
         }
-        let previous = self.best(level).await?;
+        let previous = match self.best(level).await {
+            Ok(previous) => previous,
+            // The region was erased: this win is the first record in it.
+            Err(RecordError::Corrupted) => None,
+            Err(e) => return Err(e),
+        };
         if !beats(frames, previous) {
             // `beats` is false only with a record.
             return Ok(Offer::Kept {

@@ -308,3 +308,41 @@ fn wear() {
         "{erases_per_update} erases per update"
     );
 }
+
+/// QEMU's RAM flash keeps the NVMC's rules, and the records run on it as on the
+/// mock flash: a record survives a save and reload of the image.
+#[test]
+fn qemu_ram_flash_holds_records_across_a_reload() {
+    use embedded_storage_async::nor_flash::{
+        NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
+    };
+    use marble_rolling::board::qemu::ram_flash::RamFlash;
+    const N: usize = 4 * 4096;
+    let mut r = Records::new(RamFlash::<N>::new(), 0..N as u32).unwrap();
+    assert_eq!(block_on(r.offer(5, 640)), Ok(Offer::New { previous: None }));
+    let saved = *r.flash().image();
+    let mut reloaded = RamFlash::<N>::new();
+    *reloaded.image_mut() = saved;
+    let mut r = Records::new(reloaded, 0..N as u32).unwrap();
+    assert_eq!(block_on(r.best(5)), Ok(Some(640)));
+    // NOR rules: a write only clears bits; misaligned or out-of-range is refused.
+    let mut f = RamFlash::<4096>::new();
+    block_on(async {
+        f.write(0, &[0xF0, 0x0F, 0xFF, 0x00]).await.unwrap();
+        f.write(0, &[0x3C, 0xFF, 0x00, 0xFF]).await.unwrap();
+        let mut b = [0u8; 4];
+        f.read(0, &mut b).await.unwrap();
+        assert_eq!(b, [0x30, 0x0F, 0x00, 0x00]);
+        assert_eq!(
+            f.write(2, &[0; 4]).await.unwrap_err().kind(),
+            NorFlashErrorKind::NotAligned
+        );
+        assert_eq!(
+            f.write(4096, &[0; 4]).await.unwrap_err().kind(),
+            NorFlashErrorKind::OutOfBounds
+        );
+        f.erase(0, 4096).await.unwrap();
+        f.read(0, &mut b).await.unwrap();
+        assert_eq!(b, [0xFF; 4]);
+    });
+}

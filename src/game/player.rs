@@ -60,6 +60,12 @@ pub struct Status {
     pub sensor_down: bool,
     /// Whether the sound is off.
     pub muted: bool,
+    /// The won level on show set a new record ([`Player::announce_record`]).
+    pub new_record: bool,
+    /// The level's record in frames, as the records task last read it
+    /// (feature `records`; the game task fills it in).
+    #[cfg(feature = "records")]
+    pub best: Option<u32>,
 }
 
 impl Status {
@@ -72,6 +78,9 @@ impl Status {
         autopilot: false,
         sensor_down: false,
         muted: false,
+        new_record: false,
+        #[cfg(feature = "records")]
+        best: None,
     };
 }
 
@@ -114,6 +123,8 @@ pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENT
     fault_shown: bool,
     /// Sound off ([`Command::ToggleMute`]).
     muted: bool,
+    /// The win on show is a new record: [`record_frame`] instead of the flash.
+    new_record: bool,
 }
 
 impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
@@ -146,6 +157,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             sensor_down: None,
             fault_shown: false,
             muted: false,
+            new_record: false,
         })
     }
 
@@ -231,6 +243,9 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             autopilot: self.autopilot(),
             sensor_down: self.sensor_down.is_some(),
             muted: self.muted,
+            new_record: self.new_record,
+            #[cfg(feature = "records")]
+            best: None,
         }
     }
 
@@ -311,12 +326,13 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             }
             Some((phase, left)) => {
                 self.pause = Some((phase, left - 1));
+                let record = self.new_record;
                 draw.then(|| {
                     let frame = self.render();
-                    if phase == Phase::Won {
-                        win_frame(&frame, left)
-                    } else {
-                        frame
+                    match (phase, record) {
+                        (Phase::Won, true) => record_frame(left),
+                        (Phase::Won, false) => win_frame(&frame, left),
+                        _ => frame,
                     }
                 })
             }
@@ -328,11 +344,21 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         }
     }
 
+    /// The win on show set a new record (the records task found it, while the
+    /// win is shown): the rest of the pause shows [`record_frame`]. Ignored
+    /// unless a won level is on show.
+    pub fn announce_record(&mut self) {
+        if let Some((Phase::Won, _)) = self.pause {
+            self.new_record = true;
+        }
+    }
+
     /// Starts the level over (the tilt calibration is kept).
     pub fn restart(&mut self) {
         self.session.restart();
         self.renderer.reset();
         self.pause = None;
+        self.new_record = false;
         if self.autopilot.is_some() {
             self.set_autopilot(true);
         }
@@ -377,6 +403,23 @@ pub fn win_frame<const W: usize, const H: usize>(last: &Frame<W, H>, left: u32) 
     } else {
         *last
     }
+}
+
+/// A new record's display: squares growing from the centre to the edge, an
+/// eighth of a second each, over and over; `left` counts the frames down.
+pub fn record_frame<const W: usize, const H: usize>(left: u32) -> Frame<W, H> {
+    let (cx, cy) = (W / 2, H / 2);
+    let rings = cx.max(cy) as u32 + 1;
+    let ring = (WIN_PAUSE_FRAMES.saturating_sub(left) / WIN_FLASH_FRAMES.max(1) % rings) as usize;
+    let mut frame = Frame::new();
+    for y in 0..H {
+        for x in 0..W {
+            if x.abs_diff(cx).max(y.abs_diff(cy)) == ring {
+                frame.set(x, y, MAX_BRIGHTNESS);
+            }
+        }
+    }
+    frame
 }
 
 /// Whether [`win_frame`] shows the full-on screen with `left` frames to go.

@@ -73,11 +73,14 @@ fn program(elf: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// QEMU mps2-an386 with `elf`, its semihosting command line `mode` + `args`.
+/// QEMU mps2-an386 with `elf`, its semihosting command line `mode` + `args`,
+/// started in the workspace root (the firmware keeps its records' flash image in
+/// `target/qemu-records.bin`, a path relative to there).
 pub fn mps2(qemu: &Path, elf: &Path, mode: &str, args: &[String]) -> Command {
     let mut line = vec![mode.to_string()];
     line.extend_from_slice(args);
     let mut cmd = Command::new(qemu);
+    cmd.current_dir(crate::workspace::root());
     cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
         .args(["-display", "none", "-monitor", "none", "-nodefaults"])
         .arg("-semihosting-config")

@@ -166,7 +166,7 @@ fn report_memory() {
 #[embassy_executor::task]
 async fn game(options: Options) {
     let mode = if options.demo {
-        GameMode::Demo
+        GameMode::Demo { records: false }
     } else {
         GameMode::Play {
             tilt: TiltConfig::DEFAULT,

@@ -88,6 +88,47 @@ pub fn options() -> Options {
     }
 }
 
+/// The records' flash image in a host file (semihosting), so that best times
+/// survive from one run to the next. QEMU's working directory is the
+/// workspace root (`cargo qemu` starts it there).
+pub mod records_file {
+    use core::ffi::CStr;
+    use semihosting::fs;
+    use semihosting::io::Read;
+
+    /// The image's file.
+    pub const PATH: &CStr = c"target/qemu-records.bin";
+
+    /// Fills `image` from the file; a missing file (the first run) or one of
+    /// another size leaves `image` as it is (erased), with a log line.
+    pub fn load(image: &mut [u8]) {
+        let read = fs::File::open(PATH).and_then(|mut file| {
+            let len = file.metadata()?.len();
+            if len != image.len() as u64 {
+                return Ok(false);
+            }
+            file.read_exact(image).map(|()| true)
+        });
+        match read {
+            Ok(true) => defmt::info!("records: loaded from {=str}", path()),
+            Ok(false) => defmt::warn!("records: {=str} has another size, not loaded", path()),
+            Err(_) => defmt::info!("records: no {=str} yet: starting empty", path()),
+        }
+    }
+
+    /// Writes `image` to the file (a failure is logged: the records still
+    /// hold for this run).
+    pub fn save(image: &[u8]) {
+        if fs::write(PATH, image).is_err() {
+            defmt::warn!("records: cannot write {=str}", path());
+        }
+    }
+
+    fn path() -> &'static str {
+        PATH.to_str().unwrap_or("?")
+    }
+}
+
 /// Every interrupt without a handler of its own lands here (cortex-m-rt's
 /// default vector table); the board's few interrupts are dispatched by number,
 /// which needs neither a PAC nor a `device.x`.

@@ -28,6 +28,7 @@ mod sensor;
 use defmt_semihosting as _;
 use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TerminalSound};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
+use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr};
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
@@ -37,6 +38,7 @@ use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{OnTimeIntegrator, Scanner};
+use marble_rolling::records::Records;
 
 use marble_qemu as hw;
 
@@ -115,6 +117,14 @@ fn main() -> ! {
                 Err(_) => hw::fatal("cannot spawn the sound task"),
             }
         }
+        // The player's best times; in the demo only for the records check
+        // (`--records`: the autopilot's wins are never a player's records).
+        if options.records {
+            match records() {
+                Ok(token) => spawner.spawn(token),
+                Err(_) => hw::fatal("cannot spawn the records task"),
+            }
+        }
         if options.fault_script {
             match fault_script_task(options) {
                 Ok(token) => spawner.spawn(token),
@@ -181,6 +191,24 @@ async fn display(interactive: bool) -> ! {
     }
 }
 
+/// The records' region: four 4 KiB pages, as on the micro:bit v2.
+const RECORDS_BYTES: usize = 4 * ram_flash::PAGE;
+
+/// The best times, in a RAM flash image kept in a host file between runs
+/// (`marble_rolling::board::qemu::ram_flash`): the same records code as the v2.
+#[embassy_executor::task]
+async fn records() -> ! {
+    let mut flash = RamFlash::<RECORDS_BYTES>::new();
+    hw::records_file::load(flash.image_mut());
+    let Some(mut records) = Records::new(flash, 0..RECORDS_BYTES as u32) else {
+        hw::fatal("the records' region is not whole pages")
+    };
+    app::records_task(&LINKS, &mut records, |flash| {
+        hw::records_file::save(flash.image())
+    })
+    .await
+}
+
 /// The game's sounds: logged, and the terminal's bell on a win.
 #[embassy_executor::task]
 async fn sound() -> ! {
@@ -194,7 +222,9 @@ async fn game(options: Options) {
             tilt: SYNTHETIC_TILT,
         }
     } else {
-        GameMode::Demo
+        GameMode::Demo {
+            records: options.records,
+        }
     };
     if !options.interactive {
         // The baseline: the display scanning a blank frame, the timers and

@@ -7,13 +7,16 @@
 //! embassy), and the virtual accelerometer the firmware reads its tilt from:
 //! a [`virtual_lsm303agr`] on a [`virtual_i2c`] bus that behaves like the
 //! micro:bit's TWIM, driven by the terminal's keys ([`fault_keys`]) or the
-//! fault script. The register-level half (UART and TIMER0 drivers, the WFI
+//! fault script; and the records' flash, a RAM image with NOR rules
+//! (`ram_flash`, feature `records`). The register-level half (UART and TIMER0 drivers, the WFI
 //! executor, interrupt handlers, the time driver, semihosting exit) is the
 //! firmware crate `boards/qemu`; it needs `unsafe`, which this library
 //! forbids. `cargo qemu` (xtask) builds it and runs it in qemu-system-arm.
 
 pub mod cpu_meter;
 pub mod fault_keys;
+#[cfg(feature = "records")]
+pub mod ram_flash;
 pub mod virtual_i2c;
 pub mod virtual_lsm303agr;
 #[cfg(feature = "app")]
@@ -101,6 +104,10 @@ pub struct Options {
     pub fault_script: bool,
     /// The virtual TWIM's copy buffer, bytes.
     pub twim_copy_buffer: usize,
+    /// Keep best times (`--records`): always when interactive; in the demo, the
+    /// records check (the autopilot's wins offered as records, so that two
+    /// runs show the records written, saved and read back).
+    pub records: bool,
 }
 
 impl Default for Options {
@@ -109,6 +116,7 @@ impl Default for Options {
             interactive: false,
             fault_script: false,
             twim_copy_buffer: DEFAULT_COPY_BUFFER,
+            records: false,
         }
     }
 }
@@ -130,6 +138,7 @@ impl Options {
                     headless = true;
                 }
                 "--no-copy-buffer" => options.twim_copy_buffer = 0,
+                "--records" => options.records = true,
                 _ => {
                     if let Some(Ok(bytes)) = arg
                         .strip_prefix("--twim-copy-buffer=")
@@ -143,6 +152,7 @@ impl Options {
         if headless {
             options.interactive = false;
         }
+        options.records |= options.interactive && !options.fault_script;
         options
     }
 }
@@ -165,6 +175,9 @@ mod tests {
             0
         );
         assert_eq!(Options::parse(["--twim-copy-buffer=0"]).twim_copy_buffer, 0);
+        assert!(Options::parse(["--interactive"]).records);
+        assert!(!Options::parse(["--demo"]).records);
+        assert!(Options::parse(["--demo", "--records"]).records);
         assert_eq!(Options::parse(["--twim-copy-buffer=3"]).twim_copy_buffer, 3);
         assert_eq!(
             Options::parse(["--twim-copy-buffer=x"]).twim_copy_buffer,

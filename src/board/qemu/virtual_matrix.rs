@@ -188,6 +188,25 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
         x,
         z
     );
+    // The level's record (feature `records`), and the news of a new one.
+    #[cfg(feature = "records")]
+    {
+        match status.best {
+            Some(frames) => {
+                let cs = frames.saturating_mul(100) / FRAME_HZ.max(1);
+                let _ = write!(out, "  best {}.{:02} s", cs / 100, cs % 100);
+            }
+            None => {
+                let _ = write!(out, "  no record yet");
+            }
+        }
+        let news = if status.new_record {
+            "  NEW RECORD!"
+        } else {
+            ""
+        };
+        let _ = write!(out, "{news}\x1b[K\r\n");
+    }
     let _ = write!(
         out,
         "  arrows/WASD tilt, space level, c calibrate, r restart, n next level,\x1b[K\r\n  p autopilot, m sound, q quit\x1b[K\r\n"
