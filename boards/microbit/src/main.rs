@@ -37,7 +37,10 @@ use embassy_nrf::twim;
 use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
 use embassy_nrf::{bind_interrupts, peripherals};
 use embassy_time::{Duration, Ticker};
+use embassy_embedded_hal::adapter::BlockingAsync;
+use embassy_nrf::nvmc::Nvmc;
 use lsm303agr::Lsm303agr;
+use marble_rolling::records::Records;
 
 use marble_rolling::app::{self, Links};
 use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, WatchdogGate};
@@ -109,6 +112,16 @@ async fn game() {
         let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
         defmt::warn!("game_task returned: {}", exit);
     }
+}
+
+/// The records' flash: the NVMC, blocking (the CPU waits on a page erase, about
+/// 85 ms, between levels only), as the async NOR flash the records take.
+type RecordsFlash = BlockingAsync<Nvmc<'static>>;
+
+/// The best times in [`board::RECORDS`].
+#[embassy_executor::task]
+async fn records(mut records: Records<RecordsFlash>) -> ! {
+    app::records_task(&LINKS, &mut records, |_| {}).await
 }
 
 /// Pets the watchdog whenever every task has beaten since the last pet.
@@ -207,6 +220,13 @@ async fn main(spawner: Spawner) {
     match sound(speaker) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("sound task already running"),
+    }
+    match Records::new(BlockingAsync::new(Nvmc::new(p.NVMC)), board::RECORDS) {
+        Some(store) => match records(store) {
+            Ok(token) => spawner.spawn(token),
+            Err(_) => defmt::error!("records task already running"),
+        },
+        None => defmt::error!("records: the region is not whole pages"),
     }
     if let Some(handle) = wdt {
         match watchdog(handle) {

@@ -161,6 +161,12 @@ pub const I2C_TIMEOUT_MS: u64 = 5;
 /// provably in RAM.
 pub const TWIM_COPY_BUFFER_BYTES: usize = 2;
 
+/// The best times' flash region (byte addresses, whole 4 KiB NVMC pages): the
+/// last 16 KiB of the nRF52833's 512 KiB, left out of `FLASH` in
+/// `boards/microbit/memory.x` (a host test reads it there). Four pages, so that
+/// the erases rotate: see `marble_rolling::records` and the README's wear figure.
+pub const RECORDS: core::ops::Range<u32> = 0x7_C000..0x8_0000;
+
 /// Button timing for [`INPUT_PERIOD_MS`] (30 ms debounce, 1 s A+B hold).
 pub const BUTTONS: ButtonConfig = ButtonConfig::DEFAULT_10MS;
 
