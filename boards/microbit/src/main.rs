@@ -30,21 +30,25 @@ mod hw;
 
 use core::pin::pin;
 
+use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_nrf::interrupt;
 use embassy_nrf::interrupt::{InterruptExt, Priority};
+use embassy_nrf::nvmc::Nvmc;
 use embassy_nrf::twim;
 use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
 use embassy_nrf::{bind_interrupts, peripherals};
 use embassy_time::{Duration, Ticker};
-use embassy_embedded_hal::adapter::BlockingAsync;
-use embassy_nrf::nvmc::Nvmc;
 use lsm303agr::Lsm303agr;
 use marble_rolling::records::Records;
 
 use marble_rolling::app::{self, Links};
+use marble_rolling::board::microbit::power_on::{self, PowerOn};
 use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, WatchdogGate};
+use marble_rolling::input::buttons::Buttons;
+use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::input::tilt::TiltConfig;
+use marble_rolling::matrix::Frame;
 
 bind_interrupts!(pub struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
@@ -94,8 +98,14 @@ async fn input(mut input: hw::MicrobitInput) -> ! {
     app::input_task(&LINKS, &mut input).await
 }
 
+/// The game; first the self-test when B was held at power-on
+/// (`board::power_on`), until A.
 #[embassy_executor::task]
-async fn game() {
+async fn game(self_test: bool) {
+    if self_test {
+        let test = pin!(run_self_test());
+        hw::with_heartbeat(&HEARTBEATS, Task::Game, test).await;
+    }
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         let mode = app::GameMode::Play {
@@ -112,6 +122,65 @@ async fn game() {
         let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
         defmt::warn!("game_task returned: {}", exit);
     }
+}
+
+/// The self-test's frames at the game's frame rate, the dot from the live
+/// tilt (none while the sensor is down); returns on A.
+async fn run_self_test() {
+    defmt::info!("self-test: LEDs one by one, brightness levels, then the tilt dot; A to play");
+    let mut ticker = Ticker::every(Duration::from_hz(u64::from(app::FRAME_HZ)));
+    let mut sensor_up = true;
+    let mut n = 0u32;
+    loop {
+        ticker.next().await;
+        while let Ok(event) = LINKS.events.try_receive() {
+            match event {
+                InputEvent::Command(Command::Restart) => return,
+                InputEvent::SensorDown(_) => sensor_up = false,
+                InputEvent::SensorUp => sensor_up = true,
+                _ => {}
+            }
+        }
+        let reading = sensor_up.then(|| LINKS.tilt.get().reading_mg());
+        LINKS.frames.signal(power_on::self_test_frame(n, reading));
+        n = n.saturating_add(1);
+    }
+}
+
+/// A+B held at power-on: the question mark until one button answers (A
+/// clears every best time, B or 10 s of nothing keeps them), petting the
+/// watchdog meanwhile (its task is not running yet).
+async fn confirm_clear(
+    records: &mut Records<RecordsFlash>,
+    a: &embassy_nrf::gpio::Input<'static>,
+    b: &embassy_nrf::gpio::Input<'static>,
+    wdt: &mut Option<WatchdogHandle>,
+) {
+    defmt::info!("A+B at power-on: clear the best times? A yes, B no");
+    LINKS.frames.signal(power_on::confirm_frame());
+    let mut buttons = Buttons::new(board::BUTTONS);
+    let mut ticker = Ticker::every(Duration::from_millis(board::INPUT_PERIOD_MS));
+    let mut samples = 0u32;
+    let clear = loop {
+        ticker.next().await;
+        if let Some(handle) = wdt {
+            handle.pet();
+        }
+        samples = samples.saturating_add(1);
+        let event = buttons.update(a.is_low(), b.is_low());
+        if let Some(answer) = power_on::confirm(event, samples) {
+            break answer;
+        }
+    };
+    if clear {
+        match records.clear().await {
+            Ok(()) => defmt::info!("records cleared"),
+            Err(e) => defmt::error!("records: {=str}", e.as_str()),
+        }
+    } else {
+        defmt::info!("records kept");
+    }
+    LINKS.frames.signal(Frame::new());
 }
 
 /// The records' flash: the NVMC, blocking (the CPU waits on a page erase, about
@@ -164,7 +233,7 @@ async fn main(spawner: Spawner) {
     let p = embassy_nrf::init(Default::default());
     defmt::info!("Marble Rolling on micro:bit v2");
 
-    let wdt = start_watchdog(p.WDT);
+    let mut wdt = start_watchdog(p.WDT);
 
     // LED matrix: rows P0.21, P0.22, P0.15, P0.24, P0.19; columns P0.28,
     // P0.11, P0.31, P1.05, P0.30.
@@ -185,6 +254,26 @@ async fn main(spawner: Spawner) {
         ],
         &HEARTBEATS,
     );
+    interrupt::EGU0_SWI0.set_priority(Priority::P6);
+    let display_spawner = EXECUTOR_DISPLAY.start(interrupt::EGU0_SWI0);
+    match display(matrix) {
+        Ok(token) => display_spawner.spawn(token),
+        Err(_) => defmt::error!("display task already running"),
+    }
+
+    // Buttons A P0.14, B P0.23: what is held now chooses (board::power_on).
+    let (button_a, button_b) = (
+        hw::MicrobitInput::button_pin(p.P0_14),
+        hw::MicrobitInput::button_pin(p.P0_23),
+    );
+    let choice = power_on::power_on(button_a.is_low(), button_b.is_low());
+    defmt::info!("power-on: {}", choice);
+
+    // The best times: the last 16 KiB of flash (board::RECORDS).
+    let mut store = Records::new(BlockingAsync::new(Nvmc::new(p.NVMC)), board::RECORDS);
+    if let (PowerOn::ClearRecords, Some(store)) = (choice, store.as_mut()) {
+        confirm_clear(store, &button_a, &button_b, &mut wdt).await;
+    }
 
     // Internal I²C: SDA P0.16, SCL P0.08. The driver writes register
     // addresses from flash, so the bus gives its TWIM a RAM copy buffer
@@ -192,28 +281,16 @@ async fn main(spawner: Spawner) {
     // clear (hw::Bus).
     let bus = hw::Bus::new(p.TWISPI0, p.P0_16.into(), p.P0_08.into());
     let sensor = Lsm303agr::new_with_i2c(bus);
-    // Buttons A P0.14, B P0.23.
-    let input_dev = hw::MicrobitInput::new(
-        sensor,
-        hw::MicrobitInput::button_pin(p.P0_14),
-        hw::MicrobitInput::button_pin(p.P0_23),
-        &HEARTBEATS,
-    );
+    let input_dev = hw::MicrobitInput::new(sensor, button_a, button_b, &HEARTBEATS);
 
     // Speaker: P0.00, PWM0.
     let speaker = hw::Speaker::new(p.PWM0, p.P0_00);
 
-    interrupt::EGU0_SWI0.set_priority(Priority::P6);
-    let display_spawner = EXECUTOR_DISPLAY.start(interrupt::EGU0_SWI0);
-    match display(matrix) {
-        Ok(token) => display_spawner.spawn(token),
-        Err(_) => defmt::error!("display task already running"),
-    }
     match input(input_dev) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("input task already running"),
     }
-    match game() {
+    match game(choice == PowerOn::SelfTest) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
     }
@@ -221,7 +298,7 @@ async fn main(spawner: Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("sound task already running"),
     }
-    match Records::new(BlockingAsync::new(Nvmc::new(p.NVMC)), board::RECORDS) {
+    match store {
         Some(store) => match records(store) {
             Ok(token) => spawner.spawn(token),
             Err(_) => defmt::error!("records task already running"),

@@ -54,6 +54,7 @@
 //! watchdog task itself runs in thread mode, so its pets also prove the
 //! thread executor is not hogged.
 
+pub mod power_on;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use crate::input::buttons::ButtonConfig;

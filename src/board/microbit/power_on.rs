@@ -1,0 +1,137 @@
+//! What the owner asks for at power-on, by the buttons held while the board
+//! starts: nothing (the game), **B** (the self-test), **A+B** (clear the best
+//! times, after a confirmation). Pure: the v2's `main` samples the pins, feeds
+//! these functions and shows their frames.
+//!
+//! # The self-test
+//!
+//! How an owner checks the LEDs and the accelerometer's axes on a real board
+//! ([`AXIS_MAP`](super::AXIS_MAP) is taken from the micro:bit runtime, never
+//! checked on hardware here):
+//! 1. every LED alone, at full brightness, left to right and top to bottom
+//!    ([`SWEEP_FRAMES`] each): a dark step is a dead LED;
+//! 2. the whole matrix at each brightness level, dimmest first
+//!    ([`LEVEL_FRAMES`] each): the steps must look even;
+//! 3. the live tilt as a dot where the marble would roll (the game's gravity:
+//!    the reading negated): tilt the right edge down and the dot goes right,
+//!    tilt the edge connector (the edge nearest you) down and it goes to the
+//!    bottom row. If it goes the other way, flip that axis's sign in
+//!    `AXIS_MAP` (x for left/right, z for up/down).
+//!
+//! **A** leaves the self-test for the game.
+//!
+//! # Clearing the records
+//!
+//! A+B at power-on shows [`confirm_frame`] (a question mark) until both are
+//! released and one is pressed: **A** clears every best time, **B** keeps them,
+//! and so does doing nothing for [`CONFIRM_TIMEOUT_SAMPLES`] (a board that
+//! starts with both buttons stuck down never loses its records).
+
+use crate::input::buttons::ButtonEvent;
+use crate::matrix::{Brightness, Frame, MAX_BRIGHTNESS};
+
+/// What the buttons held at power-on ask for.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PowerOn {
+    /// Nothing held: the game.
+    Play,
+    /// B held: the self-test.
+    SelfTest,
+    /// A+B held: clear the records, once confirmed.
+    ClearRecords,
+}
+
+/// The choice for buttons A and B held (`true`) at power-on. A alone is the
+/// game: a short A is "restart", harmless if the press was still going on.
+pub const fn power_on(a_held: bool, b_held: bool) -> PowerOn {
+    match (a_held, b_held) {
+        (true, true) => PowerOn::ClearRecords,
+        (false, true) => PowerOn::SelfTest,
+        _ => PowerOn::Play,
+    }
+}
+
+/// Button samples (10 ms each) without an answer after which the
+/// confirmation keeps the records: 10 s.
+pub const CONFIRM_TIMEOUT_SAMPLES: u32 = 1000;
+
+/// The answer to "clear the records?" after `samples` button samples, of
+/// which the latest gave `event` (from [`crate::input::buttons::Buttons`],
+/// which reports A or B only for a press of one button alone, so the A+B
+/// still held from power-on answers nothing): `Some(true)` clear, `Some(false)`
+/// keep, `None` not yet.
+pub const fn confirm(event: Option<ButtonEvent>, samples: u32) -> Option<bool> {
+    match event {
+        Some(ButtonEvent::Restart) => Some(true),
+        Some(ButtonEvent::NextLevel) => Some(false),
+        _ if samples >= CONFIRM_TIMEOUT_SAMPLES => Some(false),
+        _ => None,
+    }
+}
+
+/// The question mark the confirmation shows.
+pub fn confirm_frame() -> Frame<5, 5> {
+    const ROWS: [&[u8; 5]; 5] = [b".###.", b"...#.", b"..#..", b".....", b"..#.."];
+    let mut frame = Frame::new();
+    for (y, row) in ROWS.iter().enumerate() {
+        for (x, &c) in row.iter().enumerate() {
+            if c == b'#' {
+                frame.set(x, y, MAX_BRIGHTNESS);
+            }
+        }
+    }
+    frame
+}
+
+/// Frames each LED is shown alone (1/16 s at 128 frames/s).
+pub const SWEEP_FRAMES: u32 = 8;
+/// Frames each brightness level is shown (1/4 s).
+pub const LEVEL_FRAMES: u32 = 32;
+/// Milli-g of tilt per pixel the dot moves (about 17° to the edge).
+pub const DOT_MG_PER_PIXEL: i32 = 150;
+
+/// Frame `n` of the self-test (see the module doc), with `reading_mg` the
+/// latest accelerometer reading in the board frame (for the dot; `None`
+/// while the sensor is down: the dot is then not shown).
+pub fn self_test_frame(n: u32, reading_mg: Option<[i32; 3]>) -> Frame<5, 5> {
+    let mut frame = Frame::new();
+    let sweep = 25 * SWEEP_FRAMES;
+    if n < sweep {
+        let led = (n / SWEEP_FRAMES) as usize;
+        frame.set(led % 5, led / 5, MAX_BRIGHTNESS);
+        return frame;
+    }
+    let level = (n - sweep) / LEVEL_FRAMES + 1;
+    if level <= u32::from(MAX_BRIGHTNESS) {
+        return Frame::filled(level as Brightness);
+    }
+    if let Some([x, _, z]) = reading_mg {
+        let (col, row) = dot(x, z);
+        frame.set(col, row, MAX_BRIGHTNESS);
+    }
+    frame
+}
+
+/// Where the dot goes for a board-frame reading: the way the marble rolls
+/// (gravity is the reading negated: `x < 0` rolls towards `+x`, the right),
+/// one pixel per [`DOT_MG_PER_PIXEL`], rounded, held on the matrix.
+pub fn dot(x_mg: i32, z_mg: i32) -> (usize, usize) {
+    let pixel = |mg: i32| {
+        let g = mg.saturating_neg();
+        let half = DOT_MG_PER_PIXEL / 2;
+        let steps = if g >= 0 {
+            (g.saturating_add(half)) / DOT_MG_PER_PIXEL
+        } else {
+            -((half.saturating_sub(g)) / DOT_MG_PER_PIXEL)
+        };
+        (2 + steps.clamp(-2, 2)) as usize
+    };
+    (pixel(x_mg), pixel(z_mg))
+}
+
+/// Frames from the end of the brightness steps on (the live dot): the
+/// self-test's length before the dot.
+pub const fn dot_from() -> u32 {
+    25 * SWEEP_FRAMES + MAX_BRIGHTNESS as u32 * LEVEL_FRAMES
+}
