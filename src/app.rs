@@ -209,6 +209,10 @@ pub enum GameMode {
     Play {
         /// The tilt path's configuration.
         tilt: TiltConfig,
+        /// The level to start at (index in [`LEVELS`], wrapped): 0, or the
+        /// one the toy fell asleep on. Feature `sleep` only (without it, 0).
+        #[cfg(feature = "sleep")]
+        level: u8,
     },
     /// The headless demo: the autopilot plays each built-in level once, in
     /// order, then [`game_task`] returns.
@@ -231,6 +235,14 @@ pub enum GameExit {
     DemoDone(DemoSummary),
     /// No level could be set up (a bug in the built-in levels).
     SetupFailed(SetupError),
+    /// Nobody touched the toy for two minutes ([`crate::input::idle`]):
+    /// the board may sleep, and resume at the start of `level`. Feature
+    /// `sleep` only.
+    #[cfg(feature = "sleep")]
+    Asleep {
+        /// The level on show (index in [`LEVELS`]).
+        level: u8,
+    },
 }
 
 /// The demo's totals.
@@ -265,7 +277,12 @@ pub async fn game_task<const W: usize, const H: usize, const PILOT: bool, const 
 ) -> GameExit {
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
+        #[cfg(not(feature = "sleep"))]
         GameMode::Play { tilt } => play::<W, H, PILOT, EVENTS>(links, &mut ticker, tilt).await,
+        #[cfg(feature = "sleep")]
+        GameMode::Play { tilt, level } => {
+            play::<W, H, PILOT, EVENTS>(links, &mut ticker, tilt, level).await
+        }
         GameMode::Demo { records } => {
             demo::<W, H, PILOT, EVENTS>(links, &mut ticker, records).await
         }
@@ -277,21 +294,49 @@ async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
     links: &Links<W, H>,
     ticker: &mut Ticker,
     tilt: TiltConfig,
+    #[cfg(feature = "sleep")] level: u8,
 ) -> GameExit {
-    let mut player = match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, 0, tilt, false) {
+    // Without `sleep` the start is the literal 0, as it always was: on the
+    // micro:bit v1 even a start level passed in as a constant measured 2 KB
+    // more stack (`cargo xtask check-microbit-v1`), over its RAM budget.
+    #[cfg(feature = "sleep")]
+    let start = usize::from(level);
+    #[cfg(not(feature = "sleep"))]
+    let start = 0;
+    let mut player = match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, start, tilt, false) {
         Ok(player) => player,
         Err(e) => return GameExit::SetupFailed(e),
     };
     #[cfg(feature = "defmt")]
-    defmt::info!("level 1: {=str}", player.level_name());
+    defmt::info!("level {=usize}: {=str}", start + 1, player.level_name());
+    // Two minutes without a command and with the tilt still (feature `sleep`).
+    #[cfg(feature = "sleep")]
+    let mut idle =
+        crate::input::idle::Idle::new(crate::input::idle::IdleConfig::two_minutes(FRAME_HZ));
     loop {
         ticker.next().await;
         while let Ok(event) = links.events.try_receive() {
             #[cfg(feature = "defmt")]
             defmt::info!("input {}", event);
+            #[cfg(feature = "sleep")]
+            if let InputEvent::Command(_) = event {
+                idle.activity();
+            }
             if !player.handle(event) {
                 return GameExit::Quit;
             }
+        }
+        // The autopilot playing is the toy in use.
+        #[cfg(feature = "sleep")]
+        if idle.tick(links.tilt.get().reading_mg()) && !player.autopilot() {
+            #[cfg(feature = "defmt")]
+            defmt::info!(
+                "idle for two minutes: asleep on level {=usize}",
+                player.level_index() + 1
+            );
+            return GameExit::Asleep {
+                level: player.level_index().min(usize::from(u8::MAX)) as u8,
+            };
         }
         // Draw only once the display has taken the previous frame (it
         // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.

@@ -7,7 +7,7 @@ use marble_rolling::board::microbit::power_on::{
     CONFIRM_TIMEOUT_SAMPLES, LEVEL_FRAMES, SWEEP_FRAMES,
 };
 use marble_rolling::board::microbit::{AXIS_MAP, BUTTONS};
-use marble_rolling::input::buttons::{ButtonEvent, Buttons};
+use marble_rolling::input::buttons::Buttons;
 use marble_rolling::input::sensor::AccelMg;
 use marble_rolling::matrix::MAX_BRIGHTNESS;
 
@@ -126,4 +126,18 @@ fn the_dot_follows_the_way_the_marble_rolls() {
     // Raw y reads +1 g with the logo (far) edge down: the dot goes to the top.
     let logo_down = AXIS_MAP.apply(AccelMg::new(0, 1000, 0));
     assert_eq!(dot(logo_down.x, logo_down.z), (2, 0));
+}
+
+/// Sleeping keeps the level in GPREGRET; a wake-up resumes there, any other
+/// reset (GPREGRET 0 at power-on, or whatever a debugger left) at level 1.
+#[test]
+fn the_level_survives_system_off() {
+    use marble_rolling::board::microbit::{level_after_reset, sleep_marker};
+    for level in 0..16u8 {
+        assert_eq!(level_after_reset(sleep_marker(level)), level);
+    }
+    assert_eq!(level_after_reset(sleep_marker(16)), 0);
+    assert_eq!(level_after_reset(0), 0);
+    assert_eq!(level_after_reset(0x05), 0);
+    assert_eq!(level_after_reset(0xB3), 0);
 }

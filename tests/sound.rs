@@ -163,3 +163,49 @@ fn the_player_plays_the_outcome_and_obeys_the_mute() {
     muted.handle(InputEvent::Command(Command::ToggleMute));
     assert!(!muted.muted());
 }
+
+/// Two marbles rolled at each other on an open floor (`e = 1`): their bounce is
+/// one impact at their closing speed (both steppers), so it clicks like a tile
+/// bounce at that speed.
+#[test]
+fn a_bounce_between_marbles_is_one_impact_at_the_closing_speed() {
+    for st in [Stepping::Fixed, Stepping::Events] {
+        let floor = open_floor(31);
+        let p = params::<S>(PhysicsSpec {
+            restitution_milli: 1000,
+            ..spec_in(
+                st,
+                Effects {
+                    rolling: true,
+                    marbles: true,
+                    ..Effects::NONE
+                },
+            )
+        });
+        let mut w = world(
+            p,
+            &floor,
+            &[cell_centre(&p, 11, 15), cell_centre(&p, 19, 15)],
+        );
+        w.set_gravity_mg([0, -1000, 0]);
+        let v = 4.0; // pitch/s each: closing at 8
+        w.marbles_mut()[0].vel = Vec3::new(S::from_f64(v), S::ZERO, S::ZERO);
+        w.marbles_mut()[1].vel = Vec3::new(S::from_f64(-v), S::ZERO, S::ZERO);
+        let mut speeds = Vec::new();
+        let mut count = 0;
+        // Three quarters of a second: they meet after about 0.4 s (4 pitches
+        // apart, less a diameter, at 8 pitch/s), and the floor's edges are
+        // further than they roll.
+        for _ in 0..3 * (1 << p.k) / 4 {
+            w.step();
+            let impacts = w.take_impacts();
+            count += impacts.count;
+            speeds.extend(impacts.speeds().iter().map(|s| s.to_f64()));
+        }
+        assert_eq!(count, 1, "{st:?}: {speeds:?}");
+        assert!((speeds[0] - 2.0 * v).abs() < 0.02 * v, "{st:?}: {speeds:?}");
+        // They bounced back apart.
+        let (a, b) = (w.marbles()[0].vel.x.to_f64(), w.marbles()[1].vel.x.to_f64());
+        assert!(a < 0.0 && b > 0.0, "{st:?}: {a} {b}");
+    }
+}

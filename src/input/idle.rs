@@ -5,13 +5,13 @@
 //! [`IdleConfig::timeout_frames`]. What sleeping means is the board's (for the
 //! micro:bit v2: display off, System OFF, woken by a button).
 //!
-//! **Not wired into the game yet** (issue 15): run from `Player::tick`, with the
-//! app's game task returning to the board to power down, it worked in QEMU
-//! (asleep after 120.02 s untouched, awake at the next key), but the micro:bit
-//! v1's firmware, which shares that code, then measured 2 KB more stack before
-//! the game even started (4 784 B against 2 648 B, the game task's future
-//! unchanged in size) and went over its 12 KiB RAM budget, and the v2 reached
-//! 99 % of its flash. The next session finds that stack first.
+//! Run by the app's game loop (`app::play`, feature `sleep`): every command
+//! is activity, every frame's reading is ticked, and two minutes idle end
+//! the game task with `GameExit::Asleep` for the board to power down: the
+//! micro:bit v2 goes to System OFF (woken by a button, resuming at the start
+//! of the level), QEMU darkens its matrix until a key. The micro:bit v1 leaves
+//! the feature out: wired into `Player::tick` instead, it had cost the v1 2 KB
+//! of stack, over its 12 KiB RAM budget.
 //!
 //! "No tilt change" cannot mean "the same reading": an accelerometer on a
 //! table reads a few milli-g of noise every sample. It means the reading has

@@ -259,9 +259,10 @@ pub struct StepStats {
 /// How many bounces between two [`World::take_impacts`] keep their speed.
 pub const IMPACTS_KEPT: usize = 4;
 
-/// The bounces against tiles (eq. 1 with `e`, not the slow impacts that become
-/// contacts) since the last [`World::take_impacts`], for what a game plays or
-/// shows of them: a click per bounce, louder the harder it hits.
+/// The bounces against tiles and between marbles (eq. 1 with `e`, not the slow
+/// impacts that become contacts) since the last [`World::take_impacts`], for
+/// what a game plays or shows of them: a click per bounce, louder the harder it
+/// hits. A bounce between two marbles counts once, at their closing speed.
 ///
 /// Kept like [`StepStats`]: each bounce adds a count and, for the first
 /// [`IMPACTS_KEPT`], its speed. No other code runs for it, whether anybody takes
@@ -993,13 +994,16 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             (d.scale(inv), len2 * inv)
         };
         let push = (r2 - len).half();
-        let (va, vb) = marble_pair(
+        let (va, vb, bounce) = marble_pair(
             ma.vel.shr(T_LOG2),
             mb.vel.shr(T_LOG2),
             n,
             p.restitution,
             p.threshold,
         );
+        if bounce > S::ZERO {
+            self.impacts.record(bounce.shl(T_LOG2));
+        }
         let mut na = Marble {
             asleep: false,
             ..ma

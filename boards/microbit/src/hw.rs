@@ -18,6 +18,8 @@ use core::future::Future;
 use core::pin::Pin;
 
 use embassy_nrf::gpio::{AnyPin, Flex, Input, Level, Output, OutputDrive, Pull};
+use embassy_nrf::pac;
+use embassy_nrf::pac::gpio::vals::Sense;
 use embassy_nrf::pwm::{DutyCycle, Prescaler, SimpleConfig, SimplePwm};
 use embassy_nrf::twim::{self, Twim};
 use embassy_nrf::{peripherals, Peri};
@@ -25,13 +27,13 @@ use embassy_time::{with_timeout, Duration, Instant, Ticker, Timer};
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 use heapless::Deque;
 
-use marble_rolling::app::{MatrixOutput, SoundOutput, TiltInput, REFRESH_HZ};
+use marble_rolling::app::{Links, MatrixOutput, SoundOutput, TiltInput, REFRESH_HZ};
 use marble_rolling::board::microbit::{self as board, BusClear, BusLines, Heartbeats, Task};
 use marble_rolling::input::buttons::{ButtonEvent, Buttons};
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::input::lsm303::{self, BusFault};
 use marble_rolling::input::sensor::{Action, Fault, Read, TiltPipeline};
-use marble_rolling::matrix::ScanStep;
+use marble_rolling::matrix::{Frame, ScanStep};
 use marble_rolling::sound::{self, Sound};
 
 /// RTC ticks per BCM base tick (4 → 109 Hz refresh; see the board module).
@@ -522,4 +524,42 @@ pub async fn with_heartbeat<F: Future>(
         future.as_mut().poll(cx)
     })
     .await
+}
+
+// ---------------------------------------------------------------------------
+// Idle sleep: System OFF
+// ---------------------------------------------------------------------------
+
+/// The level to start at: the one the toy fell asleep on when this reset is
+/// the wake-up from [`system_off`], else the first. Clears the marker.
+pub fn level_after_reset() -> u8 {
+    let level = board::level_after_reset(pac::POWER.gpregret().read().gpregret());
+    pac::POWER.gpregret().write(|w| w.set_gpregret(0));
+    level
+}
+
+/// Sleeps in System OFF, the nRF52833's lowest state that keeps the flash
+/// (the records) and GPREGRET: the display dark (its last frame blank for a
+/// full refresh), level `level` kept in GPREGRET, buttons A (P0.14) and B
+/// (P0.23) armed to wake it on a press. The wake-up is a reset
+/// ([`level_after_reset`]). Called by the game task after two minutes idle.
+pub async fn system_off(
+    links: &'static Links<{ board::WIDTH }, { board::HEIGHT }>,
+    level: u8,
+) -> ! {
+    links.frames.signal(Frame::new());
+    // Two refreshes at 109 Hz: the blank frame is on, every row off.
+    embassy_time::Timer::after_millis(25).await;
+    pac::POWER
+        .gpregret()
+        .write(|w| w.set_gpregret(board::sleep_marker(level)));
+    for pin in [14, 23] {
+        pac::P0.pin_cnf(pin).modify(|w| w.set_sense(Sense::Low));
+    }
+    defmt::info!("System OFF on level {=u8}: a button wakes", level + 1);
+    pac::POWER.systemoff().write(|w| w.set_systemoff(true));
+    // Under a debugger System OFF is only emulated, and the core runs on.
+    loop {
+        cortex_m::asm::wfe();
+    }
 }

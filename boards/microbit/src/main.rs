@@ -101,7 +101,7 @@ async fn input(mut input: hw::MicrobitInput) -> ! {
 /// The game; first the self-test when B was held at power-on
 /// (`board::power_on`), until A.
 #[embassy_executor::task]
-async fn game(self_test: bool) {
+async fn game(self_test: bool, level: u8) {
     if self_test {
         let test = pin!(run_self_test());
         hw::with_heartbeat(&HEARTBEATS, Task::Game, test).await;
@@ -110,6 +110,7 @@ async fn game(self_test: bool) {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         let mode = app::GameMode::Play {
             tilt: TiltConfig::DEFAULT,
+            level,
         };
         // The game loop is app's; being polled (every frame tick, paused or
         // not) is its heartbeat.
@@ -120,6 +121,9 @@ async fn game(self_test: bool) {
             EVENTS,
         >(&LINKS, mode));
         let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
+        if let app::GameExit::Asleep { level } = exit {
+            hw::system_off(&LINKS, level).await;
+        }
         defmt::warn!("game_task returned: {}", exit);
     }
 }
@@ -290,7 +294,8 @@ async fn main(spawner: Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("input task already running"),
     }
-    match game(choice == PowerOn::SelfTest) {
+    // After a wake-up from System OFF: the level it fell asleep on.
+    match game(choice == PowerOn::SelfTest, hw::level_after_reset()) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
     }

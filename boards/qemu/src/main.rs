@@ -37,7 +37,7 @@ use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
-use marble_rolling::matrix::{OnTimeIntegrator, Scanner};
+use marble_rolling::matrix::{Frame, OnTimeIntegrator, Scanner};
 use marble_rolling::records::Records;
 
 use marble_qemu as hw;
@@ -198,15 +198,35 @@ const RECORDS_BYTES: usize = 4 * ram_flash::PAGE;
 /// (`marble_rolling::board::qemu::ram_flash`): the same records code as the v2.
 #[embassy_executor::task]
 async fn records() -> ! {
-    let mut flash = RamFlash::<RECORDS_BYTES>::new();
-    hw::records_file::load(flash.image_mut());
-    let Some(mut records) = Records::new(flash, 0..RECORDS_BYTES as u32) else {
+    let Some(mut records) = open_records() else {
         hw::fatal("the records' region is not whole pages")
     };
     app::records_task(&LINKS, &mut records, |flash| {
         hw::records_file::save(flash.image())
     })
     .await
+}
+
+/// The records over the image loaded from the host file (outside the task's
+/// future, which then holds one image, not two).
+fn open_records() -> Option<Records<RamFlash<RECORDS_BYTES>>> {
+    let mut flash = RamFlash::<RECORDS_BYTES>::new();
+    hw::records_file::load(flash.image_mut());
+    Records::new(flash, 0..RECORDS_BYTES as u32)
+}
+
+/// Asleep: a dark matrix until a key (a command, or a tilt key).
+async fn sleep_until_touched() {
+    defmt::info!("asleep: a dark matrix until a key");
+    LINKS.frames.signal(Frame::new());
+    let tilt = LINKS.tilt.get();
+    loop {
+        embassy_time::Timer::after_millis(10).await;
+        if LINKS.events.try_receive().is_ok() || LINKS.tilt.get() != tilt {
+            defmt::info!("awake");
+            return;
+        }
+    }
 }
 
 /// The game's sounds: logged, and the terminal's bell on a win.
@@ -220,6 +240,7 @@ async fn game(options: Options) {
     let mode = if options.interactive {
         GameMode::Play {
             tilt: SYNTHETIC_TILT,
+            level: 0,
         }
     } else {
         GameMode::Demo {
@@ -242,7 +263,18 @@ async fn game(options: Options) {
         }
     }
     let start = hw::cpu_meter::sample();
-    let exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
+    let mut exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
+    // Idle for two minutes: QEMU has no power to save; it blanks the matrix,
+    // waits for a key, and resumes at the start of the level (as the v2 does
+    // from System OFF).
+    while let GameExit::Asleep { level } = exit {
+        sleep_until_touched().await;
+        let mode = GameMode::Play {
+            tilt: SYNTHETIC_TILT,
+            level,
+        };
+        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
+    }
     let end = hw::cpu_meter::sample();
     let summary = match exit {
         GameExit::Quit => {
@@ -255,6 +287,7 @@ async fn game(options: Options) {
             defmt::error!("cannot set up a level: {}", e);
             hw::exit(1)
         }
+        GameExit::Asleep { .. } => DemoSummary::default(),
     };
     let stack = hw::stack::high_water();
     defmt::info!(

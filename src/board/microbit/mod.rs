@@ -168,6 +168,31 @@ pub const TWIM_COPY_BUFFER_BYTES: usize = 2;
 /// the erases rotate: see `marble_rolling::records` and the README's wear figure.
 pub const RECORDS: core::ops::Range<u32> = 0x7_C000..0x8_0000;
 
+/// What GPREGRET (the nRF52's general purpose retention register, kept in
+/// System OFF) holds while the toy sleeps: this tag in the high nibble, the
+/// level in the low one, so that a wake-up resumes at the start of that level
+/// and any other value (a power-on reset clears it to 0) starts at level 1.
+pub const SLEEP_TAG: u8 = 0xA0;
+
+/// GPREGRET's value for sleeping on level `level` (levels past 15, which the 8
+/// built-in levels never reach, resume at level 1).
+pub const fn sleep_marker(level: u8) -> u8 {
+    if level < 16 {
+        SLEEP_TAG | level
+    } else {
+        0
+    }
+}
+
+/// The level to start at after a reset with GPREGRET `gpregret`.
+pub const fn level_after_reset(gpregret: u8) -> u8 {
+    if gpregret & 0xF0 == SLEEP_TAG {
+        gpregret & 0x0F
+    } else {
+        0
+    }
+}
+
 /// Button timing for [`INPUT_PERIOD_MS`] (30 ms debounce, 1 s A+B hold).
 pub const BUTTONS: ButtonConfig = ButtonConfig::DEFAULT_10MS;
 

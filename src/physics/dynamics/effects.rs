@@ -287,7 +287,9 @@ impl<S: Scalar> BoardMotion<S> {
 }
 
 /// Two equal marbles in contact along unit normal `n` (from 1 to 2), in the contact
-/// solver's units (pitch/T). Returns the new velocities. The pair's relative motion obeys eq. 1 with the
+/// solver's units (pitch/T). Returns the new velocities and, when they bounce (eq. 1
+/// with `e`, closing faster than `threshold`), their closing speed (else zero: for
+/// the impacts a game clicks on). The pair's relative motion obeys eq. 1 with the
 /// other marble as the "board", each taking half of the momentum change.
 pub fn marble_pair<S: Scalar>(
     v1: Vec3<S>,
@@ -295,14 +297,15 @@ pub fn marble_pair<S: Scalar>(
     n: Vec3<S>,
     e: S,
     threshold: S,
-) -> (Vec3<S>, Vec3<S>) {
+) -> (Vec3<S>, Vec3<S>, S) {
     let vn = (v2 - v1).dot(n);
     if vn >= S::ZERO {
-        return (v1, v2);
+        return (v1, v2, S::ZERO);
     }
     let e = if -vn <= threshold { S::ZERO } else { e };
     // Eq. 1 for marble 2 against marble 1: the change it would get off an immovable
     // board, halved because the "board" recoils with equal mass.
     let dv = (restitution(v2, v1, n, e) - v2).shr(1);
-    (v1 - dv, v2 + dv)
+    let bounce = if e > S::ZERO { -vn } else { S::ZERO };
+    (v1 - dv, v2 + dv, bounce)
 }

@@ -1043,7 +1043,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let (ma, mb) = (self.marbles[a], self.marbles[b]);
         let (va, vb) = (ma.vel.shr(T_LOG2), mb.vel.shr(T_LOG2));
         let approach = -(vb - va).dot(n);
-        let (na, nb) = marble_pair(va, vb, n, p.restitution, p.threshold);
+        let (na, nb, bounce) = marble_pair(va, vb, n, p.restitution, p.threshold);
+        if bounce > S::ZERO {
+            self.impacts.record(bounce.shl(T_LOG2));
+        }
         let set = |m: &mut Marble<S>, v: Vec3<S>| {
             let old = m.vel.dot(n);
             let new = n.scale(v.dot(n).shl(T_LOG2).clamp(-p.v_max, p.v_max));
