@@ -188,3 +188,56 @@ fn key_bytes_give_the_same_game_on_every_front_end() {
         "the keys moved the marble"
     );
 }
+
+/// A new record (the records task's news, `Player::announce_record`) turns the
+/// rest of the win's display into growing squares; it is never shown outside a
+/// win, and the next level starts without it.
+#[test]
+fn a_new_record_shows_growing_squares_until_the_next_level() {
+    use marble_rolling::game::player::{record_frame, win_frame};
+    let mut p = FivePlayer::new(&LEVELS, 0, SYNTHETIC_TILT, true).expect("level");
+    // Not during play.
+    p.announce_record();
+    assert!(!p.status().new_record);
+    let mut last = None;
+    for _ in 0..20_000 {
+        let tick = p.tick([0, 1000, 0], true);
+        if tick.finished == Some(Phase::Won) {
+            last = tick.frame;
+            break;
+        }
+    }
+    let last = last.expect("the autopilot wins level 1");
+    // Before the news: the win's flash.
+    let left = WIN_PAUSE_FRAMES;
+    assert_eq!(
+        p.tick([0, 1000, 0], true).frame,
+        Some(win_frame(&last, left))
+    );
+    p.announce_record();
+    assert!(p.status().new_record);
+    let mut rings = std::collections::BTreeSet::new();
+    for left in (1..left).rev() {
+        let frame = p.tick([0, 1000, 0], true).frame.expect("drawn");
+        assert_eq!(frame, record_frame::<5, 5>(left));
+        // One square around the centre at a time.
+        let lit: Vec<(usize, usize)> = (0..25)
+            .map(|i| (i % 5, i / 5))
+            .filter(|&(x, y)| frame.get(x, y) > 0)
+            .collect();
+        let ring = lit[0].0.abs_diff(2).max(lit[0].1.abs_diff(2));
+        assert!(lit
+            .iter()
+            .all(|&(x, y)| x.abs_diff(2).max(y.abs_diff(2)) == ring));
+        assert_eq!(lit.len(), if ring == 0 { 1 } else { 8 * ring });
+        rings.insert(ring);
+    }
+    assert_eq!(
+        rings.len(),
+        3,
+        "the squares grow from the centre to the edge"
+    );
+    p.tick([0, 1000, 0], true);
+    assert_eq!(p.level_index(), 1);
+    assert!(!p.status().new_record, "the next level starts without it");
+}
