@@ -187,16 +187,23 @@ async function main() {
     // is taken as level, then the right edge down (gamma > 0) rolls it right
     // and the top edge raised (beta > 0) rolls it down the screen.
     await page.click('#orientation');
+    // Switching on is asynchronous where the browser asks for permission: the
+    // listener is attached once the button says so (CI saw a run whose events
+    // came before it, and the marble did not move).
+    await page.waitForFunction(
+      () => document.querySelector('#orientation').getAttribute('aria-pressed') === 'true');
     for (const [beta, gamma, sx, sz, what] of [[0, 20, 1, 0, 'right'], [20, 0, 0, 1, 'down']]) {
       await page.keyboard.press('r');
       const before = (await page.evaluate(() => window.marbleState())).marbles[0];
-      await page.evaluate(([b, g]) => {
+      const tilted = await page.evaluate(([b, g]) => {
         const tilt = (beta, gamma) => window.dispatchEvent(
           new DeviceOrientationEvent('deviceorientation', { alpha: 0, beta, gamma }));
         tilt(5, -3);
         tilt(5 + b, -3 + g);
         window.marbleTest.steps(48);
+        const input = window.marbleState().input;
         tilt(5, -3);
+        return input;
       }, [beta, gamma]);
       const after = (await page.evaluate(() => window.marbleState())).marbles[0];
       const dx = after.x - before.x;
@@ -204,9 +211,11 @@ async function main() {
       const along = sx * dx + sz * dz;
       const across = Math.abs(sx ? dz : dx);
       check(along > 2 && across < 0.1 * along, `tilting the phone rolls the marble ${what}`,
-        `moved ${dx.toFixed(2)} mm right, ${dz.toFixed(2)} mm down`);
+        `moved ${dx.toFixed(2)} mm right, ${dz.toFixed(2)} mm down; input ${JSON.stringify(tilted)}`);
     }
     await page.click('#orientation');
+    await page.waitForFunction(
+      () => document.querySelector('#orientation').getAttribute('aria-pressed') === 'false');
     await page.evaluate(() => document.activeElement.blur());
 
     // A level won by hand: its best time is kept in localStorage.

@@ -566,6 +566,8 @@ function testHooks() {
       x: w.marble_mm(m, 0), y: w.marble_mm(m, 1), z: w.marble_mm(m, 2), out: !!w.marble_out(m),
     })),
     finished: finishedRecord(),
+    // What the next frame would take as the tilt, and what the game took last.
+    input: { tilt: tilt(), reading: [w.reading_x(), w.reading_z()], orientation: { ...orientation } },
   });
   window.marbleTest = {
     levels: () => Array.from({ length: w.level_count() }, (_, i) => answer(w.builtin_name(i))),
