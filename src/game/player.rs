@@ -105,7 +105,7 @@ pub struct Tick<const W: usize, const H: usize> {
 /// it) does not link the controller: about 6 KiB of flash.
 ///
 /// `EVENTS` picks the physics stepper ([`GameConfig::stepped_by`]), a constant for
-/// the same reason: the event stepper costs about 24 KiB of flash, which a board
+/// the same reason: the event stepper costs 18 to 24 KiB of flash, which a board
 /// with a 64 KiB budget does not have, and the fixed step is then all it links.
 #[derive(Clone, Debug)]
 pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool> {

@@ -68,7 +68,7 @@ const STALL_LOG_CHECKS: u16 = 5;
 /// leaving it out saves about 6 KiB of flash.
 const PILOT: bool = false;
 
-/// Fixed physics steps: the event stepper (about 24 KiB of code) does not fit
+/// Fixed physics steps: the event stepper (about 18 KiB of code here) does not fit
 /// the 64 KiB flash budget (README, "Stepping: fixed or events").
 const EVENTS: bool = false;
 
