@@ -107,8 +107,12 @@ enum Task {
         #[arg(default_value_t = 40)]
         top: usize,
         /// Profile the micro:bit v1 firmware in QEMU microbit instead.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "bench")]
         v1: bool,
+        /// Profile the study's M4 benchmark instead: one scene (incline,
+        /// bounce, maze, corner), backend i8f24, event stepping.
+        #[arg(long, value_name = "SCENE", value_parser = clap::builder::PossibleValuesParser::new(profile::SCENES))]
+        bench: Option<String>,
     },
     /// Build the game for the browser (wasm32-unknown-unknown) and serve the
     /// page on 127.0.0.1 (`cargo web`).
@@ -167,7 +171,19 @@ impl Task {
             Task::CheckDemo => demo::run(),
             Task::SizeReport { no_build, elf } => size::run(no_build, elf),
             Task::Properties { cases } => properties::run(cases),
-            Task::QemuProfile { top, v1 } => profile::run(top, v1),
+            Task::QemuProfile { top, v1, bench } => {
+                let subject = match bench {
+                    Some(scene) => profile::Subject::Bench(
+                        profile::SCENES
+                            .iter()
+                            .position(|&s| s == scene)
+                            .unwrap_or(0),
+                    ),
+                    None if v1 => profile::Subject::DemoV1,
+                    None => profile::Subject::Demo,
+                };
+                profile::run(top, subject)
+            }
             Task::Web { port, no_serve } => web::run(port, no_serve),
             Task::WebTest { screenshot } => web::test(screenshot),
             Task::Accuracy { args } => study::accuracy(&args),
@@ -262,8 +278,17 @@ mod tests {
         ));
         assert!(matches!(
             parse(&["qemu-profile", "20"]),
-            Task::QemuProfile { top: 20, v1: false }
+            Task::QemuProfile {
+                top: 20,
+                v1: false,
+                bench: None
+            }
         ));
+        assert!(matches!(
+            parse(&["qemu-profile", "--bench", "maze"]),
+            Task::QemuProfile { top: 40, v1: false, bench: Some(scene) } if scene == "maze"
+        ));
+        assert!(Cli::try_parse_from(["xtask", "qemu-profile", "--bench", "mazes"]).is_err());
         assert!(matches!(
             parse(&["size-report", "--no-build"]),
             Task::SizeReport {

@@ -1,14 +1,22 @@
-//! `cargo xtask qemu-profile [TOP] [--v1]`: where the QEMU firmware's
-//! instructions go, by function (the mps2-an386 board's, or with `--v1` the
-//! micro:bit v1's in QEMU microbit). Runs the headless demo with QEMU's translation-block trace on
+//! `cargo xtask qemu-profile [TOP] [--v1 | --bench SCENE]`: where the QEMU
+//! firmware's instructions go, by function (the mps2-an386 board's, or with
+//! `--v1` the micro:bit v1's in QEMU microbit, or with `--bench` the study's
+//! Cortex-M4F benchmark running one scene with the firmware's backend and
+//! event stepping: where `cargo accuracy`'s M4 instructions per step go). Runs the headless demo with QEMU's translation-block trace on
 //! (`-d in_asm,exec,nochain`: every executed block is logged, chaining off so
 //! none is skipped) and attributes every executed instruction to the function
-//! holding it (see trace.rs). The trace is large (about 2 GB for the whole
+//! holding it (see trace.rs). A second pair of tables follows the DWARF
+//! inline records (the `addr2line` crate): each instruction is counted for
+//! the function of ours it was written in, however deeply the optimiser
+//! inlined it (a task's `poll` holds most of the firmware), and for an area
+//! of the firmware (display, physics, autopilot, …). The trace is large (about 2 GB for the whole
 //! demo, in PROFILE_DIR, default `<target>/qemu-profile`; deleted afterwards
 //! unless KEEP_TRACE=1), so it is streamed, never loaded whole.
 
+use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufRead, BufReader};
+use std::path::Path;
 use std::process::Stdio;
 
 use crate::error::{say, Failure, Outcome};
@@ -18,13 +26,33 @@ use crate::process;
 use crate::runner;
 use crate::setup::{self, M0, M4};
 use crate::symbols::{self, Symbols};
-use crate::trace::Profile;
+use crate::trace::{Profile, Tally};
 use crate::workspace;
 
+/// The study's scenes, in `study::SceneId` order (the benchmark's
+/// `--scenes` mask bits).
+pub const SCENES: [&str; 4] = ["incline", "bounce", "maze", "corner"];
+
+/// What to profile.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Subject {
+    /// The QEMU firmware's headless demo.
+    Demo,
+    /// The micro:bit v1 firmware's demo in QEMU microbit.
+    DemoV1,
+    /// The M4 benchmark, one scene (index in [`SCENES`]), backend i8f24,
+    /// event stepping.
+    Bench(usize),
+}
+
 /// Runs, attributes, prints the tables on stdout.
-pub fn run(top: usize, v1: bool) -> Outcome {
+pub fn run(top: usize, subject: Subject) -> Outcome {
+    let v1 = subject == Subject::DemoV1;
     let qemu = setup::qemu()?;
-    let elf = if v1 {
+    let elf = if let Subject::Bench(_) = subject {
+        setup::target(M4)?;
+        firmware::build(&Artifact::firmware("marble-qemu", "bench", M4))?
+    } else if v1 {
         setup::target(M0)?;
         firmware::build(&Artifact::firmware(
             microbit_v1::PACKAGE,
@@ -43,7 +71,15 @@ pub fn run(top: usize, v1: bool) -> Outcome {
     let defmt = File::create(dir.join("defmt.bin"))
         .map_err(|e| Failure::new(format!("cannot write in {}: {e}", dir.display())))?;
 
-    let demo = ["--demo".to_string()];
+    let demo = match subject {
+        Subject::Bench(scene) => vec![
+            "--backends=1".to_string(),
+            "--rates=1".to_string(),
+            format!("--scenes={}", 1u32 << scene),
+            "--variants=0".to_string(),
+        ],
+        _ => vec!["--demo".to_string()],
+    };
     let mut cmd = if v1 {
         // Its command line already counts instructions (`-icount`).
         microbit_v1::qemu_command(&qemu, &elf, &demo)
@@ -57,7 +93,11 @@ pub fn run(top: usize, v1: bool) -> Outcome {
         .stdin(Stdio::null())
         .stdout(defmt);
     say!(
-        "tracing the headless demo in QEMU (about 2 GB in {})…",
+        "tracing the {} in QEMU (up to 2 GB in {})…",
+        match subject {
+            Subject::Bench(scene) => format!("benchmark's {} scene", SCENES[scene]),
+            _ => "headless demo".to_string(),
+        },
         trace.display()
     );
     let status = process::status(&mut cmd)?;
@@ -88,8 +128,221 @@ pub fn run(top: usize, v1: bool) -> Outcome {
         }
     }
     print!("{}", profile.report(top));
+    print!("{}", by_source(&elf, &profile.instruction_counts(0), top)?);
     if std::env::var("KEEP_TRACE").as_deref() != Ok("1") {
         let _ = std::fs::remove_file(&trace);
     }
     Ok(0)
+}
+
+/// The areas of the firmware, by what the name of the function an instruction
+/// was written in contains (first match wins).
+const AREAS: [(&str, &[&str]); 13] = [
+    (
+        "measurement (CPU meter, stack paint)",
+        &["cpu_meter", "::stack::"],
+    ),
+    // What stands in for hardware QEMU lacks (runs in the firmware, but on a
+    // board the chip or the LEDs themselves do it).
+    (
+        "QEMU hardware models (virtual accelerometer and I2C, LED on-time)",
+        &["virtual_", "OnTimeIntegrator"],
+    ),
+    ("display (frame loads, scanning)", &["matrix::", "Matrix"]),
+    ("render", &["render::"]),
+    ("autopilot", &["autopilot"]),
+    ("physics", &["physics::"]),
+    ("records", &["records"]),
+    ("sound", &["sound"]),
+    (
+        "input and sensor",
+        &["input::", "sensor", "lsm303", "i2c", "I2c"],
+    ),
+    ("game (rules, session, player)", &["game::"]),
+    (
+        "executor and time",
+        &[
+            "embassy",
+            "clock",
+            "executor",
+            "SysTick",
+            "critical_section",
+            "cortex_m",
+        ],
+    ),
+    (
+        "compiler helpers (memcpy, division)",
+        &["compiler_builtins", "aeabi", "mem"],
+    ),
+    ("app glue (tasks, board)", &["app::", "qemu", "microbit"]),
+];
+
+/// The area of a function (its readable name), or "other".
+pub fn area(function: &str) -> &'static str {
+    AREAS
+        .iter()
+        .find(|(_, keys)| keys.iter().any(|key| function.contains(key)))
+        .map_or("other", |(name, _)| name)
+}
+
+/// Whether a function belongs to the Rust standard library (or is a method of
+/// a primitive type) or to a fixed-point or container crate: such code is
+/// counted for the function of ours that called it.
+pub fn is_library(function: &str) -> bool {
+    let name = function.trim_start_matches(['<', '&', '(', '*']);
+    let name = name.strip_prefix("mut ").unwrap_or(name);
+    let name = name.strip_prefix("const ").unwrap_or(name);
+    let first = name.split([':', '>', ' ', '<']).next().unwrap_or("");
+    // A blanket impl over a type parameter (`<&mut I as Iterator>::next`).
+    let generic = first.len() == 1 && first.starts_with(|c: char| c.is_ascii_uppercase());
+    name.starts_with('[')
+        || generic
+        || [
+            "core",
+            "alloc",
+            "std",
+            "u8",
+            "u16",
+            "u32",
+            "u64",
+            "u128",
+            "usize",
+            "i8",
+            "i16",
+            "i32",
+            "i64",
+            "i128",
+            "isize",
+            "bool",
+            "char",
+            "f32",
+            "f64",
+            "str",
+            "fixed",
+            "typenum",
+            "az",
+            "heapless",
+            "micromath",
+        ]
+        .contains(&first)
+}
+
+/// The instructions of `counts` by the function of ours each was written in
+/// (the innermost inline frame that is not the standard library's; the
+/// outermost when all are) and by area.
+fn by_source(elf: &Path, counts: &HashMap<u64, u64>, top: usize) -> Result<String, Failure> {
+    let loader = addr2line::Loader::new(elf).map_err(|e| {
+        Failure::new(format!(
+            "cannot read the debug info of {}: {e}",
+            elf.display()
+        ))
+    })?;
+    let mut functions = Tally::new();
+    let mut areas = Tally::new();
+    let mut pcs: Vec<(u64, u64)> = counts.iter().map(|(&pc, &n)| (pc, n)).collect();
+    pcs.sort_unstable();
+    for (pc, n) in pcs {
+        let mut names = Vec::new();
+        if let Ok(mut frames) = loader.find_frames(pc) {
+            while let Ok(Some(frame)) = frames.next() {
+                if let Some(name) = frame.function.as_ref().and_then(|f| f.demangle().ok()) {
+                    names.push(name.into_owned());
+                }
+            }
+        }
+        let name = names
+            .iter()
+            .find(|name| !is_library(name))
+            .or(names.last())
+            .cloned()
+            .or_else(|| loader.find_symbol(pc).map(symbols::readable))
+            .unwrap_or_else(|| format!("?{pc:#x}"));
+        areas.add(area(&name), n);
+        functions.add(name, n);
+    }
+    let total = functions.total().max(1);
+    let share = |n: u64| 100.0 * n as f64 / total as f64;
+    let mut out =
+        format!("== by area (inlined code counted where it was written): {total} instructions\n");
+    for (name, n) in areas.most_common(AREAS.len() + 1) {
+        out += &format!("{n:11} {:5.1}%  {name}\n", share(n));
+    }
+    out += "== by source function (inlined code counted where it was written)\n";
+    for (name, n) in functions.most_common(top) {
+        let name: String = name.chars().take(120).collect();
+        out += &format!("{n:11} {:5.1}%  {name}\n", share(n));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn library_frames_are_skipped() {
+        for name in [
+            "core::option::Option<&T>::copied",
+            "<usize as core::slice::index::SliceIndex<[T]>>::get_mut",
+            "<u32>::saturating_add",
+            "<core::ops::range::Range<T> as core::iter::range::RangeIteratorImpl>::spec_next",
+            "<[T]>::iter",
+            "<fixed::FixedI32<typenum::uint::UInt<typenum::uint::UTerm>> as core::ops::Mul>::mul",
+            "<&mut I as core::iter::traits::iterator::Iterator>::next",
+        ] {
+            assert!(is_library(name), "{name}");
+        }
+        for name in [
+            "marble_rolling::matrix::OnTimeIntegrator<_,_>::feed",
+            "<marble_rolling::board::qemu::virtual_matrix::VirtualMatrix<C> as marble_rolling::app::MatrixOutput<_,_>>::show_refresh",
+            "embassy_executor::raw::TaskStorage<F>::poll",
+            "qemu::profile",
+            "__aeabi_memcpy4",
+        ] {
+            assert!(!is_library(name), "{name}");
+        }
+    }
+
+    #[test]
+    fn areas() {
+        assert_eq!(
+            area("<marble_rolling::board::qemu::virtual_matrix::VirtualMatrix<C> as marble_rolling::app::MatrixOutput<_,_>>::show_refresh"),
+            "QEMU hardware models (virtual accelerometer and I2C, LED on-time)"
+        );
+        assert_eq!(area("marble_rolling::physics::world::events::<impl marble_rolling::physics::world::World<S,_>>::search"), "physics");
+        assert_eq!(area("marble_rolling::game::autopilot::solid"), "autopilot");
+        assert_eq!(
+            area("marble_rolling::game::session::Session<S>::frame_in"),
+            "game (rules, session, player)"
+        );
+        assert_eq!(
+            area("marble_qemu::clock::embassy_ticks"),
+            "executor and time"
+        );
+        assert_eq!(
+            area("__aeabi_memcpy4"),
+            "compiler helpers (memcpy, division)"
+        );
+        assert_eq!(
+            area("marble_qemu::cpu_meter::count_instructions"),
+            "measurement (CPU meter, stack paint)"
+        );
+        assert_eq!(
+            area("lsm303agr::device_impl::acceleration"),
+            "input and sensor"
+        );
+        assert_eq!(
+            area("marble_rolling::matrix::OnTimeIntegrator<_,_>::feed"),
+            "QEMU hardware models (virtual accelerometer and I2C, LED on-time)"
+        );
+        assert_eq!(
+            area("marble_rolling::board::qemu::virtual_lsm303agr::VirtualLsm303agr::read_accel"),
+            "QEMU hardware models (virtual accelerometer and I2C, LED on-time)"
+        );
+        assert_eq!(
+            area("marble_rolling::matrix::Scanner<_,_>::next_step"),
+            "display (frame loads, scanning)"
+        );
+        assert_eq!(area("zzz"), "other");
+    }
 }

@@ -101,7 +101,10 @@ pub struct Profile {
     replay: (u64, u64),
     /// Host address → (first pc, instruction count) of a translated block.
     sizes: HashMap<u64, (u64, u64)>,
+    /// Host address → the guest address of each instruction of the block.
+    listings: HashMap<u64, Vec<u64>>,
     pending: Option<u64>,
+    listing: Vec<u64>,
     count: u64,
     /// 0: the demo, 1: the profiling replay.
     phase: usize,
@@ -119,7 +122,9 @@ impl Profile {
             symbols,
             replay,
             sizes: HashMap::new(),
+            listings: HashMap::new(),
             pending: None,
+            listing: Vec::new(),
             count: 0,
             phase: 0,
             runs: [Tally::new(), Tally::new()],
@@ -147,6 +152,8 @@ impl Profile {
                 if let Some(pending) = self.pending.take() {
                     if pending == pc {
                         self.sizes.insert(host, (pc, self.count));
+                        self.listings
+                            .insert(host, std::mem::take(&mut self.listing));
                     }
                 }
                 if self.phase == 0 && self.replay.0 <= pc && pc < self.replay.1 {
@@ -167,19 +174,34 @@ impl Profile {
             Some(b'I') if line.starts_with(b"IN:") => {
                 self.pending = None;
                 self.count = 0;
+                self.listing.clear();
             }
             Some(b'0') if line.starts_with(b"0x") => {
+                let Some(address) = parse_instruction(line) else {
+                    return;
+                };
                 if self.pending.is_none() {
-                    let Some(address) = parse_instruction(line) else {
-                        return;
-                    };
                     self.pending = Some(address);
                     self.count = 0;
+                    self.listing.clear();
                 }
                 self.count += 1;
+                self.listing.push(address);
             }
             _ => {}
         }
+    }
+
+    /// How many times each instruction ran in `phase` (0: the demo or the
+    /// benchmark, 1: the profiling replay), by guest address.
+    pub fn instruction_counts(&self, phase: usize) -> HashMap<u64, u64> {
+        let mut counts = HashMap::new();
+        for &(host, n) in self.runs[phase].items() {
+            for &pc in self.listings.get(&host).map_or(&[][..], Vec::as_slice) {
+                *counts.entry(pc).or_insert(0) += n;
+            }
+        }
+        counts
     }
 
     /// The tables: instructions by function for the demo and the replay, then
@@ -312,5 +334,11 @@ Trace 0: 0x99 [00000000/00000700/00000000/ff200000]
         2  memcpy <- qemu::main
 "
         );
+        let counts = profile.instruction_counts(0);
+        assert_eq!(counts.get(&0x400), Some(&2));
+        assert_eq!(counts.get(&0x402), Some(&2));
+        assert_eq!(counts.get(&0x500), Some(&2));
+        assert_eq!(counts.get(&0x600), None);
+        assert_eq!(profile.instruction_counts(1).get(&0x604), Some(&1));
     }
 }

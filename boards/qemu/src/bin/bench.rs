@@ -16,7 +16,10 @@
 //! Options on the semihosting command line: `--backends=MASK` (bit n selects
 //! `study::BACKENDS[n]`), `--rates=MASK` (bit k selects 2^k steps/s; bit 0
 //! selects event stepping, `study::EVENTS_LOG2`, printed as `<step_log2>` 0:
-//! its `<steps>` are frames, 128 per simulated second).
+//! its `<steps>` are frames, 128 per simulated second), `--scenes=MASK` (bit n
+//! selects `study::SceneId` number n: incline, bounce, maze, corner) and
+//! `--variants=0` (no per-effect variants: what `cargo xtask qemu-profile
+//! --bench` traces).
 //!
 //! The instruction counter is the board's TIMER0 (25 MHz, 3.2 ticks per
 //! instruction at shift=7), calibrated against a NOP loop of known length
@@ -61,7 +64,12 @@ fn main() -> ! {
     defmt::info!("EMPTY {=u64}", empty);
     let backends = mask_option("--backends", (1 << BACKENDS.len()) - 1);
     let rates = mask_option("--rates", u32::MAX);
+    let scenes = mask_option("--scenes", u32::MAX);
+    let variants = mask_option("--variants", 1) != 0;
     bench_plan(backends, rates, |item| {
+        if scenes & (1 << item.scene as u32) == 0 || (item.variant.is_some() && !variants) {
+            return;
+        }
         let result = bench_one(&item, &mut |f| hw::cpu_meter::count_instructions(f).1);
         match result {
             Some(r) => defmt::info!(
