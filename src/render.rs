@@ -202,34 +202,50 @@ fn focus<S: Scalar, const M: usize>(world: &World<'_, S, M>) -> Option<TilePoint
         .map(|m| tile_point(layout, m.pos.x, m.pos.z))
 }
 
-/// The background level of tile `(i, k)`.
-fn tile_level(level: &LevelView<'_>, i: i32, k: i32, blink_on: bool) -> Brightness {
+/// The storey on show: the focus marble's (the lowest before any marble is
+/// placed, or once all are out).
+fn focus_storey<S: Scalar, const M: usize>(world: &World<'_, S, M>) -> i32 {
+    if !cfg!(feature = "storeys") {
+        return 0;
+    }
+    let layout = &world.params().layout;
+    world
+        .marbles()
+        .iter()
+        .find(|m| !m.out)
+        .map_or(0, |m| layout.storey_of(m.pos.y).max(0))
+}
+
+/// The background level of tile `(i, k)` of `storey`: its wall layer, then its
+/// floor slab (eq. 5: layers `2·storey + 1` and `2·storey`).
+fn tile_level(level: &LevelView<'_>, i: i32, k: i32, storey: i32, blink_on: bool) -> Brightness {
     if i < 0 || k < 0 || i >= level.info.nx as i32 || k >= level.info.nz as i32 {
         return OUTSIDE;
     }
-    let is_goal = level
-        .info
-        .goals()
-        .iter()
-        .any(|&(gi, gk)| gi as i32 == i && gk as i32 == k);
+    let storey = if cfg!(feature = "storeys") { storey } else { 0 };
+    let is_goal = level.info.goals().iter().any(|goal| {
+        i32::from(goal.i) == i && i32::from(goal.k) == k && i32::from(goal.storey) == storey
+    });
     if is_goal {
         if blink_on {
             GOAL_ON
         } else {
             GOAL_OFF
         }
-    } else if level.tiles.is_solid(TileIndex::new(i, 1, k)) {
+    } else if level.tiles.is_solid(TileIndex::new(i, 2 * storey + 1, k)) {
         WALL
-    } else if level.tiles.is_solid(TileIndex::new(i, 0, k)) {
+    } else if level.tiles.is_solid(TileIndex::new(i, 2 * storey, k)) {
         FLOOR
     } else {
         HOLE
     }
 }
 
-/// The tiles alone (walls, floor, holes, goals, outside), without marbles.
+/// The tiles of `storey` alone (walls, floor, holes, goals, outside), without
+/// marbles.
 pub fn render_background<const W: usize, const H: usize>(
     level: &LevelView<'_>,
+    storey: i32,
     blink_on: bool,
     viewport: Viewport,
 ) -> Frame<W, H> {
@@ -238,7 +254,7 @@ pub fn render_background<const W: usize, const H: usize>(
     for y in 0..H {
         let mut i = viewport.x;
         for x in 0..W {
-            frame.set(x, y, tile_level(level, i, k, blink_on));
+            frame.set(x, y, tile_level(level, i, k, storey, blink_on));
             i = i.saturating_add(1);
         }
         k = k.saturating_add(1);
@@ -314,28 +330,40 @@ pub fn draw_marble<const W: usize, const H: usize>(
     }
 }
 
-/// Renders `world` on `level` through `viewport`: the background (goals lit
-/// when `blink_on`) and every marble still in play. Pure: no state, usable
-/// without a [`Game`].
+/// Renders `world` on `level` through `viewport`: the background of the focus
+/// marble's storey (goals lit when `blink_on`) and every marble still in play
+/// on it. Pure: no state, usable without a [`Game`].
 pub fn render_world<S: Scalar, const M: usize, const W: usize, const H: usize>(
     level: &LevelView<'_>,
     world: &World<'_, S, M>,
     blink_on: bool,
     viewport: Viewport,
 ) -> Frame<W, H> {
-    let mut frame = render_background(level, blink_on, viewport);
-    draw_marbles(&mut frame, world, viewport);
+    let storey = focus_storey(world);
+    let mut frame = render_background(level, storey, blink_on, viewport);
+    draw_marbles(&mut frame, world, storey, viewport);
     frame
 }
 
-/// Every marble still in play, at full brightness, on top of `frame`.
+/// Every marble still in play on `storey`, at full brightness, on top of
+/// `frame`.
 fn draw_marbles<S: Scalar, const M: usize, const W: usize, const H: usize>(
     frame: &mut Frame<W, H>,
     world: &World<'_, S, M>,
+    storey: i32,
     viewport: Viewport,
 ) {
     let layout = &world.params().layout;
-    for m in world.marbles().iter().filter(|m| !m.out) {
+    let on_show = |y: S| {
+        !cfg!(feature = "storeys")
+            || world.tiles().storeys() == 1
+            || layout.storey_of(y).max(0) == storey
+    };
+    for m in world
+        .marbles()
+        .iter()
+        .filter(|m| !m.out && on_show(m.pos.y))
+    {
         draw_marble(
             frame,
             tile_point(layout, m.pos.x, m.pos.z),
@@ -360,6 +388,7 @@ pub struct Renderer<const W: usize, const H: usize> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct BackgroundKey {
     level: (usize, usize, u8, u8),
+    storey: i32,
     viewport: Viewport,
     blink: bool,
 }
@@ -423,6 +452,7 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
         let viewport = self.follow(game.level(), game.world());
         let blink = blink_on(game.frames(), game.config().frame_log2);
         let level = game.level();
+        let storey = focus_storey(game.world());
         let key = BackgroundKey {
             level: (
                 level.info.name.as_ptr() as usize,
@@ -430,18 +460,19 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
                 level.info.nx,
                 level.info.nz,
             ),
+            storey,
             viewport,
             blink,
         };
         let mut frame = match self.background {
             Some((k, bg)) if k == key => bg,
             _ => {
-                let bg = render_background(level, blink, viewport);
+                let bg = render_background(level, storey, blink, viewport);
                 self.background = Some((key, bg));
                 bg
             }
         };
-        draw_marbles(&mut frame, game.world(), viewport);
+        draw_marbles(&mut frame, game.world(), storey, viewport);
         frame
     }
 }

@@ -247,7 +247,11 @@ impl Scene {
                 let level = by_name("switchback")
                     .map(|(_, l)| l)
                     .unwrap_or(crate::game::levels::LEVELS[0]);
-                let start = level.info.starts().first().copied().unwrap_or((1, 1));
+                let start = level
+                    .info
+                    .starts()
+                    .first()
+                    .map_or((1, 1), |start| (start.i, start.k));
                 Scene {
                     id,
                     name: "maze",

@@ -3,7 +3,7 @@
 //! the float backends, with other tilt-path settings too — deterministically.
 
 use marble_rolling::game::autopilot::Autopilot;
-use marble_rolling::game::level::{parse, LevelView};
+use marble_rolling::game::level::{parse, Cell, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
 use marble_rolling::game::session::SYNTHETIC_TILT;
@@ -97,7 +97,7 @@ fn wins_every_level<S: Scalar>(tilt: Option<TiltConfig>) {
             level.info.name,
             o.max_step
         );
-        if o.phase != Phase::Won || o.frames > level.info.time_limit_s * hz {
+        if o.phase != Phase::Won || o.frames > u32::from(level.info.time_limit_s) * hz {
             lost.push((level.info.name, o.phase.as_str(), o.frames));
         }
     }
@@ -178,17 +178,30 @@ fn plans_the_shortest_path() {
     let ap = Autopilot::new(&corner);
     assert_eq!(ap.marble(), 0);
     assert_eq!(ap.path_cells(), Some(3 + 1 + 3));
-    assert_eq!(ap.next_cell(&corner, 1, 1), Some((3, 1)));
-    assert_eq!(ap.next_cell(&corner, 7, 1), Some((7, 3)));
-    assert_eq!(ap.next_cell(&corner, 7, 3), Some((5, 3)));
-    assert_eq!(ap.next_cell(&corner, 1, 3), None, "the goal");
+    assert_eq!(
+        ap.next_cell(&corner, Cell::new(1, 1, 0)),
+        Some(Cell::new(3, 1, 0))
+    );
+    assert_eq!(
+        ap.next_cell(&corner, Cell::new(7, 1, 0)),
+        Some(Cell::new(7, 3, 0))
+    );
+    assert_eq!(
+        ap.next_cell(&corner, Cell::new(7, 3, 0)),
+        Some(Cell::new(5, 3, 0))
+    );
+    assert_eq!(ap.next_cell(&corner, Cell::new(1, 3, 0)), None, "the goal");
     // A hole cell is never entered; a gap (a short tile without floor) is crossed.
     let stones = LEVELS[3];
     let ap = Autopilot::new(&stones);
-    assert_eq!(ap.next_cell(&stones, 5, 1), Some((7, 1)), "over the gap");
     assert_eq!(
-        ap.next_cell(&stones, 5, 3),
-        Some((5, 1)),
+        ap.next_cell(&stones, Cell::new(5, 1, 0)),
+        Some(Cell::new(7, 1, 0)),
+        "over the gap"
+    );
+    assert_eq!(
+        ap.next_cell(&stones, Cell::new(5, 3, 0)),
+        Some(Cell::new(5, 1, 0)),
         "not into the hole at (3, 3)"
     );
     assert_eq!(ap.path_cells(), Some(7));

@@ -1,7 +1,7 @@
 //! The level format: built-ins, defaults, and errors with line and column.
 
 use marble_rolling::game::level::{
-    parse, words_needed, LevelError, LevelErrorKind, MAX_PITCH_UM, MIN_PITCH_UM,
+    parse, words_needed, Cell, LevelError, LevelErrorKind, MAX_PITCH_UM, MIN_PITCH_UM,
 };
 use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
@@ -61,8 +61,8 @@ fn defaults_apply_when_the_header_is_empty() {
     assert_eq!(l.info.spec.restitution_milli, 500);
     assert_eq!(l.info.time_limit_s, 60);
     assert!(l.info.spec.effects.rolling && !l.info.spec.effects.friction);
-    assert_eq!(l.info.starts(), &[(1, 1)]);
-    assert_eq!(l.info.goals(), &[(3, 1)]);
+    assert_eq!(l.info.starts(), &[Cell::new(1, 1, 0)]);
+    assert_eq!(l.info.goals(), &[Cell::new(3, 1, 0)]);
     assert_eq!(words_needed("---\n#####\n#S.G#\n#####\n"), 1);
 }
 
@@ -464,5 +464,5 @@ fn a_byte_order_mark_is_skipped_at_compile_time() {
     static BOM: marble_rolling::game::level::LevelView<'static> =
         marble_rolling::builtin_level!("\u{feff}name: bom\n---\n#####\n#S.G#\n#####\n");
     assert_eq!(BOM.info.name, "bom");
-    assert_eq!(BOM.info.goals(), &[(3, 1)]);
+    assert_eq!(BOM.info.goals(), &[Cell::new(3, 1, 0)]);
 }

@@ -97,8 +97,8 @@ fn tile_kinds_get_their_levels() {
     let l = level(CORRIDOR);
     let v = l.view();
     // 7×3 tiles on 8×8: columns centred at offset 0 (odd pixel right), rows at 2.
-    let on: Frame<8, 8> = render_background(&v, true, Viewport::new(0, -2));
-    let off: Frame<8, 8> = render_background(&v, false, Viewport::new(0, -2));
+    let on: Frame<8, 8> = render_background(&v, 0, true, Viewport::new(0, -2));
+    let off: Frame<8, 8> = render_background(&v, 0, false, Viewport::new(0, -2));
     let row = |f: &Frame<8, 8>, y| (0..8).map(|x| f.get(x, y)).collect::<Vec<_>>();
     assert_eq!(
         row(&on, 2),
@@ -153,7 +153,7 @@ fn marble_at_cell_centre_lights_one_pixel_fully() {
         let lit: Vec<_> = blank.iter().filter(|p| p.2 > 0).collect();
         assert_eq!(lit, vec![(2, 2, MARBLE)], "cell ({i}, {k})");
         let f: Frame<5, 5> = render_world(g.level(), g.world(), true, vp);
-        let bg: Frame<5, 5> = render_background(g.level(), true, vp);
+        let bg: Frame<5, 5> = render_background(g.level(), 0, true, vp);
         assert_eq!(f.get(2, 2), MAX_BRIGHTNESS);
         let diff = added(&f, &bg);
         assert_eq!(diff.len(), 1, "{diff:?}");
@@ -183,7 +183,7 @@ fn marble_between_two_pixels_splits_its_brightness() {
     assert_eq!(blank.iter().filter(|p| p.2 > 0).count(), 2);
     // On the real background (floor 1, wall 3) nothing saturates: sum 15 ± 1.
     let f: Frame<5, 5> = render_world(g.level(), g.world(), true, vp);
-    let bg: Frame<5, 5> = render_background(g.level(), true, vp);
+    let bg: Frame<5, 5> = render_background(g.level(), 0, true, vp);
     let diff = added(&f, &bg);
     let sum: u32 = diff.iter().map(|d| d.2 as u32).sum();
     assert_eq!(diff.len(), 2, "{diff:?}");
@@ -267,7 +267,7 @@ fn fallen_marble_is_not_drawn() {
     let l = level("---\n#########\n#S.S...G#\n#########\n");
     let mut g = game(&l);
     let vp = Viewport::new(0, -1);
-    let bg: Frame<9, 5> = render_background(g.level(), true, vp);
+    let bg: Frame<9, 5> = render_background(g.level(), 0, true, vp);
     let both: Frame<9, 5> = render_world(g.level(), g.world(), true, vp);
     assert_eq!(added(&both, &bg).len(), 2);
     g.world_mut().marbles_mut()[0].out = true;

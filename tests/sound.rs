@@ -140,7 +140,7 @@ fn the_player_plays_the_outcome_and_obeys_the_mute() {
     let mut player =
         Player::<5, 5, true, false>::new(&LEVELS, 0, SYNTHETIC_TILT, true).expect("first level");
     let mut win = false;
-    for _ in 0..(LEVELS[0].info.time_limit_s * 128) {
+    for _ in 0..(u32::from(LEVELS[0].info.time_limit_s) * 128) {
         let tick = player.tick([0, 1000, 0], false);
         if tick.finished == Some(Phase::Won) {
             win = tick.sounds.iter().any(|s| s == Sound::Win);
@@ -153,7 +153,7 @@ fn the_player_plays_the_outcome_and_obeys_the_mute() {
         Player::<5, 5, true, false>::new(&LEVELS, 0, SYNTHETIC_TILT, true).expect("first level");
     muted.handle(InputEvent::Command(Command::ToggleMute));
     assert!(muted.muted() && muted.status().muted);
-    for _ in 0..(LEVELS[0].info.time_limit_s * 128) {
+    for _ in 0..(u32::from(LEVELS[0].info.time_limit_s) * 128) {
         let tick = muted.tick([0, 1000, 0], false);
         assert!(tick.sounds.is_empty(), "a sound while muted");
         if tick.finished.is_some() {

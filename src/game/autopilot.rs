@@ -13,17 +13,21 @@
 //!
 //! # Path
 //!
-//! A breadth-first search over the long×long cells (odd `i`, odd `k`) from every goal
-//! cell. Two neighbouring cells are connected when the short tile between them has
-//! no wall (`j = 1`); a missing floor there is a 2 mm gap the marble rolls over, so it
-//! is passable. A cell without floor (a hole) or with a wall is never entered.
+//! A breadth-first search over the long×long cells (odd `i`, odd `k`) of every storey
+//! from every goal cell. Two neighbouring cells of a storey are connected when the
+//! short tile between them has no wall (the storey's wall layer); a missing floor
+//! there is a 2 mm gap the marble rolls over, so it is passable. A cell with a wall
+//! is never entered, nor a hole in the lowest storey; a hole above it is a one-way
+//! step to the cell below (the marble rolls in and drops), so the backward search
+//! reaches it only from that cell.
 //!
 //! # Memory
 //!
 //! The search result is a distance field stored **modulo 3** in 2 bits per cell
 //! (`0` = unreachable, `1..=3` = distance mod 3 + 1): neighbouring cells differ by at
 //! most one step, so the way to the goal is always the connected neighbour whose
-//! code is one less (mod 3). For the largest grid (63×63 cells) that is 993 bytes,
+//! code is one less (mod 3). For the largest grid (63×63 cells, or four storeys of
+//! up to 31×31: a larger maze of storeys gets no plan) that is 993 bytes,
 //! against 3969 for a `u8` field and 7938 for `u16` — see
 //! [`Autopilot::RAM_BYTES`]. The search needs no queue either: it sweeps the grid
 //! once per distance, relaxing the cells of the last wavefront (a cell of distance
@@ -68,16 +72,24 @@
 //! its cell's centre.
 
 use crate::physics::geometry::grid::{Tiles, MAX_TILES_XZ};
-use crate::physics::geometry::tiles::TileIndex;
+use crate::physics::geometry::tiles::{TileIndex, TileLayout};
+use crate::physics::world::Marble;
 use crate::physics::world::PhysicsSpec;
 use crate::physics::Scalar;
 
-use super::level::LevelView;
+use super::level::{Cell, LevelView};
 use super::rules::Game;
 
 /// The most cells along x' or z' (63 for 127 tiles).
 pub const MAX_CELLS_XZ: usize = MAX_TILES_XZ / 2;
-const FIELD_BYTES: usize = (MAX_CELLS_XZ * MAX_CELLS_XZ).div_ceil(4);
+/// Whether the game has storeys (feature `storeys`): without, every storey
+/// test below is a constant and the plan is the one-storey plan.
+const STOREYS: bool = cfg!(feature = "storeys");
+
+/// The most cells the plan holds, over all storeys (a 63 × 63 maze, or four
+/// storeys of 31 × 31 cells): a larger maze gets no plan.
+const MAX_PLANNED: usize = MAX_CELLS_XZ * MAX_CELLS_XZ;
+const FIELD_BYTES: usize = MAX_PLANNED.div_ceil(4);
 
 /// Fraction bits of the controller's fixed-point lengths (pitch) and speeds (pitch/s).
 const Q: u32 = 12;
@@ -153,9 +165,10 @@ impl Dir {
 pub struct Autopilot {
     /// Distance to the nearest goal mod 3, plus 1, 2 bits per cell (0: unreachable).
     field: [u8; FIELD_BYTES],
-    /// Cells along x' and z'.
+    /// Cells along x' and z', and storeys (0 when the maze is too large to plan).
     ncx: u8,
     ncz: u8,
+    storeys: u8,
     /// The marble steered.
     marble: u8,
     /// Its start's distance to a goal in cells (`u16::MAX`: no way).
@@ -166,9 +179,9 @@ pub struct Autopilot {
     boost: [i16; 2],
     /// The steered marble's position last frame (q12 pitch).
     last_pos: [i32; 2],
-    /// The steered marble's cell last frame (`u8::MAX`: not seen yet) and its
-    /// distance to the goal (cells).
-    cell: [u8; 2],
+    /// The steered marble's cell and storey last frame (`u8::MAX`: not seen yet)
+    /// and its distance to the goal (cells).
+    cell: [u8; 3],
     dist: u16,
     /// The least distance reached so far, and the frames since it was reached.
     best: u16,
@@ -189,46 +202,63 @@ impl Autopilot {
         let tiles = &level.tiles;
         let ncx = (tiles.nx() / 2).min(MAX_CELLS_XZ) as u8;
         let ncz = (tiles.nz() / 2).min(MAX_CELLS_XZ) as u8;
+        let fits = ncx as usize * ncz as usize * tiles.storeys() <= MAX_PLANNED;
         let mut ap = Autopilot {
             field: [0; FIELD_BYTES],
             ncx,
             ncz,
+            storeys: if !STOREYS {
+                1
+            } else if fits {
+                tiles.storeys() as u8
+            } else {
+                0
+            },
             marble: 0,
             start_cells: u16::MAX,
             last: [0; 2],
             boost: [0; 2],
             last_pos: [0; 2],
-            cell: [u8::MAX; 2],
+            cell: [u8::MAX; 3],
             dist: 0,
             best: 0,
             stalled: 0,
         };
-        for &(i, k) in level.info.goals() {
-            let (cx, cz) = ((i / 2) as i32, (k / 2) as i32);
-            if ap.inside(cx, cz) && enterable(tiles, cx, cz) {
-                ap.set_code(cx, cz, 1);
+        for goal in level.info.goals() {
+            let c = [(goal.i / 2) as i32, (goal.k / 2) as i32, goal.storey as i32];
+            if ap.inside(c) && enterable(tiles, c) {
+                ap.set_code(c, 1);
             }
         }
         // Wavefront sweeps: cells at distance d (code d % 3 + 1) label their unvisited
-        // connected neighbours d + 1.
+        // connected neighbours d + 1, and the hole above them (a drop is one way:
+        // the hole's cell is reached only from below in this backward search).
         let mut d: u32 = 0;
         loop {
             let (from, to) = ((d % 3 + 1) as u8, ((d + 1) % 3 + 1) as u8);
             let mut grew = false;
-            for cz in 0..ncz as i32 {
-                for cx in 0..ncx as i32 {
-                    if ap.code(cx, cz) != from {
-                        continue;
-                    }
-                    for dir in Dir::ALL {
-                        let (dx, dz) = dir.delta();
-                        let (nx, nz) = (cx + dx, cz + dz);
-                        if ap.inside(nx, nz)
-                            && ap.code(nx, nz) == 0
-                            && connected(tiles, cx, cz, dir)
-                            && enterable(tiles, nx, nz)
-                        {
-                            ap.set_code(nx, nz, to);
+            for cy in 0..ap.storeys() {
+                for cz in 0..ncz as i32 {
+                    for cx in 0..ncx as i32 {
+                        let c = [cx, cz, cy];
+                        if ap.code(c) != from {
+                            continue;
+                        }
+                        for dir in Dir::ALL {
+                            let (dx, dz) = dir.delta();
+                            let n = [cx + dx, cz + dz, cy];
+                            if ap.inside(n)
+                                && ap.code(n) == 0
+                                && connected(tiles, c, dir)
+                                && enterable(tiles, n)
+                            {
+                                ap.set_code(n, to);
+                                grew = true;
+                            }
+                        }
+                        let above = [cx, cz, cy + 1];
+                        if is_drop(tiles, above) && ap.inside(above) && ap.code(above) == 0 {
+                            ap.set_code(above, to);
                             grew = true;
                         }
                     }
@@ -240,8 +270,13 @@ impl Autopilot {
             d += 1;
         }
         // Steer the marble whose start is nearest a goal (the first on a tie).
-        for (n, &(i, k)) in level.info.starts().iter().enumerate() {
-            if let Some(len) = ap.cells_to_goal(level, (i / 2) as i32, (k / 2) as i32) {
+        for (n, start) in level.info.starts().iter().enumerate() {
+            let c = [
+                (start.i / 2) as i32,
+                (start.k / 2) as i32,
+                start.storey as i32,
+            ];
+            if let Some(len) = ap.cells_to_goal(level, c) {
                 if len < ap.start_cells {
                     ap.start_cells = len;
                     ap.marble = n as u8;
@@ -262,16 +297,20 @@ impl Autopilot {
         (self.start_cells != u16::MAX).then_some(self.start_cells)
     }
 
-    /// The next cell `(i, k)` (tile indices) on the way from cell `(i, k)` to a goal;
-    /// `None` at a goal, and from a cell with no way to one.
-    pub fn next_cell(&self, level: &LevelView, i: u8, k: u8) -> Option<(u8, u8)> {
-        let (cx, cz) = ((i / 2) as i32, (k / 2) as i32);
-        if is_goal(level, cx, cz) {
+    /// The next cell (tile indices and storey) on the way from `cell` to a goal:
+    /// a neighbour on the same storey, or from a hole the cell below it; `None` at
+    /// a goal, and from a cell with no way to one.
+    pub fn next_cell(&self, level: &LevelView, cell: Cell) -> Option<Cell> {
+        let c = [(cell.i / 2) as i32, (cell.k / 2) as i32, cell.storey as i32];
+        if is_goal(level, c) {
             return None;
         }
-        self.step_towards_goal(&level.tiles, cx, cz)
-            .map(|d| d.delta())
-            .map(|(dx, dz)| ((2 * (cx + dx) + 1) as u8, (2 * (cz + dz) + 1) as u8))
+        let n = self.next(&level.tiles, c)?;
+        Some(Cell::new(
+            (2 * n[0] + 1) as u8,
+            (2 * n[1] + 1) as u8,
+            n[2] as u8,
+        ))
     }
 
     /// The accelerometer reading (board frame, milli-g) the autopilot wants for the
@@ -303,7 +342,8 @@ impl Autopilot {
         let Some(m) = marbles.get(self.marble as usize).filter(|m| !m.out) else {
             return [0, 0];
         };
-        let me = MarbleQ::new(m.pos.x, m.pos.z, m.vel.x, m.vel.z, s, self);
+        let layout = &game.world().params().layout;
+        let me = MarbleQ::new(m, layout, s, self);
         // How fast it really moved since the last frame (q12 pitch/s): a marble
         // pressed into a wall or a post may keep a velocity it cannot follow.
         let frame_log2 = game.config().frame_log2;
@@ -320,7 +360,7 @@ impl Autopilot {
             limit = Self::ESCAPE_TILT_MG as i64;
             cmd[a] = sign * limit;
             cmd[1 - a] = k.hold(me.centre[1 - a] - me.pos[1 - a], me.vel[1 - a]);
-        } else if let Some(dir) = self.step_towards_goal(tiles, me.cell[0], me.cell[1]) {
+        } else if let Some(dir) = self.step_towards_goal(tiles, me.cell) {
             let along = if matches!(dir, Dir::Left | Dir::Right) {
                 0
             } else {
@@ -331,13 +371,15 @@ impl Autopilot {
             // a gap the marble has not crossed yet.
             let (dx, dz) = dir.delta();
             let sign: i64 = if dx + dz > 0 { 1 } else { -1 };
+            let cy = me.cell[2];
             let (mut ex, mut ez) = (me.cell[0], me.cell[1]);
-            let mut gap = self.gap_ahead(tiles, ex - dx, ez - dz, dir, s, me.pos[along]);
+            let mut gap = self.gap_ahead(tiles, [ex - dx, ez - dz, cy], dir, s, me.pos[along]);
             loop {
-                gap = gap || self.gap_ahead(tiles, ex, ez, dir, s, me.pos[along]);
+                gap = gap || self.gap_ahead(tiles, [ex, ez, cy], dir, s, me.pos[along]);
                 ex += dx;
                 ez += dz;
-                if is_goal(level, ex, ez) || self.step_towards_goal(tiles, ex, ez) != Some(dir) {
+                let e = [ex, ez, cy];
+                if is_goal(level, e) || self.step_towards_goal(tiles, e) != Some(dir) {
                     break;
                 }
             }
@@ -349,7 +391,7 @@ impl Autopilot {
             cmd[along] = if !aligned {
                 k.hold(me.centre[along] - pos, vel)
             } else {
-                let mut want = if is_goal(level, ex, ez) {
+                let mut want = if is_goal(level, [ex, ez, cy]) {
                     sign * k.v_max
                 } else {
                     k.approach_speed([centre(ex, s), centre(ez, s)][along] - pos)
@@ -384,12 +426,12 @@ impl Autopilot {
             let q = if n == self.marble as usize {
                 me
             } else {
-                MarbleQ::new(m.pos.x, m.pos.z, m.vel.x, m.vel.z, s, self)
+                MarbleQ::new(m, layout, s, self)
             };
             for dir in Dir::ALL {
                 let (dx, dz) = dir.delta();
-                if connected(tiles, q.cell[0], q.cell[1], dir)
-                    && is_pit(tiles, q.cell[0] + dx, q.cell[1] + dz)
+                if connected(tiles, q.cell, dir)
+                    && is_pit(tiles, [q.cell[0] + dx, q.cell[1] + dz, q.cell[2]])
                 {
                     let (a, toward) = if dx != 0 {
                         (0, dx as i64)
@@ -412,8 +454,11 @@ impl Autopilot {
     fn in_gap(&self, tiles: &Tiles, me: &MarbleQ, s: i64) -> Option<(usize, i64)> {
         // The tile under the centre (eq. 6 in q12).
         let tile = |p: i64| (2 * (p >> Q) + ((p & (ONE - 1)) >= s) as i64) as i32;
-        let (i, k) = (tile(me.pos[0]), tile(me.pos[1]));
-        if solid(tiles, i, 0, k) || solid(tiles, i, 1, k) || (i % 2 == 1) == (k % 2 == 1) {
+        let (i, k, cy) = (tile(me.pos[0]), tile(me.pos[1]), me.cell[2]);
+        if solid(tiles, i, 2 * cy, k)
+            || solid(tiles, i, 2 * cy + 1, k)
+            || (i % 2 == 1) == (k % 2 == 1)
+        {
             return None;
         }
         // The two cells the gap joins: along x' for an even column, else along z'.
@@ -424,7 +469,7 @@ impl Autopilot {
         } else {
             [lo[0], lo[1] + 1]
         };
-        let (cl, ch) = (self.code(lo[0], lo[1]), self.code(hi[0], hi[1]));
+        let (cl, ch) = (self.code([lo[0], lo[1], cy]), self.code([hi[0], hi[1], cy]));
         // Towards the cell one step nearer the goal; towards the reachable one when
         // only one is.
         let up = if cl == 0 || ch == 0 {
@@ -439,25 +484,18 @@ impl Autopilot {
     /// returns the gains to use: gentler ones, in turn, while it makes no progress
     /// (a tilt path with more lag than planned for makes the marble overshoot and
     /// oscillate; slower approaches settle).
-    fn progress(&mut self, level: &LevelView, cell: [i32; 2]) -> Gains {
-        let new = [cell[0] as u8, cell[1] as u8];
-        if self.cell == [u8::MAX; 2] {
+    fn progress(&mut self, level: &LevelView, cell: [i32; 3]) -> Gains {
+        let new = [cell[0] as u8, cell[1] as u8, cell[2] as u8];
+        if self.cell == [u8::MAX; 3] {
             // The first frame (the autopilot may take over a game in progress).
-            self.dist = self
-                .cells_to_goal(level, cell[0], cell[1])
-                .unwrap_or(u16::MAX);
+            self.dist = self.cells_to_goal(level, cell).unwrap_or(u16::MAX);
             self.best = self.dist;
             self.cell = new;
         } else if new != self.cell {
-            let (a, b) = (
-                self.code(self.cell[0] as i32, self.cell[1] as i32),
-                self.code(cell[0], cell[1]),
-            );
+            let (a, b) = (self.code(self.cell.map(i32::from)), self.code(cell));
             if a == 0 || self.dist == u16::MAX {
                 // From a cell off the planned ways: count afresh.
-                self.dist = self
-                    .cells_to_goal(level, cell[0], cell[1])
-                    .unwrap_or(u16::MAX);
+                self.dist = self.cells_to_goal(level, cell).unwrap_or(u16::MAX);
             } else if b != 0 {
                 if b == a % 3 + 1 {
                     self.dist = self.dist.saturating_add(1);
@@ -481,10 +519,10 @@ impl Autopilot {
 
     /// Whether there is a gap between cell `(cx, cz)` and its neighbour `dir` whose
     /// far edge the marble at `pos` (along `dir`'s axis, q12) has not passed.
-    fn gap_ahead(&self, tiles: &Tiles, cx: i32, cz: i32, dir: Dir, s: i64, pos: i64) -> bool {
+    fn gap_ahead(&self, tiles: &Tiles, c: [i32; 3], dir: Dir, s: i64, pos: i64) -> bool {
         let (dx, dz) = dir.delta();
-        let (i, k) = (2 * cx + 1 + dx, 2 * cz + 1 + dz);
-        if !self.inside(cx, cz) || solid(tiles, i, 0, k) || solid(tiles, i, 1, k) {
+        let (i, k, j) = (2 * c[0] + 1 + dx, 2 * c[1] + 1 + dz, 2 * c[2]);
+        if !self.inside(c) || solid(tiles, i, j, k) || solid(tiles, i, j + 1, k) {
             return false;
         }
         let lo = ((if dx != 0 { i } else { k } / 2) as i64) << Q;
@@ -495,51 +533,81 @@ impl Autopilot {
         }
     }
 
-    /// The move from cell `(cx, cz)` towards a goal (`None` at a goal or with no way).
-    fn step_towards_goal(&self, tiles: &Tiles, cx: i32, cz: i32) -> Option<Dir> {
-        let here = self.code(cx, cz);
-        if here == 0 {
+    /// The move from cell `c` towards a goal along its storey (`None` at a goal,
+    /// over a hole, and with no way).
+    fn step_towards_goal(&self, tiles: &Tiles, c: [i32; 3]) -> Option<Dir> {
+        let here = self.code(c);
+        if here == 0 || is_drop(tiles, c) {
             return None;
         }
         let want = (here + 1) % 3 + 1; // (d − 1) mod 3 + 1
         Dir::ALL.into_iter().find(|&dir| {
             let (dx, dz) = dir.delta();
-            self.code(cx + dx, cz + dz) == want && connected(tiles, cx, cz, dir)
+            self.code([c[0] + dx, c[1] + dz, c[2]]) == want && connected(tiles, c, dir)
         })
     }
 
-    /// Cells from cell `(cx, cz)` to a goal by the planned way.
-    fn cells_to_goal(&self, level: &LevelView, mut cx: i32, mut cz: i32) -> Option<u16> {
-        if self.code(cx, cz) == 0 {
+    /// The cell after `c` on the planned way: a neighbour, or under a hole the
+    /// cell below.
+    fn next(&self, tiles: &Tiles, c: [i32; 3]) -> Option<[i32; 3]> {
+        if is_drop(tiles, c) {
+            let below = [c[0], c[1], c[2] - 1];
+            return (self.code(c) != 0 && self.code(below) != 0).then_some(below);
+        }
+        let (dx, dz) = self.step_towards_goal(tiles, c)?.delta();
+        Some([c[0] + dx, c[1] + dz, c[2]])
+    }
+
+    /// Cells from cell `c` to a goal by the planned way (a drop counts as one).
+    fn cells_to_goal(&self, level: &LevelView, mut c: [i32; 3]) -> Option<u16> {
+        if self.code(c) == 0 {
             return None;
         }
         let mut n: u16 = 0;
-        while !is_goal(level, cx, cz) {
-            let (dx, dz) = self.step_towards_goal(&level.tiles, cx, cz)?.delta();
-            cx += dx;
-            cz += dz;
+        while !is_goal(level, c) {
+            c = self.next(&level.tiles, c)?;
             n += 1;
-            if n as usize > MAX_CELLS_XZ * MAX_CELLS_XZ {
+            if n as usize > MAX_PLANNED {
                 return None;
             }
         }
         Some(n)
     }
 
-    fn inside(&self, cx: i32, cz: i32) -> bool {
-        cx >= 0 && cz >= 0 && cx < self.ncx as i32 && cz < self.ncz as i32
+    fn inside(&self, c: [i32; 3]) -> bool {
+        c[0] >= 0
+            && c[1] >= 0
+            && c[2] >= 0
+            && c[0] < self.ncx as i32
+            && c[1] < self.ncz as i32
+            && c[2] < self.storeys()
     }
 
-    fn code(&self, cx: i32, cz: i32) -> u8 {
-        if !self.inside(cx, cz) {
+    /// Storeys planned (without the feature `storeys`, the constant 1).
+    #[inline]
+    fn storeys(&self) -> i32 {
+        if STOREYS {
+            i32::from(self.storeys)
+        } else {
+            1
+        }
+    }
+
+    /// Where cell `c` is in the field: storey after storey, compact.
+    fn slot(&self, c: [i32; 3]) -> usize {
+        (c[2] as usize * self.ncz as usize + c[1] as usize) * self.ncx as usize + c[0] as usize
+    }
+
+    fn code(&self, c: [i32; 3]) -> u8 {
+        if !self.inside(c) {
             return 0;
         }
-        let n = cz as usize * MAX_CELLS_XZ + cx as usize;
+        let n = self.slot(c);
         (self.field[n / 4] >> (2 * (n % 4))) & 3
     }
 
-    fn set_code(&mut self, cx: i32, cz: i32, code: u8) {
-        let n = cz as usize * MAX_CELLS_XZ + cx as usize;
+    fn set_code(&mut self, c: [i32; 3], code: u8) {
+        let n = self.slot(c);
         let shift = 2 * (n % 4);
         self.field[n / 4] = (self.field[n / 4] & !(3 << shift)) | (code << shift);
     }
@@ -552,20 +620,26 @@ struct MarbleQ {
     pos: [i64; 2],
     /// Velocity, pitch/s (q12).
     vel: [i64; 2],
-    /// The cell nearest the centre (cell coordinates, clamped to the grid).
-    cell: [i32; 2],
+    /// The cell nearest the centre (cell coordinates, clamped to the grid) and
+    /// the storey it is on.
+    cell: [i32; 3],
     /// That cell's centre (q12).
     centre: [i64; 2],
 }
 
 impl MarbleQ {
-    fn new<S: Scalar>(x: S, z: S, vx: S, vz: S, s: i64, ap: &Autopilot) -> Self {
-        let pos = [to_q(x), to_q(z)];
-        let vel = [to_q(vx), to_q(vz)];
+    fn new<S: Scalar>(m: &Marble<S>, layout: &TileLayout<S>, s: i64, ap: &Autopilot) -> Self {
+        let pos = [to_q(m.pos.x), to_q(m.pos.z)];
+        let vel = [to_q(m.vel.x), to_q(m.vel.z)];
         // Cell n's centre is n + (1 + s)/2; the boundary between n and n + 1 lies at
         // n + 1 + s/2, halfway between the centres.
         let cell_of = |p: i64, n: u8| (((p - s / 2) >> Q) as i32).min(n as i32 - 1).max(0);
-        let cell = [cell_of(pos[0], ap.ncx), cell_of(pos[1], ap.ncz)];
+        let storey = if STOREYS {
+            layout.storey_of(m.pos.y).min(ap.storeys() - 1).max(0)
+        } else {
+            0
+        };
+        let cell = [cell_of(pos[0], ap.ncx), cell_of(pos[1], ap.ncz), storey];
         MarbleQ {
             pos,
             vel,
@@ -669,28 +743,41 @@ fn solid(tiles: &Tiles, i: i32, j: i32, k: i32) -> bool {
     tiles.is_solid(TileIndex::new(i, j, k))
 }
 
-/// A cell the marble may roll into: floor, no wall.
-fn enterable(tiles: &Tiles, cx: i32, cz: i32) -> bool {
-    let (i, k) = (2 * cx + 1, 2 * cz + 1);
-    solid(tiles, i, 0, k) && !solid(tiles, i, 1, k)
+/// A cell the marble may roll into: floor, no wall (eq. 5: storey `c[2]`'s slab
+/// is layer `2·c[2]`, its walls `2·c[2] + 1`).
+fn enterable(tiles: &Tiles, c: [i32; 3]) -> bool {
+    let (i, k, j) = (2 * c[0] + 1, 2 * c[1] + 1, 2 * c[2]);
+    solid(tiles, i, j, k) && !solid(tiles, i, j + 1, k)
 }
 
-/// A cell the marble falls through: no floor and no wall (also off the grid).
-fn is_pit(tiles: &Tiles, cx: i32, cz: i32) -> bool {
-    let (i, k) = (2 * cx + 1, 2 * cz + 1);
-    !solid(tiles, i, 0, k) && !solid(tiles, i, 1, k)
+/// A hole above the lowest storey, over a cell without a wall (inside the grid):
+/// the marble that rolls in drops one storey.
+fn is_drop(tiles: &Tiles, c: [i32; 3]) -> bool {
+    let (i, k, j) = (2 * c[0] + 1, 2 * c[1] + 1, 2 * c[2]);
+    let inside = i < tiles.nx() as i32 && k < tiles.nz() as i32 && i >= 0 && k >= 0;
+    STOREYS
+        && inside
+        && c[2] > 0
+        && !solid(tiles, i, j, k)
+        && !solid(tiles, i, j + 1, k)
+        && !solid(tiles, i, j - 1, k)
 }
 
-/// No wall on the short tile between cell `(cx, cz)` and its neighbour `dir`.
-fn connected(tiles: &Tiles, cx: i32, cz: i32, dir: Dir) -> bool {
+/// A cell the marble falls out of the maze through: no floor and no wall, and
+/// no storey below to land on (also off the grid).
+fn is_pit(tiles: &Tiles, c: [i32; 3]) -> bool {
+    let (i, k, j) = (2 * c[0] + 1, 2 * c[1] + 1, 2 * c[2]);
+    !solid(tiles, i, j, k) && !solid(tiles, i, j + 1, k) && !is_drop(tiles, c)
+}
+
+/// No wall on the short tile between cell `c` and its neighbour `dir`.
+fn connected(tiles: &Tiles, c: [i32; 3], dir: Dir) -> bool {
     let (dx, dz) = dir.delta();
-    !solid(tiles, 2 * cx + 1 + dx, 1, 2 * cz + 1 + dz)
+    !solid(tiles, 2 * c[0] + 1 + dx, 2 * c[2] + 1, 2 * c[1] + 1 + dz)
 }
 
-fn is_goal(level: &LevelView, cx: i32, cz: i32) -> bool {
-    level
-        .info
-        .goals()
-        .iter()
-        .any(|&(i, k)| (i / 2) as i32 == cx && (k / 2) as i32 == cz)
+fn is_goal(level: &LevelView, c: [i32; 3]) -> bool {
+    level.info.goals().iter().any(|goal| {
+        (goal.i / 2) as i32 == c[0] && (goal.k / 2) as i32 == c[1] && goal.storey as i32 == c[2]
+    })
 }

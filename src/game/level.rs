@@ -29,6 +29,29 @@
 //! must sit at odd column and odd row (a long×long cell). Holes and several `S` switch
 //! on the `holes` and `marbles` effects. All rows have the same length, at most 127.
 //!
+//! # Storeys
+//!
+//! A maze of several storeys (eq. 5 along y': storey `n` is the floor slab
+//! `j = 2n` and the wall layer `j = 2n + 1` on it, one pitch above storey
+//! `n − 1`) lists them **top to bottom**, each a grid as above, separated by a
+//! line `===`. Every storey has the first one's rows and columns. A storey's
+//! floor is the ceiling of the storey below; the top storey has the lid. `O` is a
+//! hole into the storey below (in the lowest storey: out of the maze), so it may
+//! not lie over a wall of the storey below (the marble would sink onto the
+//! wall's top, 2 mm down, and stick there). `S` and `G` may be on any storey; a
+//! maze of several storeys always moves in 3-D (the `holes` effect).
+//!
+//! ```text
+//! ---
+//! #######                   ← top storey (here storey 1)
+//! #S.O..#
+//! #######
+//! ===
+//! #######                   ← the storey below (storey 0)
+//! #...G.#
+//! #######
+//! ```
+//!
 //! The parser refuses what the physics setup ([`Params::new`]) would refuse of a
 //! header (pitch `s + l` 1 ..= 100 mm, `2r < l`), at the value that breaks the rule
 //! (the later of the keys involved). A leading UTF-8 byte-order mark is skipped
@@ -37,7 +60,7 @@
 //! [`Params::new`]: crate::physics::world::Params::new
 
 use crate::physics::dynamics::effects::Effects;
-use crate::physics::geometry::grid::{words_for, TileGrid, Tiles, MAX_TILES_XZ};
+use crate::physics::geometry::grid::{words_for, TileGrid, Tiles, MAX_STOREYS, MAX_TILES_XZ};
 use crate::physics::geometry::tiles::LayoutError;
 pub use crate::physics::geometry::tiles::{MAX_PITCH_UM, MIN_PITCH_UM};
 use crate::physics::world::{PhysicsSpec, SetupError};
@@ -46,6 +69,29 @@ use crate::physics::world::{PhysicsSpec, SetupError};
 pub const MAX_MARBLES: usize = 4;
 /// Most goal cells a level may have.
 pub const MAX_GOALS: usize = 4;
+
+/// The line between two storeys of the grid (listed top to bottom).
+const STOREY_SEPARATOR: &[u8] = b"===";
+
+/// A long×long cell on a storey (odd `i`, odd `k`; storey 0 is the lowest):
+/// where a marble starts or a goal lies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Cell {
+    /// Column along x'.
+    pub i: u8,
+    /// Row along z'.
+    pub k: u8,
+    /// Storey (its floor slab is layer `j = 2·storey`).
+    pub storey: u8,
+}
+
+impl Cell {
+    /// Cell `(i, k)` on storey `storey`.
+    pub const fn new(i: u8, k: u8, storey: u8) -> Self {
+        Cell { i, k, storey }
+    }
+}
 
 /// What is wrong with a level.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,6 +139,14 @@ pub enum LevelErrorKind {
     },
     /// The name is not valid UTF-8.
     BadName,
+    /// More storeys than [`MAX_STOREYS`].
+    TooManyStoreys,
+    /// A storey with more or fewer rows than the first.
+    StoreyRows,
+    /// A `===` with no rows before or after it.
+    EmptyStorey,
+    /// A wall under a hole of the storey above.
+    HoleAboveWall,
 }
 
 impl LevelErrorKind {
@@ -120,6 +174,12 @@ impl LevelErrorKind {
                 "marble does not fit a cell: 2 × marble_radius_mm must be less than long_mm"
             }
             LevelErrorKind::BadName => "name is not valid UTF-8",
+            LevelErrorKind::TooManyStoreys => "more than 4 storeys",
+            LevelErrorKind::StoreyRows => "storey has a different number of rows from the first",
+            LevelErrorKind::EmptyStorey => "no rows between storey separators (===)",
+            LevelErrorKind::HoleAboveWall => {
+                "wall under a hole (O) of the storey above: a marble would sink onto its top"
+            }
         }
     }
 }
@@ -232,24 +292,26 @@ pub struct LevelInfo<'a> {
     /// Physics parameters and effects.
     pub spec: PhysicsSpec,
     /// Seconds before the attempt times out.
-    pub time_limit_s: u32,
+    pub time_limit_s: u16,
     /// Tiles along x' (columns).
     pub nx: u8,
     /// Tiles along z' (rows).
     pub nz: u8,
-    starts: [(u8, u8); MAX_MARBLES],
+    /// Storeys (1 ..= [`MAX_STOREYS`]).
+    pub storeys: u8,
+    starts: [Cell; MAX_MARBLES],
     n_starts: u8,
-    goals: [(u8, u8); MAX_GOALS],
+    goals: [Cell; MAX_GOALS],
     n_goals: u8,
 }
 
 impl LevelInfo<'_> {
-    /// Start cells `(i, k)`.
-    pub fn starts(&self) -> &[(u8, u8)] {
+    /// Start cells, in reading order (top storey first).
+    pub fn starts(&self) -> &[Cell] {
         &self.starts[..self.n_starts as usize]
     }
-    /// Goal cells `(i, k)`.
-    pub fn goals(&self) -> &[(u8, u8)] {
+    /// Goal cells, in reading order (top storey first).
+    pub fn goals(&self) -> &[Cell] {
         &self.goals[..self.n_goals as usize]
     }
 }
@@ -289,10 +351,17 @@ pub const fn words_needed(src: &str) -> usize {
     let Some(grid_start) = grid_start(b) else {
         return 1;
     };
-    let (nx, nz) = grid_size(b, grid_start);
+    let (nx, nz, storeys) = grid_shape(b, grid_start);
+    let storeys = if storeys == 0 {
+        1
+    } else if storeys > MAX_STOREYS {
+        MAX_STOREYS
+    } else {
+        storeys
+    };
     let w = words_for(
         if nx == 0 { 1 } else { nx },
-        2,
+        2 * storeys,
         if nz == 0 { 1 } else { nz },
     );
     if w == 0 {
@@ -360,23 +429,36 @@ const fn grid_start(b: &[u8]) -> Option<usize> {
     None
 }
 
-/// Columns of the first row and number of non-empty rows.
-const fn grid_size(b: &[u8], start: usize) -> (usize, usize) {
+/// Whether the line `[start, end)` (trimmed) separates two storeys.
+const fn is_separator(b: &[u8], start: usize, end: usize) -> bool {
+    eq_bytes(b, start, end, STOREY_SEPARATOR)
+}
+
+/// Columns of the first row, rows of the first storey, and storeys (rows
+/// before the first `===`, and one more storey per `===`).
+const fn grid_shape(b: &[u8], start: usize) -> (usize, usize, usize) {
     let mut i = start;
     let mut nx = 0;
     let mut nz = 0;
+    let mut storeys = 0;
     while i < b.len() {
         let e = line_end(b, i);
         let t = trim_end(b, i, e);
         if t > i {
-            if nz == 0 {
-                nx = count_chars(b, i, t);
+            if is_separator(b, i, t) {
+                storeys += 1;
+            } else {
+                if nx == 0 && nz == 0 {
+                    nx = count_chars(b, i, t);
+                }
+                if storeys == 0 {
+                    nz += 1;
+                }
             }
-            nz += 1;
         }
         i = e + 1;
     }
-    (nx, nz)
+    (nx, nz, storeys + 1)
 }
 
 const fn count_chars(b: &[u8], start: usize, end: usize) -> usize {
@@ -489,7 +571,7 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
         ..Effects::NONE
     };
     let mut name: &str = "untitled";
-    let mut time_limit_s = 60u32;
+    let mut time_limit_s = 60u16;
     let mut short_at: At = (0, 0, 0);
     let mut long_at: At = (0, 0, 0);
     let mut radius_at: At = (0, 0, 0);
@@ -580,7 +662,8 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
                 } else if eq_bytes(b, s, kend, b"rolling_resistance") {
                     spec.rolling_resistance_ppm = n;
                 } else {
-                    time_limit_s = n;
+                    // 1 ..= 3600, checked above.
+                    time_limit_s = n as u16;
                 }
             }
         }
@@ -613,9 +696,9 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
         };
         return err(if l == 0 { 1 } else { l }, b, ls, at, kind);
     }
-    // Grid.
-    let (nx, nz) = grid_size(b, i);
-    if nz == 0 || nx == 0 {
+    // Grid: storeys top to bottom (`t` from the top; storey `n` from the bottom).
+    let (nx, nz, storeys) = grid_shape(b, i);
+    if nx == 0 {
         return Err(LevelError {
             line: line as u32,
             column: 1,
@@ -629,7 +712,15 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
             kind: LevelErrorKind::TooLarge,
         });
     }
-    let mut grid = match TileGrid::<WORDS>::new(nx, 2, nz) {
+    // Past MAX_STOREYS the loop below stops at the separator that starts one too
+    // many, having read the first ones as the storeys a grid can hold.
+    let storeys = if storeys > MAX_STOREYS {
+        MAX_STOREYS
+    } else {
+        storeys
+    };
+    let layers = 2 * storeys;
+    let mut grid = match TileGrid::<WORDS>::new(nx, layers, if nz == 0 { 1 } else { nz }) {
         Ok(g) => g,
         Err(_) => {
             return Err(LevelError {
@@ -639,20 +730,38 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
             })
         }
     };
-    let mut starts = [(0u8, 0u8); MAX_MARBLES];
+    let mut starts = [Cell::new(0, 0, 0); MAX_MARBLES];
     let mut n_starts = 0usize;
-    let mut goals = [(0u8, 0u8); MAX_GOALS];
+    let mut goals = [Cell::new(0, 0, 0); MAX_GOALS];
     let mut n_goals = 0usize;
-    let mut holes = false;
+    let mut holes = storeys > 1;
+    let mut t = 0usize;
     let mut k = 0usize;
     let mut last_row_line = line;
     while i < b.len() {
         let e = line_end(b, i);
-        let t = trim_end(b, i, e);
-        if t > i {
+        let end = trim_end(b, i, e);
+        if end > i && is_separator(b, i, end) {
+            if k == 0 {
+                return err(line, b, i, i, LevelErrorKind::EmptyStorey);
+            }
+            if k != nz {
+                return err(line, b, i, i, LevelErrorKind::StoreyRows);
+            }
+            t += 1;
+            if t >= MAX_STOREYS {
+                return err(line, b, i, i, LevelErrorKind::TooManyStoreys);
+            }
+            k = 0;
+        } else if end > i {
+            if k >= nz {
+                return err(line, b, i, i, LevelErrorKind::StoreyRows);
+            }
+            let n = storeys - 1 - t;
+            let (slab, walls) = (2 * n, 2 * n + 1);
             let mut col = 0usize;
             let mut p = i;
-            while p < t {
+            while p < end {
                 let c = b[p];
                 if col >= nx {
                     return err(line, b, i, p, LevelErrorKind::RaggedRow);
@@ -660,29 +769,34 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
                 let cell = col % 2 == 1 && k % 2 == 1;
                 match c {
                     b'#' => {
-                        grid.set(col, 0, k, true);
-                        grid.set(col, 1, k, true);
+                        // The storey above is already read: no slab there is its `O`.
+                        if n + 1 < storeys && !grid.is_set(col, slab + 2, k) {
+                            return err(line, b, i, p, LevelErrorKind::HoleAboveWall);
+                        }
+                        grid.set(col, slab, k, true);
+                        grid.set(col, walls, k, true);
                     }
                     b'.' => {
-                        grid.set(col, 0, k, true);
+                        grid.set(col, slab, k, true);
                     }
                     b'O' => holes = true,
                     b'S' | b'G' => {
                         if !cell {
                             return err(line, b, i, p, LevelErrorKind::NotACell);
                         }
-                        grid.set(col, 0, k, true);
+                        grid.set(col, slab, k, true);
+                        let at = Cell::new(col as u8, k as u8, n as u8);
                         if c == b'S' {
                             if n_starts == MAX_MARBLES {
                                 return err(line, b, i, p, LevelErrorKind::StartCount);
                             }
-                            starts[n_starts] = (col as u8, k as u8);
+                            starts[n_starts] = at;
                             n_starts += 1;
                         } else {
                             if n_goals == MAX_GOALS {
                                 return err(line, b, i, p, LevelErrorKind::GoalCount);
                             }
-                            goals[n_goals] = (col as u8, k as u8);
+                            goals[n_goals] = at;
                             n_goals += 1;
                         }
                     }
@@ -693,13 +807,27 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
                 col += 1;
             }
             if col != nx {
-                return err(line, b, i, t, LevelErrorKind::RaggedRow);
+                return err(line, b, i, end, LevelErrorKind::RaggedRow);
             }
             k += 1;
             last_row_line = line;
         }
         i = e + 1;
         line += 1;
+    }
+    if t > 0 && k == 0 {
+        return Err(LevelError {
+            line: last_row_line as u32 + 1,
+            column: 1,
+            kind: LevelErrorKind::EmptyStorey,
+        });
+    }
+    if k != nz {
+        return Err(LevelError {
+            line: last_row_line as u32,
+            column: 1,
+            kind: LevelErrorKind::StoreyRows,
+        });
     }
     if n_starts == 0 {
         return Err(LevelError {
@@ -725,6 +853,7 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
             time_limit_s,
             nx: nx as u8,
             nz: nz as u8,
+            storeys: storeys as u8,
             starts,
             n_starts: n_starts as u8,
             goals,
@@ -749,7 +878,7 @@ pub use const_panic as __const_panic;
 /// ```
 /// static OK: marble_rolling::game::level::LevelView<'static> =
 ///     marble_rolling::builtin_level!("---\n#####\n#S.G#\n#####\n");
-/// assert_eq!(OK.info.goals(), &[(3, 1)]);
+/// assert_eq!(OK.info.goals(), &[marble_rolling::game::level::Cell::new(3, 1, 0)]);
 /// ```
 #[macro_export]
 macro_rules! builtin_level {

@@ -1,6 +1,7 @@
 //! The built-in levels, parsed at compile time into flash. Rising difficulty; together
 //! they use every effect (rolling everywhere; friction from 3; holes in 4, 7, 8;
-//! several marbles in 5 and 8; board motion in 6 and 8).
+//! several marbles in 5 and 8; board motion in 6 and 8) and storeys (2 in 9, 3 in
+//! 10: listed top to bottom, a hole drops the marble one storey).
 
 use super::level::LevelView;
 
@@ -11,7 +12,7 @@ macro_rules! builtin {
 }
 
 /// Every built-in level, in playing order.
-pub static LEVELS: [LevelView<'static>; 8] = [
+pub static LEVELS: [LevelView<'static>; if cfg!(feature = "storeys") { 10 } else { 8 }] = [
     builtin!(
         "name: first-roll
 time_limit_s: 30
@@ -125,6 +126,50 @@ time_limit_s: 180
 #.###.#####.#####.#
 #S....O...........#
 ###################
+"
+    ),
+    #[cfg(feature = "storeys")]
+    builtin!(
+        "name: two-floors
+effects: rolling, friction
+time_limit_s: 60
+---
+###########
+#S........#
+#########.#
+#########O#
+###########
+===
+###########
+###########
+###########
+#G........#
+###########
+"
+    ),
+    #[cfg(feature = "storeys")]
+    builtin!(
+        "name: three-floors
+effects: rolling, friction
+time_limit_s: 90
+---
+###########
+#S.......O#
+###########
+###########
+###########
+===
+###########
+#########.#
+#########.#
+#O........#
+###########
+===
+###########
+#........G#
+#.#########
+#.#########
+###########
 "
     ),
 ];

@@ -9,7 +9,7 @@ use crate::physics::scalar::rsqrt_bits;
 use crate::physics::world::{Params, SetupError, Stepping, World};
 use crate::physics::{Scalar, Vec3};
 
-use super::level::{LevelView, MAX_MARBLES};
+use super::level::{Cell, LevelView, MAX_MARBLES};
 
 /// Frame rate, substeps and the stepper: `dt = 2^-(frame_log2 + substeps_log2)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,12 +105,19 @@ impl<'a, S: Scalar> Game<'a, S> {
         spec.step_log2 = config.frame_log2 + config.substeps_log2;
         spec.stepping = config.stepping;
         let params = Params::<S>::new(spec)?;
-        let mut starts = [(S::ZERO, S::ZERO); MAX_MARBLES];
+        let mut starts = [Vec3::ZERO; MAX_MARBLES];
         let n = level.info.starts().len();
-        for (slot, &(i, k)) in starts.iter_mut().zip(level.info.starts()) {
-            *slot = cell_centre(&params, i, k);
+        for (slot, start) in starts.iter_mut().zip(level.info.starts()) {
+            let (x, z) = cell_centre(&params, start.i, start.k);
+            // On its storey's floor slab, whose top is at y' = storey (eq. 5).
+            let floor = if cfg!(feature = "storeys") {
+                S::from_int(i32::from(start.storey))
+            } else {
+                S::ZERO
+            };
+            *slot = Vec3::new(x, floor + params.radius, z);
         }
-        let world = World::new(params, level.tiles, &starts[..n])?;
+        let world = World::with_centres(params, level.tiles, &starts[..n])?;
         Ok(Game {
             level,
             config,
@@ -231,21 +238,20 @@ impl<'a, S: Scalar> Game<'a, S> {
         }
         let in_goal = marbles.iter().any(|m| {
             let (i, k) = (layout.index_xz(m.pos.x), layout.index_xz(m.pos.z));
+            let on_storey = |goal: &Cell| {
+                !cfg!(feature = "storeys") || i32::from(goal.storey) == layout.storey_of(m.pos.y)
+            };
             self.level
                 .info
                 .goals()
                 .iter()
-                .any(|&(gi, gk)| gi as i32 == i && gk as i32 == k)
+                .any(|goal| i32::from(goal.i) == i && i32::from(goal.k) == k && on_storey(goal))
         });
         if in_goal {
             return Phase::Won;
         }
         if self.frames
-            >= self
-                .level
-                .info
-                .time_limit_s
-                .saturating_mul(self.config.frame_hz())
+            >= u32::from(self.level.info.time_limit_s).saturating_mul(self.config.frame_hz())
         {
             return Phase::TimeUp;
         }

@@ -18,11 +18,12 @@ use std::vec::Vec;
 
 use crate::game::level::{parse, LevelView};
 use crate::game::levels::{by_name, LEVELS};
-use crate::physics::geometry::grid::{words_for, MAX_TILES_XZ};
+use crate::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
 
-/// Occupancy words of the largest level the format allows (127 × 2 × 127 tiles):
+/// Occupancy words of the largest level the format allows (127 × 127 tiles on 4
+/// storeys, 16 KiB):
 /// every level read at run time is parsed into a grid of this size.
-pub const MAX_WORDS: usize = words_for(MAX_TILES_XZ, 2, MAX_TILES_XZ);
+pub const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
 
 /// A level chosen on the command line.
 #[derive(Clone, Copy, Debug)]

@@ -333,9 +333,28 @@ pub const MAX_MG: i32 = 8_000;
 
 impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// A world with marbles resting on the floor at `starts` (tile-frame x', z'; the
-    /// height is set to the radius).
+    /// height is set to the radius: storey 0).
     pub fn new(params: Params<S>, tiles: Tiles<'a>, starts: &[(S, S)]) -> Result<Self, SetupError> {
-        if starts.is_empty() || starts.len() > M {
+        let mut centres = [Vec3::ZERO; M];
+        for (centre, &(x, z)) in centres.iter_mut().zip(starts) {
+            *centre = Vec3::new(x, params.radius, z);
+        }
+        if starts.len() > M {
+            return Err(SetupError::MarbleCount);
+        }
+        Self::with_centres(params, tiles, &centres[..starts.len()])
+    }
+
+    /// A world with marbles at rest with their centres at `centres` (tile frame,
+    /// pitch): on a storey's floor, its height is the storey plus the radius.
+    pub fn with_centres(
+        mut params: Params<S>,
+        tiles: Tiles<'a>,
+        centres: &[Vec3<S>],
+    ) -> Result<Self, SetupError> {
+        // A marble can only leave or reach a storey in 3-D.
+        params.spec.effects.holes |= tiles.storeys() > 1;
+        if centres.is_empty() || centres.len() > M {
             return Err(SetupError::MarbleCount);
         }
         let layout = params.layout;
@@ -343,10 +362,16 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             layout.span_xz(tiles.nx() as i32 - 1).1,
             layout.span_xz(tiles.nz() as i32 - 1).1,
         );
+        let lid = S::from_int(tiles.storeys() as i32) - layout.s;
         let mut marbles = HVec::new();
-        for (n, &(x, z)) in starts.iter().enumerate() {
-            let pos = Vec3::new(x, params.radius, z);
-            let inside = x > S::ZERO && z > S::ZERO && x < extent.0 && z < extent.1;
+        for (n, &pos) in centres.iter().enumerate() {
+            let (x, z) = (pos.x, pos.z);
+            let inside = x > S::ZERO
+                && z > S::ZERO
+                && x < extent.0
+                && z < extent.1
+                && pos.y > S::ZERO
+                && pos.y + params.radius <= lid;
             if !inside || overlaps_any(&layout, tiles, pos, params.radius) {
                 return Err(SetupError::BadStart(n));
             }
@@ -419,6 +444,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     pub fn gravity_mg(&self) -> [i32; 3] {
         self.gravity_mg
     }
+    /// The lid's height (pitch): the top of the top storey's walls.
+    #[inline]
+    pub fn lid(&self) -> S {
+        S::from_int(self.tiles.storeys() as i32) - self.params.layout.s
+    }
+
     /// The board's extent along x' and z' (pitch).
     pub fn extent(&self) -> (S, S) {
         self.extent
@@ -670,7 +701,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 self.clear[n] = range;
             }
         }
-        if clear && (!SPACE || lid_contact(m.pos, r, layout.l).is_none()) {
+        if clear && (!SPACE || lid_contact(m.pos, r, self.lid()).is_none()) {
             // What the passes return when the first touches nothing.
             return !SPACE;
         }
@@ -748,7 +779,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 k += 1;
             }
             if SPACE {
-                if let Some(c) = lid_contact(m.pos, r, layout.l) {
+                if let Some(c) = lid_contact(m.pos, r, self.lid()) {
                     touched = true;
                     settled &= face_once(&mut faces, &c);
                     if self.take_contact::<SPACE>(m, &c, kick, pass, start, &mut supported) {
@@ -942,7 +973,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             // is nothing down there to hold it, not even under the neighbouring tiles.
             let depth = self.params.layout.s + self.params.radius;
             if p.y < -depth
-                || p.y > S::from_int(4)
+                || p.y > S::from_int(self.tiles.storeys() as i32 + 3)
                 || p.x < -margin
                 || p.z < -margin
                 || p.x > ex + margin
@@ -1082,9 +1113,12 @@ fn face_once<S: Scalar>(faces: &mut u8, c: &Contact<S>) -> bool {
 }
 
 /// Whether a marble at `c` overlaps any solid tile (start validation, tests).
+/// A floor slab below the centre does not count: a marble resting on it may
+/// overlap it by a rounding (`n + r − r` in floating point on storey `n`).
 pub fn overlaps_any<S: Scalar>(layout: &TileLayout<S>, tiles: Tiles<'_>, c: Vec3<S>, r: S) -> bool {
     candidates(layout, c, r)
         .solid(tiles)
-        .filter(|t: &TileIndex| t.j >= 1)
+        // Slab `j = 2n` (eq. 5) tops out at `y' = n`.
+        .filter(|t: &TileIndex| t.j & 1 == 1 || S::from_int(t.j >> 1) > c.y)
         .any(|t| super::geometry::narrowphase::overlaps(c, r, &layout.tile_box(t)))
 }

@@ -36,13 +36,13 @@ use core::cell::{RefCell, UnsafeCell};
 use core::fmt::Write;
 
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
-use marble_rolling::game::level::{parse, Level, LevelError, LevelErrorKind, LevelView};
+use marble_rolling::game::level::{parse, Cell, Level, LevelError, LevelErrorKind, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::{Player, FRAME_HZ};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::event::Tilt;
-use marble_rolling::physics::geometry::grid::{words_for, MAX_TILES_XZ};
+use marble_rolling::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
 use marble_rolling::physics::TileIndex;
 
 /// The micro:bit v2's player: its 5×5 matrix and its fixed physics steps (so
@@ -53,7 +53,7 @@ type WebPlayer = Player<WIDTH, HEIGHT, true, false>;
 
 /// Occupancy words of the largest level the format allows: the editor's level
 /// is parsed into a grid of this size (as the host tools' run-time levels are).
-const MAX_WORDS: usize = words_for(MAX_TILES_XZ, 2, MAX_TILES_XZ);
+const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
 /// Bytes of level text the editor can hand over: a 127 × 127 grid with its
 /// line ends is 16 256, the header a few hundred more.
 const TEXT_CAPACITY: usize = 32 * 1024;
@@ -558,7 +558,7 @@ pub extern "C" fn level_name() -> u32 {
 /// The time limit of the level in play, seconds.
 #[no_mangle]
 pub extern "C" fn time_limit_s() -> u32 {
-    with_app(0, |app| app.level().info.time_limit_s)
+    with_app(0, |app| u32::from(app.level().info.time_limit_s))
 }
 
 /// Where the attempt stands: 0 playing, 1 won, 2 fell, 3 time up.
@@ -636,7 +636,8 @@ pub extern "C" fn level_nz() -> u32 {
     with_app(0, |app| u32::from(app.level().info.nz))
 }
 
-/// What tile `(i, k)` is: 0 floor, 1 wall, 2 hole, 3 goal, 4 start, 5 outside.
+/// What tile `(i, k)` of the storey marble 0 is on (the lowest once it is out)
+/// is: 0 floor, 1 wall, 2 hole, 3 goal, 4 start, 5 outside.
 #[no_mangle]
 pub extern "C" fn tile_kind(i: u32, k: u32) -> u32 {
     with_app(5, |app| {
@@ -645,8 +646,18 @@ pub extern "C" fn tile_kind(i: u32, k: u32) -> u32 {
         if i >= u32::from(info.nx) || k >= u32::from(info.nz) {
             return 5;
         }
-        let cell = (i as u8, k as u8);
-        let solid = |j| level.tiles.is_solid(TileIndex::new(i as i32, j, k as i32));
+        let world = app.player.game().world();
+        let storey = world
+            .marbles()
+            .first()
+            .filter(|m| !m.out)
+            .map_or(0, |m| world.params().layout.storey_of(m.pos.y).max(0));
+        let cell = Cell::new(i as u8, k as u8, storey as u8);
+        let solid = |j| {
+            level
+                .tiles
+                .is_solid(TileIndex::new(i as i32, 2 * storey + j, k as i32))
+        };
         if solid(1) {
             1
         } else if !solid(0) {

@@ -25,7 +25,7 @@ pub struct Kick<S> {
 }
 
 /// Standard gravity in µm/s² per milli-g ×100 (9.80665 m/s² = 980 665 ×10⁻⁵).
-const G_UM_PER_MG_X100: i128 = 980_665;
+const G_UM_PER_MG_X100: i64 = 980_665;
 /// Fraction bits of a [`PullScale`].
 const SCALE_SHIFT: u32 = 56;
 
@@ -37,11 +37,29 @@ const SCALE_SHIFT: u32 = 56;
 pub struct PullScale(i64);
 
 impl PullScale {
-    /// The scale for `a = mg · 9.80665 mm/s² · num/den` in a layout of `pitch_um`.
+    /// The scale for `a = mg · 9.80665 mm/s² · num/den` in a layout of `pitch_um`
+    /// (`num ≥ 0`, `den > 0`), rounded to nearest.
+    ///
+    /// `round(980 665·num·2^56 / (100·pitch_um·den))` by long division in 64 bits,
+    /// 16 quotient bits at a time: the numerator needs 99 bits, and 128-bit
+    /// arithmetic cost the micro:bit v1 over a kilobyte of its 64 KiB of flash for
+    /// a function that runs three times per level. The divisor stays below 2^48
+    /// (pitch ≤ 100 mm, `den` ≤ 2^24), so each shifted remainder fits.
     pub fn new(num: i64, den: i64, pitch_um: u32) -> Self {
-        let n = (G_UM_PER_MG_X100 * num as i128) << SCALE_SHIFT;
-        let d = 100 * pitch_um as i128 * den as i128;
-        PullScale(((n + d / 2) / d).min(i64::MAX as i128) as i64)
+        let a = G_UM_PER_MG_X100 as u64 * num.max(0) as u64;
+        let d = 100 * u64::from(pitch_um) * den.max(1) as u64;
+        let (mut q, mut r) = (a / d, a % d);
+        for bits in [16, 16, 16, SCALE_SHIFT - 48] {
+            r <<= bits;
+            q = match q.checked_mul(1 << bits) {
+                Some(q) => q | (r / d),
+                None => return PullScale(i64::MAX),
+            };
+            r %= d;
+        }
+        // Half up: the remainder against the divisor's half, rounded down.
+        q += u64::from(r >= d - d / 2);
+        PullScale(q.min(i64::MAX as u64) as i64)
     }
 
     /// `a·dt` (to nearest) and `½·a·dt²` (away from zero) for `mg` milli-g at
@@ -105,4 +123,47 @@ pub fn advance_plane<S: Scalar>(p: &mut Vec3<S>, v: &mut Vec3<S>, kick: &Kick<S>
     p.z += v.z.shr(k) + kick.dp.z;
     v.x += kick.dv.x;
     v.z += kick.dv.z;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 128-bit formula the long division replaces.
+    fn reference(num: i64, den: i64, pitch_um: u32) -> i64 {
+        let n = (G_UM_PER_MG_X100 as i128 * num as i128) << SCALE_SHIFT;
+        let d = 100 * pitch_um as i128 * den as i128;
+        ((n + d / 2) / d).min(i64::MAX as i128) as i64
+    }
+
+    #[test]
+    fn long_division_equals_the_128_bit_formula() {
+        let edges = [
+            (1, 1, 12_000),
+            (5, 7, 12_000),
+            (10_000 * 5, 1_000_000 * 7, 12_000),
+            (1, 1, 1_000),
+            (1, 1, 100_000),
+            (5_000_000, 7_000_000, 1_000),
+            (0, 7, 12_000),
+            (1_000_000, 1, 1_000),
+        ];
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        let random = core::iter::repeat_with(move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let num = (x % 5_000_001) as i64;
+            let den = ((x >> 23) % 7_000_000 + 1) as i64;
+            let pitch = ((x >> 45) % 99_001 + 1_000) as u32;
+            (num, den, pitch)
+        });
+        for (num, den, pitch) in edges.into_iter().chain(random.take(200_000)) {
+            assert_eq!(
+                PullScale::new(num, den, pitch).0,
+                reference(num, den, pitch),
+                "{num}/{den} at {pitch} µm"
+            );
+        }
+    }
 }

@@ -8,8 +8,13 @@ use super::tiles::TileIndex;
 
 /// The largest number of tiles along x' or z' (63 cells and 64 walls).
 pub const MAX_TILES_XZ: usize = 127;
-/// The largest number of layers along y' (the floor `j = 0` and the walls `j = 1`).
-pub const MAX_LAYERS: usize = 2;
+/// The most storeys a maze may have. Storey `n` is a floor slab (layer
+/// `j = 2n`, eq. 5: `n − s ≤ y' < n`) under a layer of walls and cells
+/// (`j = 2n + 1`: `n ≤ y' < n + 1 − s`); each slab is the ceiling of the
+/// storey below.
+pub const MAX_STOREYS: usize = 4;
+/// The largest number of layers along y': two per storey (`j = 0 ..= 7`).
+pub const MAX_LAYERS: usize = 2 * MAX_STOREYS;
 
 /// Number of `u32` words for an `nx × ny × nz` grid.
 pub const fn words_for(nx: usize, ny: usize, nz: usize) -> usize {
@@ -73,6 +78,16 @@ impl<const WORDS: usize> TileGrid<WORDS> {
         true
     }
 
+    /// Whether tile `[i, j, k]` is present (outside the grid: no), in a
+    /// `const` context (the level parser's).
+    pub const fn is_set(&self, i: usize, j: usize, k: usize) -> bool {
+        if i >= self.nx as usize || j >= self.ny as usize || k >= self.nz as usize {
+            return false;
+        }
+        let bit = (j * self.nz as usize + k) * self.nx as usize + i;
+        self.bits[bit / 32] & (1u32 << (bit % 32)) != 0
+    }
+
     /// Whether tile `[i, j, k]` is present (outside the grid: no).
     pub fn get(&self, t: TileIndex) -> bool {
         self.view().is_solid(t)
@@ -129,10 +144,17 @@ impl Tiles<'_> {
         }
     }
 
-    /// Whether any floor tile (`j = 0`) is missing inside the grid: the scene then
-    /// needs 3-D motion (holes).
+    /// Storeys: a slab and a wall layer each (a grid of the floor alone is one;
+    /// a grid has at least one layer).
+    pub fn storeys(&self) -> usize {
+        (self.ny as usize).div_ceil(2)
+    }
+
+    /// Whether any floor slab tile (`j = 0, 2, …`) is missing inside the grid, or
+    /// there are several storeys: the scene then needs 3-D motion (holes).
     pub fn has_holes(&self) -> bool {
-        (0..self.nz as i32)
-            .any(|k| (0..self.nx as i32).any(|i| !self.is_solid(TileIndex::new(i, 0, k))))
+        self.storeys() > 1
+            || (0..self.nz as i32)
+                .any(|k| (0..self.nx as i32).any(|i| !self.is_solid(TileIndex::new(i, 0, k))))
     }
 }

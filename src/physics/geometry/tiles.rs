@@ -20,7 +20,8 @@
 //!
 //! Along x' and z' even indices are short tiles (walls, posts) and odd ones long
 //! tiles (cells); along y' `j = 0` is the floor slab `[-s, 0)` and `j = 1` the wall
-//! layer `[0, l)`.
+//! layer `[0, l)`, and the pattern repeats one pitch up per storey: storey `n`'s
+//! slab `j = 2n` is `[n − s, n)`, its walls `j = 2n + 1` are `[n, n + 1 − s)`.
 
 use super::super::scalar::Scalar;
 use super::super::vec::Vec3;
@@ -31,7 +32,7 @@ use super::super::vec::Vec3;
 pub struct TileIndex {
     /// Column along x'.
     pub i: i32,
-    /// Layer along y' (0 = floor, 1 = walls).
+    /// Layer along y' (`2n`: storey `n`'s floor slab, `2n + 1`: its walls).
     pub j: i32,
     /// Row along z'.
     pub k: i32,
@@ -148,6 +149,13 @@ impl<S: Scalar> TileLayout<S> {
     pub fn index_y(&self, b: S) -> i32 {
         let n = b.floor_int();
         2 * n + 1 + (b >= S::from_int(n + 1) - self.s) as i32
+    }
+
+    /// The storey whose wall layer or floor slab holds height `b` (a marble on a
+    /// slab, or falling through a hole in it, is on that slab's storey).
+    #[inline]
+    pub fn storey_of(&self, b: S) -> i32 {
+        self.index_y(b).div_euclid(2)
     }
 
     /// Eq. 6 for a point.
