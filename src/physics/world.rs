@@ -335,12 +335,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// A world with marbles resting on the floor at `starts` (tile-frame x', z'; the
     /// height is set to the radius: storey 0).
     pub fn new(params: Params<S>, tiles: Tiles<'a>, starts: &[(S, S)]) -> Result<Self, SetupError> {
+        if starts.len() > M {
+            return Err(SetupError::MarbleCount);
+        }
         let mut centres = [Vec3::ZERO; M];
         for (centre, &(x, z)) in centres.iter_mut().zip(starts) {
             *centre = Vec3::new(x, params.radius, z);
-        }
-        if starts.len() > M {
-            return Err(SetupError::MarbleCount);
         }
         Self::with_centres(params, tiles, &centres[..starts.len()])
     }
@@ -362,7 +362,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             layout.span_xz(tiles.nx() as i32 - 1).1,
             layout.span_xz(tiles.nz() as i32 - 1).1,
         );
-        let lid = S::from_int(tiles.storeys() as i32) - layout.s;
+        let lid = lid_height(&layout, tiles);
         let mut marbles = HVec::new();
         for (n, &pos) in centres.iter().enumerate() {
             let (x, z) = (pos.x, pos.z);
@@ -447,7 +447,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// The lid's height (pitch): the top of the top storey's walls.
     #[inline]
     pub fn lid(&self) -> S {
-        S::from_int(self.tiles.storeys() as i32) - self.params.layout.s
+        lid_height(&self.params.layout, self.tiles)
     }
 
     /// The board's extent along x' and z' (pitch).
@@ -1110,6 +1110,13 @@ fn face_once<S: Scalar>(faces: &mut u8, c: &Contact<S>) -> bool {
         }
         _ => false,
     }
+}
+
+/// The lid's height over `tiles` (pitch): the top of the top storey's walls,
+/// `storeys − s` (eq. 5).
+#[inline]
+fn lid_height<S: Scalar>(layout: &TileLayout<S>, tiles: Tiles<'_>) -> S {
+    S::from_int(tiles.storeys() as i32) - layout.s
 }
 
 /// Whether a marble at `c` overlaps any solid tile (start validation, tests).

@@ -556,9 +556,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
             k += 1;
         }
-        if SPACE && skip != LID && path.max.y + r + tol >= self.lid() {
+        let lid_y = if SPACE { self.lid() } else { S::ZERO };
+        if SPACE && skip != LID && path.max.y + r + tol >= lid_y {
             let lid = Aabb {
-                min: Vec3::new(S::from_int(-127), self.lid(), S::from_int(-127)),
+                min: Vec3::new(S::from_int(-127), lid_y, S::from_int(-127)),
                 max: Vec3::new(S::from_int(127), S::from_int(127), S::from_int(127)),
             };
             if !behind_held(m, &lid) {
