@@ -432,6 +432,8 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
         if EVENTS { "events" } else { "fixed" }
     );
     for (index, level) in LEVELS.iter().enumerate() {
+        // Named in the defmt log only.
+        let _ = level;
         summary.levels = summary.levels.saturating_add(1);
         let mut player =
             match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, index, SYNTHETIC_TILT, true) {

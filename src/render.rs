@@ -11,6 +11,19 @@
 //! | outside the maze (a small maze is centred) | [`OUTSIDE`] |
 //! | marble, added on top and saturating at 15 | [`MARBLE`] in total |
 //!
+//! # Storeys
+//!
+//! The matrix shows one storey: the one holding the marble the view follows
+//! (its wall layer `j = 2n + 1` over its slab `j = 2n`, eq. 5). A hole shows
+//! dark whatever lies below it, so a 5×5 view stays as readable as on a
+//! one-storey level. When the followed marble drops to a lower storey, the
+//! [`Renderer`] flashes the new storey's floor: it is drawn [`DROP_FLASH`]
+//! levels brighter, fading linearly back to [`FLOOR`] over a quarter second
+//! ([`drop_glow`]). Brighter than the walls at first, the floor tells the
+//! player at a glance that the maze changed under the marble; the fade keeps
+//! the walls readable again before the marble reaches one. Climbing back (a
+//! restart) does not flash.
+//!
 //! # The marble, anti-aliased
 //!
 //! Tiles are not equally wide (a short wall `s ≈ 1/6` pitch, a long cell
@@ -68,6 +81,11 @@ pub const BLINK_HZ_LOG2: u32 = 1;
 /// Goal blink frequency (Hz): a full on/off cycle every half second, lit for
 /// the first quarter second of it (see [`blink_on`]).
 pub const BLINK_HZ: u32 = 1 << BLINK_HZ_LOG2;
+/// How much brighter the floor is drawn in the frame the followed marble
+/// lands on a lower storey (fading to nothing over a quarter second).
+pub const DROP_FLASH: Brightness = 6;
+/// The drop flash lasts `2^(frame_log2 − DROP_FLASH_LOG2)` frames: 1/4 s.
+pub const DROP_FLASH_LOG2: u32 = 2;
 /// Fraction bits of a [`TilePoint`] (1/64 tile).
 pub const SUBPIXEL_BITS: u32 = 6;
 /// One tile in [`TilePoint`] units.
@@ -80,6 +98,18 @@ pub const SUBPIXEL_ONE: i32 = 1 << SUBPIXEL_BITS;
 pub fn blink_on(frames: u32, frame_log2: u32) -> bool {
     let shift = frame_log2.saturating_sub(BLINK_HZ_LOG2 + 1);
     frames.checked_shr(shift).unwrap_or(0) & 1 == 0
+}
+
+/// How much brighter the floor is `elapsed` frames after a drop, at
+/// `2^frame_log2` frames/s: [`DROP_FLASH`] at 0, falling linearly to 0 at a
+/// quarter second (at frame rates of 4 frames/s or less, one frame).
+pub fn drop_glow(elapsed: u32, frame_log2: u32) -> Brightness {
+    let log2 = frame_log2.saturating_sub(DROP_FLASH_LOG2);
+    let total = 1u32 << log2.min(16);
+    if elapsed >= total {
+        return 0;
+    }
+    ((u32::from(DROP_FLASH) * (total - elapsed)) >> log2.min(16)) as Brightness
 }
 
 /// The tile shown at pixel `(0, 0)`; negative when a small maze is centred.
@@ -216,8 +246,25 @@ fn focus_storey<S: Scalar, const M: usize>(world: &World<'_, S, M>) -> i32 {
         .map_or(0, |m| layout.storey_of(m.pos.y).max(0))
 }
 
-/// The background level of tile `(i, k)` of `storey`: its wall layer, then its
-/// floor slab (eq. 5: layers `2·storey + 1` and `2·storey`).
+/// The brightness of tile `(i, k)` of `storey` without marbles: a goal of that
+/// storey, else its wall layer, then its floor slab (eq. 5: layers
+/// `2·storey + 1` and `2·storey`); outside the maze [`OUTSIDE`]. Any tile
+/// index is safe. Maps of a whole storey (QEMU's terminal, the host's GIF)
+/// use it, so they show what the matrix would.
+pub fn storey_tile(
+    level: &LevelView<'_>,
+    i: i32,
+    k: i32,
+    storey: i32,
+    blink_on: bool,
+) -> Brightness {
+    tile_level(level, i, k, storey, blink_on)
+}
+
+/// [`storey_tile`], inlined into [`render_background`]'s loop: with a second
+/// caller (the storey maps) LLVM left it out of line, a call per pixel that
+/// cost QEMU's demo 130 instructions per frame.
+#[inline(always)]
 fn tile_level(level: &LevelView<'_>, i: i32, k: i32, storey: i32, blink_on: bool) -> Brightness {
     if i < 0 || k < 0 || i >= level.info.nx as i32 || k >= level.info.nz as i32 {
         return OUTSIDE;
@@ -383,11 +430,20 @@ pub struct Renderer<const W: usize, const H: usize> {
     /// goal lit): the tiles only change when one of those does, so most frames
     /// copy it and draw the marbles on top instead of looking up every tile.
     background: Option<(BackgroundKey, Frame<W, H>)>,
+    /// The storey last on show (of the level in `background`), and the game
+    /// frame of the drop onto it (`None`: no drop since the level started):
+    /// the drop flash ([`drop_glow`]).
+    #[cfg(feature = "storeys")]
+    shown: Option<(i32, Option<u32>)>,
 }
+
+/// A level's identity for the renderer's caches (its name's address and
+/// length, its size): cheaper than comparing tiles.
+type LevelKey = (usize, usize, u8, u8);
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct BackgroundKey {
-    level: (usize, usize, u8, u8),
+    level: LevelKey,
     storey: i32,
     viewport: Viewport,
     blink: bool,
@@ -400,6 +456,8 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
         Renderer {
             state: None,
             background: None,
+            #[cfg(feature = "storeys")]
+            shown: None,
         }
     }
 
@@ -408,6 +466,25 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
     pub fn reset(&mut self) {
         self.state = None;
         self.background = None;
+        #[cfg(feature = "storeys")]
+        {
+            self.shown = None;
+        }
+    }
+
+    /// How much brighter the floor of `storey` is drawn in game frame `now`:
+    /// a drop (the storey on show of the same level going down) starts the
+    /// flash, and it fades over [`drop_glow`]'s quarter second.
+    #[cfg(feature = "storeys")]
+    fn glow(&mut self, level: LevelKey, storey: i32, now: u32, frame_log2: u32) -> Brightness {
+        let same_level = matches!(self.background, Some((key, _)) if key.level == level);
+        let dropped_at = match self.shown {
+            Some((s, at)) if same_level && s == storey => at,
+            Some((s, _)) if same_level && storey < s => Some(now),
+            _ => None,
+        };
+        self.shown = Some((storey, dropped_at));
+        dropped_at.map_or(0, |at| drop_glow(now.wrapping_sub(at), frame_log2))
     }
 
     /// The viewport last used (the origin before the first frame).
@@ -453,13 +530,23 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
         let blink = blink_on(game.frames(), game.config().frame_log2);
         let level = game.level();
         let storey = focus_storey(game.world());
+        let level_key = (
+            level.info.name.as_ptr() as usize,
+            level.info.name.len(),
+            level.info.nx,
+            level.info.nz,
+        );
+        // A one-storey level cannot drop: it skips the flash's bookkeeping.
+        #[cfg(feature = "storeys")]
+        let glow = if level.info.storeys > 1 {
+            self.glow(level_key, storey, game.frames(), game.config().frame_log2)
+        } else {
+            0
+        };
+        #[cfg(not(feature = "storeys"))]
+        let glow = 0;
         let key = BackgroundKey {
-            level: (
-                level.info.name.as_ptr() as usize,
-                level.info.name.len(),
-                level.info.nx,
-                level.info.nz,
-            ),
+            level: level_key,
             storey,
             viewport,
             blink,
@@ -472,6 +559,18 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
                 bg
             }
         };
+        if glow > 0 {
+            // The flash lights the floor alone: the pixels at exactly
+            // `FLOOR` (walls, holes, goals and the outside have levels of
+            // their own), before the marbles are drawn.
+            for y in 0..H {
+                for x in 0..W {
+                    if frame.get(x, y) == FLOOR {
+                        frame.set(x, y, FLOOR + glow);
+                    }
+                }
+            }
+        }
         draw_marbles(&mut frame, game.world(), storey, viewport);
         frame
     }

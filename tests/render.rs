@@ -6,8 +6,9 @@ use marble_rolling::game::rules::{cell_centre, Game, GameConfig};
 use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
 use marble_rolling::physics::Vec3;
 use marble_rolling::render::{
-    blink_on, draw_marble, margin, render_background, render_world, tile_point, Renderer, Viewport,
-    FLOOR, GOAL_OFF, GOAL_ON, HOLE, MARBLE, OUTSIDE, WALL,
+    blink_on, draw_marble, drop_glow, margin, render_background, render_world, storey_tile,
+    tile_point, Renderer, Viewport, DROP_FLASH, FLOOR, GOAL_OFF, GOAL_ON, HOLE, MARBLE, OUTSIDE,
+    WALL,
 };
 
 type S = I8F24;
@@ -538,4 +539,137 @@ fn rendering_is_deterministic() {
     let g = game(&l);
     let mut r = Renderer::<16, 9>::new();
     assert_eq!(r.render(&g), r.render(&g));
+}
+
+/// Two storeys (top first): the start above a hole at (3, 1), a post at (5, 1)
+/// on the lower storey, which has the goal at (1, 1).
+const TWO_STOREYS: &str = "---
+#######
+#S.O..#
+#######
+===
+#######
+#G..#.#
+#######
+";
+
+/// The height (pitches) of a marble resting on storey `n`'s floor.
+fn resting_height(g: &Game<'_, S>, n: i32) -> S {
+    let p = g.world().params();
+    p.layout.span_y(2 * n).1 + p.radius
+}
+
+#[test]
+fn the_matrix_shows_the_followed_marble_storey() {
+    let l = level(TWO_STOREYS);
+    let mut g = game(&l);
+    let vp = Viewport::new(0, -1);
+    let top: Frame<7, 5> = render_background(g.level(), 1, true, vp);
+    let low: Frame<7, 5> = render_background(g.level(), 0, true, vp);
+    // Row 2 of the view is row k = 1 of the maze.
+    assert_eq!(top.get(3, 2), HOLE, "the top storey's hole");
+    assert_eq!(top.get(5, 2), FLOOR);
+    assert_eq!(top.get(1, 2), FLOOR, "the goal is on the lower storey");
+    assert_eq!(low.get(3, 2), FLOOR, "under the hole is floor");
+    assert_eq!(low.get(4, 2), WALL, "the lower storey's post");
+    assert_eq!(low.get(1, 2), GOAL_ON);
+    assert_eq!(storey_tile(g.level(), 4, 1, 0, true), WALL);
+    assert_eq!(storey_tile(g.level(), 4, 1, 1, true), FLOOR);
+    assert_eq!(storey_tile(g.level(), 4, 1, 7, true), HOLE, "no storey 7");
+    assert_eq!(storey_tile(g.level(), -1, 1, 0, true), OUTSIDE);
+
+    // The marble starts on the top storey: its storey is on show, with it.
+    let f: Frame<7, 5> = render_world(g.level(), g.world(), true, vp);
+    assert_eq!(added(&f, &top), vec![(1, 2, MARBLE - FLOOR)]);
+    // Moved onto the lower storey's floor: that storey is on show.
+    let y = resting_height(&g, 0);
+    let m = &mut g.world_mut().marbles_mut()[0];
+    m.pos = Vec3::new(m.pos.x, y, m.pos.z);
+    let f: Frame<7, 5> = render_world(g.level(), g.world(), true, vp);
+    assert_eq!(added(&f, &low).len(), 1);
+    assert_eq!(f.get(1, 2), MAX_BRIGHTNESS, "the marble on the goal");
+}
+
+#[test]
+fn only_marbles_on_the_storey_on_show_are_drawn() {
+    let l = level("---\n#######\n#S.O.S#\n#######\n===\n#######\n#G....#\n#######\n");
+    let mut g = game(&l);
+    let vp = Viewport::new(0, -1);
+    let top: Frame<7, 5> = render_background(g.level(), 1, true, vp);
+    let f: Frame<7, 5> = render_world(g.level(), g.world(), true, vp);
+    assert_eq!(added(&f, &top).len(), 2, "both marbles on the top storey");
+    // Marble 1 drops to the lower storey: the view follows marble 0 and
+    // shows only it.
+    let y = resting_height(&g, 0);
+    let m = &mut g.world_mut().marbles_mut()[1];
+    m.pos = Vec3::new(m.pos.x, y, m.pos.z);
+    let f: Frame<7, 5> = render_world(g.level(), g.world(), true, vp);
+    assert_eq!(added(&f, &top), vec![(1, 2, MARBLE - FLOOR)]);
+}
+
+#[test]
+fn drop_glow_fades_over_a_quarter_second() {
+    // 128 frames/s: 32 frames, from DROP_FLASH down, never rising.
+    assert_eq!(drop_glow(0, 7), DROP_FLASH);
+    assert_eq!(drop_glow(32, 7), 0);
+    assert_eq!(drop_glow(u32::MAX, 7), 0);
+    let mut last = DROP_FLASH;
+    for e in 0..32 {
+        let g = drop_glow(e, 7);
+        assert!(g <= last && (e < 27 || g <= 1), "frame {e}: {g}");
+        last = g;
+    }
+    assert!(drop_glow(16, 7) == DROP_FLASH / 2);
+    // Slow frame rates: one frame; absurd ones never panic.
+    assert_eq!((drop_glow(0, 2), drop_glow(1, 2)), (DROP_FLASH, 0));
+    assert_eq!(drop_glow(0, 0), DROP_FLASH);
+    assert!(drop_glow(1 << 20, 60) <= DROP_FLASH);
+}
+
+#[test]
+fn a_drop_flashes_the_floor_it_lands_on() {
+    let l = level(TWO_STOREYS);
+    let mut g = game(&l);
+    let mut r = Renderer::<7, 5>::new();
+    let layout = g.world().params().layout;
+    // The marble starts beside the hole: put it over the hole and let it fall
+    // on a level board.
+    let (x, _) = cell_centre(g.world().params(), 3, 1);
+    let z = g.world().marbles()[0].pos.z;
+    place(&mut g, 0, x, z);
+    let mut floors = Vec::new();
+    let mut landed_at = None;
+    for n in 0..120u32 {
+        let f = r.render(&g);
+        let storey = layout.storey_of(g.world().marbles()[0].pos.y);
+        if storey == 0 && landed_at.is_none() {
+            landed_at = Some(n);
+        }
+        // (5, 1) is floor on both storeys and the marble never comes near.
+        floors.push((storey, f.get(5, 2)));
+        g.frame();
+    }
+    let at = landed_at.expect("the marble should drop a storey") as usize;
+    assert!(at > 0);
+    assert!(
+        floors[..at].iter().all(|&(s, v)| s == 1 && v == FLOOR),
+        "no flash before: {floors:?}"
+    );
+    assert_eq!(floors[at].1, FLOOR + DROP_FLASH, "the flash");
+    assert!(floors[at].1 > WALL, "brighter than the walls at first");
+    for (e, &(s, v)) in floors[at..].iter().enumerate() {
+        assert_eq!(s, 0, "the marble stays below");
+        assert_eq!(
+            v,
+            FLOOR + drop_glow(e as u32, 7),
+            "frame {e} after the drop"
+        );
+    }
+    assert_eq!(floors[at + 32].1, FLOOR, "over after a quarter second");
+
+    // A restart puts the marble back up: no flash.
+    g.restart();
+    let f = r.render(&g);
+    assert_eq!(layout.storey_of(g.world().marbles()[0].pos.y), 1);
+    assert_eq!(f.get(5, 2), FLOOR);
 }

@@ -898,6 +898,40 @@ macro_rules! builtin_level {
                 e.kind.message()
             ),
         };
-        LEVEL.view()
+        // The name and the grid get constants of their own: the view must not
+        // point into `SRC` or into `LEVEL` (whose name does), or the level's
+        // whole text stays in flash (about 2 KB for the built-in levels).
+        const NAME_BYTES: [u8; LEVEL.info.name.len()] =
+            $crate::game::level::name_bytes(LEVEL.info.name);
+        const NAME: &str = match ::core::str::from_utf8(&NAME_BYTES) {
+            Ok(name) => name,
+            Err(_) => panic!("built-in level: the name is not UTF-8"),
+        };
+        const GRID: $crate::game::level::BuiltinGrid<{ $crate::game::level::words_needed(SRC) }> =
+            LEVEL.grid;
+        let mut info = LEVEL.info;
+        info.name = NAME;
+        $crate::game::level::LevelView {
+            info,
+            tiles: GRID.view(),
+        }
     }};
+}
+
+/// The grid of a built-in level ([`builtin_level!`]).
+#[doc(hidden)]
+pub type BuiltinGrid<const WORDS: usize> = TileGrid<WORDS>;
+
+/// `name`'s bytes in an array of their own ([`builtin_level!`]): `N` must be
+/// `name.len()`.
+#[doc(hidden)]
+pub const fn name_bytes<const N: usize>(name: &str) -> [u8; N] {
+    let bytes = name.as_bytes();
+    let mut out = [0u8; N];
+    let mut n = 0;
+    while n < N && n < bytes.len() {
+        out[n] = bytes[n];
+        n += 1;
+    }
+    out
 }

@@ -5,6 +5,10 @@
 //! changed since the previous image is encoded, and an unchanged image only makes
 //! the previous one last longer, so a marble rolling through a maze costs a few
 //! hundred bytes per GIF frame.
+//!
+//! An image may also hold [`NO_LED`]: a square drawn all in the gap colour, not
+//! an LED (the space between the matrix and the storey maps of a level with
+//! storeys, [`super::storey_maps`]).
 
 use std::fs::File;
 use std::io::{self, BufWriter};
@@ -16,6 +20,10 @@ use crate::matrix::MAX_BRIGHTNESS;
 
 /// Palette index of the gap between LEDs.
 const GAP: u8 = 16;
+
+/// An image value that is no LED: its square is drawn in the gap colour
+/// (levels above it are clamped to [`MAX_BRIGHTNESS`] like any other).
+pub const NO_LED: u8 = GAP;
 
 /// The GIF palette: 16 amber brightness levels, the gap colour, padding to 32.
 fn palette() -> Vec<u8> {
@@ -78,9 +86,9 @@ impl GifRecorder {
         self.frames
     }
 
-    /// Adds the image `leds` (`w·h` brightness levels, row-major) shown from `t_s`
-    /// seconds on. Images closer than 1/100 s to the previous one are dropped
-    /// (GIF delays are whole centiseconds).
+    /// Adds the image `leds` (`w·h` brightness levels or [`NO_LED`], row-major)
+    /// shown from `t_s` seconds on. Images closer than 1/100 s to the previous
+    /// one are dropped (GIF delays are whole centiseconds).
     pub fn push(&mut self, leds: &[u8], t_s: f64) -> io::Result<()> {
         assert_eq!(leds.len(), self.w * self.h, "image size");
         let cs = (t_s * 100.0).round().max(0.0) as u64;
@@ -105,10 +113,11 @@ impl GifRecorder {
             let (ly, iy) = (y0 + py / s, py % s);
             for px in 0..pw {
                 let (lx, ix) = (x0 + px / s, px % s);
-                if gap && (ix == s - 1 || iy == s - 1) {
+                let led = leds[ly * self.w + lx];
+                if led == NO_LED || (gap && (ix == s - 1 || iy == s - 1)) {
                     continue;
                 }
-                buf[py * pw + px] = leds[ly * self.w + lx].min(MAX_BRIGHTNESS);
+                buf[py * pw + px] = led.min(MAX_BRIGHTNESS);
             }
         }
         let mut frame = gif::Frame::from_indexed_pixels(pw as u16, ph as u16, buf, None);

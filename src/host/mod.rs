@@ -2,6 +2,9 @@
 //! the terminal player ([`play`], `cargo play`). The `sim` and `play` binaries are
 //! thin wrappers around [`sim::main`] and [`play::main`], so the logic lives in the
 //! library where it is documented and type-checked with the rest of the crate.
+//! What `cargo sim --gif` records of a game, the matrix picture and (for a level
+//! with storeys) every storey's map beside it, is composed in [`storey_maps`] and
+//! written by [`gif_out`].
 //!
 //! Nothing in here is used by the firmware: the module (and its dependencies clap,
 //! gif and crossterm) exists only when the `tools` feature is on.
@@ -9,6 +12,7 @@
 pub mod gif_out;
 pub mod play;
 pub mod sim;
+pub mod storey_maps;
 pub mod trace;
 
 use std::boxed::Box;

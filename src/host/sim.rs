@@ -8,6 +8,10 @@
 //! cargo sim -- --check my.level
 //! ```
 //!
+//! `--gif FILE` records the whole level as the matrix draws it (the followed
+//! marble's storey), one LED per tile; a level with storeys gets every storey's
+//! map beside it, top storey first ([`super::storey_maps`]).
+//!
 //! The run goes through [`Session`] exactly like the firmware and the terminal
 //! player: one reading per frame (flat, from a tilt trace, or from the autopilot)
 //! → tilt path → [`crate::game::rules::Game::frame`] (`substeps` physics steps,
@@ -114,7 +118,8 @@ pub struct Args {
     /// Print one JSON line instead of the human summary.
     #[arg(long)]
     pub json: bool,
-    /// Render the run to an animated GIF.
+    /// Render the run to an animated GIF (a level with storeys: every storey's map
+    /// beside the matrix, top storey first).
     #[arg(long, value_name = "FILE")]
     pub gif: Option<PathBuf>,
     /// GIF pixels per LED (tile).
@@ -485,7 +490,7 @@ impl WithScalar for Job<'_> {
             writeln!(w, "{}", trace_header(start.len())).map_err(|e| write_err(p, e))?;
         }
         if let Some((p, gif, _)) = &mut self.gif {
-            let (_, _, px) = super::level_picture(session.game());
+            let (_, _, px) = super::storey_maps::game_image(session.game());
             gif.push(&px, 0.0).map_err(|e| write_err(p, e))?;
         }
         let dt = session.game().world().params().dt();
@@ -519,7 +524,7 @@ impl WithScalar for Job<'_> {
             if let Some((p, gif, every)) = &mut self.gif {
                 if frames.is_multiple_of(*every as u64) || session.game().phase() != Phase::Playing
                 {
-                    let (_, _, px) = super::level_picture(session.game());
+                    let (_, _, px) = super::storey_maps::game_image(session.game());
                     gif.push(&px, frames as f64 / hz)
                         .map_err(|e| write_err(p, e))?;
                 }
@@ -670,19 +675,42 @@ fn nth_start(src: &str, n: usize) -> Option<(usize, usize)> {
         .map(|(line, column, _)| (line, column))
 }
 
+/// The built-in levels, what each takes in the firmware's flash (its grid's
+/// occupancy words, read in place: no RAM), and the backends.
 fn list() {
+    use crate::game::level::LevelView;
+    use crate::physics::geometry::grid::words_for;
     println!("built-in levels:");
-    for (i, l) in crate::game::levels::LEVELS.iter().enumerate() {
+    let levels = &crate::game::levels::LEVELS;
+    let mut grids = 0;
+    for (i, l) in levels.iter().enumerate() {
+        let t = &l.tiles;
+        let grid = 4 * words_for(t.nx(), t.ny(), t.nz());
+        grids += grid;
         println!(
-            "  {}. {:<16} {}×{} tiles, {} s, {} marble(s)",
+            "  {}. {:<16} {}×{} tiles × {} storey(s), {} s, {} marble(s), grid {} B",
             i + 1,
             l.info.name,
             l.info.nx,
             l.info.nz,
+            l.info.storeys,
             l.info.time_limit_s,
-            l.info.starts().len()
+            l.info.starts().len(),
+            grid
         );
     }
+    let names: usize = levels.iter().map(|l| l.info.name.len()).sum();
+    println!(
+        "flash for the levels: grids {grids} B, names {names} B, and a descriptor each \
+         (the firmware's `LEVELS`; {} B each on this host)",
+        core::mem::size_of::<LevelView<'static>>()
+    );
+    println!(
+        "the largest grid ({MAX}×{MAX} tiles × {} storeys): {} B",
+        crate::physics::geometry::grid::MAX_STOREYS,
+        4 * super::MAX_WORDS,
+        MAX = crate::physics::geometry::grid::MAX_TILES_XZ
+    );
     let names: Vec<_> = Backend::ALL.iter().map(|b| b.name()).collect();
     println!(
         "backends: {} (default {})",
@@ -760,7 +788,7 @@ pub fn simulate(args: &Args) -> Result<Report, String> {
     };
     let gif = match &args.gif {
         Some(p) => {
-            let (w, h) = (level.info.nx as usize, level.info.nz as usize);
+            let (w, h) = super::storey_maps::image_size(&level);
             let g = GifRecorder::create(p, w, h, args.gif_scale as usize)
                 .map_err(|e| format!("cannot create {}: {e}", p.display()))?;
             Some((p.as_path(), g, args.gif_every))

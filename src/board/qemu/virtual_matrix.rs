@@ -7,6 +7,28 @@
 //! There is no real scan clock to wait for: each refresh's steps are
 //! integrated at once and the display task then sleeps on a `Ticker` until
 //! the next refresh (at [`REFRESH_HZ`]).
+//!
+//! # Storeys
+//!
+//! The matrix shows one storey, the one holding the marble the view follows.
+//! On a level with storeys (feature `storeys`) the terminal also draws every
+//! storey as a map below the status lines, side by side, top storey first
+//! (`storey 1 (top)`, `storey 0`; storey 0 is the lowest): two characters a
+//! tile, with the matrix's shading characters and greys for the brightness
+//! the matrix would give the tile ([`storey_tile`]: walls, floor, holes dark,
+//! the goal blinking as on the matrix), and each marble in play
+//! ([`Status::marbles`]) a full-brightness `█` on its own storey's map. The
+//! maps together stay within `MAPS_COLUMNS` (100) columns and each shows at
+//! most `MAP_ROWS` (9) tile rows, so that the screen fits a 100×30
+//! terminal: a maze too large for that (never a built-in one; up to 23 tiles
+//! across fit on two storeys, 15 on three, 11 on four) shows the same window
+//! of tiles on every storey, centred on the followed marble and clamped to
+//! the maze (`map_window`). Every draw ends by clearing the rest of the
+//! screen, so the maps of a level before do not linger under a one-storey
+//! level's screen (which is otherwise exactly what it was before storeys).
+//!
+//! [`storey_tile`]: crate::render::storey_tile
+//! [`Status::marbles`]: crate::game::player::Status
 
 use core::fmt::Write as _;
 
@@ -17,6 +39,8 @@ use crate::app::{Console, Latest, MatrixOutput, FRAME_HZ, REFRESH_HZ};
 use crate::game::levels::LEVELS;
 use crate::game::player::Status;
 use crate::matrix::{Brightness, Frame, OnTimeIntegrator, ScanStep, Scanner};
+#[cfg(feature = "storey-maps")]
+pub use storey_maps::{map_window, MapWindow, MAPS_COLUMNS, MAP_ROWS};
 
 /// One picture of the virtual matrix.
 type DisplayFrame = Frame<WIDTH, HEIGHT>;
@@ -78,6 +102,12 @@ impl<C: Console> VirtualMatrix<C> {
             let mut status = self.status.get();
             // Redraw for whole tenths of a second only.
             status.frames -= status.frames % (FRAME_HZ / 10).max(1);
+            // The storey maps draw whole tiles: a marble moving within its
+            // tile changes nothing on them.
+            #[cfg(feature = "storey-maps")]
+            for spot in status.marbles.iter_mut().flatten() {
+                *spot = spot.whole_tile();
+            }
             let first = self.drawn.is_none();
             if self.drawn != Some((frame, status)) {
                 draw(console, &frame, &status, first);
@@ -211,6 +241,129 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
         out,
         "  arrows/WASD tilt, space level, c calibrate, r restart, n next level,\x1b[K\r\n  p autopilot, m sound, q quit\x1b[K\r\n"
     );
+    #[cfg(feature = "storey-maps")]
+    if let Some(level) = LEVELS.get(usize::from(status.level)) {
+        if level.info.storeys > 1 {
+            storey_maps::draw(&mut out, level, status);
+        }
+    }
+    // Whatever a taller screen left below (the storey maps of the level
+    // before) goes.
+    out.0.write(b"\x1b[J");
+}
+
+/// The storey maps of a level with storeys (see the module doc).
+#[cfg(feature = "storey-maps")]
+mod storey_maps {
+    use core::fmt::Write as _;
+
+    use super::{grey, shade, Out, HEIGHT};
+    use crate::app::{Console, FRAME_HZ};
+    use crate::game::level::LevelView;
+    use crate::game::player::Status;
+    use crate::matrix::MAX_BRIGHTNESS;
+    use crate::render::{blink_on, storey_tile};
+
+    /// How wide the storey maps may be together, in terminal columns with their
+    /// indent: a 100-column terminal shows them whole.
+    pub const MAPS_COLUMNS: usize = 100;
+    /// Most tile rows a storey map shows: the matrix's, so that the whole screen
+    /// fits 30 lines.
+    pub const MAP_ROWS: usize = HEIGHT;
+    /// The maps' indent (the matrix's), in columns.
+    const MAP_INDENT: usize = 4;
+    /// Columns between two maps.
+    const MAP_GAP: usize = 2;
+    /// The widest map title, `storey 3 (top)`.
+    const TITLE_COLUMNS: usize = 14;
+
+    /// The tiles the storey maps show, the same on every storey: `(i0, k0)` the
+    /// first tile, `(w, h)` tiles across and down.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct MapWindow {
+        /// First tile column shown.
+        pub i0: i32,
+        /// First tile row shown.
+        pub k0: i32,
+        /// Tile columns shown.
+        pub w: i32,
+        /// Tile rows shown.
+        pub h: i32,
+    }
+
+    /// The window of `level`'s maps (`storeys` of them side by side, two
+    /// columns a tile): the whole storey when the maps fit [`MAPS_COLUMNS`]
+    /// columns and [`MAP_ROWS`] rows, else as many tiles as fit, centred on the
+    /// marble the view follows (`focus`, its tile) and clamped to the maze.
+    pub fn map_window(nx: u8, nz: u8, storeys: u8, focus: Option<(i32, i32)>) -> MapWindow {
+        let n = usize::from(storeys.max(1));
+        let per_map = ((MAPS_COLUMNS - MAP_INDENT) / n).saturating_sub(MAP_GAP);
+        let w = i32::from(nx).min((per_map / 2).max(1) as i32);
+        let h = i32::from(nz).min(MAP_ROWS as i32);
+        let (fi, fk) = focus.unwrap_or((0, 0));
+        let start = |f: i32, size: i32, all: i32| (f - size / 2).clamp(0, (all - size).max(0));
+        MapWindow {
+            i0: start(fi, w, i32::from(nx)),
+            k0: start(fk, h, i32::from(nz)),
+            w,
+            h,
+        }
+    }
+
+    /// Writes `n` spaces.
+    fn pad<C: Console>(out: &mut Out<'_, C>, n: usize) {
+        for _ in 0..n {
+            out.0.write(b" ");
+        }
+    }
+
+    /// Every storey of `level` as a map below the status lines, side by side,
+    /// top storey first, each titled and drawn with the matrix's characters
+    /// ([`storey_tile`]), the marbles in play at full brightness on their own
+    /// storey's map.
+    pub(super) fn draw<C: Console>(out: &mut Out<'_, C>, level: &LevelView<'_>, status: &Status) {
+        let storeys = i32::from(level.info.storeys);
+        let focus = status.marbles.iter().flatten().next().map(|m| m.tile());
+        let window = map_window(level.info.nx, level.info.nz, level.info.storeys, focus);
+        let map_columns = (2 * window.w as usize).max(TITLE_COLUMNS);
+        let blink = blink_on(status.frames, FRAME_HZ.trailing_zeros());
+        // Titles, top storey first.
+        out.0.write(b"\x1b[K\r\n");
+        pad(out, MAP_INDENT);
+        for storey in (0..storeys).rev() {
+            let suffix = if storey == storeys - 1 { " (top)" } else { "" };
+            let _ = write!(out, "storey {storey}{suffix}");
+            if storey > 0 {
+                // `storey N`: one digit (at most 4 storeys).
+                pad(out, map_columns + MAP_GAP - "storey 0".len() - suffix.len());
+            }
+        }
+        out.0.write(b"\x1b[K\r\n");
+        for k in window.k0..window.k0 + window.h {
+            pad(out, MAP_INDENT);
+            for storey in (0..storeys).rev() {
+                for i in window.i0..window.i0 + window.w {
+                    let marble = status
+                        .marbles
+                        .iter()
+                        .flatten()
+                        .any(|m| i32::from(m.storey) == storey && m.tile() == (i, k));
+                    let level = if marble {
+                        MAX_BRIGHTNESS
+                    } else {
+                        storey_tile(level, i, k, storey, blink)
+                    };
+                    let s = shade(level);
+                    let _ = write!(out, "\x1b[38;5;{}m{}{}", grey(level), s, s);
+                }
+                out.0.write(b"\x1b[0m");
+                if storey > 0 {
+                    pad(out, map_columns - 2 * window.w as usize + MAP_GAP);
+                }
+            }
+            out.0.write(b"\x1b[K\r\n");
+        }
+    }
 }
 
 /// Leaves the terminal usable: default colours, cursor shown, new line.
