@@ -430,11 +430,11 @@ pub struct Renderer<const W: usize, const H: usize> {
     /// goal lit): the tiles only change when one of those does, so most frames
     /// copy it and draw the marbles on top instead of looking up every tile.
     background: Option<(BackgroundKey, Frame<W, H>)>,
-    /// The storey last on show (of the level in `background`), and the game
-    /// frame of the drop onto it (`None`: no drop since the level started):
-    /// the drop flash ([`drop_glow`]).
+    /// The game frame of the drop onto the storey on show (`None`: no drop
+    /// onto it): the drop flash ([`drop_glow`]). The storey last on show is
+    /// `background`'s.
     #[cfg(feature = "storeys")]
-    shown: Option<(i32, Option<u32>)>,
+    dropped_at: Option<u32>,
 }
 
 /// A level's identity for the renderer's caches (its name's address and
@@ -457,7 +457,7 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
             state: None,
             background: None,
             #[cfg(feature = "storeys")]
-            shown: None,
+            dropped_at: None,
         }
     }
 
@@ -468,7 +468,7 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
         self.background = None;
         #[cfg(feature = "storeys")]
         {
-            self.shown = None;
+            self.dropped_at = None;
         }
     }
 
@@ -477,14 +477,15 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
     /// flash, and it fades over [`drop_glow`]'s quarter second.
     #[cfg(feature = "storeys")]
     fn glow(&mut self, level: LevelKey, storey: i32, now: u32, frame_log2: u32) -> Brightness {
-        let same_level = matches!(self.background, Some((key, _)) if key.level == level);
-        let dropped_at = match self.shown {
-            Some((s, at)) if same_level && s == storey => at,
-            Some((s, _)) if same_level && storey < s => Some(now),
-            _ => None,
-        };
-        self.shown = Some((storey, dropped_at));
-        dropped_at.map_or(0, |at| drop_glow(now.wrapping_sub(at), frame_log2))
+        match self.background {
+            Some((key, _)) if key.level == level && key.storey == storey => {}
+            Some((key, _)) if key.level == level && storey < key.storey => {
+                self.dropped_at = Some(now);
+            }
+            _ => self.dropped_at = None,
+        }
+        self.dropped_at
+            .map_or(0, |at| drop_glow(now.wrapping_sub(at), frame_log2))
     }
 
     /// The viewport last used (the origin before the first frame).
