@@ -17,7 +17,7 @@ use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::player::{MarbleSpot, Player, Status};
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
-use marble_rolling::render::{storey_tile, SUBPIXEL_ONE};
+use marble_rolling::render::storey_tile;
 
 /// QEMU's player: the board's matrix, the autopilot, the event stepper.
 type QemuPlayer = Player<WIDTH, HEIGHT, true, true>;
@@ -207,8 +207,8 @@ fn a_marble_on_the_lower_storey_is_drawn_on_its_map_only() {
     let (index, view) = two_floors();
     let tile = (5, 3);
     let spot = MarbleSpot {
-        u: (tile.0 * SUBPIXEL_ONE + SUBPIXEL_ONE / 2) as i16,
-        v: (tile.1 * SUBPIXEL_ONE + SUBPIXEL_ONE / 2) as i16,
+        i: tile.0 as i16,
+        k: tile.1 as i16,
         storey: 0,
     };
     assert_eq!(spot.tile(), tile);
@@ -300,8 +300,8 @@ fn a_one_storey_level_draws_no_maps_and_clears_below() {
     // Marbles in the status would not change a one-storey screen.
     let elsewhere = Status {
         marbles: [Some(MarbleSpot {
-            u: 64,
-            v: 64,
+            i: 1,
+            k: 1,
             storey: 0,
         }); 4],
         ..status

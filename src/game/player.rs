@@ -30,9 +30,9 @@ use crate::input::tilt::TiltConfig;
 use crate::matrix::{Frame, MAX_BRIGHTNESS};
 use crate::physics::world::SetupError;
 use crate::physics::Fx;
-use crate::render::Renderer;
 #[cfg(feature = "storey-maps")]
-use crate::render::{tile_point, SUBPIXEL_BITS};
+use crate::render::tile_point;
+use crate::render::Renderer;
 use crate::sound::{self, Sounds};
 
 /// Game frames per second, whatever the stepper ([`Player::CONFIG`]: both
@@ -80,40 +80,27 @@ pub struct Status {
     pub marbles: [Option<MarbleSpot>; MAX_MARBLES],
 }
 
-/// Where a marble is, for status displays: its tile-index point
-/// ([`crate::render::TilePoint`], 1/64 tile) and its storey (0 the lowest).
+/// Where a marble is, for status displays: the tile holding its centre and
+/// its storey (0 the lowest). Whole tiles, because that is all a storey map
+/// draws: a marble moving within its tile leaves the status as it was, and
+/// the display has nothing to redraw.
 #[cfg(feature = "storey-maps")]
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct MarbleSpot {
-    /// Along x' (tile columns), 1/64 tile.
-    pub u: i16,
-    /// Along z' (tile rows), 1/64 tile.
-    pub v: i16,
+    /// Tile column `i`.
+    pub i: i16,
+    /// Tile row `k`.
+    pub k: i16,
     /// The storey whose wall layer or floor slab holds the marble's centre.
     pub storey: u8,
 }
 
 #[cfg(feature = "storey-maps")]
 impl MarbleSpot {
-    /// The tile holding the marble's centre, `(i, k)`.
+    /// The tile, `(i, k)`.
     pub const fn tile(&self) -> (i32, i32) {
-        (
-            (self.u as i32) >> SUBPIXEL_BITS,
-            (self.v as i32) >> SUBPIXEL_BITS,
-        )
-    }
-
-    /// The same tile, its point moved to the tile's corner (status displays
-    /// that only draw tiles compare these, so that a marble moving within its
-    /// tile does not count as a change).
-    pub const fn whole_tile(self) -> MarbleSpot {
-        let mask = !((1i16 << SUBPIXEL_BITS) - 1);
-        MarbleSpot {
-            u: self.u & mask,
-            v: self.v & mask,
-            storey: self.storey,
-        }
+        (self.i as i32, self.k as i32)
     }
 }
 
@@ -130,11 +117,11 @@ fn marble_spots(game: &Game<'_, Fx>) -> [Option<MarbleSpot>; MAX_MARBLES] {
         if m.out {
             continue;
         }
-        let point = tile_point(layout, m.pos.x, m.pos.z);
+        let (i, k) = tile_point(layout, m.pos.x, m.pos.z).tile();
         let narrow = |a: i32| a.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16;
         *spot = Some(MarbleSpot {
-            u: narrow(point.u),
-            v: narrow(point.v),
+            i: narrow(i),
+            k: narrow(k),
             storey: layout.storey_of(m.pos.y).clamp(0, i32::from(u8::MAX)) as u8,
         });
     }

@@ -102,12 +102,6 @@ impl<C: Console> VirtualMatrix<C> {
             let mut status = self.status.get();
             // Redraw for whole tenths of a second only.
             status.frames -= status.frames % (FRAME_HZ / 10).max(1);
-            // The storey maps draw whole tiles: a marble moving within its
-            // tile changes nothing on them.
-            #[cfg(feature = "storey-maps")]
-            for spot in status.marbles.iter_mut().flatten() {
-                *spot = spot.whole_tile();
-            }
             let first = self.drawn.is_none();
             if self.drawn != Some((frame, status)) {
                 draw(console, &frame, &status, first);
