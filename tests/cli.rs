@@ -76,13 +76,14 @@ fn json_contract_fields_and_types() {
     }
     assert_eq!(v["backend"], "i8f24");
     assert_eq!(v["level"], "corner");
-    assert_eq!(v["dt_s"].as_f64(), Some(1.0 / 1024.0));
+    // Events by default: one step per 1/128 s frame.
+    assert_eq!(v["dt_s"].as_f64(), Some(1.0 / 128.0));
     assert_eq!(v["short_mm"].as_f64(), Some(2.0));
     assert_eq!(v["long_mm"].as_f64(), Some(10.0));
     assert_eq!(v["marble_radius_mm"].as_f64(), Some(3.5));
     let steps = v["steps"].as_u64().unwrap();
-    assert_eq!(steps, v["frames"].as_u64().unwrap() * 8);
-    assert!((v["sim_seconds"].as_f64().unwrap() - steps as f64 / 1024.0).abs() < 1e-12);
+    assert_eq!(steps, v["frames"].as_u64().unwrap());
+    assert!((v["sim_seconds"].as_f64().unwrap() - steps as f64 / 128.0).abs() < 1e-12);
     let hash = v["state_hash"].as_str().expect("hash is a string");
     assert_eq!(hash.len(), 16, "{hash}");
     assert!(
@@ -117,7 +118,9 @@ fn seconds_stop_a_run_as_timeout() {
     let v = sim_json(&["--level", "corner", "--seconds", "1"]);
     assert_eq!(v["outcome"], "timeout");
     assert_eq!(v["frames"], 128);
-    assert_eq!(v["steps"], 1024);
+    assert_eq!(v["steps"], 128, "events: a step per frame");
+    let f = sim_json(&["--level", "corner", "--seconds", "1", "--stepping", "fixed"]);
+    assert_eq!(f["steps"], 1024, "fixed: 8 steps per frame");
     // Flat board: the marble stays put.
     assert_eq!(v["final"], v["start"]);
     // Without --seconds the level's time limit (30 s) ends it.
@@ -132,6 +135,8 @@ fn substeps_keep_the_frame_rate() {
         let v = sim_json(&[
             "--level",
             "corner",
+            "--stepping",
+            "fixed",
             "--seconds",
             "0.5",
             "--substeps",
@@ -260,6 +265,8 @@ fn trace_has_one_row_per_physics_step() {
         .join("steps.csv");
     for substeps in ["8", "2"] {
         let plain = sim_json(&[
+            "--stepping",
+            "fixed",
             "--level",
             "first-roll",
             "--tilt-trace",
@@ -268,6 +275,8 @@ fn trace_has_one_row_per_physics_step() {
             substeps,
         ]);
         let v = sim_json(&[
+            "--stepping",
+            "fixed",
             "--level",
             "first-roll",
             "--tilt-trace",
@@ -318,8 +327,9 @@ fn trace_follows_a_changing_tilt() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
         .join("cli")
         .join("autopilot-steps.csv");
-    let plain = sim_json(&["--level", "corner", "--autopilot"]);
-    let v = sim_json(&["--level", "corner", "--autopilot", "--trace", s(&out)]);
+    let fixed = ["--level", "corner", "--autopilot", "--stepping", "fixed"];
+    let plain = sim_json(&fixed);
+    let v = sim_json(&[&fixed[..], &["--trace", s(&out)]].concat());
     assert_eq!(v["outcome"], "won");
     assert_eq!(v["state_hash"], plain["state_hash"]);
     let rows = std::fs::read_to_string(&out).unwrap().lines().count() as u64;
@@ -348,17 +358,21 @@ fn trace_follows_a_changing_tilt() {
 const KNOCK: &str =
     "t_s,ax_mg,ay_mg,az_mg\n0,0,954,-300\n0.5,0,954,300\n1,-300,908,300\n1.5,300,908,-300\n";
 
-/// `--stepping events`: one step per 1/128 s frame by default; bad modes fail.
+/// Events by default, one step per 1/128 s frame; `fixed` on request; bad modes
+/// fail.
 #[test]
 fn event_stepping_is_a_step_per_frame() {
-    let v = sim_json(&["--level", "corner", "--autopilot", "--stepping", "events"]);
+    let v = sim_json(&["--level", "corner", "--autopilot"]);
     assert_eq!(v["outcome"], "won");
     assert_eq!(v["stepping"], "events");
     assert_eq!(v["substeps"], 1);
     assert_eq!(v["steps"], v["frames"]);
     assert_eq!(v["dt_s"].as_f64(), Some(1.0 / 128.0));
-    let f = sim_json(&["--level", "corner", "--autopilot"]);
+    let e = sim_json(&["--level", "corner", "--autopilot", "--stepping", "events"]);
+    assert_eq!(e["state_hash"], v["state_hash"], "the default is events");
+    let f = sim_json(&["--level", "corner", "--autopilot", "--stepping", "fixed"]);
     assert_eq!(f["stepping"], "fixed");
+    assert_eq!(f["substeps"], 8);
     // Events at 1024 steps/s are allowed too (2^7 ..= 2^10 steps/s).
     let v8 = sim_json(&[
         "--level",
@@ -583,4 +597,17 @@ fn a_byte_order_mark_is_fine_in_levels_and_tilt_traces() {
             assert_eq!(v[key], reference[key], "{key} with {lvl:?}, {trace:?}");
         }
     }
+}
+
+/// `--help` says what a run steps by when nobody asks.
+#[test]
+fn help_names_events_as_the_default_stepping() {
+    let o = sim(&["--help"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let stepping: String = out
+        .lines()
+        .skip_while(|l| !l.contains("--stepping"))
+        .take_while(|l| !l.trim_start().starts_with("--trace"))
+        .collect();
+    assert!(stepping.contains("[default: events]"), "{out}");
 }

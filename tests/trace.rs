@@ -49,8 +49,11 @@ fn check<S: Scalar>() {
         for (n, m) in after.iter().enumerate() {
             assert_eq!(last[n], (m.pos, m.vel), "frame {frame} marble {n}");
             // Sampling the flights at the step's end agrees with it: exactly,
-            // unless a slice (two marbles pressed together) ended there, whose
-            // contact passes push the marble out by a hair at that instant.
+            // unless a slice ended there: a plain slice's contact passes push the
+            // marble out by a hair at that instant (two marbles pressed
+            // together), a pivot slice puts it back on the sphere about its edge,
+            // by at most r·δθ²/2 for the turn δθ ≤ √2/8 rad a pivot slice allows
+            // (r/64).
             let (p, _) = sample(log.of(n), &before[n], S::ONE);
             let d = (mm(p.x) - mm(m.pos.x))
                 .hypot(mm(p.y) - mm(m.pos.y))
@@ -59,7 +62,8 @@ fn check<S: Scalar>() {
                 assert_eq!(p, m.pos, "frame {frame} marble {n}");
                 exact += 1;
             } else {
-                assert!(d < 0.002, "frame {frame} marble {n}: {d} mm from the world");
+                let bound = 0.002 + two_r / 2.0 / 64.0;
+                assert!(d < bound, "frame {frame} marble {n}: {d} mm from the world");
             }
             flights += log.of(n).len();
         }

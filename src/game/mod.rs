@@ -7,3 +7,4 @@ pub mod level;
 pub mod levels;
 pub mod rules;
 pub mod session;
+pub mod stress;

@@ -25,13 +25,11 @@ pub struct GameConfig {
 }
 
 impl GameConfig {
-    /// 128 frames/s × 8 fixed substeps = 1024 steps/s (see the accuracy study in
-    /// `docs/`): the boards whose flash has no room for the event stepper.
-    pub const DEFAULT: GameConfig = GameConfig {
-        frame_log2: 7,
-        substeps_log2: 3,
-        stepping: Stepping::Fixed,
-    };
+    /// What every board and tool plays, and what the accuracy study recommends
+    /// (`docs/accuracy.md`): 128 frames/s, each one event step. The one place the
+    /// choice is made: the firmware's `Player` takes [`DEFAULT_EVENTS`], `cargo
+    /// sim` and the web page start from it.
+    pub const DEFAULT: GameConfig = GameConfig::EVENTS;
 
     /// 128 frames/s, each one event step (see [`Stepping::Events`]).
     pub const EVENTS: GameConfig = GameConfig {
@@ -40,12 +38,20 @@ impl GameConfig {
         stepping: Stepping::Events,
     };
 
-    /// [`GameConfig::EVENTS`] if `events`, else [`GameConfig::DEFAULT`].
+    /// 128 frames/s × 8 fixed substeps = 1024 steps/s: the study's baseline
+    /// (`cargo sim -- --stepping fixed`); no board ships it.
+    pub const FIXED: GameConfig = GameConfig {
+        frame_log2: 7,
+        substeps_log2: 3,
+        stepping: Stepping::Fixed,
+    };
+
+    /// [`GameConfig::EVENTS`] if `events`, else [`GameConfig::FIXED`].
     pub const fn stepped_by(events: bool) -> GameConfig {
         if events {
             GameConfig::EVENTS
         } else {
-            GameConfig::DEFAULT
+            GameConfig::FIXED
         }
     }
 
@@ -54,6 +60,10 @@ impl GameConfig {
         1 << self.frame_log2
     }
 }
+
+/// Whether [`GameConfig::DEFAULT`] steps by events: the `EVENTS` constant every
+/// board's `Player` is built with.
+pub const DEFAULT_EVENTS: bool = matches!(GameConfig::DEFAULT.stepping, Stepping::Events);
 
 impl Default for GameConfig {
     fn default() -> Self {

@@ -106,10 +106,10 @@ pub struct Args {
     /// Default: 8 with fixed steps, 1 (one step per frame) with events.
     #[arg(long, value_name = "N", value_parser = parse_substeps)]
     pub substeps: Option<u32>,
-    /// How a step is crossed: `fixed` (the closed form over the step, contacts at
-    /// its end, speed capped; the micro:bits' firmware) or `events` (each marble
-    /// flies its closed form from event to event; QEMU's firmware).
-    #[arg(long, value_name = "MODE", default_value = "fixed", value_parser = parse_stepping)]
+    /// How a step is crossed: `events` (each marble flies its closed form from
+    /// event to event; what every board plays) or `fixed` (the closed form over
+    /// the step, contacts at its end, speed capped; the study's baseline).
+    #[arg(long, value_name = "MODE", default_value = "events", value_parser = parse_stepping)]
     pub stepping: Stepping,
     /// Write every marble's position (mm) and velocity (mm/s) to FILE as CSV: a
     /// row per 1/1024 s with events, a row per step with fixed steps.

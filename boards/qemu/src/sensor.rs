@@ -49,6 +49,7 @@ pub struct SensorReport {
     samples: AtomicU32,
     reinits: AtomicU32,
     failed_reinits: AtomicU32,
+    faults: AtomicU32,
 }
 
 impl SensorReport {
@@ -58,6 +59,7 @@ impl SensorReport {
             samples: AtomicU32::new(0),
             reinits: AtomicU32::new(0),
             failed_reinits: AtomicU32::new(0),
+            faults: AtomicU32::new(0),
         }
     }
 
@@ -74,6 +76,12 @@ impl SensorReport {
     /// Of those, the failed ones.
     pub fn failed_reinits(&self) -> u32 {
         self.failed_reinits.load(Ordering::Relaxed)
+    }
+
+    /// Polls that failed, or whose sample the plausibility rules refused: 0 in a
+    /// fault-free run (a frame that starves the input task shows here first).
+    pub fn faults(&self) -> u32 {
+        self.faults.load(Ordering::Relaxed)
     }
 
     fn bump(counter: &AtomicU32) {
@@ -280,6 +288,12 @@ impl<'a, S: ByteSource, C: Console> QemuInput<'a, S, C> {
         let read = lsm303::read(&mut self.sensor).await;
         let step = self.pipeline.feed(read);
         let mut slow = read == Read::Failed(Fault::Timeout);
+        if matches!(
+            (read, step.action),
+            (Read::Failed(_), _) | (Read::Sample(_), Action::KeepLast(_))
+        ) {
+            SensorReport::bump(&self.report.faults);
+        }
         match step.action {
             Action::Use(_) => SensorReport::bump(&self.report.samples),
             Action::KeepLast(_) | Action::ShowFault => {}

@@ -1,0 +1,153 @@
+//! Rolling around an edge: a slice that pivots on it instead of sinking into it.
+//!
+//! A marble pulled slowly over an edge or a corner — off the rim of a hole, round
+//! the end of a wall — moves on a sphere of radius `r` about the edge's nearest
+//! point: not a parabola, so it was flown in plain slices, each short enough that
+//! the pull sinks it at most `2^-12·r` into the edge before the passes push it
+//! out. At a 12 mm pitch and 1 g that is 32 slices a frame, each a search and a
+//! set of passes: the worst frame of every level with holes (345 k instructions
+//! on the Cortex-M4F, against about 2 k for an ordinary frame), long enough to
+//! starve the sensor's task.
+//!
+//! A **pivot slice** drops instead the pull's part along the normal `n` from the
+//! edge while the edge holds the marble — while the pull presses harder than the
+//! turn needs, `−a·n > v_t²/r` (the normal force is positive; below it the
+//! marble leaves the edge, as a real one does). The slice then flies the tangent
+//! and cannot sink: the tangent leaves the sphere by `r·δθ²/2` for a turn `δθ`,
+//! and at the slice's end the centre is put back on it, `r` (and a tolerance) from
+//! the edge, with the velocity turned to the new tangent at no more than its speed
+//! (the radial part dropped, `√(1 + x) ≥ 1 + x/2` given back to the tangent).
+//! Putting the centre back moves it towards the edge, along the pull that holds
+//! it there, so the correction only ever takes energy out. The slice's length
+//! bounds the travel across the edge (`r/8` per axis: a turn `δθ ≤ √2/8` rad,
+//! so the centre is put back by at most `r/64`) and the travel in all (`r/4`, as
+//! every slice), not the sink: about 8 slices a frame at the speed an edge can
+//! still hold a marble, where plain slices took 32. Every other tile is searched
+//! as in any slice — a second tile it rests on too (two edges under a marble over
+//! a slot), which then hands the marble to plain slices — and the fixed step's
+//! passes run at each end for what the search leaves to them.
+//!
+//! Measured on the built-in levels' worst frames (`cargo xtask qemu-profile`,
+//! the demo's per-level `profile` lines): see `docs/performance.md`.
+
+use super::super::super::dynamics::respond::T_LOG2;
+use super::super::super::dynamics::toi::Segment;
+use super::super::super::geometry::tiles::TileIndex;
+use super::{max_abs, Flight};
+use super::{Marble, Scalar, Vec3, World};
+
+impl<S: Scalar, const M: usize> World<'_, S, M> {
+    /// The point of tile `t` nearest the centre `pos` when it is on an edge or a
+    /// corner (two or three axes outside the tile's box), the unit normal from it
+    /// to the centre, and the edge's axis (`None` at a corner).
+    pub(super) fn pivot_point(
+        &self,
+        pos: Vec3<S>,
+        t: TileIndex,
+    ) -> Option<(Vec3<S>, Vec3<S>, Option<usize>)> {
+        let b = self.params.layout.tile_box(t);
+        let mut q = pos;
+        let mut outside = 0;
+        let mut along = None;
+        for axis in 0..3 {
+            let c = pos.axis(axis);
+            if c < b.min.axis(axis) {
+                q.set_axis(axis, b.min.axis(axis));
+                outside += 1;
+            } else if c > b.max.axis(axis) {
+                q.set_axis(axis, b.max.axis(axis));
+                outside += 1;
+            } else {
+                along = Some(axis);
+            }
+        }
+        if outside < 2 {
+            return None;
+        }
+        let d = pos - q;
+        let d2 = d.length_sq();
+        if d2 <= S::ZERO {
+            return None;
+        }
+        Some((q, d.scale(d2.rsqrt_fine()), along))
+    }
+
+    /// Whether edge tile `t` holds the marble on the flight `f.seg` (the pull
+    /// presses it on harder than the turn needs); if so the flight's normal parts
+    /// (the pull's and the velocity's) are dropped.
+    pub(super) fn pivot_hold(&self, m: &Marble<S>, f: &mut Flight<S>, t: TileIndex) -> bool {
+        let Some((_, n, _)) = self.pivot_point(m.pos, t) else {
+            return false;
+        };
+        let p = &self.params;
+        let seg = f.seg;
+        // Half the pull along n, pitch/step² (negative: towards the edge).
+        let hn = seg.h.dot(n);
+        if hn >= S::ZERO {
+            return false;
+        }
+        // The turn needs a_c = u_t²/r; held while −a·n = −2·h·n exceeds it. In
+        // pitch/step, |u| < 1 per axis: the squares stay under 3.
+        let un = seg.u.dot(n);
+        let ut2 = seg.u.length_sq() - un.times(un);
+        if (p.radius + p.radius).times(S::ZERO - hn) <= ut2 {
+            return false;
+        }
+        // |v| ≤ 127 pitch/s (`cap_speed`), so |v·n| ≤ 127 by Cauchy–Schwarz.
+        let v = seg.v - n.scale(seg.v.dot(n));
+        let dv = seg.dv - n.scale(seg.dv.dot(n));
+        f.seg = Segment::new(m.pos, v, dv, seg.h - n.scale(hn), p.k);
+        true
+    }
+
+    /// A pivot slice's length: `2^-j` of the flight's interval, at most 10 halvings,
+    /// turning the marble at most 1/8 rad about edge tile `t` (the travel across
+    /// the edge at most `r/8`) and moving it at most `r/4` in all.
+    pub(super) fn pivot_len(&self, m: &Marble<S>, f: &Flight<S>, t: TileIndex) -> S {
+        let r = self.params.radius;
+        let seg = &f.seg;
+        let (mut across_u, mut across_h) = (seg.u, seg.h);
+        if let Some((_, _, Some(a))) = self.pivot_point(m.pos, t) {
+            across_u.set_axis(a, S::ZERO);
+            across_h.set_axis(a, S::ZERO);
+        }
+        let (um, hm) = (max_abs(seg.u), max_abs(seg.h));
+        let (cu, ch) = (max_abs(across_u), max_abs(across_h));
+        let mut len = f.len;
+        let mut j = 0;
+        while j < 10
+            && (um.times(len) > r.shr(2)
+                || hm.times(len.times(len)) > r.shr(2)
+                || cu.times(len) > r.shr(4)
+                || ch.times(len.times(len)) > r.shr(4))
+        {
+            len = len.half();
+            j += 1;
+        }
+        len
+    }
+
+    /// The end of a pivot slice: the centre back on the sphere about edge tile `t`
+    /// (`r` and a tolerance from it) and the velocity along the new tangent, no
+    /// faster than it was.
+    pub(super) fn onto_pivot(&self, m: &mut Marble<S>, t: TileIndex) {
+        let Some((q, n, _)) = self.pivot_point(m.pos, t) else {
+            return;
+        };
+        m.pos = q + n.scale(self.params.radius + self.tol());
+        // In pitch/T (1/32 s): components ≤ 4, squares ≤ 48.
+        let w = m.vel.shr(T_LOG2);
+        let wn = w.dot(n);
+        if wn > S::ZERO {
+            let wt = w - n.scale(wn);
+            let (t2, n2) = (wt.length_sq(), wn.times(wn));
+            // |wt|·(1 + x/2) ≤ |wt|·√(1 + x) = |w| with x = wn²/|wt|².
+            let wt = if n2 < t2 {
+                wt.scale(S::ONE + n2.div(t2).half())
+            } else {
+                wt
+            };
+            m.vel = wt.shl(T_LOG2);
+        }
+    }
+}
