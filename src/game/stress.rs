@@ -25,11 +25,12 @@ pub struct StressScene {
     pub tilt: fn(u32) -> [i32; 3],
 }
 
-/// Hard towards −x' and −z', a slight shake every quarter second: the marble
-/// keeps bouncing between the corner's two walls (nothing damps it at `e = 1`).
+/// Hard towards −x' and −z' (a reading's +x rolls the marble to −x'), a slight
+/// shake every quarter second: the marble keeps bouncing between the corner's two
+/// walls (nothing damps it at `e = 1`).
 fn into_the_corner(frame: u32) -> [i32; 3] {
     let shake = if frame % 32 < 16 { 0 } else { 150 };
-    [-600 + shake, 500, -600 - shake]
+    [600 - shake, 500, 600 + shake]
 }
 
 /// A new diagonal every eighth of a second, hard.
@@ -44,7 +45,7 @@ fn shaken(frame: u32) -> [i32; 3] {
 
 /// Towards +x': into the hole, and the marble below against its wall.
 fn towards_plus_x(_: u32) -> [i32; 3] {
-    [300, 950, 0]
+    [-300, 950, 0]
 }
 
 /// Every stress scene. Each goal lies where the scene's tilt never takes a

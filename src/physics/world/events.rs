@@ -1062,6 +1062,22 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         h: hb - ha,
                     };
                     let horizon = when - t0;
+                    // Out of reach over the horizon: no touch, and no square of a
+                    // far separation (I8F24's |d|² leaves its range past 11.3
+                    // pitch; wrapped, a pair 16 pitches apart read as touching).
+                    // Within reach every axis is under 2r + tol plus a step's
+                    // relative travel (2 pitch at 127 pitch/s): squares under 48.
+                    let path = swept(rel.p, rel.pos_at(horizon), rel.h, horizon);
+                    let near = r2 + tol;
+                    if path.min.x > near
+                        || path.max.x < -near
+                        || path.min.y > near
+                        || path.max.y < -near
+                        || path.min.z > near
+                        || path.max.z < -near
+                    {
+                        continue;
+                    }
                     match toi_box(&rel, r2, &point, horizon, tol) {
                         Toi::Hit { at, contact, .. }
                             if t0 + at < when || (at == S::ZERO && t0 <= when) =>
