@@ -62,8 +62,8 @@ const MAX_COPY_BUFFER: usize = 64;
 const PILOT: bool = true;
 
 /// The event stepper: QEMU's board has the flash for it, and it takes fewer
-/// instructions per frame than eight fixed steps (README, "Stepping: fixed or
-/// events"). `cargo sim -- --stepping events` plays the same game.
+/// instructions per frame than eight fixed steps (docs/physics.md, "The two
+/// steppers"). `cargo sim -- --stepping events` plays the same game.
 const EVENTS: bool = true;
 
 /// Headless runs log the perceived matrix (when it changed) every this many
