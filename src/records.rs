@@ -31,7 +31,7 @@
 //! An update appends one item: 16 bytes (8 of header, 1 of key and 4 of value,
 //! padded to the flash's 4-byte words) — see `tests/records.rs::wear` for the
 //! flash operations per update and the pages erased per update, from which the
-//! README's life figure comes.
+//! life figure in docs/testing.md comes.
 
 use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::cache::{Cache, Uncached};

@@ -3,7 +3,7 @@
 //! 4 pages of `boards/microbit/memory.x`): a power cut at every byte of every
 //! flash operation of a record update reads back the old record or the new one,
 //! never garbage and never a panic; a corrupted region is recovered; and the
-//! flash operations per update (the README's wear figure).
+//! flash operations per update (the wear figure in docs/testing.md).
 
 use embassy_futures::block_on;
 use marble_rolling::records::{beats, plausible, Offer, RecordError, Records, MAX_RECORD_FRAMES};
@@ -265,7 +265,7 @@ fn a_region_of_garbage_is_erased_and_works_again() {
     assert_eq!(block_on(r.best(0)), Ok(Some(300)));
 }
 
-/// The README's wear figure: flash operations per record update, measured over
+/// The wear figure in docs/testing.md: flash operations per record update, measured over
 /// 20 000 updates (many times around the region), printed with
 /// `cargo test --features records --test records wear -- --nocapture`.
 #[test]

@@ -32,7 +32,7 @@
 //! We have no sourced figure for either — we could not find an accelerometer
 //! noise figure to cite for the LSM303AGR (ST datasheet DocID027765), and the
 //! board's noise has not been measured (no micro:bit has run this firmware yet,
-//! see the README) — so the default width is 0: no dead zone, and no number made
+//! see docs/boards.md) — so the default width is 0: no dead zone, and no number made
 //! up. The knob ([`TiltConfig::dead_zone_mg`]) stays for a board that proves
 //! noisier once measured; it is a ramped zone that gives the input back
 //! unchanged beyond twice its width (see there), never a bias on every reading.

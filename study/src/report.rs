@@ -537,7 +537,7 @@ pub fn markdown(study: &Study) -> String {
         }
         if is_events(r.k) || is_events(c.k) {
             // The study builds benchmarks, not the firmware: the flash figure is
-            // the firmware's (README, "Stepping: fixed or events").
+            // the firmware's (docs/boards.md, "Budget").
             let _ = writeln!(
                 w,
                 "**Flash**: not measured by the study. The firmware links one stepper, chosen at compile time (`Player<W, H, PILOT, EVENTS>`): the micro:bit v2 firmware (with its records, at its opt-level \"z\") is 62 372 B with fixed steps and 80 244 B with the event stepper (`cargo xtask size-report`, with `EVENTS` set in boards/microbit/src/main.rs), so the boards with a 64 KiB budget keep fixed steps and QEMU's board runs events — the recommendation holds where the flash allows it.\n"

@@ -127,7 +127,7 @@ enum Task {
     /// The browser test: the page in headless Chromium (keys, autopilot hashes
     /// against `cargo sim`, the editor's errors, the frame cost, a screenshot).
     WebTest {
-        /// Also write the screenshot here (the README's is docs/web.png).
+        /// Also write the screenshot here (docs/tools.md shows docs/web.png).
         #[arg(long, value_name = "FILE")]
         screenshot: Option<PathBuf>,
     },

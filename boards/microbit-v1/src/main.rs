@@ -63,7 +63,7 @@ static LINKS: Links<WIDTH, HEIGHT> = Links::new();
 const PILOT: bool = true;
 
 /// Fixed physics steps: the event stepper (about 24 KiB of code) does not fit
-/// the flash (README, "Stepping: fixed or events").
+/// the flash (docs/boards.md, "micro:bit v1").
 const EVENTS: bool = false;
 
 #[cortex_m_rt::entry]

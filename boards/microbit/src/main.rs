@@ -69,7 +69,7 @@ const STALL_LOG_CHECKS: u16 = 5;
 const PILOT: bool = false;
 
 /// Fixed physics steps: the event stepper (about 18 KiB of code here) does not fit
-/// the 64 KiB flash budget (README, "Stepping: fixed or events").
+/// the 64 KiB flash budget (docs/boards.md, "Budget").
 const EVENTS: bool = false;
 
 /// Runs the display above thread mode.

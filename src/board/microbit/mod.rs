@@ -165,7 +165,7 @@ pub const TWIM_COPY_BUFFER_BYTES: usize = 2;
 /// The best times' flash region (byte addresses, whole 4 KiB NVMC pages): the
 /// last 16 KiB of the nRF52833's 512 KiB, left out of `FLASH` in
 /// `boards/microbit/memory.x` (a host test reads it there). Four pages, so that
-/// the erases rotate: see `marble_rolling::records` and the README's wear figure.
+/// the erases rotate: see `marble_rolling::records` and the wear figure in docs/testing.md.
 pub const RECORDS: core::ops::Range<u32> = 0x7_C000..0x8_0000;
 
 /// What GPREGRET (the nRF52's general purpose retention register, kept in
