@@ -3,6 +3,7 @@
 //! ```text
 //! cargo play                      # the built-in levels, from the first
 //! cargo play -- --level cavern    # a built-in level by name, or a level file
+//! cargo play -- --generate 7 --storeys 2   # a generated maze, then the built-in ones
 //! ```
 //!
 //! The LED matrix is drawn with two shaded block characters per pixel, coloured by
@@ -69,6 +70,9 @@ pub struct Args {
     /// Start with the autopilot at the controls (`p` toggles it).
     #[arg(long)]
     pub autopilot: bool,
+    /// A generated maze to start with instead of `--level`.
+    #[command(flatten)]
+    pub maze: super::generated::GenerateArgs,
 }
 
 /// Runs the player with the process arguments; returns the exit status.
@@ -77,15 +81,26 @@ pub fn main() -> i32 {
         Ok(a) => a,
         Err(status) => return status,
     };
-    let first = match &args.level {
-        Some(l) => match load_level(l) {
+    let generated = match args.maze.level() {
+        Ok(g) => g.map(|(_, view)| Loaded {
+            view,
+            builtin: None,
+        }),
+        Err(e) => {
+            eprintln!("play: error: {e}");
+            return 2;
+        }
+    };
+    let first = match (&args.level, generated) {
+        (_, Some(maze)) => maze,
+        (Some(l), None) => match load_level(l) {
             Ok(l) => l,
             Err(e) => {
                 eprintln!("play: error: {e}");
                 return 2;
             }
         },
-        None => Loaded {
+        (None, None) => Loaded {
             view: LEVELS[0],
             builtin: Some(0),
         },
