@@ -116,6 +116,13 @@ fn bad_arguments_are_named() {
 }
 
 #[test]
+fn a_maze_is_small() {
+    let size = core::mem::size_of::<Maze>();
+    println!("size_of::<Maze>() = {size} bytes");
+    assert!(size <= 1024, "{size} bytes");
+}
+
+#[test]
 fn the_largest_text_fits_its_bound() {
     for seed in 0..8 {
         let t = text(&generate(seed, MAX_SIZE, MAX_STOREYS as u8, MAX_DIFFICULTY).unwrap());
