@@ -3,6 +3,7 @@
 
 pub mod autopilot;
 pub mod generate;
+pub mod ghost;
 pub mod player;
 pub mod level;
 pub mod levels;
