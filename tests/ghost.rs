@@ -9,6 +9,7 @@ use marble_rolling::game::level::{parse, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{GameConfig, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::input::sensor::Calibration;
 use proptest::prelude::*;
 
 type Fx = fixed::types::I8F24;
@@ -32,7 +33,7 @@ fn encode(readings: &[[i32; 3]], hash: u64) -> Vec<u8> {
     for &r in readings {
         w.push(r).unwrap();
     }
-    w.finish(hash).unwrap().to_vec()
+    w.finish(hash, Calibration::NONE).unwrap().to_vec()
 }
 
 fn ghost_replays(level: LevelView<'_>, config: GameConfig) -> (usize, f64) {
@@ -80,6 +81,37 @@ fn ghost_replays_a_generated_maze() {
 }
 
 #[test]
+fn ghost_keeps_the_calibration() {
+    let level = LEVELS[1];
+    let config = GameConfig::EVENTS;
+    let cal = Calibration {
+        offset_x: 30,
+        offset_z: -20,
+    };
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    session.tilt_mut().set_calibration(cal);
+    let mut ap = Autopilot::new(&level);
+    let mut buf = vec![0u8; 1 << 16];
+    let mut w = GhostWriter::new(&mut buf).unwrap();
+    while session.game().phase() == Phase::Playing && session.game().frames() < 2000 {
+        let r = ap.reading_mg(session.game());
+        w.push(r).unwrap();
+        session.frame(r);
+    }
+    let bytes = w.finish(session.state_hash(), cal).unwrap().to_vec();
+    let ghost = Ghost::parse(&bytes).unwrap();
+    assert_eq!(ghost.calibration, cal);
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    assert!(replay(&mut fresh, &ghost).unwrap().1);
+    // Without it, another run.
+    let mut other = bytes.clone();
+    other[16..24].fill(0);
+    let ghost = Ghost::parse(&other).unwrap();
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    assert!(!replay(&mut fresh, &ghost).unwrap().1);
+}
+
+#[test]
 fn ghost_replay_of_another_run_misses_the_hash() {
     let level = LEVELS[2];
     let config = GameConfig::EVENTS;
@@ -110,7 +142,7 @@ fn ghost_writer_stops_whole_when_full() {
         }
     }
     assert!(written > 0 && written < readings.len());
-    let bytes = w.finish(7).unwrap().to_vec();
+    let bytes = w.finish(7, Calibration::NONE).unwrap().to_vec();
     let ghost = Ghost::parse(&bytes).unwrap();
     let back: Vec<_> = ghost.readings().map(Result::unwrap).collect();
     assert_eq!(back, readings[..written]);
@@ -128,7 +160,7 @@ fn ghost_errors_name_the_byte() {
         Ghost::parse(b"not a ghost at all"),
         Err(GhostError::BadHeader)
     );
-    assert_eq!(Ghost::parse(&bytes[..10]), Err(GhostError::BadHeader));
+    assert_eq!(Ghost::parse(&bytes[..20]), Err(GhostError::BadHeader));
     // Cut inside the tokens.
     let cut = &bytes[..bytes.len() - 1];
     assert!(

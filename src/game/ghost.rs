@@ -13,13 +13,20 @@
 //! 0  "MG" 1 0        magic, version, reserved
 //! 4  frames          u32 LE: readings in the run
 //! 8  state_hash      u64 LE: Session::state_hash at the run's end
-//! 16 tokens          LEB128 varints, until the end
+//! 16 offset_x        i32 LE: the tilt path's calibration during the run (mg)
+//! 20 offset_z        i32 LE
+//! 24 tokens          LEB128 varints, until the end
 //! ```
 //!
 //! Each token starts with a varint `h`. Even `h` is a **run**: the last reading
 //! again for `h / 2` frames. Odd `h` is **one frame** whose axes `x, y, z` (bits
 //! 0, 1, 2 of `h >> 1`) that changed follow as zigzag varints of the change. The
 //! reading before the first frame is a flat board `(0, 1000, 0)` mg.
+//!
+//! The calibration is part of the run (the tilt path subtracts it from every
+//! reading; a restart keeps it), so the replay sets it first. A calibration
+//! changed in the middle of a run is not recorded: that run's replay misses its
+//! hash, which [`replay`] reports.
 //!
 //! # Why this coding
 //!
@@ -30,18 +37,19 @@
 //! * **Run lengths**: keys and the autopilot hold a tilt for many frames (a held
 //!   key repeats the same reading), and a run of any length costs a varint.
 //!
-//! The autopilot's runs of the built-in levels take 178 to 276 bytes per second
-//! of run, against 768 for three `i16` a frame; with a sensor's noise (±4 mg on
-//! every axis, every frame) `corner` takes 485 (`cargo test --features tools
+//! The autopilot's runs of the built-in levels take 188 to 279 bytes per second
+//! of run (header included), against 768 for three `i16` a frame; with a
+//! sensor's noise (±4 mg on every axis, every frame) `corner` takes 489 (`cargo test --features tools
 //! --test ghost -- --nocapture` prints them).
 
+use crate::input::sensor::Calibration;
 use crate::physics::Scalar;
 
 use super::rules::Phase;
 use super::session::Session;
 
 /// Bytes before the tokens.
-pub const HEADER_BYTES: usize = 16;
+pub const HEADER_BYTES: usize = 24;
 const MAGIC: [u8; 4] = [b'M', b'G', 1, 0];
 /// The reading before the first frame.
 const FLAT: [i32; 3] = [0, 1000, 0];
@@ -147,11 +155,18 @@ impl<'a> GhostWriter<'a> {
         Ok(())
     }
 
-    /// Closes the ghost with the run's end state hash; returns its bytes.
-    pub fn finish(mut self, state_hash: u64) -> Result<&'a [u8], GhostError> {
+    /// Closes the ghost with the run's end state hash and the tilt path's
+    /// calibration during the run; returns its bytes.
+    pub fn finish(
+        mut self,
+        state_hash: u64,
+        calibration: Calibration,
+    ) -> Result<&'a [u8], GhostError> {
         self.flush_run()?;
         self.buf[4..8].copy_from_slice(&self.frames.to_le_bytes());
         self.buf[8..16].copy_from_slice(&state_hash.to_le_bytes());
+        self.buf[16..20].copy_from_slice(&calibration.offset_x.to_le_bytes());
+        self.buf[20..24].copy_from_slice(&calibration.offset_z.to_le_bytes());
         let len = self.len;
         Ok(&self.buf[..len])
     }
@@ -196,6 +211,8 @@ pub struct Ghost<'a> {
     pub frames: u32,
     /// The state hash at the run's end.
     pub state_hash: u64,
+    /// The tilt path's calibration during the run.
+    pub calibration: Calibration,
     tokens: &'a [u8],
 }
 
@@ -213,6 +230,10 @@ impl<'a> Ghost<'a> {
         let ghost = Ghost {
             frames: word(4..8) as u32,
             state_hash: word(8..16),
+            calibration: Calibration {
+                offset_x: word(16..20) as u32 as i32,
+                offset_z: word(20..24) as u32 as i32,
+            },
             tokens: &bytes[HEADER_BYTES..],
         };
         let mut n: u32 = 0;
@@ -317,13 +338,15 @@ impl Iterator for Readings<'_> {
     }
 }
 
-/// Plays `ghost` into `session` (a fresh session of the ghost's level and
-/// configuration) frame by frame until the readings end or the attempt does;
-/// returns how it ended, and whether the state hash is the ghost's.
+/// Plays `ghost` into `session` (a fresh session of the ghost's level, game
+/// configuration and tilt settings) with the ghost's calibration, frame by frame
+/// until the readings end or the attempt does; returns how it ended, and whether
+/// the state hash is the ghost's.
 pub fn replay<S: Scalar>(
     session: &mut Session<'_, S>,
     ghost: &Ghost<'_>,
 ) -> Result<(Phase, bool), GhostError> {
+    session.tilt_mut().set_calibration(ghost.calibration);
     let mut phase = session.game().phase();
     for r in ghost.readings() {
         if phase != Phase::Playing {
