@@ -231,3 +231,61 @@ fn ghost_size_per_second() {
     );
     assert!(clean < rough && (rough as f64) < 6.0 * readings.len() as f64);
 }
+
+/// `cargo play`'s ghost files: a win is written once it replays to its hash,
+/// read back, replayed beside a new attempt; a slower win leaves it; a stale
+/// file is ignored.
+#[cfg(feature = "tools")]
+#[test]
+fn ghost_file_keeps_the_best_run() {
+    use marble_rolling::host::ghost_file::{load, path_for, GhostKeeper, GhostRun};
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("ghosts-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let level = LEVELS[1];
+    let config = GameConfig::EVENTS;
+    let name = level.info.name;
+    assert_eq!(load(&dir, level, config, SYNTHETIC_TILT), None);
+    // An attempt abandoned after 50 frames, then a whole autopilot run.
+    let mut keeper = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, None);
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut ap = Autopilot::new(&level);
+    for _ in 0..50 {
+        session.frame([-200, 980, 0]);
+        assert_eq!(keeper.observe(&session), Ok(None));
+    }
+    session.restart();
+    let mut written = None;
+    while session.game().phase() == Phase::Playing {
+        session.autopilot_frame(&mut ap);
+        if let Some(p) = keeper.observe(&session).unwrap() {
+            written = Some(p);
+        }
+    }
+    // The pause after the win sees the same frame again: nothing new.
+    assert_eq!(keeper.observe(&session), Ok(None));
+    let path = written.expect("the win is written");
+    assert_eq!(path, path_for(&dir, name));
+    let frames = session.game().frames();
+    let bytes = load(&dir, level, config, SYNTHETIC_TILT).expect("a valid ghost");
+    assert_eq!(Ghost::parse(&bytes).unwrap().frames, frames);
+    // Replayed beside a new attempt: where the first run's marble was.
+    let mut run = GhostRun::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
+    assert_eq!(run.frames(), frames);
+    let start = run.at(0).unwrap();
+    let end = run.at(frames).unwrap();
+    assert_ne!(start, end);
+    assert_eq!(run.at(0), Some(start), "back to the start after a restart");
+    // A slower win does not replace it.
+    let mut slow = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(frames - 1));
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut ap = Autopilot::new(&level);
+    while session.game().phase() == Phase::Playing {
+        session.autopilot_frame(&mut ap);
+        assert_eq!(slow.observe(&session), Ok(None));
+    }
+    // The same file for another level's grid: stale, ignored.
+    std::fs::copy(&path, path_for(&dir, LEVELS[0].info.name)).unwrap();
+    assert_eq!(load(&dir, LEVELS[0], config, SYNTHETIC_TILT), None);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -10,6 +10,7 @@
 //! gif and crossterm) exists only when the `tools` feature is on.
 
 pub mod generated;
+pub mod ghost_file;
 pub mod gif_out;
 pub mod play;
 pub mod sim;
