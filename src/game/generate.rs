@@ -23,7 +23,8 @@
 //! Difficulty (0 ..= [`MAX_DIFFICULTY`]) adds, in turn: rolling resistance
 //! (`friction`, from 1); pits (holes out of the maze, from 2: on the lowest
 //! storey, in dead ends off the way to the goal, one more every two levels);
-//! a second marble (from 4) and a third (from 7) in dead ends of the top storey;
+//! a second marble (from 4) and a third (from 7) in dead ends of the top storey
+//! (on mazes of up to [`MAX_SIZE_FOR_MARBLES`] cells a side);
 //! `board_motion` (from 6, on one or two storeys: see [`Maze::board_motion`]); and a time limit that shrinks from three to one and a
 //! half times the autopilot's measured pace (see [`Maze::time_limit_s`]).
 //!
@@ -56,6 +57,13 @@ pub const MIN_SIZE: u8 = 2;
 pub const MAX_SIZE: u8 = 15;
 /// The hardest difficulty.
 pub const MAX_DIFFICULTY: u8 = 9;
+/// The largest maze (cells a side) that gets more than one marble. Two marbles
+/// farther apart than about 11 pitches overflow the event stepper's
+/// marble–marble search in the firmware's `I8F24` (a square of the distance
+/// passes its range of 128; found by `survey` in `tests/generate.rs`: debug
+/// builds panicked from size 9 on, event steps only), and on larger mazes the
+/// autopilot lost some three-marble runs on time. Up to 7 every one was won.
+pub const MAX_SIZE_FOR_MARBLES: u8 = 7;
 /// The longest level text [`Maze`] writes (four storeys of the largest size).
 pub const MAX_TEXT_BYTES: usize = 128 + MAX_STOREYS * (TILES * (TILES + 1) + 4);
 
@@ -224,7 +232,7 @@ impl Maze {
     }
 
     /// The level's time limit: 0.35 s per cell and per turn of the way (the
-    /// autopilot needs at most 0.30 s: it stops at every corner; 720 mazes of
+    /// autopilot needs at most 0.30 s: it stops at every corner; 1 680 mazes of
     /// every difficulty, both steppers, `survey` in `tests/generate.rs`) times a
     /// margin from 3 (difficulty 0) down to 1.5 (difficulty 9), plus 5 s.
     pub fn time_limit_s(&self) -> u16 {
@@ -408,8 +416,12 @@ impl Maze {
     }
 
     /// From difficulty 4 a second marble, from 7 a third, each in a dead end of the
-    /// top storey off the way (when there is one).
+    /// top storey off the way (when there is one) — on mazes of up to
+    /// [`MAX_SIZE_FOR_MARBLES`] cells a side.
     fn add_marbles(&mut self, storey: usize, rng: &mut XorShiftRng) {
+        if self.size > MAX_SIZE_FOR_MARBLES {
+            return;
+        }
         let extra = usize::from(self.difficulty >= 4) + usize::from(self.difficulty >= 7);
         for _ in 0..extra.min(MAX_MARBLES - 1) {
             self.mark_spare_dead_end(storey, START, rng);
