@@ -611,3 +611,55 @@ fn help_names_events_as_the_default_stepping() {
         .collect();
     assert!(stepping.contains("[default: events]"), "{out}");
 }
+
+#[test]
+fn a_generated_maze_prints_checks_and_is_won() {
+    let print = |storeys: &str| {
+        let o = sim(&["--generate", "11", "--storeys", storeys, "--print-level"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    for storeys in ["1", "3"] {
+        let text = print(storeys);
+        assert_eq!(text, print(storeys), "the same text every time");
+        assert!(
+            text.starts_with(&format!("name: maze-11-6x6x{storeys}-d2\n")),
+            "{text}"
+        );
+        let file = scratch(&format!("maze-11-{storeys}.level"), &text);
+        let o = sim(&["--check", s(&file)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
+        for stepping in ["events", "fixed"] {
+            let from_file = sim_json(&["--level", s(&file), "--autopilot", "--stepping", stepping]);
+            assert_eq!(from_file["outcome"], "won", "{stepping}\n{text}");
+            // Played straight from the seed: the same level, the same run.
+            let direct = sim_json(&[
+                "--generate",
+                "11",
+                "--storeys",
+                storeys,
+                "--autopilot",
+                "--stepping",
+                stepping,
+            ]);
+            assert_eq!(direct["state_hash"], from_file["state_hash"], "{stepping}");
+            assert_eq!(direct["frames"], from_file["frames"], "{stepping}");
+        }
+    }
+}
+
+#[test]
+fn generate_options_are_checked() {
+    let cases: [(&[&str], &str); 4] = [
+        (&["--generate", "1", "--size", "16"], "--size"),
+        (&["--generate", "1", "--storeys", "5"], "--storeys"),
+        (&["--generate", "1", "--level", "corner"], "--level"),
+        (&["--level", "corner", "--size", "4"], "need --generate"),
+    ];
+    for (args, words) in cases {
+        let o = sim(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(words), "{args:?}: {}", stderr(&o));
+    }
+}

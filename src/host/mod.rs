@@ -9,6 +9,8 @@
 //! Nothing in here is used by the firmware: the module (and its dependencies clap,
 //! gif and crossterm) exists only when the `tools` feature is on.
 
+pub mod generated;
+pub mod ghost_file;
 pub mod gif_out;
 pub mod play;
 pub mod sim;

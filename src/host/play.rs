@@ -3,7 +3,12 @@
 //! ```text
 //! cargo play                      # the built-in levels, from the first
 //! cargo play -- --level cavern    # a built-in level by name, or a level file
+//! cargo play -- --generate 7 --storeys 2   # a generated maze, then the built-in ones
 //! ```
+//!
+//! Each level's best winning run is kept as a ghost in `target/ghosts/`
+//! (`--ghosts DIR`; [`super::ghost_file`]) and replayed, bit for bit, as a dim
+//! marble beside the next attempts.
 //!
 //! The LED matrix is drawn with two shaded block characters per pixel, coloured by
 //! brightness (the same [`crate::render`] frames the firmware shows: one pixel per
@@ -23,6 +28,7 @@
 
 use std::boxed::Box;
 use std::io::{self, IsTerminal, Write};
+use std::path::{Path, PathBuf};
 use std::string::{String, ToString};
 use std::time::{Duration, Instant};
 use std::vec::Vec;
@@ -34,6 +40,7 @@ use crossterm::style::{Color, Print, ResetColor, SetForegroundColor};
 use crossterm::terminal::{self, Clear, ClearType};
 use crossterm::{cursor, execute, queue};
 
+use super::ghost_file::{self, GhostKeeper, GhostRun};
 use super::{load_level, Loaded};
 use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
@@ -69,6 +76,12 @@ pub struct Args {
     /// Start with the autopilot at the controls (`p` toggles it).
     #[arg(long)]
     pub autopilot: bool,
+    /// A generated maze to start with instead of `--level`.
+    #[command(flatten)]
+    pub maze: super::generated::GenerateArgs,
+    /// Where each level's best run is kept as a ghost (`NAME.ghost`).
+    #[arg(long, value_name = "DIR", default_value = "target/ghosts")]
+    pub ghosts: PathBuf,
 }
 
 /// Runs the player with the process arguments; returns the exit status.
@@ -77,15 +90,26 @@ pub fn main() -> i32 {
         Ok(a) => a,
         Err(status) => return status,
     };
-    let first = match &args.level {
-        Some(l) => match load_level(l) {
+    let generated = match args.maze.level() {
+        Ok(g) => g.map(|(_, view)| Loaded {
+            view,
+            builtin: None,
+        }),
+        Err(e) => {
+            eprintln!("play: error: {e}");
+            return 2;
+        }
+    };
+    let first = match (&args.level, generated) {
+        (_, Some(maze)) => maze,
+        (Some(l), None) => match load_level(l) {
             Ok(l) => l,
             Err(e) => {
                 eprintln!("play: error: {e}");
                 return 2;
             }
         },
-        None => Loaded {
+        (None, None) => Loaded {
             view: LEVELS[0],
             builtin: Some(0),
         },
@@ -105,7 +129,7 @@ pub fn main() -> i32 {
                 return 1;
             }
         };
-        let r = Game::new(first, args.autopilot).and_then(|mut g| g.run());
+        let r = Game::new(first, args.autopilot, &args.ghosts).and_then(|mut g| g.run());
         drop(guard);
         r
     };
@@ -207,10 +231,20 @@ struct Game {
     shown_level: usize,
     out: io::Stdout,
     buf: Vec<u8>,
+    ghosts: PathBuf,
+    /// The level the keeper and the ghost are for, the keeper, the stored
+    /// ghost's replay, and the last word about ghosts for the status line.
+    ghost_level: Option<usize>,
+    keeper: GhostKeeper,
+    ghost: Option<GhostRun>,
+    ghost_note: String,
 }
 
+/// The ghost marble's brightness (the live marble is drawn at full).
+const GHOST_BRIGHTNESS: u8 = 4;
+
 impl Game {
-    fn new(first: Loaded, autopilot: bool) -> io::Result<Game> {
+    fn new(first: Loaded, autopilot: bool, ghosts: &Path) -> io::Result<Game> {
         let (levels, index) = level_list(first);
         let player =
             TerminalPlayer::new(levels, index, SYNTHETIC_TILT, autopilot).map_err(|e| {
@@ -226,7 +260,44 @@ impl Game {
             view: None,
             out: io::stdout(),
             buf: Vec::with_capacity(1 << 16),
+            ghosts: ghosts.to_path_buf(),
+            ghost_level: None,
+            keeper: GhostKeeper::new(ghosts, "", SYNTHETIC_TILT, None),
+            ghost: None,
+            ghost_note: String::new(),
         })
+    }
+
+    /// Loads the ghost of the level on show when it changed, and keeps the
+    /// attempt's readings (writing a new best run).
+    fn follow_ghost(&mut self) {
+        let index = self.player.level_index();
+        if self.ghost_level != Some(index) {
+            let level = *self.player.game().level();
+            let (config, tilt) = (TerminalPlayer::CONFIG, SYNTHETIC_TILT);
+            let stored = ghost_file::load(&self.ghosts, level, config, tilt);
+            self.ghost = stored
+                .as_deref()
+                .and_then(|b| GhostRun::new(b, level, config, tilt));
+            let best = self.ghost.as_ref().map(GhostRun::frames);
+            self.keeper = GhostKeeper::new(&self.ghosts, level.info.name, tilt, best);
+            self.ghost_level = Some(index);
+            self.ghost_note = match best {
+                Some(f) => format!("ghost: best {:.2} s", f as f64 / FRAME_HZ as f64),
+                None => "no ghost yet: win to leave one".to_string(),
+            };
+        }
+        match self.keeper.observe(self.player.session()) {
+            Ok(Some(path)) => {
+                let level = *self.player.game().level();
+                let (config, tilt) = (TerminalPlayer::CONFIG, SYNTHETIC_TILT);
+                self.ghost = ghost_file::load(&self.ghosts, level, config, tilt)
+                    .and_then(|b| GhostRun::new(&b, level, config, tilt));
+                self.ghost_note = format!("new best run: ghost saved to {}", path.display());
+            }
+            Ok(None) => {}
+            Err(e) => self.ghost_note = format!("ghost not saved: {e}"),
+        }
     }
 
     fn run(&mut self) -> io::Result<()> {
@@ -258,6 +329,7 @@ impl Game {
                 continue;
             }
             self.player.tick(self.keys.tilt().reading_mg(), false);
+            self.follow_ghost();
             if self.player.level_index() != self.shown_level || self.player.game().frames() == 0 {
                 // Another level, or the same one restarted: a new picture.
                 self.shown_level = self.player.level_index();
@@ -308,12 +380,27 @@ impl Game {
         let frame: crate::matrix::Frame<N, N> =
             render_world(level, game.world(), blink, Viewport::new(vx, vz));
         let (w, h) = (w as usize, h as usize);
-        let px = frame
+        let mut px: Vec<u8> = frame
             .rows()
             .iter()
             .take(h)
             .flat_map(|r| r[..w].iter().copied())
             .collect();
+        // The ghost, dim, where it is on the storey on show and nothing brighter is.
+        let storey = game
+            .world()
+            .marbles()
+            .iter()
+            .find(|m| !m.out)
+            .map(|m| layout.storey_of(m.pos.y));
+        let frames = game.frames();
+        if let Some((i, k, s)) = self.ghost.as_mut().and_then(|g| g.at(frames)) {
+            let (x, y) = (i - vx, k - vz);
+            if Some(s) == storey && (0..w as i32).contains(&x) && (0..h as i32).contains(&y) {
+                let p = &mut px[y as usize * w + x as usize];
+                *p = (*p).max(GHOST_BRIGHTNESS);
+            }
+        }
         (w, h, px)
     }
 
@@ -353,7 +440,7 @@ impl Game {
             ""
         };
         let lines = [
-            format!("{} ({which})  {status}", info.name),
+            format!("{} ({which})  {status}  · {}", info.name, self.ghost_note),
             format!(
                 "tilt  x {:+5} mg  z {:+5} mg{pilot}",
                 -reading[0], -reading[2]

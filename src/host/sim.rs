@@ -6,6 +6,8 @@
 //! cargo sim -- --level two-marbles --autopilot --stepping events --trace run.csv
 //! cargo sim -- --level corner --autopilot --gif docs/corner.gif
 //! cargo sim -- --check my.level
+//! cargo sim -- --generate 7 --storeys 2 --print-level > maze.level
+//! cargo sim -- --generate 7 --storeys 2 --autopilot
 //! ```
 //!
 //! `--gif FILE` records the whole level as the matrix draws it (the followed
@@ -59,7 +61,7 @@ use std::path::{Path, PathBuf};
 use std::string::{String, ToString};
 use std::time::Instant;
 use std::vec::Vec;
-use std::{eprintln, format, println};
+use std::{eprintln, format, print, println};
 
 use clap::Parser;
 
@@ -86,7 +88,7 @@ const GIF_HOLD_S: f64 = 1.5;
 )]
 pub struct Args {
     /// Level: a built-in name (first-roll, corner, ...) or a level file.
-    #[arg(long, value_name = "FILE|NAME", required_unless_present_any = ["check", "list"])]
+    #[arg(long, value_name = "FILE|NAME", required_unless_present_any = ["check", "list", "generate"])]
     pub level: Option<String>,
     /// Tilt readings: CSV `t_s,ax_mg,ay_mg,az_mg` (board frame, flat = 0,1000,0;
     /// ax < 0 rolls towards +x'), each held until the next. Default: flat board.
@@ -134,6 +136,12 @@ pub struct Args {
     /// List the built-in levels and backends.
     #[arg(long)]
     pub list: bool,
+    /// A generated maze instead of `--level` (see `docs/generator.md`).
+    #[command(flatten)]
+    pub maze: super::generated::GenerateArgs,
+    /// Print the generated maze's level text (for `--check` and `--level`) and stop.
+    #[arg(long, requires = "generate")]
+    pub print_level: bool,
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {
@@ -737,6 +745,19 @@ pub fn run(args: &Args) -> i32 {
         list();
         return 0;
     }
+    if args.print_level {
+        return match args.maze.level() {
+            Ok(Some((text, _))) => {
+                print!("{text}");
+                0
+            }
+            Ok(None) => 0,
+            Err(msg) => {
+                eprintln!("sim: error: {msg}");
+                2
+            }
+        };
+    }
     match simulate(args) {
         Ok(report) => {
             if args.json {
@@ -756,7 +777,10 @@ pub fn run(args: &Args) -> i32 {
 /// Loads the inputs named by `args` and runs the level.
 pub fn simulate(args: &Args) -> Result<Report, String> {
     let backend = Backend::from_name(&args.backend)?;
-    let level = load_level(args.level.as_deref().unwrap_or_default())?.view;
+    let level = match args.maze.level()? {
+        Some((_, view)) => view,
+        None => load_level(args.level.as_deref().unwrap_or_default())?.view,
+    };
     let base = GameConfig::stepped_by(args.stepping == Stepping::Events);
     let config = GameConfig {
         substeps_log2: args

@@ -1,0 +1,291 @@
+//! The ghost (`game::ghost`): a run kept as its readings, compressed, and replayed
+//! into a fresh session to the record's state hash — every built-in level, both
+//! steppers — and the format's edges (a full buffer, a cut or foreign file).
+
+use marble_rolling::game::autopilot::Autopilot;
+use marble_rolling::game::generate::generate;
+use marble_rolling::game::ghost::{replay, Ghost, GhostError, GhostWriter, HEADER_BYTES};
+use marble_rolling::game::level::{parse, LevelView};
+use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::rules::{GameConfig, Phase};
+use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::input::sensor::Calibration;
+use proptest::prelude::*;
+
+type Fx = fixed::types::I8F24;
+
+/// The autopilot's run of `level`: its readings, how it ended, its hash.
+fn record(level: LevelView<'_>, config: GameConfig) -> (Vec<[i32; 3]>, Phase, u64) {
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut ap = Autopilot::new(&level);
+    let mut readings = Vec::new();
+    while session.game().phase() == Phase::Playing {
+        let r = ap.reading_mg(session.game());
+        readings.push(r);
+        session.frame(r);
+    }
+    (readings, session.game().phase(), session.state_hash())
+}
+
+fn encode(readings: &[[i32; 3]], hash: u64) -> Vec<u8> {
+    let mut buf = vec![0u8; HEADER_BYTES + 6 * readings.len() + 16];
+    let mut w = GhostWriter::new(&mut buf).unwrap();
+    for &r in readings {
+        w.push(r).unwrap();
+    }
+    w.finish(hash, Calibration::NONE).unwrap().to_vec()
+}
+
+fn ghost_replays(level: LevelView<'_>, config: GameConfig) -> (usize, f64) {
+    let (readings, phase, hash) = record(level, config);
+    assert_eq!(phase, Phase::Won, "{}", level.info.name);
+    let bytes = encode(&readings, hash);
+    let ghost = Ghost::parse(&bytes).unwrap();
+    assert_eq!(ghost.frames as usize, readings.len());
+    let decoded: Vec<[i32; 3]> = ghost.readings().map(Result::unwrap).collect();
+    assert_eq!(decoded, readings, "{}", level.info.name);
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let (end, same) = replay(&mut fresh, &ghost).unwrap();
+    assert_eq!(end, Phase::Won, "{}", level.info.name);
+    assert!(same, "{}: the replay ends on another hash", level.info.name);
+    assert_eq!(fresh.game().frames() as usize, readings.len());
+    let seconds = readings.len() as f64 / f64::from(config.frame_hz());
+    (bytes.len(), bytes.len() as f64 / seconds)
+}
+
+fn ghost_of_every_builtin_level(config: GameConfig) {
+    for level in LEVELS.iter() {
+        let (bytes, per_s) = ghost_replays(*level, config);
+        println!(
+            "{:?} {:16} ghost {bytes:5} B, {per_s:5.0} B per second of run",
+            config.stepping, level.info.name
+        );
+    }
+}
+
+#[test]
+fn ghost_replays_every_builtin_level_to_its_hash_with_events() {
+    ghost_of_every_builtin_level(GameConfig::EVENTS);
+}
+
+#[test]
+fn ghost_replays_every_builtin_level_to_its_hash_with_fixed_steps() {
+    ghost_of_every_builtin_level(GameConfig::DEFAULT);
+}
+
+#[test]
+fn ghost_replays_a_generated_maze() {
+    let text = generate(9, 6, 3, 5).unwrap().to_string();
+    let level = parse::<512>(&text).unwrap();
+    ghost_replays(level.view(), GameConfig::EVENTS);
+}
+
+#[test]
+fn ghost_keeps_the_calibration() {
+    let level = LEVELS[1];
+    let config = GameConfig::EVENTS;
+    let cal = Calibration {
+        offset_x: 30,
+        offset_z: -20,
+    };
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    session.tilt_mut().set_calibration(cal);
+    let mut ap = Autopilot::new(&level);
+    let mut buf = vec![0u8; 1 << 16];
+    let mut w = GhostWriter::new(&mut buf).unwrap();
+    while session.game().phase() == Phase::Playing && session.game().frames() < 2000 {
+        let r = ap.reading_mg(session.game());
+        w.push(r).unwrap();
+        session.frame(r);
+    }
+    let bytes = w.finish(session.state_hash(), cal).unwrap().to_vec();
+    let ghost = Ghost::parse(&bytes).unwrap();
+    assert_eq!(ghost.calibration, cal);
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    assert!(replay(&mut fresh, &ghost).unwrap().1);
+    // Without it, another run.
+    let mut other = bytes.clone();
+    other[16..24].fill(0);
+    let ghost = Ghost::parse(&other).unwrap();
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    assert!(!replay(&mut fresh, &ghost).unwrap().1);
+}
+
+#[test]
+fn ghost_replay_of_another_run_misses_the_hash() {
+    let level = LEVELS[2];
+    let config = GameConfig::EVENTS;
+    let (mut readings, _, hash) = record(level, config);
+    // One reading 1 mg off, halfway through.
+    let n = readings.len() / 2;
+    readings[n][0] += 1;
+    let bytes = encode(&readings, hash);
+    let ghost = Ghost::parse(&bytes).unwrap();
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let (_, same) = replay(&mut fresh, &ghost).unwrap();
+    assert!(!same);
+}
+
+#[test]
+fn ghost_writer_stops_whole_when_full() {
+    let readings: Vec<[i32; 3]> = (0..200).map(|n| [n * 3, 1000 - n, -n]).collect();
+    let mut buf = [0u8; 64];
+    let mut w = GhostWriter::new(&mut buf).unwrap();
+    let mut written = 0;
+    for &r in &readings {
+        match w.push(r) {
+            Ok(()) => written += 1,
+            Err(e) => {
+                assert_eq!(e, GhostError::Full);
+                break;
+            }
+        }
+    }
+    assert!(written > 0 && written < readings.len());
+    let bytes = w.finish(7, Calibration::NONE).unwrap().to_vec();
+    let ghost = Ghost::parse(&bytes).unwrap();
+    let back: Vec<_> = ghost.readings().map(Result::unwrap).collect();
+    assert_eq!(back, readings[..written]);
+    assert_eq!(
+        GhostWriter::new(&mut [0u8; 8]).err(),
+        Some(GhostError::Full)
+    );
+}
+
+#[test]
+fn ghost_errors_name_the_byte() {
+    let readings: Vec<[i32; 3]> = (0..50).map(|n| [n * 300, 1000, -n * 200]).collect();
+    let bytes = encode(&readings, 1);
+    assert_eq!(
+        Ghost::parse(b"not a ghost at all"),
+        Err(GhostError::BadHeader)
+    );
+    assert_eq!(Ghost::parse(&bytes[..20]), Err(GhostError::BadHeader));
+    // Cut inside the tokens.
+    let cut = &bytes[..bytes.len() - 1];
+    assert!(
+        matches!(Ghost::parse(cut), Err(GhostError::Truncated { .. })),
+        "{:?}",
+        Ghost::parse(cut)
+    );
+    // The header claims one frame more than the tokens hold.
+    let mut more = bytes.clone();
+    more[4] += 1;
+    assert_eq!(
+        Ghost::parse(&more),
+        Err(GhostError::Truncated { at: bytes.len() })
+    );
+    let msg = GhostError::Truncated { at: 17 }.to_string();
+    assert!(msg.contains("byte 17"), "{msg}");
+}
+
+proptest! {
+    #[test]
+    fn ghost_of_any_readings_reads_back(
+        start in prop::array::uniform3(-2000i32..2000),
+        steps in prop::collection::vec((prop::array::uniform3(-40i32..40), 0u32..6), 0..300),
+    ) {
+        // A noisy sensor's walk, with repeated readings now and then.
+        let mut r = start;
+        let mut readings = Vec::new();
+        for (d, repeat) in steps {
+            for a in 0..3 {
+                r[a] += d[a];
+            }
+            for _ in 0..=repeat {
+                readings.push(r);
+            }
+        }
+        let bytes = encode(&readings, 0xfeed);
+        let ghost = Ghost::parse(&bytes).unwrap();
+        prop_assert_eq!(ghost.state_hash, 0xfeed);
+        let back: Vec<[i32; 3]> = ghost.readings().map(Result::unwrap).collect();
+        prop_assert_eq!(back, readings);
+    }
+}
+
+/// What the coding saves: the autopilot's run of `corner`, as it is and with a
+/// sensor's noise (±4 mg on every axis, every frame), against 6 bytes a frame
+/// (three `i16`) uncompressed.
+#[test]
+fn ghost_size_per_second() {
+    let (readings, _, hash) = record(LEVELS[1], GameConfig::EVENTS);
+    let seconds = readings.len() as f64 / 128.0;
+    let mut s: u32 = 0x1234_5678;
+    let mut noise = || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        (s % 9) as i32 - 4
+    };
+    let noisy: Vec<[i32; 3]> = readings
+        .iter()
+        .map(|r| [r[0] + noise(), r[1] + noise(), r[2] + noise()])
+        .collect();
+    let (clean, rough) = (encode(&readings, hash).len(), encode(&noisy, hash).len());
+    println!(
+        "corner: {:.0} B/s from the autopilot, {:.0} B/s with a sensor's noise, {:.0} B/s raw",
+        clean as f64 / seconds,
+        rough as f64 / seconds,
+        6.0 * 128.0
+    );
+    assert!(clean < rough && (rough as f64) < 6.0 * readings.len() as f64);
+}
+
+/// `cargo play`'s ghost files: a win is written once it replays to its hash,
+/// read back, replayed beside a new attempt; a slower win leaves it; a stale
+/// file is ignored.
+#[cfg(feature = "tools")]
+#[test]
+fn ghost_file_keeps_the_best_run() {
+    use marble_rolling::host::ghost_file::{load, path_for, GhostKeeper, GhostRun};
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("ghosts-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let level = LEVELS[1];
+    let config = GameConfig::EVENTS;
+    let name = level.info.name;
+    assert_eq!(load(&dir, level, config, SYNTHETIC_TILT), None);
+    // An attempt abandoned after 50 frames, then a whole autopilot run.
+    let mut keeper = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, None);
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut ap = Autopilot::new(&level);
+    for _ in 0..50 {
+        session.frame([-200, 980, 0]);
+        assert_eq!(keeper.observe(&session), Ok(None));
+    }
+    session.restart();
+    let mut written = None;
+    while session.game().phase() == Phase::Playing {
+        session.autopilot_frame(&mut ap);
+        if let Some(p) = keeper.observe(&session).unwrap() {
+            written = Some(p);
+        }
+    }
+    // The pause after the win sees the same frame again: nothing new.
+    assert_eq!(keeper.observe(&session), Ok(None));
+    let path = written.expect("the win is written");
+    assert_eq!(path, path_for(&dir, name));
+    let frames = session.game().frames();
+    let bytes = load(&dir, level, config, SYNTHETIC_TILT).expect("a valid ghost");
+    assert_eq!(Ghost::parse(&bytes).unwrap().frames, frames);
+    // Replayed beside a new attempt: where the first run's marble was.
+    let mut run = GhostRun::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
+    assert_eq!(run.frames(), frames);
+    let start = run.at(0).unwrap();
+    let end = run.at(frames).unwrap();
+    assert_ne!(start, end);
+    assert_eq!(run.at(0), Some(start), "back to the start after a restart");
+    // A slower win does not replace it.
+    let mut slow = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(frames - 1));
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut ap = Autopilot::new(&level);
+    while session.game().phase() == Phase::Playing {
+        session.autopilot_frame(&mut ap);
+        assert_eq!(slow.observe(&session), Ok(None));
+    }
+    // The same file for another level's grid: stale, ignored.
+    std::fs::copy(&path, path_for(&dir, LEVELS[0].info.name)).unwrap();
+    assert_eq!(load(&dir, LEVELS[0], config, SYNTHETIC_TILT), None);
+    let _ = std::fs::remove_dir_all(&dir);
+}
