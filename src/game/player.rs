@@ -56,6 +56,9 @@ pub struct Status {
     pub phase: Phase,
     /// Frames played in this attempt.
     pub frames: u32,
+    /// Frames on the level clock in this attempt (the time to show; see
+    /// [`Game::clock_frames`]).
+    pub clock: u32,
     /// The reading fed to the game last (milli-g, board frame).
     pub reading: [i32; 3],
     /// Whether the autopilot is playing.
@@ -134,6 +137,7 @@ impl Status {
         level: 0,
         phase: Phase::Playing,
         frames: 0,
+        clock: 0,
         reading: [0, 1000, 0],
         autopilot: false,
         sensor_down: false,
@@ -301,6 +305,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             level: self.level.min(usize::from(u8::MAX)) as u8,
             phase: game.phase(),
             frames: game.frames(),
+            clock: game.clock_frames(),
             reading: self.session.reading(),
             autopilot: self.autopilot(),
             sensor_down: self.sensor_down.is_some(),

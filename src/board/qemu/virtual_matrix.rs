@@ -102,6 +102,7 @@ impl<C: Console> VirtualMatrix<C> {
             let mut status = self.status.get();
             // Redraw for whole tenths of a second only.
             status.frames -= status.frames % (FRAME_HZ / 10).max(1);
+            status.clock -= status.clock % (FRAME_HZ / 10).max(1);
             let first = self.drawn.is_none();
             if self.drawn != Some((frame, status)) {
                 draw(console, &frame, &status, first);
@@ -190,7 +191,7 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
         }
         out.0.write(b"\x1b[0m\x1b[K\r\n");
     }
-    let tenths = status.frames * 10 / FRAME_HZ.max(1);
+    let tenths = status.clock * 10 / FRAME_HZ.max(1);
     let [x, _, z] = status.reading;
     let _ = write!(
         out,
