@@ -54,11 +54,10 @@ pub struct Status {
     pub level: u8,
     /// Where the attempt stands.
     pub phase: Phase,
-    /// Frames played in this attempt.
+    /// Frames on the level clock in this attempt: the time to show, 0 until a
+    /// marble rolls ([`Game::clock_frames`]). Not the frames played: a status
+    /// is copied often, and the v1 has no RAM for both.
     pub frames: u32,
-    /// Frames on the level clock in this attempt (the time to show; see
-    /// [`Game::clock_frames`]).
-    pub clock: u32,
     /// The reading fed to the game last (milli-g, board frame).
     pub reading: [i32; 3],
     /// Whether the autopilot is playing.
@@ -137,7 +136,6 @@ impl Status {
         level: 0,
         phase: Phase::Playing,
         frames: 0,
-        clock: 0,
         reading: [0, 1000, 0],
         autopilot: false,
         sensor_down: false,
@@ -304,8 +302,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         Status {
             level: self.level.min(usize::from(u8::MAX)) as u8,
             phase: game.phase(),
-            frames: game.frames(),
-            clock: game.clock_frames(),
+            frames: game.clock_frames(),
             reading: self.session.reading(),
             autopilot: self.autopilot(),
             sensor_down: self.sensor_down.is_some(),

@@ -102,7 +102,6 @@ impl<C: Console> VirtualMatrix<C> {
             let mut status = self.status.get();
             // Redraw for whole tenths of a second only.
             status.frames -= status.frames % (FRAME_HZ / 10).max(1);
-            status.clock -= status.clock % (FRAME_HZ / 10).max(1);
             let first = self.drawn.is_none();
             if self.drawn != Some((frame, status)) {
                 draw(console, &frame, &status, first);
@@ -191,7 +190,7 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
         }
         out.0.write(b"\x1b[0m\x1b[K\r\n");
     }
-    let tenths = status.clock * 10 / FRAME_HZ.max(1);
+    let tenths = status.frames * 10 / FRAME_HZ.max(1);
     let [x, _, z] = status.reading;
     let _ = write!(
         out,
@@ -321,6 +320,8 @@ mod storey_maps {
         let focus = status.marbles.iter().flatten().next().map(|m| m.tile());
         let window = map_window(level.info.nx, level.info.nz, level.info.storeys, focus);
         let map_columns = (2 * window.w as usize).max(TITLE_COLUMNS);
+        // On the level clock (the status's frames): the goal shows lit until
+        // the first roll, then blinks.
         let blink = blink_on(status.frames, FRAME_HZ.trailing_zeros());
         // Titles, top storey first.
         out.0.write(b"\x1b[K\r\n");
