@@ -59,6 +59,23 @@ time_limit_s: 60
 #........G#
 ###########
 `;
+// Two marbles, one on each storey: the board shows both storeys side by side.
+const SPLIT = `name: split
+effects: rolling, friction
+time_limit_s: 60
+---
+#########
+#S......#
+#######.#
+#######G#
+#########
+===
+#########
+#########
+#########
+#....S..#
+#########
+`;
 // Line 4, column 3: a tile the format does not know.
 const BROKEN = `name: broken
 ---
@@ -366,6 +383,24 @@ async function main() {
         JSON.stringify({ start: shot, list }));
       await page.locator('#board').screenshot({ path: STOREY_SHOT });
       console.log(`screenshot: ${STOREY_SHOT}`);
+    }
+
+    // Marbles on different storeys: both storeys side by side, each marble on its own.
+    {
+      await page.fill('#source', SPLIT);
+      await page.click('#play-source');
+      await page.evaluate(() => document.activeElement.blur());
+      const split = await page.evaluate(() => {
+        window.marbleTest.steps(64);
+        window.marbleTest.draw();
+        return { name: window.marbleState().name, list: window.marbleTest.placements() };
+      });
+      const { list } = split;
+      check(split.name === 'split' && JSON.stringify(list.shown) === '[1,0]' && list.marbles.length === 2
+        && list.marbles.every((m) => list.shown[m.map] === m.storey && m.kind !== 1 && m.kind !== 5),
+        'storey: marbles on two storeys are drawn on both storeys side by side, each on its own',
+        JSON.stringify(split));
+      await page.locator('#board').screenshot({ path: join(dirname(SCREENSHOT), 'split.png') });
     }
 
     // 4. A broken level: the parser's line:column message, as `cargo sim -- --check` gives it.
