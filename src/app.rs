@@ -357,7 +357,7 @@ async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
                 // between levels; a full queue drops the win, never the game.
                 let _ = links.wins.try_send(Win {
                     level: player.level_index().min(usize::from(u8::MAX)) as u8,
-                    frames: player.game().frames(),
+                    frames: player.game().clock_frames(),
                 });
             }
             let _ = phase;
@@ -486,7 +486,7 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
                     .wins
                     .send(Win {
                         level: index.min(usize::from(u8::MAX)) as u8,
-                        frames: game.frames(),
+                        frames: game.clock_frames(),
                     })
                     .await;
             }

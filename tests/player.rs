@@ -241,3 +241,109 @@ fn a_new_record_shows_growing_squares_until_the_next_level() {
     assert_eq!(p.level_index(), 1);
     assert!(!p.status().new_record, "the next level starts without it");
 }
+
+/// The level clock (`game::rules`, one rule for every board): it does not run
+/// while nothing rolls, starts within a few frames of the first tilt that rolls
+/// the marble, and the time limit counts from there; the physics steps all
+/// along, so the clock changes no state hash.
+#[test]
+fn the_clock_starts_at_the_first_tilt_that_rolls_a_marble() {
+    fn check<const EVENTS: bool>() {
+        let mut p = Player::<5, 5, true, EVENTS>::new(&LEVELS, 1, SYNTHETIC_TILT, false)
+            .expect("built-in level");
+        const LOOKING: u32 = 300;
+        for _ in 0..LOOKING {
+            p.tick([0, 1000, 0], false);
+        }
+        assert_eq!(p.game().frames(), LOOKING);
+        assert_eq!(p.game().clock_frames(), 0, "looking at the maze is free");
+        assert!(!p.game().clock_started());
+        assert_eq!(p.status().frames, 0, "the status shows the clock");
+        // Noise a hand gives (a few mg): the rolling resistance holds the marble.
+        for n in 0..200 {
+            let wobble = [(n % 5) - 2, 1000, (n % 3) - 1];
+            p.tick(wobble, false);
+        }
+        assert_eq!(
+            p.game().clock_frames(),
+            0,
+            "a wobble that rolls nothing is free"
+        );
+        let idle = p.game().frames();
+        let mut started_after = None;
+        for n in 1..=64 {
+            p.tick(TILTED, false);
+            if p.game().clock_started() {
+                started_after = Some(n);
+                break;
+            }
+        }
+        let started_after = started_after.expect("a 0.3 g tilt starts the clock");
+        assert!(
+            started_after <= 8,
+            "the clock started {started_after} frames after the tilt"
+        );
+        assert_eq!(
+            p.game().clock_frames() + idle + started_after - 1,
+            p.game().frames()
+        );
+        for _ in 0..100 {
+            p.tick(TILTED, false);
+        }
+        assert_eq!(p.status().frames, p.game().clock_frames());
+        assert_eq!(
+            p.game().frames() - p.game().clock_frames(),
+            idle + started_after - 1,
+            "once started, the clock runs with the frames"
+        );
+    }
+    check::<false>();
+    check::<true>();
+}
+
+/// The time limit is on the clock: an attempt whose first 20 s were spent
+/// looking still has the whole limit to play; one nobody touches at all ends
+/// as time up at the limit (a board left alone does not play one attempt for
+/// ever).
+#[test]
+fn the_time_limit_counts_from_the_clock_start() {
+    let limit = u32::from(LEVELS[0].info.time_limit_s) * 128;
+    let mut untouched = player(0);
+    let mut ended = None;
+    for frame in 1..=limit + 10 {
+        if let Some(phase) = untouched.tick([0, 1000, 0], false).finished {
+            ended = Some((phase, frame));
+            break;
+        }
+    }
+    assert_eq!(
+        ended,
+        Some((Phase::TimeUp, limit)),
+        "untouched: time up at the limit"
+    );
+
+    // corner: the marble rolled right a little (the clock starts), then back
+    // against the left wall and held there until the time is up.
+    let mut p = player(1);
+    let looking = 20 * 128;
+    for _ in 0..looking {
+        p.tick([0, 1000, 0], false);
+    }
+    let limit = u32::from(LEVELS[1].info.time_limit_s) * 128;
+    let mut ended = None;
+    for frame in 1..=2 * limit {
+        let reading = if frame <= 32 { TILTED } else { [300, 954, 0] };
+        if let Some(phase) = p.tick(reading, false).finished {
+            ended = Some((phase, frame, p.game().clock_frames()));
+            break;
+        }
+    }
+    let (phase, frame, clock) = ended.expect("the attempt ends");
+    assert_eq!(phase, Phase::TimeUp);
+    assert_eq!(clock, limit, "time up after the whole limit on the clock");
+    assert!(
+        (limit..limit + 8).contains(&frame),
+        "the looking time was not charged: time up {frame} frames after the first tilt"
+    );
+    assert_eq!(p.game().frames(), looking + frame);
+}

@@ -54,7 +54,9 @@ pub struct Status {
     pub level: u8,
     /// Where the attempt stands.
     pub phase: Phase,
-    /// Frames played in this attempt.
+    /// Frames on the level clock in this attempt: the time to show, 0 until a
+    /// marble rolls ([`Game::clock_frames`]). Not the frames played: a status
+    /// is copied often, and the v1 has no RAM for both.
     pub frames: u32,
     /// The reading fed to the game last (milli-g, board frame).
     pub reading: [i32; 3],
@@ -300,7 +302,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         Status {
             level: self.level.min(usize::from(u8::MAX)) as u8,
             phase: game.phase(),
-            frames: game.frames(),
+            frames: game.clock_frames(),
             reading: self.session.reading(),
             autopilot: self.autopilot(),
             sensor_down: self.sensor_down.is_some(),

@@ -2,6 +2,21 @@
 //! every frame: a marble's centre inside a goal cell wins, a marble out of play
 //! (through a hole, off an open edge) falls, and the level's time limit ends the
 //! attempt.
+//!
+//! # The level clock
+//!
+//! One rule for every board, so that records compare: the clock starts with the
+//! first frame that ends with a marble rolling (faster than [`CLOCK_START_SPEED_LOG2`] says
+//! in the board's plane), i.e. at the first tilt that moves anything. Looking at
+//! the maze before touching it costs nothing; neither does sensor noise or a
+//! hand that is not quite level, which the rolling resistance holds. A tilt
+//! rule (an angle in mg) would leave a gap: a tilt just under it rolls the
+//! marble for free. The motion is the physics' own state, identical on every
+//! board and stepper, so the rule needs no per-board threshold. The frames
+//! before the clock starts still step the physics (the state hashes do not
+//! depend on the clock), and an attempt nobody touches for its whole time limit
+//! (or 8.5 minutes, if the limit is longer) still ends as time up, so an
+//! untouched board does not play one attempt for ever.
 
 use crate::physics::dynamics::effects::BoardMotion;
 use crate::physics::geometry::frame::Frame;
@@ -71,6 +86,13 @@ impl Default for GameConfig {
     }
 }
 
+/// The speed at which a marble counts as rolling and starts the level clock
+/// is `2^-CLOCK_START_SPEED_LOG2` tile pitches per second along x or z (1/64:
+/// a fraction of a millimetre per second). A marble the rolling resistance
+/// holds is still to the bit (`tests/cli.rs`: a flat board's run ends where it
+/// started); a tilt that rolls it passes this within a few frames.
+pub const CLOCK_START_SPEED_LOG2: u32 = 6;
+
 /// Where an attempt stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -104,6 +126,13 @@ pub struct Game<'a, S: Scalar> {
     config: GameConfig,
     world: World<'a, S, MAX_MARBLES>,
     frames: u32,
+    /// Frames played before the clock started: all of them until a marble
+    /// rolls (see the module doc), then fixed. A `u16` (an attempt untouched
+    /// for `u16::MAX` frames, 8.5 minutes, ends as time up): it fits beside
+    /// `phase` where a `u32` would grow every copy of the game by 8 B, and
+    /// the micro:bit v1 had 24 B of RAM left (`cargo xtask check-microbit-v1`
+    /// measured 12 304 B of 12 288 with a `u32`).
+    idle: u16,
     phase: Phase,
     board: Option<(Frame<S>, Vec3<S>)>,
 }
@@ -133,6 +162,7 @@ impl<'a, S: Scalar> Game<'a, S> {
             config,
             world,
             frames: 0,
+            idle: 0,
             phase: Phase::Playing,
             board: None,
         })
@@ -163,9 +193,18 @@ impl<'a, S: Scalar> Game<'a, S> {
     pub fn config(&self) -> GameConfig {
         self.config
     }
-    /// Frames played.
+    /// Frames played, the clock's idle ones included (the simulated time).
     pub fn frames(&self) -> u32 {
         self.frames
+    }
+    /// Frames on the level clock (see the module doc): the attempt's time, the
+    /// one a record keeps and a display shows; 0 until a marble rolls.
+    pub fn clock_frames(&self) -> u32 {
+        self.frames - u32::from(self.idle)
+    }
+    /// Whether the level clock runs (a marble has rolled in this attempt).
+    pub fn clock_started(&self) -> bool {
+        u32::from(self.idle) < self.frames
     }
     /// Physics steps taken.
     pub fn steps(&self) -> u64 {
@@ -235,9 +274,24 @@ impl<'a, S: Scalar> Game<'a, S> {
         for _ in 0..(1u32 << self.config.substeps_log2) {
             self.world.step_in::<EVENTS>();
         }
+        let started = self.clock_started();
         self.frames = self.frames.saturating_add(1);
+        if !started && !self.rolling() {
+            self.idle = self.idle.saturating_add(1);
+        }
         self.phase = self.judge();
         self.phase
+    }
+
+    /// A marble in play moves faster than [`CLOCK_START_SPEED_LOG2`] says in the
+    /// board's plane (a falling one counts only once it rolls).
+    ///
+    fn rolling(&self) -> bool {
+        let limit = S::from_scaled(1, CLOCK_START_SPEED_LOG2, false);
+        self.world
+            .marbles()
+            .iter()
+            .any(|m| !m.out && (m.vel.x.abs() > limit || m.vel.z.abs() > limit))
     }
 
     fn judge(&self) -> Phase {
@@ -260,9 +314,10 @@ impl<'a, S: Scalar> Game<'a, S> {
         if in_goal {
             return Phase::Won;
         }
-        if self.frames
-            >= u32::from(self.level.info.time_limit_s).saturating_mul(self.config.frame_hz())
-        {
+        // On the clock, or untouched for the whole limit (idle == frames) or
+        // as long as `idle` counts.
+        let limit = u32::from(self.level.info.time_limit_s).saturating_mul(self.config.frame_hz());
+        if self.clock_frames() >= limit || u32::from(self.idle) >= limit.min(u16::MAX.into()) {
             return Phase::TimeUp;
         }
         Phase::Playing

@@ -425,7 +425,7 @@ impl Game {
         let game = self.player.game();
         let info = &game.level().info;
         let hz = game.config().frame_hz() as f64;
-        let t = game.frames() as f64 / hz;
+        let t = game.clock_frames() as f64 / hz;
         let which = format!("level {}", self.player.level_index() + 1);
         let status = match game.phase() {
             Phase::Playing => format!("{:.1} / {} s", t, info.time_limit_s),

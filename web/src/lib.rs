@@ -11,6 +11,14 @@
 //! ends each built-in level with `cargo sim -- --autopilot`'s `state_hash`
 //! (the browser test checks that).
 //!
+//! # Both steppers
+//!
+//! The page plays with event stepping, as every board and `cargo sim` do by
+//! default (the accuracy study's recommendation), and can switch to fixed
+//! steps, the study's baseline: [`set_stepping`]. The stepper is a constant of
+//! the [`Player`] type (a board links one), so the page holds either player
+//! ([`AnyPlayer`]); both cost the module their code, which a browser can spare.
+//!
 //! # Why no wasm-bindgen
 //!
 //! The interface is a few dozen numbers and two byte buffers, so it is plain
@@ -38,18 +46,80 @@ use core::fmt::Write;
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::level::{parse, Cell, Level, LevelError, LevelErrorKind, LevelView};
 use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::player::Tick;
 use marble_rolling::game::player::{Player, FRAME_HZ};
-use marble_rolling::game::rules::Phase;
+use marble_rolling::game::rules::{Game, Phase};
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::event::Tilt;
 use marble_rolling::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
-use marble_rolling::physics::TileIndex;
+use marble_rolling::physics::{Fx, TileIndex};
+use marble_rolling::render;
 
-/// The micro:bit v2's player: its 5×5 matrix and its fixed physics steps (so
-/// the page plays the micro:bit's game to the bit, and `cargo sim` with its
-/// defaults replays it), with the autopilot (the page has a button for it, as
-/// the QEMU board has a key).
-type WebPlayer = Player<WIDTH, HEIGHT, true, false>;
+/// The micro:bit's player (its 5×5 matrix) with the autopilot (the page has
+/// a button for it, as the QEMU board has a key), stepped by events (`EVENTS`)
+/// or fixed steps: `cargo sim -- --stepping events|fixed` replays either.
+type WebPlayer<const EVENTS: bool> = Player<WIDTH, HEIGHT, true, EVENTS>;
+
+/// The player on the stepper the page chose (see the module doc).
+enum AnyPlayer {
+    Events(WebPlayer<true>),
+    Fixed(WebPlayer<false>),
+}
+
+/// `$body` with `$p` bound to the player, whichever stepper it has.
+macro_rules! each {
+    ($player:expr, $p:ident => $body:expr) => {
+        match $player {
+            AnyPlayer::Events($p) => $body,
+            AnyPlayer::Fixed($p) => $body,
+        }
+    };
+}
+
+impl AnyPlayer {
+    fn new(
+        levels: &'static [LevelView<'static>],
+        index: usize,
+        events: bool,
+        autopilot: bool,
+    ) -> Option<AnyPlayer> {
+        Some(if events {
+            AnyPlayer::Events(WebPlayer::new(levels, index, SYNTHETIC_TILT, autopilot).ok()?)
+        } else {
+            AnyPlayer::Fixed(WebPlayer::new(levels, index, SYNTHETIC_TILT, autopilot).ok()?)
+        })
+    }
+    fn events(&self) -> bool {
+        matches!(self, AnyPlayer::Events(_))
+    }
+    fn tick(&mut self, reading: [i32; 3]) -> Tick<WIDTH, HEIGHT> {
+        each!(self, p => p.tick(reading, true))
+    }
+    fn game(&self) -> &Game<'static, Fx> {
+        each!(self, p => p.game())
+    }
+    fn level_index(&self) -> usize {
+        each!(self, p => p.level_index())
+    }
+    fn state_hash(&self) -> u64 {
+        each!(self, p => p.session().state_hash())
+    }
+    fn reading(&self) -> [i32; 3] {
+        each!(self, p => p.session().reading())
+    }
+    fn autopilot(&self) -> bool {
+        each!(self, p => p.autopilot())
+    }
+    fn set_autopilot(&mut self, on: bool) {
+        each!(self, p => p.set_autopilot(on))
+    }
+    fn restart(&mut self) {
+        each!(self, p => p.restart())
+    }
+    fn next_level(&mut self) {
+        each!(self, p => p.next_level())
+    }
+}
 
 /// Occupancy words of the largest level the format allows: the editor's level
 /// is parsed into a grid of this size (as the host tools' run-time levels are).
@@ -140,11 +210,15 @@ struct Finished {
     custom: bool,
     phase: Phase,
     frames: u32,
+    /// Frames on the level clock (the time a player is shown and a record keeps).
+    clock: u32,
     hash: u64,
 }
 
 struct App {
-    player: WebPlayer,
+    player: AnyPlayer,
+    /// The level list in play (the built-ins, or the editor's level and them).
+    levels: &'static [LevelView<'static>],
     /// Whether the player's list starts with the editor's level.
     custom: bool,
     /// The page's tilt, as the accelerometer reading the player is fed.
@@ -156,9 +230,10 @@ struct App {
 
 impl App {
     fn new() -> Option<App> {
-        let player = WebPlayer::new(&LEVELS, 0, SYNTHETIC_TILT, false).ok()?;
+        let player = AnyPlayer::new(&LEVELS, 0, true, false)?;
         Some(App {
             player,
+            levels: &LEVELS,
             custom: false,
             reading: Tilt::FLAT.reading_mg(),
             led: [0; WIDTH * HEIGHT],
@@ -168,27 +243,39 @@ impl App {
                 custom: false,
                 phase: Phase::Playing,
                 frames: 0,
+                clock: 0,
                 hash: 0,
             },
         })
     }
 
-    /// Plays level `index` of `levels` from its start; the autopilot setting
-    /// carries over. False (and the game unchanged) if it cannot be set up.
+    /// Plays level `index` of `levels` from its start with the stepper in
+    /// use; the autopilot setting carries over. False (and the game
+    /// unchanged) if it cannot be set up.
     fn start(&mut self, levels: &'static [LevelView<'static>], index: usize) -> bool {
-        let autopilot = self.player.autopilot();
-        match WebPlayer::new(levels, index, SYNTHETIC_TILT, autopilot) {
-            Ok(player) => {
+        self.start_stepped(levels, index, self.player.events())
+    }
+
+    /// [`App::start`] with the stepper `events` picks.
+    fn start_stepped(
+        &mut self,
+        levels: &'static [LevelView<'static>],
+        index: usize,
+        events: bool,
+    ) -> bool {
+        match AnyPlayer::new(levels, index, events, self.player.autopilot()) {
+            Some(player) => {
                 self.player = player;
+                self.levels = levels;
                 true
             }
-            Err(_) => false,
+            None => false,
         }
     }
 
     fn tick(&mut self) -> u32 {
         let level = self.player.level_index();
-        let tick = self.player.tick(self.reading, true);
+        let tick = self.player.tick(self.reading);
         if let Some(frame) = tick.frame {
             for (y, row) in frame.rows().iter().enumerate() {
                 self.led[y * WIDTH..(y + 1) * WIDTH].copy_from_slice(row);
@@ -203,7 +290,8 @@ impl App {
                 custom: self.is_custom_level(),
                 phase,
                 frames: game.frames(),
-                hash: self.player.session().state_hash(),
+                clock: game.clock_frames(),
+                hash: self.player.state_hash(),
             };
             flags |= TICK_FINISHED;
         }
@@ -411,13 +499,13 @@ pub extern "C" fn set_tilt(right_mg: i32, up_mg: i32) {
 /// The reading fed to the game last, x (mg, board frame).
 #[no_mangle]
 pub extern "C" fn reading_x() -> i32 {
-    with_app(0, |app| app.player.session().reading()[0])
+    with_app(0, |app| app.player.reading()[0])
 }
 
 /// The reading fed to the game last, z (mg, board frame).
 #[no_mangle]
 pub extern "C" fn reading_z() -> i32 {
-    with_app(0, |app| app.player.session().reading()[2])
+    with_app(0, |app| app.player.reading()[2])
 }
 
 /// Built-in levels.
@@ -576,16 +664,40 @@ fn phase_code(phase: Phase) -> u32 {
     }
 }
 
-/// Frames played in this attempt.
+/// Frames played in this attempt (the clock's idle ones included: the
+/// simulated time `cargo sim` reports).
 #[no_mangle]
 pub extern "C" fn frames() -> u32 {
     with_app(0, |app| app.player.game().frames())
 }
 
+/// Frames on the level clock in this attempt (`Game::clock_frames`: it starts
+/// at the first tilt that rolls a marble, on every board).
+#[no_mangle]
+pub extern "C" fn clock_frames() -> u32 {
+    with_app(0, |app| app.player.game().clock_frames())
+}
+
+/// 1 while the page plays with event stepping, 0 with fixed steps.
+#[no_mangle]
+pub extern "C" fn stepping_events() -> u32 {
+    with_app(0, |app| app.player.events() as u32)
+}
+
+/// Switches the stepper (`events` ≠ 0: event stepping, else fixed steps) and
+/// starts the level in play over with it; 1 on success.
+#[no_mangle]
+pub extern "C" fn set_stepping(events: u32) -> u32 {
+    with_app(0, |app| {
+        let index = app.player.level_index();
+        app.start_stepped(app.levels, index, events != 0) as u32
+    })
+}
+
 /// The exact state's digest (`Session::state_hash`, as `cargo sim` prints it).
 #[no_mangle]
 pub extern "C" fn state_hash() -> u64 {
-    with_app(0, |app| app.player.session().state_hash())
+    with_app(0, |app| app.player.state_hash())
 }
 
 /// Attempts finished so far (see the `finished_*` functions for the last one).
@@ -618,6 +730,12 @@ pub extern "C" fn finished_frames() -> u32 {
     with_app(0, |app| app.finished.frames)
 }
 
+/// The last finished attempt's time on the level clock, frames.
+#[no_mangle]
+pub extern "C" fn finished_clock() -> u32 {
+    with_app(0, |app| app.finished.clock)
+}
+
 /// `state_hash` at the end of the last finished attempt.
 #[no_mangle]
 pub extern "C" fn finished_hash() -> u64 {
@@ -636,23 +754,24 @@ pub extern "C" fn level_nz() -> u32 {
     with_app(0, |app| u32::from(app.level().info.nz))
 }
 
-/// What tile `(i, k)` of the storey marble 0 is on (the lowest once it is out)
-/// is: 0 floor, 1 wall, 2 hole, 3 goal, 4 start, 5 outside.
+/// Storeys of the level in play (1 for a flat maze).
 #[no_mangle]
-pub extern "C" fn tile_kind(i: u32, k: u32) -> u32 {
+pub extern "C" fn level_storeys() -> u32 {
+    with_app(1, |app| u32::from(app.level().info.storeys).max(1))
+}
+
+/// What tile `(i, k)` of storey `storey` (0 the lowest) is: 0 floor, 1 wall,
+/// 2 hole, 3 goal, 4 start, 5 outside (also for a storey the level lacks).
+#[no_mangle]
+pub extern "C" fn tile_kind(i: u32, k: u32, storey: u32) -> u32 {
     with_app(5, |app| {
         let level = app.level();
         let info = &level.info;
-        if i >= u32::from(info.nx) || k >= u32::from(info.nz) {
+        if i >= u32::from(info.nx) || k >= u32::from(info.nz) || storey >= u32::from(info.storeys) {
             return 5;
         }
-        let world = app.player.game().world();
-        let storey = world
-            .marbles()
-            .first()
-            .filter(|m| !m.out)
-            .map_or(0, |m| world.params().layout.storey_of(m.pos.y).max(0));
         let cell = Cell::new(i as u8, k as u8, storey as u8);
+        let storey = storey as i32;
         let solid = |j| {
             level
                 .tiles
@@ -672,6 +791,42 @@ pub extern "C" fn tile_kind(i: u32, k: u32) -> u32 {
     })
 }
 
+/// The storey marble `index` is on (0 the lowest; the one whose wall layer or
+/// floor slab holds its centre, as the LED view and QEMU's maps take it).
+#[no_mangle]
+pub extern "C" fn marble_storey(index: u32) -> u32 {
+    with_app(0, |app| {
+        let world = app.player.game().world();
+        world.marbles().get(index as usize).map_or(0, |m| {
+            let storeys = i32::from(app.level().info.storeys).max(1);
+            world
+                .params()
+                .layout
+                .storey_of(m.pos.y)
+                .clamp(0, storeys - 1) as u32
+        })
+    })
+}
+
+/// How much brighter the floor is drawn `elapsed` frames after the followed
+/// marble dropped to a lower storey, out of [`drop_flash`]: the LED matrix's
+/// flash (`render::drop_glow`), so the page shows the drop as the board does.
+#[no_mangle]
+pub extern "C" fn drop_glow(elapsed: u32) -> u32 {
+    with_app(0, |app| {
+        u32::from(render::drop_glow(
+            elapsed,
+            app.player.game().config().frame_log2,
+        ))
+    })
+}
+
+/// The drop flash's full strength ([`drop_glow`] right after a drop).
+#[no_mangle]
+pub extern "C" fn drop_flash() -> u32 {
+    u32::from(render::DROP_FLASH)
+}
+
 /// Where tile column (or row: the layout is the same along both) `i` begins,
 /// in mm; `i = nx` gives where the last one ends. Walls and cells differ in
 /// width, so the page draws them from these edges.
@@ -680,6 +835,14 @@ pub extern "C" fn tile_edge_mm(i: i32) -> f64 {
     with_app(0.0, |app| {
         let layout = &app.player.game().world().params().layout;
         layout.to_mm(layout.span_xz(i).0)
+    })
+}
+
+/// A tile pitch in mm: the height between two storeys' floors (eq. 5).
+#[no_mangle]
+pub extern "C" fn pitch_mm() -> f64 {
+    with_app(0.0, |app| {
+        f64::from(app.player.game().world().params().layout.pitch_um) / 1000.0
     })
 }
 

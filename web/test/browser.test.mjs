@@ -4,13 +4,18 @@
 // passes MARBLE_WEB_URL; run on its own (`node browser.test.mjs`) it starts
 // `cargo xtask web --port 0` itself.
 //
-// It checks: the page loads and the wasm game runs; arrow keys, WASD, the
-// mouse joystick and the phone's orientation roll the marble the right way; a won level's best time lands
-// in localStorage; the autopilot ends every built-in level with the state hash
-// `cargo sim -- --level NAME --autopilot --json` prints (computed here, at test
-// time); a broken level pasted in the editor shows the parser's line:column
-// message, the same as `cargo sim -- --check`; it writes a screenshot and
-// measures the per-frame cost with performance.now().
+// It checks: the page loads gzipped, with event stepping, and the wasm game
+// runs; arrow keys, WASD, the mouse joystick and the phone's orientation roll
+// the marble the right way; the clock waits for the first roll; a won level's
+// best time lands in localStorage and its message names the level; a key held
+// through a win does not tilt the next level; on both steppings the autopilot
+// ends every built-in level with the state hash `cargo sim -- --level NAME
+// --autopilot --json --stepping STEPPING` prints (computed here, at test time),
+// and the tile drawn under every marble in every frame of those runs is never
+// a wall (the storey check); a broken level pasted in the editor shows the
+// parser's line:column message, the same as `cargo sim -- --check`; it writes
+// screenshots (two-floors after the drop, a phone's viewport) and measures the
+// per-frame cost with performance.now().
 
 import { spawn, spawnSync } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync, mkdirSync } from 'node:fs';
@@ -22,6 +27,14 @@ import { chromium } from 'playwright-core';
 const ROOT = process.env.MARBLE_ROOT ?? resolve(dirname(fileURLToPath(import.meta.url)), '../..');
 const CARGO = process.env.CARGO ?? 'cargo';
 const SCREENSHOT = process.env.MARBLE_WEB_SCREENSHOT ?? join(ROOT, 'target/web/web.png');
+// Two-floors after the drop, and the page on a phone's screen.
+const STOREY_SHOT = join(dirname(SCREENSHOT), 'two-floors.png');
+const DROP_SHOT = join(dirname(SCREENSHOT), 'two-floors-drop.png');
+const PHONE_SHOT = join(dirname(SCREENSHOT), 'phone.png');
+// The steppings the page can run, the default first.
+const STEPPINGS = ['events', 'fixed'];
+// Tile kinds in the page's draw list (web/src/lib.rs, tile_kind).
+const KIND_NAMES = ['floor', 'wall', 'hole', 'goal', 'start', 'outside'];
 // Chromium as the machine's closed network needs it: no background
 // connections (they are refused, many at a time), no GPU, no sandbox (root).
 const CHROMIUM_ARGS = [
@@ -45,6 +58,23 @@ time_limit_s: 60
 #.........#
 #........G#
 ###########
+`;
+// Two marbles, one on each storey: the board shows both storeys side by side.
+const SPLIT = `name: split
+effects: rolling, friction
+time_limit_s: 60
+---
+#########
+#S......#
+#######.#
+#######G#
+#########
+===
+#########
+#########
+#########
+#....S..#
+#########
 `;
 // Line 4, column 3: a tile the format does not know.
 const BROKEN = `name: broken
@@ -92,12 +122,12 @@ async function server() {
   return { url, stop: () => child.kill() };
 }
 
-// What `cargo sim` says of each level's autopilot run, and its level list.
-function hostRuns(names) {
+// What `cargo sim` says of each level's autopilot run with `stepping`, and its level list.
+function hostRuns(names, stepping) {
   const list = cargo(['sim', '--', '--list']).stdout;
   const hostNames = [...list.matchAll(/^\s+\d+\.\s+(\S+)/gm)].map((m) => m[1]);
-  const runs = names.map((name) =>
-    JSON.parse(cargo(['sim', '--', '--level', name, '--autopilot', '--json']).stdout));
+  const runs = names.map((name) => JSON.parse(cargo(
+    ['sim', '--', '--level', name, '--autopilot', '--json', '--stepping', stepping]).stdout));
   return { hostNames, runs };
 }
 
@@ -123,6 +153,17 @@ async function main() {
     const first = await page.evaluate(() => window.marbleState());
     check(first.name === 'first-roll' && first.phase === 'playing',
       'page loads, the wasm game runs at its frame rate', JSON.stringify(first));
+    check(first.stepping === 'events' && await page.inputValue('#stepping') === 'events',
+      'the page steps by events by default', first.stepping);
+    check(first.clock === 0 && await page.textContent('#hud-time') === 'tilt to start (30 s)',
+      'the clock waits for the first roll', `clock ${first.clock}, ${await page.textContent('#hud-time')}`);
+    const served = await page.evaluate(() => performance.getEntriesByType('resource')
+      .filter((e) => e.name.endsWith('/marble_web.wasm'))
+      .map((e) => ({ encoded: e.encodedBodySize, decoded: e.decodedBodySize }))[0]);
+    check(served && served.encoded > 0 && served.encoded < served.decoded / 2,
+      `the wasm is served gzipped: ${served?.encoded} bytes for ${served?.decoded}`, JSON.stringify(served));
+    console.log(`wasm: ${served?.decoded} bytes, ${served?.encoded} bytes gzipped as served`);
+    check(await page.isHidden('#editor'), 'the editor waits behind its button');
     const isolated = await page.evaluate(() => window.crossOriginIsolated);
     check(isolated, 'the page is cross-origin isolated (5 µs performance.now())');
 
@@ -139,6 +180,7 @@ async function main() {
     check(stalled === 8, 'an animation frame 500 ms late catches up 8 frames, no more', `${stalled}`);
 
     // 2. Keys and the mouse joystick tilt the board the right way.
+    await page.click('#editor-toggle');
     await page.fill('#source', OPEN_FIELD);
     await page.click('#play-source');
     await page.evaluate(() => document.activeElement.blur());
@@ -219,42 +261,147 @@ async function main() {
     await page.evaluate(() => document.activeElement.blur());
 
     // A level won by hand: its best time is kept in localStorage.
-    await page.evaluate(() => { localStorage.clear(); window.marbleTest.select(0); });
+    // First two seconds of looking: they do not count.
+    await page.evaluate(() => { localStorage.clear(); window.marbleTest.select(0); window.marbleTest.steps(256); });
     await page.keyboard.down('ArrowRight');
     const won = await page.evaluate(() => {
       window.marbleTest.steps(30 * 128, true);
       return window.marbleTest.finished();
     });
-    await page.keyboard.up('ArrowRight');
     const best = await page.evaluate(() => localStorage.getItem('marble-rolling.best.first-roll'));
-    check(won.phase === 'won' && best !== null && Math.abs(Number(best) - won.frames / 128) < 0.001,
-      'holding the right arrow wins first-roll; the best time is in localStorage',
+    check(won.phase === 'won' && best !== null && Math.abs(Number(best) - won.clock / 128) < 0.001,
+      'holding the right arrow wins first-roll; the best time (on the clock) is in localStorage',
       `finished ${JSON.stringify(won)}, stored ${best}`);
+    check(won.clock > 0 && won.frames - won.clock === 256,
+      'the clock started at the first roll, not at the level\'s start', JSON.stringify(won));
+    const message = await page.evaluate(() => window.marbleTest.status());
+    check(message === `first-roll: won in ${(won.clock / 128).toFixed(2)} s, a new best!`,
+      `the win message names its level and time: "${message}"`);
 
-    // 3. The autopilot on every built-in level ends with the host's state hash.
+    // The key still held through the win does not tilt the next level: its
+    // first frames are flat and its clock does not start.
+    const next = await page.evaluate(() => {
+      window.marbleTest.steps(2 * 128);
+      const state = window.marbleState();
+      return { name: state.name, tilt: state.input.tilt, reading: state.input.reading, clock: state.clock };
+    });
+    await page.keyboard.up('ArrowRight');
+    check(next.name === 'corner' && next.tilt[0] === 0 && next.tilt[1] === 0 && next.clock === 0,
+      'a key held through the win is let go at the next level', JSON.stringify(next));
+    const after = await page.evaluate(() => window.marbleTest.status());
+    check(after.startsWith('first-roll: '), `the message still names the level it was for: "${after}"`);
+
+    // 3. On both steppings, the autopilot on every built-in level ends with
+    // the host's state hash; in every frame of its runs, the tile drawn under
+    // each marble (the page's draw list) is never a wall.
     const names = await page.evaluate(() => window.marbleTest.levels());
-    console.log(`running cargo sim for ${names.length} levels…`);
-    const { hostNames, runs } = hostRuns(names);
-    check(JSON.stringify(hostNames) === JSON.stringify(names),
-      `the page has the host's ${hostNames.length} built-in levels`, `${names} vs ${hostNames}`);
-    let matched = 0;
-    for (let i = 0; i < names.length; i++) {
-      const web = await page.evaluate((index) => {
-        window.marbleTest.select(index);
-        window.marbleTest.setAutopilot(true);
-        window.marbleTest.steps(4000 * 128, true);
-        const record = window.marbleTest.finished();
-        window.marbleTest.setAutopilot(false);
-        return record;
-      }, i);
-      const host = runs[i];
-      const same = web.level === i && web.phase === host.outcome && web.frames === host.frames
-        && web.hash === host.state_hash;
-      matched += same;
-      check(same, `autopilot on ${names[i]}: ${web.phase} in ${web.frames} frames, state_hash ${web.hash}`,
-        `host: ${host.outcome} in ${host.frames} frames, state_hash ${host.state_hash}`);
+    for (const stepping of STEPPINGS) {
+      console.log(`running cargo sim --stepping ${stepping} for ${names.length} levels…`);
+      const { hostNames, runs } = hostRuns(names, stepping);
+      check(JSON.stringify(hostNames) === JSON.stringify(names),
+        `the page has the host's ${hostNames.length} built-in levels`, `${names} vs ${hostNames}`);
+      const set = await page.evaluate((name) => window.marbleTest.stepping(name), stepping);
+      check(set === stepping, `the page switches to stepping=${stepping}`, set);
+      let matched = 0;
+      let storeyFrames = 0;
+      const misdrawn = [];
+      for (let i = 0; i < names.length; i++) {
+        const web = await page.evaluate((index) => {
+          window.marbleTest.select(index);
+          window.marbleTest.setAutopilot(true);
+          const stepping = window.marbleState().stepping;
+          const bad = [];
+          let frames = 0;
+          const storeys = new Set();
+          const before = window.marbleTest.finished().count;
+          for (let f = 0; f < 4000 * 128; f++) {
+            // The draw list as the next draw() would paint it, then the frame.
+            const list = window.marbleTest.placements();
+            frames++;
+            for (const m of list.marbles) {
+              storeys.add(m.storey);
+              if (m.kind === 1 || m.kind === 5 || list.shown[m.map] !== m.storey) {
+                if (bad.length < 3) bad.push({ frame: f, ...m, shown: list.shown });
+              }
+            }
+            window.marbleTest.steps(1);
+            if (window.marbleTest.finished().count !== before) break;
+          }
+          const record = window.marbleTest.finished();
+          window.marbleTest.setAutopilot(false);
+          return { ...record, stepping, bad, drawn: frames, storeys: [...storeys] };
+        }, i);
+        const host = runs[i];
+        const same = web.level === i && web.phase === host.outcome && web.frames === host.frames
+          && web.hash === host.state_hash && web.stepping === stepping && host.stepping === stepping;
+        matched += same;
+        check(same, `autopilot on ${names[i]} (stepping=${stepping}): ${web.phase} in ${web.frames} frames, state_hash ${web.hash}`,
+          `host: ${host.outcome} in ${host.frames} frames (${host.stepping}), state_hash ${host.state_hash}`);
+        storeyFrames += web.drawn;
+        if (web.bad.length) misdrawn.push(`${names[i]}: ${JSON.stringify(web.bad)}`);
+        if (/floors/.test(names[i])) {
+          check(web.storeys.length > 1, `storey: the autopilot's marble on ${names[i]} is drawn on ${web.storeys.length} storeys`);
+        }
+      }
+      console.log(`state hashes: ${matched}/${names.length} levels match cargo sim (stepping=${stepping})`);
+      check(misdrawn.length === 0,
+        `storey: in ${storeyFrames} frames of the autopilot on every built-in level (stepping=${stepping}), `
+        + 'each marble is drawn on its own storey, never over a wall', misdrawn.join('; '));
     }
-    console.log(`state hashes: ${matched}/${names.length} levels match cargo sim`);
+    await page.evaluate(() => window.marbleTest.stepping('events'));
+
+    // Two-floors after the drop: the lower storey on show (and the drop's
+    // flash a few frames after it), as the LEDs show it.
+    {
+      const index = names.indexOf('two-floors');
+      const shot = await page.evaluate((i) => {
+        window.marbleTest.select(i);
+        window.marbleTest.setAutopilot(true);
+        let start = window.marbleTest.placements().marbles[0].storey;
+        for (let f = 0; f < 60 * 128; f++) {
+          window.marbleTest.steps(1);
+          const m = window.marbleTest.placements().marbles[0];
+          if (m && m.storey < start) break;
+        }
+        // The flash, a few frames after the drop.
+        window.marbleTest.steps(4);
+        window.marbleTest.draw();
+        return start;
+      }, index);
+      await page.locator('#board').screenshot({ path: DROP_SHOT });
+      console.log(`screenshot: ${DROP_SHOT}`);
+      const list = await page.evaluate(() => {
+        // Once the flash is over.
+        window.marbleTest.steps(60);
+        window.marbleTest.draw();
+        window.marbleTest.setAutopilot(false);
+        return window.marbleTest.placements();
+      });
+      check(shot === 1 && JSON.stringify(list.shown) === '[0]'
+        && list.marbles.every((m) => m.storey === 0 && KIND_NAMES[m.kind] !== 'wall'),
+        'storey: two-floors after the drop shows the lower storey, the marble on its floor',
+        JSON.stringify({ start: shot, list }));
+      await page.locator('#board').screenshot({ path: STOREY_SHOT });
+      console.log(`screenshot: ${STOREY_SHOT}`);
+    }
+
+    // Marbles on different storeys: both storeys side by side, each marble on its own.
+    {
+      await page.fill('#source', SPLIT);
+      await page.click('#play-source');
+      await page.evaluate(() => document.activeElement.blur());
+      const split = await page.evaluate(() => {
+        window.marbleTest.steps(64);
+        window.marbleTest.draw();
+        return { name: window.marbleState().name, list: window.marbleTest.placements() };
+      });
+      const { list } = split;
+      check(split.name === 'split' && JSON.stringify(list.shown) === '[1,0]' && list.marbles.length === 2
+        && list.marbles.every((m) => list.shown[m.map] === m.storey && m.kind !== 1 && m.kind !== 5),
+        'storey: marbles on two storeys are drawn on both storeys side by side, each on its own',
+        JSON.stringify(split));
+      await page.locator('#board').screenshot({ path: join(dirname(SCREENSHOT), 'split.png') });
+    }
 
     // 4. A broken level: the parser's line:column message, as `cargo sim -- --check` gives it.
     const scratch = mkdtempSync(join(tmpdir(), 'marble-web-level-'));
@@ -286,6 +433,40 @@ async function main() {
     mkdirSync(dirname(SCREENSHOT), { recursive: true });
     await page.screenshot({ path: SCREENSHOT, fullPage: true });
     console.log(`screenshot: ${SCREENSHOT}`);
+
+    // A phone's viewport: the maze the page's width, the panel under it, the
+    // editor behind its button.
+    {
+      const phone = await context.newPage();
+      await phone.setViewportSize({ width: 390, height: 844 });
+      await phone.goto(url);
+      await phone.waitForSelector('body[data-ready="true"]', { timeout: 20000 });
+      await phone.evaluate(() => { window.marbleTest.setRunning(false); window.marbleTest.select(7); window.marbleTest.draw(); });
+      const box = await phone.locator('#board').boundingBox();
+      const panel = await phone.locator('aside').boundingBox();
+      const editorHidden = await phone.isHidden('#editor');
+      const viewport = phone.viewportSize();
+      check(box.width >= viewport.width - 24 && panel.y >= box.y + box.height && editorHidden,
+        `on a phone (390 × 844) the maze is ${Math.round(box.width)} px wide, the panel under it, the editor behind its button`,
+        JSON.stringify({ box, panel, editorHidden }));
+      // No band: the maze's box is as high as the level's shape asks.
+      const filled = await phone.evaluate(() => {
+        const c = document.querySelector('#board');
+        const g = c.getContext('2d');
+        // The share of the canvas's rows that hold maze (not the outside colour) in its middle column.
+        const data = g.getImageData(Math.floor(c.width / 2), 0, 1, c.height).data;
+        let maze = 0;
+        for (let y = 0; y < c.height; y++) {
+          const [r, gr, b] = [data[4 * y], data[4 * y + 1], data[4 * y + 2]];
+          if (!(r === 0x16 && gr === 0x18 && b === 0x1d)) maze++;
+        }
+        return maze / c.height;
+      });
+      check(filled > 0.9, `on a phone the maze fills ${(filled * 100).toFixed(0)} % of the board's height`);
+      await phone.screenshot({ path: PHONE_SHOT });
+      console.log(`screenshot: ${PHONE_SHOT}`);
+      await phone.close();
+    }
 
     // 6. The per-frame cost: the autopilot playing the levels over and over
     // from the first (its frames that play, not those that show a result).

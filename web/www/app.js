@@ -38,7 +38,10 @@ const orientation = { on: false, neutral: null, right: 0, up: 0 };
 const costs = new Float64Array(COST_WINDOW);
 let costCount = 0;
 let level = null; // geometry of the level in play, for drawing
-let boardCache = null; // the maze drawn at the canvas's size, redrawn on resize
+let boardCache = null; // the storeys on show drawn at the canvas's size: { key, canvas }
+// The storey the followed marble (the first in play, as the LEDs follow it)
+// was on after the last frame, and the frame it last dropped to a lower one.
+const drop = { storey: null, at: null };
 
 async function load() {
   const response = fetch('marble_web.wasm');
@@ -93,7 +96,10 @@ function onKey(event, down) {
   if (typing(event)) return;
   const dir = KEY_DIRS[event.code];
   if (dir) {
-    if (down) keys.add(dir); else keys.delete(dir);
+    // A key released by a level change (releaseInput) stays released until
+    // it is pressed again: its auto-repeats do not count as a new press.
+    if (down && !event.repeat) keys.add(dir);
+    else if (!down) keys.delete(dir);
     event.preventDefault();
     return;
   }
@@ -127,9 +133,25 @@ function tilt() {
   return [0, 0];
 }
 
+// Lets go of everything held (keys, the joystick's finger or mouse): at a level
+// change, so that a key still down at a win does not tilt the next level from
+// its first frame. The next press (or drag) takes hold again.
+function releaseInput() {
+  keys.clear();
+  if (stick.active) {
+    stick.active = false;
+    const canvas = $('board');
+    canvas.classList.remove('dragging');
+    if (stick.pointerId != null && canvas.hasPointerCapture?.(stick.pointerId)) {
+      canvas.releasePointerCapture(stick.pointerId);
+    }
+  }
+}
+
 function setupStick(canvas) {
   canvas.addEventListener('pointerdown', (e) => {
     stick.active = true;
+    stick.pointerId = e.pointerId;
     stick.x0 = stick.x = e.clientX;
     stick.y0 = stick.y = e.clientY;
     canvas.setPointerCapture(e.pointerId);
@@ -208,9 +230,28 @@ function frame() {
   const t0 = performance.now();
   const flags = w.tick();
   costs[costCount++ % COST_WINDOW] = performance.now() - t0;
+  followStorey();
   if (flags & TICK_FINISHED) finished();
   if (flags & TICK_NEW_ATTEMPT) newAttempt();
   return flags;
+}
+
+// The followed marble's storey after a frame: a drop to a lower one starts the
+// floor flash (the LED matrix's, `render::drop_glow`).
+function followStorey() {
+  if (!level || level.storeys < 2) return;
+  const followed = followedMarble();
+  if (followed < 0) return;
+  const storey = w.marble_storey(followed);
+  if (drop.storey !== null && storey < drop.storey) drop.at = w.frames();
+  drop.storey = storey;
+}
+
+// The first marble in play (the one the LED view follows), or -1.
+function followedMarble() {
+  const n = w.marble_count();
+  for (let m = 0; m < n; m++) if (!w.marble_out(m)) return m;
+  return -1;
 }
 
 let last = null;
@@ -240,7 +281,10 @@ function loop(now) {
 
 function finished() {
   const phase = w.finished_phase();
-  const seconds = w.finished_frames() / hz;
+  const seconds = w.finished_clock() / hz;
+  // Named: the page moves on to the next level while the message stays.
+  const name = levelName();
+  const time = `${seconds.toFixed(2)} s`;
   if (phase === PHASE_WON) {
     // The best time is a person's: the autopilot's runs do not count.
     if (!w.autopilot()) {
@@ -248,15 +292,17 @@ function finished() {
       const best = Number(localStorage.getItem(key));
       if (!best || seconds < best) {
         localStorage.setItem(key, seconds.toFixed(3));
-        status(`won in ${seconds.toFixed(2)} s: a new best!`);
+        status(`${name}: won in ${time}, a new best!`);
       } else {
-        status(`won in ${seconds.toFixed(2)} s (best ${best.toFixed(2)} s)`);
+        status(`${name}: won in ${time} (best ${best.toFixed(2)} s)`);
       }
     } else {
-      status(`the autopilot won in ${seconds.toFixed(2)} s`);
+      status(`${name}: the autopilot won in ${time}`);
     }
+  } else if (phase === 2) {
+    status(`${name}: fell into a hole after ${time}, again`);
   } else {
-    status(phase === 2 ? 'fell into a hole: again' : "time's up: again");
+    status(`${name}: time's up after ${time}, again`);
   }
 }
 
@@ -264,22 +310,32 @@ function bestKey() {
   return `marble-rolling.best.${w.level_is_custom() ? 'editor:' : ''}${levelName()}`;
 }
 
-// A new level or a restart: its geometry, the picker, the best time.
+// A new level or a restart: its geometry, the picker, the best time; held
+// input is let go at a new level.
 function newAttempt() {
   const nx = w.level_nx();
   const nz = w.level_nz();
-  const kinds = new Uint8Array(nx * nz);
-  for (let k = 0; k < nz; k++) for (let i = 0; i < nx; i++) kinds[k * nx + i] = w.tile_kind(i, k);
   const edges = new Float64Array(Math.max(nx, nz) + 1);
   for (let i = 0; i < edges.length; i++) edges[i] = w.tile_edge_mm(i);
+  const name = levelName();
+  const index = w.level_is_custom() ? -1 : w.level_index();
+  if (level && (level.index !== index || level.name !== name)) releaseInput();
   level = {
-    nx, nz, kinds, edges,
+    nx, nz, edges, name, index,
+    storeys: w.level_storeys(),
+    kinds: [], // per storey, read when first drawn
     radius: w.marble_radius_mm(),
-    name: levelName(),
-    // Where a marble rests on the floor: it starts there.
-    restY: w.marble_mm(0, 1),
+    pitch: w.pitch_mm(),
+    restAbove: 0,
+    shown: null, // the storeys on show (top first), kept while no marble is in play
   };
+  // Where a marble rests above its storey's floor: it starts there.
+  level.restAbove = w.marble_mm(0, 1) - storeyFloorMm(w.marble_storey(0));
+  drop.storey = null;
+  drop.at = null;
+  followStorey();
   boardCache = null;
+  fitBoard();
   const select = $('level');
   const custom = w.level_is_custom();
   select.querySelector('option[value="editor"]')?.remove();
@@ -288,8 +344,63 @@ function newAttempt() {
     select.add(option);
   }
   select.value = custom ? 'editor' : String(w.level_index());
+  $('stepping').value = w.stepping_events() ? 'events' : 'fixed';
   const best = Number(localStorage.getItem(bestKey()));
   $('hud-best').textContent = best ? `${best.toFixed(2)} s` : '–';
+}
+
+// The tile kinds of storey `s` (row by row), read from the module once per attempt.
+function kindsOf(s) {
+  if (!level.kinds[s]) {
+    const { nx, nz } = level;
+    const kinds = new Uint8Array(nx * nz);
+    for (let k = 0; k < nz; k++) for (let i = 0; i < nx; i++) kinds[k * nx + i] = w.tile_kind(i, k, s);
+    level.kinds[s] = kinds;
+  }
+  return level.kinds[s];
+}
+
+// The height of storey `s`'s floor top, mm (eq. 5: y' = s pitches).
+function storeyFloorMm(s) {
+  return s * level.pitch;
+}
+
+// The tile (column or row) holding `mm`, or -1 outside the maze.
+function tileOf(mm) {
+  const { edges } = level;
+  const n = edges.length - 1;
+  if (!(mm >= edges[0] && mm < edges[n])) return -1;
+  let i = 0;
+  while (i + 1 < n && edges[i + 1] <= mm) i++;
+  return i;
+}
+
+// The page's draw list: the storeys on show (top first: those with a marble
+// in play, side by side when the marbles are on different ones), and where
+// each marble in play is drawn, on its own storey's map, over which tile.
+// drawBoard draws from it; the browser test reads it.
+function placements() {
+  const marbles = [];
+  const n = w.marble_count();
+  for (let m = 0; m < n; m++) {
+    if (w.marble_out(m)) continue;
+    marbles.push({
+      marble: m, storey: w.marble_storey(m),
+      x: w.marble_mm(m, 0), y: w.marble_mm(m, 1), z: w.marble_mm(m, 2),
+    });
+  }
+  if (marbles.length) {
+    level.shown = [...new Set(marbles.map((m) => m.storey))].sort((a, b) => b - a);
+  } else if (!level.shown) {
+    level.shown = [level.storeys - 1];
+  }
+  for (const m of marbles) {
+    m.map = level.shown.indexOf(m.storey);
+    m.i = tileOf(m.x);
+    m.k = tileOf(m.z);
+    m.kind = m.i < 0 || m.k < 0 ? 5 : kindsOf(m.storey)[m.k * level.nx + m.i];
+  }
+  return { storeys: level.storeys, shown: level.shown, marbles };
 }
 
 function restart() {
@@ -302,6 +413,12 @@ function nextLevel() {
   w.next_level();
   newAttempt();
   status('');
+}
+
+function setStepping(events) {
+  w.set_stepping(events ? 1 : 0);
+  newAttempt();
+  status(`${events ? 'event' : 'fixed'} stepping: ${level.name} from its start`);
 }
 
 function toggleAutopilot() {
@@ -331,76 +448,118 @@ function fitCanvas(canvas) {
   return true;
 }
 
-// mm → canvas px for the level in play, centred in the canvas.
-function view(canvas) {
+// The maze's height over its width (one storey's map): the board's box is the
+// page's width and this much of it high (CSS, capped by the window), so a
+// wide maze on a phone leaves no empty bands.
+function fitBoard() {
+  $('board-wrap').style.setProperty('--maze-aspect', String(level.edges[level.nz] / level.edges[level.nx]));
+}
+
+// Gap between storey maps side by side, in tile pitches.
+const MAP_GAP_PITCHES = 0.5;
+
+// mm → canvas px for `maps` storey maps side by side, centred in the canvas;
+// map m starts `stride` px after map m - 1.
+function view(canvas, maps) {
   const widthMm = level.edges[level.nx];
   const heightMm = level.edges[level.nz];
-  const scale = Math.min(canvas.width / widthMm, canvas.height / heightMm);
+  const gapMm = MAP_GAP_PITCHES * level.pitch;
+  const totalMm = maps * widthMm + (maps - 1) * gapMm;
+  const scale = Math.min(canvas.width / totalMm, canvas.height / heightMm);
   return {
     scale,
     // Whole pixels: tiles drawn side by side then meet without seams.
-    x0: Math.round((canvas.width - widthMm * scale) / 2),
+    x0: Math.round((canvas.width - totalMm * scale) / 2),
     y0: Math.round((canvas.height - heightMm * scale) / 2),
+    stride: Math.round((widthMm + gapMm) * scale),
   };
 }
 
-function drawMaze(canvas) {
+function drawMaze(canvas, shown) {
   const cache = document.createElement('canvas');
   cache.width = canvas.width;
   cache.height = canvas.height;
   const g = cache.getContext('2d');
   g.fillStyle = COLOURS.outside;
   g.fillRect(0, 0, cache.width, cache.height);
-  const { scale, x0, y0 } = view(canvas);
-  const { nx, nz, kinds, edges } = level;
+  const { scale, x0: left, y0, stride } = view(canvas, shown.length);
+  const { nx, nz, edges } = level;
   const px = (mm) => Math.round(mm * scale);
-  for (let k = 0; k < nz; k++) {
-    for (let i = 0; i < nx; i++) {
-      const kind = kinds[k * nx + i];
-      const x = x0 + px(edges[i]);
-      const y = y0 + px(edges[k]);
-      const wd = x0 + px(edges[i + 1]) - x;
-      const ht = y0 + px(edges[k + 1]) - y;
-      g.fillStyle = [COLOURS.floor, COLOURS.wall, COLOURS.hole, COLOURS.goal, COLOURS.start][kind]
-        ?? COLOURS.outside;
-      g.fillRect(x, y, wd, ht);
-      if (kind !== 1) {
-        // Walls above and to the left cast a shadow on the floor: they read as raised.
-        const shade = Math.max(1, Math.round(scale * 0.8));
-        g.fillStyle = 'rgba(0,0,0,0.22)';
-        if (k > 0 && kinds[(k - 1) * nx + i] === 1) g.fillRect(x, y, wd, shade);
-        if (i > 0 && kinds[k * nx + i - 1] === 1) g.fillRect(x, y, shade, ht);
-      }
-      if (kind === 2) {
-        const r = Math.min(wd, ht) / 2;
-        const grad = g.createRadialGradient(x + wd / 2, y + ht / 2, r * 0.2, x + wd / 2, y + ht / 2, r * 1.1);
-        grad.addColorStop(0, '#000');
-        grad.addColorStop(1, '#3a332b');
-        g.fillStyle = grad;
+  shown.forEach((storey, map) => {
+    const x0 = left + map * stride;
+    const kinds = kindsOf(storey);
+    for (let k = 0; k < nz; k++) {
+      for (let i = 0; i < nx; i++) {
+        const kind = kinds[k * nx + i];
+        const x = x0 + px(edges[i]);
+        const y = y0 + px(edges[k]);
+        const wd = x0 + px(edges[i + 1]) - x;
+        const ht = y0 + px(edges[k + 1]) - y;
+        g.fillStyle = [COLOURS.floor, COLOURS.wall, COLOURS.hole, COLOURS.goal, COLOURS.start][kind]
+          ?? COLOURS.outside;
         g.fillRect(x, y, wd, ht);
-      } else if (kind === 3) {
-        g.strokeStyle = '#e8ffe8';
-        g.lineWidth = Math.max(1, scale * 0.6);
-        g.strokeRect(x + wd * 0.2, y + ht * 0.2, wd * 0.6, ht * 0.6);
+        if (kind !== 1) {
+          // Walls above and to the left cast a shadow on the floor: they read as raised.
+          const shade = Math.max(1, Math.round(scale * 0.8));
+          g.fillStyle = 'rgba(0,0,0,0.22)';
+          if (k > 0 && kinds[(k - 1) * nx + i] === 1) g.fillRect(x, y, wd, shade);
+          if (i > 0 && kinds[k * nx + i - 1] === 1) g.fillRect(x, y, shade, ht);
+        }
+        if (kind === 2) {
+          const r = Math.min(wd, ht) / 2;
+          const grad = g.createRadialGradient(x + wd / 2, y + ht / 2, r * 0.2, x + wd / 2, y + ht / 2, r * 1.1);
+          grad.addColorStop(0, '#000');
+          grad.addColorStop(1, '#3a332b');
+          g.fillStyle = grad;
+          g.fillRect(x, y, wd, ht);
+        } else if (kind === 3) {
+          g.strokeStyle = '#e8ffe8';
+          g.lineWidth = Math.max(1, scale * 0.6);
+          g.strokeRect(x + wd * 0.2, y + ht * 0.2, wd * 0.6, ht * 0.6);
+        }
       }
     }
-  }
+    if (level.storeys > 1) {
+      // Which storey this is (the LEDs show one at a time; the page says which).
+      const font = Math.max(11, Math.round(scale * edges[1] * 0.7));
+      g.font = `600 ${font}px system-ui, sans-serif`;
+      g.fillStyle = 'rgba(255,255,255,0.85)';
+      g.textBaseline = 'top';
+      const top = storey === level.storeys - 1 ? ' (top)' : '';
+      g.fillText(`storey ${storey + 1} of ${level.storeys}${top}`, x0 + 4, y0 + 3);
+    }
+  });
   return cache;
 }
 
 function drawBoard() {
   const canvas = $('board');
-  if (fitCanvas(canvas) || !boardCache) boardCache = drawMaze(canvas);
+  const resized = fitCanvas(canvas);
+  const list = placements();
+  const key = list.shown.join(',');
+  if (resized || !boardCache || boardCache.key !== key) {
+    boardCache = { key, canvas: drawMaze(canvas, list.shown) };
+  }
   const g = canvas.getContext('2d');
-  g.drawImage(boardCache, 0, 0);
-  const { scale, x0, y0 } = view(canvas);
+  g.drawImage(boardCache.canvas, 0, 0);
+  const { scale, x0, y0, stride } = view(canvas, list.shown.length);
+  // The drop: the floor the marble landed on flashes, as the LEDs' does.
+  if (drop.at !== null && drop.storey !== null) {
+    const glow = w.drop_glow(w.frames() - drop.at) / w.drop_flash();
+    const map = list.shown.indexOf(drop.storey);
+    if (glow > 0 && map >= 0) {
+      g.fillStyle = `rgba(255,236,190,${(0.55 * glow).toFixed(3)})`;
+      g.fillRect(x0 + map * stride, y0, Math.round(level.edges[level.nx] * scale),
+        Math.round(level.edges[level.nz] * scale));
+    }
+  }
   const r = level.radius * scale;
-  for (let m = 0; m < w.marble_count(); m++) {
-    if (w.marble_out(m)) continue;
-    const x = x0 + w.marble_mm(m, 0) * scale;
-    const z = y0 + w.marble_mm(m, 2) * scale;
-    // Below its height at the start (falling into a hole): drawn smaller.
-    const sink = Math.max(0, Math.min(1, (level.restY - w.marble_mm(m, 1)) / (2 * level.radius)));
+  for (const m of list.marbles) {
+    const x = x0 + m.map * stride + m.x * scale;
+    const z = y0 + m.z * scale;
+    // Below its rest height on its storey (sinking into a hole): drawn smaller.
+    const sunk = level.restAbove - (m.y - storeyFloorMm(m.storey));
+    const sink = Math.max(0, Math.min(1, sunk / (2 * level.radius)));
     const rr = r * (1 - 0.5 * sink);
     g.fillStyle = 'rgba(0,0,0,0.25)';
     g.beginPath();
@@ -465,9 +624,13 @@ function drawLeds() {
 }
 
 function drawHud() {
-  const frames = w.frames();
+  const frames = w.clock_frames();
   $('hud-level').textContent = `${level.name}${w.level_is_custom() ? ' (editor)' : ` (${w.level_index() + 1})`}`;
-  $('hud-time').textContent = `${(frames / hz).toFixed(1)} / ${w.time_limit_s()} s`;
+  // The level clock: it starts at the first tilt that rolls the marble.
+  $('hud-time').textContent = frames || w.phase() !== 0
+    ? `${(frames / hz).toFixed(1)} / ${w.time_limit_s()} s`
+    : `tilt to start (${w.time_limit_s()} s)`;
+  $('hud-stepping').textContent = w.stepping_events() ? 'events' : 'fixed';
   // The reading is the board's (x right, z towards the player): shown as the page's tilt.
   $('hud-tilt').textContent = `→ ${-w.reading_x()} mg, ↑ ${w.reading_z()} mg`;
   // The mean: Chromium's clock ticks in 5 µs or coarser, about a frame's cost.
@@ -541,6 +704,16 @@ function setupEditor() {
   });
 }
 
+// Shows the editor (or hides it again): behind a button, so a phone's first
+// screen is the maze and its panel.
+function toggleEditor(open) {
+  const editor = $('editor');
+  const show = open ?? editor.hidden;
+  editor.hidden = !show;
+  $('editor-toggle').setAttribute('aria-expanded', String(show));
+  if (show) editor.scrollIntoView({ block: 'nearest' });
+}
+
 // --- start ----------------------------------------------------------------------
 
 // Read-only views and a fast-forward for the browser test (web/test); the
@@ -552,6 +725,7 @@ function testHooks() {
     custom: !!w.finished_custom(),
     phase: PHASES[w.finished_phase()],
     frames: w.finished_frames(),
+    clock: w.finished_clock(),
     hash: hex(w.finished_hash()),
   });
   window.marbleState = () => ({
@@ -560,6 +734,8 @@ function testHooks() {
     custom: !!w.level_is_custom(),
     phase: PHASES[w.phase()],
     frames: w.frames(),
+    clock: w.clock_frames(),
+    stepping: w.stepping_events() ? 'events' : 'fixed',
     hash: hex(w.state_hash()),
     autopilot: !!w.autopilot(),
     marbles: Array.from({ length: w.marble_count() }, (_, m) => ({
@@ -590,6 +766,13 @@ function testHooks() {
       return n;
     },
     finished: finishedRecord,
+    stepping(name) {
+      setStepping(name === 'events');
+      return w.stepping_events() ? 'events' : 'fixed';
+    },
+    placements,
+    status: () => $('status').textContent,
+    editor: toggleEditor,
     // Game frames played by `seconds` of animation frames at `refreshHz`
     // (the loop's own accumulator, fed the timestamps such a screen gives).
     playAt(refreshHz, seconds) {
@@ -680,6 +863,11 @@ async function main() {
     status('');
     select.blur();
   });
+  $('stepping').addEventListener('change', () => {
+    setStepping($('stepping').value === 'events');
+    $('stepping').blur();
+  });
+  $('editor-toggle').addEventListener('click', () => toggleEditor());
   $('restart').addEventListener('click', restart);
   $('next').addEventListener('click', nextLevel);
   $('autopilot').addEventListener('click', toggleAutopilot);

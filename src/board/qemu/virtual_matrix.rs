@@ -320,6 +320,8 @@ mod storey_maps {
         let focus = status.marbles.iter().flatten().next().map(|m| m.tile());
         let window = map_window(level.info.nx, level.info.nz, level.info.storeys, focus);
         let map_columns = (2 * window.w as usize).max(TITLE_COLUMNS);
+        // On the level clock (the status's frames): the goal shows lit until
+        // the first roll, then blinks.
         let blink = blink_on(status.frames, FRAME_HZ.trailing_zeros());
         // Titles, top storey first.
         out.0.write(b"\x1b[K\r\n");
