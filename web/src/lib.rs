@@ -230,7 +230,12 @@ struct App {
 
 impl App {
     fn new() -> Option<App> {
-        let player = AnyPlayer::new(&LEVELS, 0, true, false)?;
+        let player = AnyPlayer::new(
+            &LEVELS,
+            0,
+            marble_rolling::game::rules::DEFAULT_EVENTS,
+            false,
+        )?;
         Some(App {
             player,
             levels: &LEVELS,
