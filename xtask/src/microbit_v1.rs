@@ -11,7 +11,7 @@
 //!   showed, a two-second play without the demo (QEMU's TWI is a stub: the
 //!   sensor must go down, the game wait, the LEDs show the fault cross), and
 //!   the budgets (RAM: statics + stack high-water ≤ V1_RAM_BUDGET, 12 KiB;
-//!   flash ≤ V1_FLASH_BUDGET, 64 KiB, with the code bytes per module when
+//!   flash ≤ V1_FLASH_BUDGET, 128 KiB, with the code bytes per module when
 //!   over; CPU ≤ V1_CPU_BUDGET_CENTIPERCENT, 20 % of 16 MHz).
 //!
 //! # The display, rebuilt from the GPIO trace
@@ -64,7 +64,7 @@ pub const CHIP: &str = "nRF51822_xxAA";
 
 /// Budgets (bytes, hundredths of a percent), overridable from the environment.
 const RAM_BUDGET: u64 = 12 * 1024;
-const FLASH_BUDGET: u64 = 64 * 1024;
+const FLASH_BUDGET: u64 = 128 * 1024;
 const CPU_BUDGET_CENTIPERCENT: u64 = 2000;
 
 /// Tolerance of the rebuilt frames, brightness levels per pixel.

@@ -54,8 +54,9 @@ pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
 
 /// Budget: static RAM plus the stack's high-water mark, bytes (12 of 16 KiB).
 pub const RAM_BUDGET_BYTES: u32 = 12 * 1024;
-/// Budget: flash (text + data), bytes.
-pub const FLASH_BUDGET_BYTES: u32 = 64 * 1024;
+/// Budget: flash (text + data), bytes: half of the chip's 256 KiB (issue 27),
+/// room for the event stepper.
+pub const FLASH_BUDGET_BYTES: u32 = 128 * 1024;
 /// Budget: the demo's CPU load, hundredths of a percent of [`CPU_HZ`].
 pub const CPU_BUDGET_CENTIPERCENT: u64 = 2000;
 
