@@ -25,7 +25,13 @@
 //! nRF51 variants), which is wrong for this board: whoever adds flash storage
 //! later must erase 1 KiB pages and may use the whole 256 KiB.
 
+pub mod accel;
 pub mod leds;
+pub mod nxp_driver;
+pub mod twi;
+pub mod virtual_nxp;
+
+pub use accel::{identify, Accelerometer, Probe, PROBES};
 
 use crate::matrix::{base_tick_hz, Brightness, Frame, ScanStep, Scanner, BCM_BITS, MAX_BRIGHTNESS};
 use leds::{out_word, COLS, LED_MAP, ROWS, SIZE};
@@ -379,92 +385,6 @@ impl LoadReport {
             centipercent_of_16mhz,
         })
     }
-}
-
-// ---------------------------------------------------------------------------
-// Accelerometers
-// ---------------------------------------------------------------------------
-
-/// The accelerometers micro:bit v1 boards were built with. The early boards
-/// (v1.3, v1.3B) carry an NXP MMA8653FC (with a MAG3110 magnetometer); the
-/// v1.5 boards an ST LSM303AGR or an NXP FXOS8700CQ (accelerometer and
-/// magnetometer in one). The DAL tells them apart by probing each chip's
-/// `WHO_AM_I` register at its address (`MicroBitAccelerometer::autoDetect`);
-/// so does the firmware, with [`PROBES`].
-#[derive(Clone, Copy, PartialEq, Eq, Debug, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Accelerometer {
-    /// NXP MMA8653FC (micro:bit v1.3, v1.3B).
-    Mma8653fc,
-    /// ST LSM303AGR (micro:bit v1.5).
-    Lsm303agr,
-    /// NXP FXOS8700CQ (micro:bit v1.5).
-    Fxos8700cq,
-}
-
-/// One `WHO_AM_I` probe: read register `register` of the I²C device at
-/// 7-bit address `address`; `id` identifies `chip`.
-#[derive(Clone, Copy, PartialEq, Eq, Debug, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Probe {
-    /// The chip this probe finds.
-    pub chip: Accelerometer,
-    /// 7-bit I²C address.
-    pub address: u8,
-    /// The `WHO_AM_I` register.
-    pub register: u8,
-    /// Its value on that chip.
-    pub id: u8,
-}
-
-/// The probes in the order the firmware tries them (the DAL's order:
-/// FXOS8700CQ, LSM303AGR, MMA8653FC). Addresses and IDs from the chips'
-/// datasheets, as the DAL uses them (its 8-bit addresses 0x3C, 0x32, 0x3A).
-pub const PROBES: [Probe; 3] = [
-    Probe {
-        chip: Accelerometer::Fxos8700cq,
-        address: 0x1E,
-        register: 0x0D,
-        id: 0xC7,
-    },
-    Probe {
-        chip: Accelerometer::Lsm303agr,
-        address: 0x19,
-        register: 0x0F,
-        id: 0x33,
-    },
-    Probe {
-        chip: Accelerometer::Mma8653fc,
-        address: 0x1D,
-        register: 0x0D,
-        id: 0x5A,
-    },
-];
-
-impl Accelerometer {
-    /// Whether the firmware drives this chip: the LSM303AGR through the
-    /// `lsm303agr` crate. No crates.io driver exists for the FXOS8700CQ; the
-    /// MMA8653FC's (`mma8x5x` 0.1) is written against embedded-hal 0.2 and
-    /// not wired up yet. Both are detected and reported as unsupported (the
-    /// game then shows the sensor-down cross).
-    pub const fn supported(self) -> bool {
-        matches!(self, Accelerometer::Lsm303agr)
-    }
-
-    /// The chip's name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Accelerometer::Mma8653fc => "MMA8653FC",
-            Accelerometer::Lsm303agr => "LSM303AGR",
-            Accelerometer::Fxos8700cq => "FXOS8700CQ",
-        }
-    }
-}
-
-/// The chip a probe's answer identifies: `read` is the byte `probe`'s
-/// register read back (`None`: no answer, e.g. a NAK).
-pub fn identify(probe: &Probe, read: Option<u8>) -> Option<Accelerometer> {
-    (read == Some(probe.id)).then_some(probe.chip)
 }
 
 #[cfg(test)]
