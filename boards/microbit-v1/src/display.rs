@@ -79,7 +79,10 @@ pub fn start() {
     let timer = pac::TIMER1;
     timer.tasks_stop().write_value(1);
     timer.mode().write_value(pac::timer::regs::Mode(0));
-    timer.bitmode().write_value(pac::timer::regs::Bitmode(3));
+    // 16 bits: the nRF51's TIMER1 has no more (only TIMER0 counts 32 bits;
+    // QEMU emulates 32 everywhere, so 32 here never showed). A slice is at
+    // most 8 × 222 µs, far below 65 535.
+    timer.bitmode().write_value(pac::timer::regs::Bitmode(0));
     timer
         .prescaler()
         .write_value(pac::timer::regs::Prescaler(u32::from(TIMER_PRESCALER)));

@@ -50,7 +50,9 @@ mod hw;
 mod log;
 mod sensor;
 
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links};
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TiltInput};
 use marble_rolling::board::microbit_v1::{
     LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WIDTH,
 };
@@ -106,11 +108,12 @@ fn spawn(spawner: embassy_executor::Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => hw::fatal("cannot spawn the game"),
     }
-    if !options.demo {
-        match input() {
-            Ok(token) => spawner.spawn(token),
-            Err(_) => hw::fatal("cannot spawn the input"),
-        }
+    // In the demo too: the sensor path runs (probe, configuration, polls,
+    // supervision) while the autopilot plays, so that the stack high-water
+    // covers it; there its events are counted, not given to the game.
+    match input(options.demo) {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => hw::fatal("cannot spawn the input"),
     }
     if let Some(seconds) = options.seconds {
         match stop_after(seconds) {
@@ -126,12 +129,29 @@ async fn display_task(log_frames: bool) -> ! {
     app::display_task(&LINKS, &mut matrix).await
 }
 
-/// The accelerometer and its supervision (not in the demo: the autopilot
-/// needs no tilt, and a sensor going down would pause the demo).
+/// Re-initialisations and faults of the sensor path so far (the demo's
+/// summary prints them).
+static SENSOR_REINITS: AtomicU32 = AtomicU32::new(0);
+/// See [`SENSOR_REINITS`].
+static SENSOR_FAULTS: AtomicU32 = AtomicU32::new(0);
+
+/// The accelerometer and its supervision. In the demo the autopilot needs
+/// no tilt and a sensor going down must not pause it (QEMU's TWI stub is no
+/// sensor): the events are only counted.
 #[embassy_executor::task]
-async fn input() -> ! {
+async fn input(demo: bool) -> ! {
     let mut input = sensor::Input::new();
-    app::input_task(&LINKS, &mut input).await
+    if !demo {
+        app::input_task(&LINKS, &mut input).await
+    }
+    loop {
+        if let marble_rolling::input::event::InputEvent::Tilt(tilt) = input.next_event().await {
+            // Shown in the summary only: the demo's game reads no tilt.
+            LINKS.tilt.set(tilt);
+        }
+        SENSOR_REINITS.store(input.reinits(), Ordering::Relaxed);
+        SENSOR_FAULTS.store(input.faults(), Ordering::Relaxed);
+    }
 }
 
 /// `--seconds=N`: ends a headless play after `N` seconds, with the game's
@@ -193,6 +213,11 @@ async fn game(options: Options) {
         );
     }
     let start = hw::cpu_meter::sample();
+    if options.demo && options.profile {
+        // Interrupts off while a frame is counted: the display's slices
+        // stretch, so this run's LEDs and CPU load are not the demo's.
+        LINKS.meter.set(Some(hw::cpu_meter::meter));
+    }
     let exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
     let end = hw::cpu_meter::sample();
     let summary = match exit {
@@ -218,6 +243,14 @@ async fn game(options: Options) {
         None => defmt::warn!("cpu load: no time elapsed"),
     }
     defmt::info!(
+        "demo sensor: {=u32} re-inits, {=u32} faults, last tilt {=i16} {=i16} {=i16} mg",
+        SENSOR_REINITS.load(Ordering::Relaxed),
+        SENSOR_FAULTS.load(Ordering::Relaxed),
+        LINKS.tilt.get().x,
+        LINKS.tilt.get().y,
+        LINKS.tilt.get().z
+    );
+    defmt::info!(
         "demo summary: {=u8}/{=u8} levels won, {=u64} physics steps in {=u64} frames: {=str}",
         summary.won,
         summary.levels,
@@ -227,3 +260,4 @@ async fn game(options: Options) {
     );
     hw::exit(if summary.all_won() { 0 } else { 1 })
 }
+

@@ -85,11 +85,6 @@ pub const PROBES: [Probe; 3] = [
 ];
 
 impl Accelerometer {
-    /// Whether the firmware drives this chip (all three since issue 28).
-    pub const fn supported(self) -> bool {
-        true
-    }
-
     /// The chip's name.
     pub const fn name(self) -> &'static str {
         match self {

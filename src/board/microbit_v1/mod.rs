@@ -223,6 +223,8 @@ pub fn rows_hex(picture: &Picture) -> [u32; SIZE] {
 /// * `--seconds=N`: play (no autopilot) for `N` seconds of firmware time,
 ///   then exit 0 — a headless run of the play mode, e.g. to see the sensor
 ///   supervision give up on QEMU's stub accelerometer.
+/// * `--profile`: with `--demo`, a profile of each level's frames
+///   (`app::profiled_demo`).
 /// * `--no-frame-log`: do not log the displayed frames (by default headless
 ///   runs log every frame that stays on the LEDs for
 ///   [`FRAME_LOG_MIN_REFRESHES`] refreshes or more, for the xtask's GPIO
@@ -236,6 +238,10 @@ pub struct Options {
     pub seconds: Option<u32>,
     /// Log the frames shown, with their times.
     pub frame_log: bool,
+    /// With `--demo`: count each frame's instructions and log a profile
+    /// per level (interrupts off while counting: the LEDs and the CPU load
+    /// of such a run are not the demo's).
+    pub profile: bool,
 }
 
 impl Default for Options {
@@ -244,6 +250,7 @@ impl Default for Options {
             demo: false,
             seconds: None,
             frame_log: true,
+            profile: false,
         }
     }
 }
@@ -257,6 +264,7 @@ impl Options {
             match arg {
                 "--demo" => options.demo = true,
                 "--no-frame-log" => options.frame_log = false,
+                "--profile" => options.profile = true,
                 _ => {
                     if let Some(Ok(seconds)) = arg.strip_prefix("--seconds=").map(str::parse::<u32>)
                     {
