@@ -47,7 +47,7 @@ use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{exception, ExceptionFrame};
 use critical_section::Mutex;
 use embassy_time_queue_utils::Queue;
-use marble_rolling::board::microbit_v1::{Options, RAM_BASE};
+use marble_rolling::board::microbit_v1::Options;
 use nrf_pac as pac;
 use pac::Interrupt;
 
@@ -437,28 +437,31 @@ pub mod cpu_meter {
 // Stack high-water mark
 // ---------------------------------------------------------------------------
 
-/// Stack painting. Without flip-link (the workspace links only the M4
-/// firmware through it) cortex-m-rt puts the statics at the bottom of RAM
-/// and the stack at the top, growing down towards `_stack_end` (the end of
-/// the statics): [`paint`](stack::paint) fills that gap at boot, [`high_water`](stack::high_water) finds the
-/// deepest word overwritten since.
+/// Stack painting. The firmware links through flip-link
+/// (`.cargo/config.toml`): the statics sit at the top of RAM and the stack
+/// below them, growing down towards the start of RAM, so an overflow faults
+/// (no RAM below) instead of overwriting them. [`paint`](stack::paint) fills
+/// the free stack at boot, [`high_water`](stack::high_water) finds the deepest
+/// word overwritten since.
 pub mod stack {
-    use marble_rolling::board::microbit_v1::STACK_PAINT;
+    use marble_rolling::board::microbit_v1::{RAM_BASE, RAM_BYTES, STACK_PAINT};
 
     /// Bytes below the SP left unpainted.
     const RED_ZONE: usize = 64;
 
     extern "C" {
         static _stack_start: u32;
-        static _stack_end: u32;
     }
 
+    /// The initial SP: just below the statics.
     fn top() -> usize {
+        // Only the symbol's address is taken, never its value.
         core::ptr::addr_of!(_stack_start) as usize
     }
 
+    /// Where the stack would run out of RAM.
     fn bottom() -> usize {
-        core::ptr::addr_of!(_stack_end) as usize
+        RAM_BASE
     }
 
     /// Paints the free stack. Call first thing in `main`.
@@ -469,8 +472,8 @@ pub mod stack {
             let end = sp.saturating_sub(RED_ZONE) & !3;
             let mut addr = bottom();
             while addr < end {
-                // SAFETY: between the end of the statics and below the SP:
-                // RAM nothing uses yet.
+                // SAFETY: from the start of RAM to below the SP: the free
+                // stack, nothing uses it yet.
                 unsafe { core::ptr::write_volatile(addr as *mut u32, STACK_PAINT) };
                 addr += 4;
             }
@@ -482,9 +485,9 @@ pub mod stack {
     pub struct StackUse {
         /// Deepest use, bytes.
         pub used: usize,
-        /// Room the stack has (top of RAM down to the statics), bytes.
+        /// Room the stack has (below the statics), bytes.
         pub size: usize,
-        /// The statics (data + bss + uninit), bytes.
+        /// The statics (data + bss + uninit, flip-link's alignment), bytes.
         pub statics: usize,
     }
 
@@ -492,14 +495,14 @@ pub mod stack {
     pub fn high_water() -> StackUse {
         let top = top();
         let mut addr = bottom();
-        // SAFETY: word reads of RAM between the statics and the stack top.
+        // SAFETY: word reads of RAM from its start to the stack top.
         while addr < top && unsafe { core::ptr::read_volatile(addr as *const u32) } == STACK_PAINT {
             addr += 4;
         }
         StackUse {
             used: top.saturating_sub(addr),
             size: top.saturating_sub(bottom()),
-            statics: bottom().saturating_sub(super::RAM_BASE),
+            statics: (RAM_BASE + RAM_BYTES as usize).saturating_sub(top),
         }
     }
 }
