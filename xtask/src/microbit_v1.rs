@@ -8,11 +8,15 @@
 //! * [`check`] — `cargo xtask check-microbit-v1`: the QEMU demo against the
 //!   host simulator (outcome, steps and `state_hash` per level), the LEDs
 //!   rebuilt from QEMU's GPIO trace against the frames the firmware says it
-//!   showed, a two-second play without the demo (QEMU's TWI is a stub: the
-//!   sensor must go down, the game wait, the LEDs show the fault cross), and
-//!   the budgets (RAM: statics + stack high-water ≤ V1_RAM_BUDGET, 12 KiB;
-//!   flash ≤ V1_FLASH_BUDGET, 128 KiB, with the code bytes per module when
-//!   over; CPU ≤ V1_CPU_BUDGET_CENTIPERCENT, 20 % of 16 MHz).
+//!   showed, the sensor path in the demo (`accel=mma8653fc` through QEMU's
+//!   TWI stub, its re-init and fault counts), a `--demo --profile` run's
+//!   per-level frame costs (printed; the 60 000-instruction worst frame is
+//!   the physics' goal), a two-second play without the demo (the stub found
+//!   as the MMA8653FC, polled without a panic, the LEDs showing what the
+//!   supervision decided), and the budgets (RAM: statics + stack
+//!   high-water ≤ V1_RAM_BUDGET, 12 KiB; flash ≤ V1_FLASH_BUDGET, 128 KiB,
+//!   with the code bytes per module when over; CPU ≤
+//!   V1_CPU_BUDGET_CENTIPERCENT, 20 % of 16 MHz).
 //!
 //! # The display, rebuilt from the GPIO trace
 //!
@@ -581,7 +585,10 @@ pub fn check() -> Outcome {
 
     // 2b. The sensor path ran in the demo: QEMU's TWI stub identified as the
     //     MMA8653FC, its counts in the summary.
-    if !text.lines().any(|line| line.trim_end().ends_with("accel=mma8653fc")) {
+    if !text
+        .lines()
+        .any(|line| line.trim_end().ends_with("accel=mma8653fc"))
+    {
         problems.report("the demo did not detect the MMA8653FC (`accel=mma8653fc`)".into());
     }
     match text.lines().find(|line| line.contains("demo sensor: ")) {
@@ -592,9 +599,8 @@ pub fn check() -> Outcome {
     // 2c. Each level's frame costs (a second run: counting stops interrupts).
     check_profile(&tools, &elf, &target, limit, &mut problems)?;
 
-    // 3. Without the demo, QEMU's stub accelerometer takes the sensor down:
-    //    the game must wait, showing the fault cross.
-    check_sensor_down(&tools, &elf, &target, limit, &mut problems)?;
+    // 3. Without the demo: play on QEMU's stub accelerometer.
+    check_play_on_stub(&tools, &elf, &target, limit, &mut problems)?;
 
     // 4. Budgets.
     match parse_ram(&text) {
@@ -681,11 +687,13 @@ pub const FAULT_CROSS: [[u8; leds::SIZE]; leds::SIZE] = [
     [15, 0, 0, 0, 15],
 ];
 
-/// Plays (no demo) for two seconds in QEMU: its TWI stub has no
-/// accelerometer behind it, so the supervision must take the sensor down,
-/// the game must stay paused, and the LEDs (from the GPIO trace, over the
-/// second second) must show the fault cross.
-fn check_sensor_down(
+/// Plays (no demo) for two seconds in QEMU: the firmware must find the
+/// MMA8653FC through the TWI stub (`accel=mma8653fc`), keep polling whatever
+/// its data registers return without a panic (the plausibility rules decide
+/// whether the sensor stays up), and the LEDs (from the GPIO trace, over the
+/// second second) must show the picture that decision implies: the maze
+/// with the sensor up, the fault cross with it down.
+fn check_play_on_stub(
     tools: &setup::Qemu,
     elf: &Path,
     target: &Path,
@@ -696,7 +704,7 @@ fn check_sensor_down(
     let trace_path = target.join("check-microbit-v1-sensor.trace");
     let file = File::create(&log_path)
         .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
-    say!("playing 2 s in QEMU without an accelerometer (its TWI is a stub)…");
+    say!("playing 2 s in QEMU on its TWI stub (the MMA8653FC's identity, no chip behind it)…");
     let args = ["--seconds=2".to_string(), "--no-frame-log".to_string()];
     let (status, _) = qemu_run(
         tools,
@@ -714,19 +722,34 @@ fn check_sensor_down(
         .map_err(|e| Failure::new(format!("cannot read {}: {e}", trace_path.display())))?;
     let timeline = Timeline::from_lines(String::from_utf8_lossy(&trace).lines());
     let seen = timeline.perceived(1_000_000, 2_000_000);
-    let paused = text
+    let detected = text
         .lines()
-        .any(|line| line.contains("stop after 2 s") && line.contains("sensor down: true"));
-    if status != 0 || !paused || seen != FAULT_CROSS {
+        .any(|line| line.trim_end().ends_with("accel=mma8653fc"));
+    let stop = text.lines().find(|line| line.contains("stop after 2 s"));
+    let down = stop.map(|line| line.contains("sensor down: true"));
+    let shown_ok = match down {
+        Some(true) => seen == FAULT_CROSS,
+        Some(false) => seen != FAULT_CROSS && seen.iter().flatten().any(|&level| level > 0),
+        None => false,
+    };
+    if status != 0 || !detected || !shown_ok {
         problems.report(format!(
-            "sensor down: status {status}, game paused with the sensor down: {paused}, \
-             LEDs {} (want the cross {}); log {}",
+            "play on the stub: status {status}, accel=mma8653fc: {detected}, sensor down: {down:?}, \
+             LEDs {} (the cross is {}); log {}",
             hex_rows(&seen),
             hex_rows(&FAULT_CROSS),
             log_path.display()
         ));
     } else {
-        say!("sensor down: reported, the game waits, the LEDs show the fault cross");
+        say!(
+            "play on the stub: MMA8653FC found, sensor down: {}, the LEDs show {}",
+            down == Some(true),
+            if down == Some(true) {
+                "the fault cross"
+            } else {
+                "the game"
+            }
+        );
     }
     Ok(())
 }

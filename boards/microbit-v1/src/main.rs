@@ -260,4 +260,3 @@ async fn game(options: Options) {
     );
     hw::exit(if summary.all_won() { 0 } else { 1 })
 }
-

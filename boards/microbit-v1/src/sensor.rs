@@ -101,7 +101,8 @@ impl Twi {
         let gpio = pac::GPIO;
         let (scl, sda) = (1u32 << SCL_PIN, 1u32 << SDA_PIN);
         twi.enable().write_value(pac::twi::regs::Enable(0));
-        gpio.outset().write_value(pac::gpio::regs::Outset(scl | sda));
+        gpio.outset()
+            .write_value(pac::gpio::regs::Outset(scl | sda));
         for pin in [SCL_PIN, SDA_PIN] {
             gpio.pin_cnf(pin as usize)
                 .write_value(pac::gpio::regs::PinCnf(OPEN_DRAIN | 1));
@@ -211,7 +212,6 @@ impl Twi {
         twi.shorts().write_value(pac::twi::regs::Shorts(0));
         Ok(())
     }
-
 }
 
 impl ErrorType for Twi {
