@@ -65,8 +65,8 @@ static LINKS: Links<WIDTH, HEIGHT> = Links::new();
 const PILOT: bool = true;
 
 /// The event stepper, as on every board (issue 27): with the v1's flash budget
-/// at 128 KiB of its 256 KiB it fits (91 108 B, 16.21 % CPU in the demo,
-/// `cargo xtask check-microbit-v1`). `cargo sim -- --stepping events` plays the
+/// at 128 KiB of its 256 KiB it fits (`cargo xtask check-microbit-v1` and
+/// docs/microbit-revisions.md have the figures). `cargo sim -- --stepping events` plays the
 /// same game.
 const EVENTS: bool = true;
 
