@@ -596,6 +596,17 @@ pub fn check() -> Outcome {
         None => problems.report("no `demo sensor:` line (re-inits and faults)".into()),
     }
 
+    // 2b'. The watchdog was petted in time all through the demo.
+    match parse_watchdog(&text) {
+        Some((waited, resets_at)) if waited < resets_at => {
+            say!("watchdog: longest wait without a pet {waited} ms (resets at {resets_at} ms)");
+        }
+        Some((waited, resets_at)) => problems.report(format!(
+            "the watchdog went {waited} ms without a pet: a board resets at {resets_at} ms"
+        )),
+        None => problems.report("no `watchdog: longest wait` line".into()),
+    }
+
     // 2c. Each level's frame costs (a second run: counting stops interrupts).
     check_profile(&tools, &elf, &target, limit, &mut problems)?;
 
@@ -752,6 +763,17 @@ fn check_play_on_stub(
         );
     }
     Ok(())
+}
+
+/// `watchdog: longest wait without a pet W ms (it resets at R ms)` → (W, R).
+pub fn parse_watchdog(log: &str) -> Option<(u64, u64)> {
+    log.lines().find_map(|line| {
+        let rest = &line
+            [line.find("longest wait without a pet ")? + "longest wait without a pet ".len()..];
+        let (waited, rest) = rest.split_once(" ms (it resets at ")?;
+        let (resets_at, _) = rest.split_once(" ms")?;
+        Some((waited.parse().ok()?, resets_at.parse().ok()?))
+    })
 }
 
 /// `profile LEVEL: N frames, instructions per frame: physics AVG (max MAX),
@@ -1008,6 +1030,16 @@ mod tests {
         assert_eq!(parse_ram(log), Some((5084, 8364)));
         assert_eq!(parse_cpu(log), Some(1858));
         assert_eq!(parse_cpu("cpu load: x = 1.5 % of a 16 MHz"), None);
+    }
+
+    #[test]
+    fn watchdog_lines() {
+        let log = "34.1 INFO  watchdog: longest wait without a pet 600 ms (it resets at 2000 ms)";
+        assert_eq!(parse_watchdog(log), Some((600, 2000)));
+        assert_eq!(
+            parse_watchdog("watchdog: longest wait without a pet x ms"),
+            None
+        );
     }
 
     #[test]

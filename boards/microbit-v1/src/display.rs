@@ -23,6 +23,7 @@ use critical_section::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use marble_rolling::app::{Latest, MatrixOutput};
+use marble_rolling::board::microbit::Task;
 use marble_rolling::board::microbit_v1::leds::{COL_PINS, MATRIX_PINS, ROW_PINS};
 use marble_rolling::board::microbit_v1::{
     frame_from_refresh, rows_hex, schedule, Picture, Schedule, DARK_SCHEDULE,
@@ -224,6 +225,7 @@ impl Matrix {
 
 impl MatrixOutput<WIDTH, HEIGHT> for Matrix {
     async fn show(&mut self, step: ScanStep) {
+        crate::HEARTBEATS.beat(Task::Display);
         // A refresh's steps add up to the picture (see `frame_from_refresh`).
         let mut lit = step.columns;
         while lit != 0 {
@@ -242,6 +244,7 @@ impl MatrixOutput<WIDTH, HEIGHT> for Matrix {
     }
 
     async fn show_refresh(&mut self, scanner: &mut Scanner<WIDTH, HEIGHT>) {
+        crate::HEARTBEATS.beat(Task::Display);
         let picture = frame_from_refresh(
             (0..Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH).map(|_| scanner.next_step()),
         );

@@ -562,3 +562,42 @@ static PENDED: AtomicBool = AtomicBool::new(false);
 fn pender(_context: *mut ()) {
     PENDED.store(true, Ordering::SeqCst);
 }
+
+// ---------------------------------------------------------------------------
+// Watchdog
+// ---------------------------------------------------------------------------
+
+/// The nRF51's WDT: a 2 s period on its 32 768 Hz clock
+/// (`board::microbit_v1::WATCHDOG_TIMEOUT_TICKS` says why) (the WDT starts the
+/// RC oscillator itself), paused while a debugger halts the core, running
+/// while it sleeps; one reload register. Petted by the watchdog task only
+/// when every task's heartbeat moved (`board::microbit::WatchdogGate`, the
+/// v2's rule and its host tests). QEMU's `microbit` machine has no WDT (its
+/// registers are unimplemented: writes ignored): there it never resets.
+pub mod watchdog {
+    use marble_rolling::board::microbit_v1::WATCHDOG_TIMEOUT_TICKS;
+    use nrf_pac as pac;
+
+    /// The value a reload register takes to pet (nRF51 reference manual).
+    const RELOAD: u32 = 0x6E52_4635;
+
+    /// Starts the watchdog (once started it runs until a reset).
+    pub fn start() {
+        let wdt = pac::WDT;
+        if wdt.runstatus().read().0 & 1 != 0 {
+            // Already running since before a soft reset: its configuration
+            // cannot change; keep petting it.
+            return;
+        }
+        wdt.crv().write_value(WATCHDOG_TIMEOUT_TICKS);
+        // SLEEP = run while asleep, HALT = pause under the debugger.
+        wdt.config().write_value(pac::wdt::regs::Config(1));
+        wdt.rren().write_value(pac::wdt::regs::Rren(1));
+        wdt.tasks_start().write_value(1);
+    }
+
+    /// Reloads the counter.
+    pub fn pet() {
+        pac::WDT.rr(0).write_value(pac::wdt::regs::Rr(RELOAD));
+    }
+}

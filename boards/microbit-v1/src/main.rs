@@ -53,13 +53,18 @@ mod sensor;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TiltInput};
+use marble_rolling::board::microbit::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::board::microbit_v1::{
-    LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WIDTH,
+    LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WATCHDOG_TIMEOUT_TICKS, WIDTH,
 };
 use marble_rolling::input::tilt::TiltConfig;
 
 /// The links between the tasks.
 static LINKS: Links<WIDTH, HEIGHT> = Links::new();
+
+/// Each task's heartbeat, for the watchdog (the v2's rule: input beats per
+/// poll, the game each time it is polled, the display per refresh).
+pub static HEARTBEATS: Heartbeats = Heartbeats::new();
 
 /// The autopilot is linked: the demo needs it.
 const PILOT: bool = true;
@@ -115,6 +120,10 @@ fn spawn(spawner: embassy_executor::Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => hw::fatal("cannot spawn the input"),
     }
+    match watchdog() {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => hw::fatal("cannot spawn the watchdog"),
+    }
     if let Some(seconds) = options.seconds {
         match stop_after(seconds) {
             Ok(token) => spawner.spawn(token),
@@ -152,6 +161,46 @@ async fn input(demo: bool) -> ! {
         SENSOR_REINITS.store(input.reinits(), Ordering::Relaxed);
         SENSOR_FAULTS.store(input.faults(), Ordering::Relaxed);
     }
+}
+
+/// The most watchdog checks in a row without a pet (the demo prints it).
+static WATCHDOG_WORST: AtomicU32 = AtomicU32::new(0);
+
+/// Pets the watchdog whenever every task has beaten since the last pet; a
+/// stalled task stops the pets and the board resets (`hw::watchdog`).
+#[embassy_executor::task]
+async fn watchdog() -> ! {
+    let mut gate = WatchdogGate::new(HEARTBEATS.snapshot());
+    let mut ticker =
+        embassy_time::Ticker::every(embassy_time::Duration::from_millis(WATCHDOG_CHECK_MS));
+    hw::watchdog::start();
+    loop {
+        ticker.next().await;
+        match gate.check(HEARTBEATS.snapshot()) {
+            Verdict::Pet => hw::watchdog::pet(),
+            Verdict::Wait { stalled, checks } => {
+                if u32::from(checks) > WATCHDOG_WORST.load(Ordering::Relaxed) {
+                    WATCHDOG_WORST.store(u32::from(checks), Ordering::Relaxed);
+                }
+                if checks == 5 {
+                    defmt::warn!("watchdog: no pet for 5 checks, stalled: {}", stalled);
+                }
+            }
+        }
+    }
+}
+
+/// Runs `future`, beating `task` each time it is polled (the game's loop is
+/// `app::game_task`'s: being polled at the frame rate is its proof of life).
+async fn with_heartbeat<F: core::future::Future>(
+    task: Task,
+    mut future: core::pin::Pin<&mut F>,
+) -> F::Output {
+    core::future::poll_fn(|cx| {
+        HEARTBEATS.beat(task);
+        future.as_mut().poll(cx)
+    })
+    .await
 }
 
 /// `--seconds=N`: ends a headless play after `N` seconds, with the game's
@@ -197,7 +246,11 @@ async fn game(options: Options) {
     if options.demo {
         // The baseline: display scanning and timers, no game.
         let before = hw::cpu_meter::sample();
-        embassy_time::Timer::after_secs(1).await;
+        // A second, beating for the watchdog (the game is not running yet).
+        for _ in 0..10 {
+            HEARTBEATS.beat(Task::Game);
+            embassy_time::Timer::after_millis(100).await;
+        }
         let after = hw::cpu_meter::sample();
         if let Some(load) = LoadReport::between(&hw::cpu_meter::calibration(), before, after) {
             defmt::info!(
@@ -218,7 +271,8 @@ async fn game(options: Options) {
         // stretch, so this run's LEDs and CPU load are not the demo's.
         LINKS.meter.set(Some(hw::cpu_meter::meter));
     }
-    let exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
+    let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode));
+    let exit = with_heartbeat(Task::Game, game).await;
     let end = hw::cpu_meter::sample();
     let summary = match exit {
         GameExit::Quit => DemoSummary::default(),
@@ -249,6 +303,11 @@ async fn game(options: Options) {
         LINKS.tilt.get().x,
         LINKS.tilt.get().y,
         LINKS.tilt.get().z
+    );
+    defmt::info!(
+        "watchdog: longest wait without a pet {=u32} ms (it resets at {=u32} ms)",
+        WATCHDOG_WORST.load(Ordering::Relaxed) * WATCHDOG_CHECK_MS as u32,
+        WATCHDOG_TIMEOUT_TICKS * 1000 / 32_768
     );
     defmt::info!(
         "demo summary: {=u8}/{=u8} levels won, {=u64} physics steps in {=u64} frames: {=str}",

@@ -29,7 +29,7 @@ use embedded_hal::i2c::{ErrorType, Operation};
 use heapless::Deque;
 use lsm303agr::Lsm303agr;
 use marble_rolling::app::TiltInput;
-use marble_rolling::board::microbit as v2;
+use marble_rolling::board::microbit::{self as v2, Task};
 use marble_rolling::board::microbit_v1::accel::{Accelerometer, NxpChip};
 use marble_rolling::board::microbit_v1::nxp_driver;
 use marble_rolling::board::microbit_v1::twi::{BusClear, Recovering, TwiError};
@@ -368,6 +368,7 @@ impl Input {
 
 impl TiltInput for Input {
     async fn next_event(&mut self) -> InputEvent {
+        crate::HEARTBEATS.beat(Task::Input);
         if let Some(event) = self.pending.pop_front() {
             return event;
         }

@@ -63,6 +63,15 @@ pub const RAM_BUDGET_BYTES: u32 = 12 * 1024;
 /// Budget: flash (text + data), bytes: half of the chip's 256 KiB (issue 27),
 /// room for the event stepper.
 pub const FLASH_BUDGET_BYTES: u32 = 128 * 1024;
+/// The watchdog's period in ticks of its 32 768 Hz clock: 2 s, twice the
+/// v2's. The v1's event-stepped drops take up to ~900 000 instructions a
+/// frame (`cargo microbit-v1 -- --demo --profile`), and the game task runs
+/// late frames back to back: in QEMU (about half a real M0's speed) every
+/// task but the game stalled for half a second in grand-tour. A second of
+/// margin over that; the pets follow the v2's rule
+/// (`board::microbit::WatchdogGate`).
+pub const WATCHDOG_TIMEOUT_TICKS: u32 = 2 * 32_768;
+
 /// Budget: the demo's CPU load, hundredths of a percent of [`CPU_HZ`].
 pub const CPU_BUDGET_CENTIPERCENT: u64 = 2000;
 
