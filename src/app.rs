@@ -123,6 +123,9 @@ pub struct Links<const W: usize, const H: usize> {
     pub frames: Signal<CriticalSectionRawMutex, Frame<W, H>>,
     /// The game's status after its latest frame.
     pub status: Latest<Status>,
+    /// Set by a board before the demo starts: the demo counts each frame's
+    /// instructions with it and logs a profile per level (see [`Meter`]).
+    pub meter: Latest<Option<Meter>>,
     /// Sounds from [`game_task`] to [`sound_task`], in order (the game never
     /// waits: what does not fit is dropped). Feature `sound` only.
     #[cfg(feature = "sound")]
@@ -162,6 +165,7 @@ impl<const W: usize, const H: usize> Links<W, H> {
             events: Channel::new(),
             frames: Signal::new(),
             status: Latest::new(Status::START),
+            meter: Latest::new(None),
             #[cfg(feature = "sound")]
             sounds: Channel::new(),
             #[cfg(feature = "records")]
@@ -389,6 +393,82 @@ async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
     }
 }
 
+/// Runs `f` and returns the instructions it took: a board's CPU meter. Set
+/// in [`Links::meter`] before a demo, it makes the demo log per level
+/// `profile LEVEL: N frames, instructions per frame: physics AVG (max MAX),
+/// autopilot AVG, render AVG` (render per frame drawn). The game is the
+/// demo's, call for call (the same hashes).
+pub type Meter = fn(&mut dyn FnMut()) -> u64;
+
+/// [`Player::frame`]'s two calls, each counted (out of line: the demo's
+/// own path keeps its stack).
+#[inline(never)]
+fn profiled_frame<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    player: &mut Player<W, H, PILOT, EVENTS>,
+    meter: Meter,
+    profile: &mut Profile,
+) -> Phase {
+    let mut reading = [0; 3];
+    let pilot = meter(&mut || reading = player.reading(Tilt::FLAT.reading_mg()));
+    let mut phase = Phase::Playing;
+    let physics = meter(&mut || phase = player.session_mut().frame_in::<EVENTS>(reading));
+    profile.frame(pilot, physics);
+    phase
+}
+
+/// [`Player::render`], counted.
+#[inline(never)]
+fn profiled_render<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    player: &mut Player<W, H, PILOT, EVENTS>,
+    meter: Meter,
+    profile: &mut Profile,
+) -> Frame<W, H> {
+    let mut picture = Frame::new();
+    let render = meter(&mut || picture = player.render());
+    profile.render(render);
+    picture
+}
+
+/// One level's instruction counts (see [`Meter`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Profile {
+    frames: u32,
+    physics: u64,
+    physics_max: u64,
+    pilot: u64,
+    renders: u32,
+    render: u64,
+}
+
+impl Profile {
+    fn frame(&mut self, pilot: u64, physics: u64) {
+        self.frames = self.frames.saturating_add(1);
+        self.pilot = self.pilot.saturating_add(pilot);
+        self.physics = self.physics.saturating_add(physics);
+        self.physics_max = self.physics_max.max(physics);
+    }
+
+    fn render(&mut self, render: u64) {
+        self.renders = self.renders.saturating_add(1);
+        self.render = self.render.saturating_add(render);
+    }
+
+    fn log(&self, level: &str) {
+        let frames = u64::from(self.frames.max(1));
+        #[cfg(feature = "defmt")]
+        defmt::info!(
+            "profile {=str}: {=u32} frames, instructions per frame: physics {=u64} (max {=u64}), autopilot {=u64}, render {=u64}",
+            level,
+            self.frames,
+            self.physics / frames,
+            self.physics_max,
+            self.pilot / frames,
+            self.render / u64::from(self.renders.max(1))
+        );
+        let _ = (level, frames);
+    }
+}
+
 /// Waits for the next frame tick, taking the input events meanwhile: in the
 /// demo only the sensor's (a downed sensor pauses it like a game) and Quit.
 /// Returns `false` on Quit.
@@ -423,6 +503,7 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
     ticker: &mut Ticker,
     records: bool,
 ) -> GameExit {
+    let meter = links.meter.get();
     let mut summary = DemoSummary::default();
     let mut sensor = None;
     // The checkers replay the demo with `cargo sim -- --stepping <this>`.
@@ -454,6 +535,7 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
         if let Some(fault) = sensor {
             player.handle(InputEvent::SensorDown(fault));
         }
+        let mut profile = Profile::default();
         let phase = loop {
             if !demo_tick(links, ticker, &mut player).await {
                 return GameExit::Quit;
@@ -466,10 +548,16 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
                 links.status.set(player.status());
                 continue;
             }
-            let phase = player.frame(Tilt::FLAT.reading_mg());
+            let phase = match meter {
+                None => player.frame(Tilt::FLAT.reading_mg()),
+                Some(meter) => profiled_frame(&mut player, meter, &mut profile),
+            };
             links.status.set(player.status());
             if !links.frames.signaled() || phase != Phase::Playing {
-                links.frames.signal(player.render());
+                links.frames.signal(match meter {
+                    None => player.render(),
+                    Some(meter) => profiled_render(&mut player, meter, &mut profile),
+                });
             }
             if phase != Phase::Playing {
                 break phase;
@@ -502,6 +590,9 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
             game.steps(),
             player.session().state_hash()
         );
+        if meter.is_some() {
+            profile.log(player.level_name());
+        }
         let last = player.render();
         // The pause's picture changes only when the flash does: each one is
         // sent once (the display keeps showing it), not once a refresh.

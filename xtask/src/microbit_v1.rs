@@ -8,11 +8,15 @@
 //! * [`check`] — `cargo xtask check-microbit-v1`: the QEMU demo against the
 //!   host simulator (outcome, steps and `state_hash` per level), the LEDs
 //!   rebuilt from QEMU's GPIO trace against the frames the firmware says it
-//!   showed, a two-second play without the demo (QEMU's TWI is a stub: the
-//!   sensor must go down, the game wait, the LEDs show the fault cross), and
-//!   the budgets (RAM: statics + stack high-water ≤ V1_RAM_BUDGET, 12 KiB;
-//!   flash ≤ V1_FLASH_BUDGET, 64 KiB, with the code bytes per module when
-//!   over; CPU ≤ V1_CPU_BUDGET_CENTIPERCENT, 20 % of 16 MHz).
+//!   showed, the sensor path in the demo (`accel=mma8653fc` through QEMU's
+//!   TWI stub, its re-init and fault counts), a `--demo --profile` run's
+//!   per-level frame costs (printed; the 60 000-instruction worst frame is
+//!   the physics' goal), a two-second play without the demo (the stub found
+//!   as the MMA8653FC, polled without a panic, the LEDs showing what the
+//!   supervision decided), and the budgets (RAM: statics + stack
+//!   high-water ≤ V1_RAM_BUDGET, 12 KiB; flash ≤ V1_FLASH_BUDGET, 128 KiB,
+//!   with the code bytes per module when over; CPU ≤
+//!   V1_CPU_BUDGET_CENTIPERCENT, 20 % of 16 MHz).
 //!
 //! # The display, rebuilt from the GPIO trace
 //!
@@ -64,7 +68,7 @@ pub const CHIP: &str = "nRF51822_xxAA";
 
 /// Budgets (bytes, hundredths of a percent), overridable from the environment.
 const RAM_BUDGET: u64 = 12 * 1024;
-const FLASH_BUDGET: u64 = 64 * 1024;
+const FLASH_BUDGET: u64 = 128 * 1024;
 const CPU_BUDGET_CENTIPERCENT: u64 = 2000;
 
 /// Tolerance of the rebuilt frames, brightness levels per pixel.
@@ -579,9 +583,35 @@ pub fn check() -> Outcome {
     let frames: Vec<LoggedFrame> = text.lines().filter_map(parse_frame).collect();
     check_frames(&timeline, &frames, levels.len(), &mut problems);
 
-    // 3. Without the demo, QEMU's stub accelerometer takes the sensor down:
-    //    the game must wait, showing the fault cross.
-    check_sensor_down(&tools, &elf, &target, limit, &mut problems)?;
+    // 2b. The sensor path ran in the demo: QEMU's TWI stub identified as the
+    //     MMA8653FC, its counts in the summary.
+    if !text
+        .lines()
+        .any(|line| line.trim_end().ends_with("accel=mma8653fc"))
+    {
+        problems.report("the demo did not detect the MMA8653FC (`accel=mma8653fc`)".into());
+    }
+    match text.lines().find(|line| line.contains("demo sensor: ")) {
+        Some(line) => say!("{}", &line[line.find("demo sensor: ").unwrap_or(0)..]),
+        None => problems.report("no `demo sensor:` line (re-inits and faults)".into()),
+    }
+
+    // 2b'. The watchdog was petted in time all through the demo.
+    match parse_watchdog(&text) {
+        Some((waited, resets_at)) if waited < resets_at => {
+            say!("watchdog: longest wait without a pet {waited} ms (resets at {resets_at} ms)");
+        }
+        Some((waited, resets_at)) => problems.report(format!(
+            "the watchdog went {waited} ms without a pet: a board resets at {resets_at} ms"
+        )),
+        None => problems.report("no `watchdog: longest wait` line".into()),
+    }
+
+    // 2c. Each level's frame costs (a second run: counting stops interrupts).
+    check_profile(&tools, &elf, &target, limit, &mut problems)?;
+
+    // 3. Without the demo: play on QEMU's stub accelerometer.
+    check_play_on_stub(&tools, &elf, &target, limit, &mut problems)?;
 
     // 4. Budgets.
     match parse_ram(&text) {
@@ -668,11 +698,13 @@ pub const FAULT_CROSS: [[u8; leds::SIZE]; leds::SIZE] = [
     [15, 0, 0, 0, 15],
 ];
 
-/// Plays (no demo) for two seconds in QEMU: its TWI stub has no
-/// accelerometer behind it, so the supervision must take the sensor down,
-/// the game must stay paused, and the LEDs (from the GPIO trace, over the
-/// second second) must show the fault cross.
-fn check_sensor_down(
+/// Plays (no demo) for two seconds in QEMU: the firmware must find the
+/// MMA8653FC through the TWI stub (`accel=mma8653fc`), keep polling whatever
+/// its data registers return without a panic (the plausibility rules decide
+/// whether the sensor stays up), and the LEDs (from the GPIO trace, over the
+/// second second) must show the picture that decision implies: the maze
+/// with the sensor up, the fault cross with it down.
+fn check_play_on_stub(
     tools: &setup::Qemu,
     elf: &Path,
     target: &Path,
@@ -683,7 +715,7 @@ fn check_sensor_down(
     let trace_path = target.join("check-microbit-v1-sensor.trace");
     let file = File::create(&log_path)
         .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
-    say!("playing 2 s in QEMU without an accelerometer (its TWI is a stub)…");
+    say!("playing 2 s in QEMU on its TWI stub (the MMA8653FC's identity, no chip behind it)…");
     let args = ["--seconds=2".to_string(), "--no-frame-log".to_string()];
     let (status, _) = qemu_run(
         tools,
@@ -701,19 +733,109 @@ fn check_sensor_down(
         .map_err(|e| Failure::new(format!("cannot read {}: {e}", trace_path.display())))?;
     let timeline = Timeline::from_lines(String::from_utf8_lossy(&trace).lines());
     let seen = timeline.perceived(1_000_000, 2_000_000);
-    let paused = text
+    let detected = text
         .lines()
-        .any(|line| line.contains("stop after 2 s") && line.contains("sensor down: true"));
-    if status != 0 || !paused || seen != FAULT_CROSS {
+        .any(|line| line.trim_end().ends_with("accel=mma8653fc"));
+    let stop = text.lines().find(|line| line.contains("stop after 2 s"));
+    let down = stop.map(|line| line.contains("sensor down: true"));
+    let shown_ok = match down {
+        Some(true) => seen == FAULT_CROSS,
+        Some(false) => seen != FAULT_CROSS && seen.iter().flatten().any(|&level| level > 0),
+        None => false,
+    };
+    if status != 0 || !detected || !shown_ok {
         problems.report(format!(
-            "sensor down: status {status}, game paused with the sensor down: {paused}, \
-             LEDs {} (want the cross {}); log {}",
+            "play on the stub: status {status}, accel=mma8653fc: {detected}, sensor down: {down:?}, \
+             LEDs {} (the cross is {}); log {}",
             hex_rows(&seen),
             hex_rows(&FAULT_CROSS),
             log_path.display()
         ));
     } else {
-        say!("sensor down: reported, the game waits, the LEDs show the fault cross");
+        say!(
+            "play on the stub: MMA8653FC found, sensor down: {}, the LEDs show {}",
+            down == Some(true),
+            if down == Some(true) {
+                "the fault cross"
+            } else {
+                "the game"
+            }
+        );
+    }
+    Ok(())
+}
+
+/// `watchdog: longest wait without a pet W ms (it resets at R ms)` → (W, R).
+pub fn parse_watchdog(log: &str) -> Option<(u64, u64)> {
+    log.lines().find_map(|line| {
+        let rest = &line
+            [line.find("longest wait without a pet ")? + "longest wait without a pet ".len()..];
+        let (waited, rest) = rest.split_once(" ms (it resets at ")?;
+        let (resets_at, _) = rest.split_once(" ms")?;
+        Some((waited.parse().ok()?, resets_at.parse().ok()?))
+    })
+}
+
+/// `profile LEVEL: N frames, instructions per frame: physics AVG (max MAX),
+/// …` → (level, frames, average, max).
+pub fn parse_profile(line: &str) -> Option<(String, u32, u64, u64)> {
+    let rest = &line[line.find("profile ")? + "profile ".len()..];
+    let (level, rest) = rest.split_once(": ")?;
+    let (frames, rest) = rest.split_once(" frames, instructions per frame: physics ")?;
+    let (average, rest) = rest.split_once(" (max ")?;
+    let (max, _) = rest.split_once(')')?;
+    Some((
+        level.to_string(),
+        frames.parse().ok()?,
+        average.parse().ok()?,
+        max.parse().ok()?,
+    ))
+}
+
+/// The worst frame the lead's physics work is to bring under (issue 27), M0
+/// instructions: reported, not yet enforced.
+const WORST_FRAME_GOAL: u64 = 60_000;
+
+/// Runs `--demo --profile` and prints each level's frame costs; it must
+/// still win every level and profile each.
+fn check_profile(
+    tools: &setup::Qemu,
+    elf: &Path,
+    target: &Path,
+    limit: Duration,
+    problems: &mut Problems,
+) -> Result<(), Failure> {
+    let log_path = target.join("check-microbit-v1-profile.log");
+    let file = File::create(&log_path)
+        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
+    say!("profiling the demo's frames in QEMU microbit (--demo --profile)…");
+    let args = [
+        "--demo".to_string(),
+        "--profile".to_string(),
+        "--no-frame-log".to_string(),
+    ];
+    let (status, _) = qemu_run(tools, elf, &args, None, Sink::File(&file), limit)?;
+    let text = std::fs::read(&log_path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", log_path.display())))?;
+    let text = demo::strip_colours(&String::from_utf8_lossy(&text));
+    let _ = std::fs::write(&log_path, &text);
+    let profiles: Vec<_> = text.lines().filter_map(parse_profile).collect();
+    let (levels, _) = demo::parse_levels(&text);
+    if status != 0 || profiles.is_empty() || profiles.len() != levels.len() {
+        problems.report(format!(
+            "profile run: status {status}, {} profiles for {} levels (log {})",
+            profiles.len(),
+            levels.len(),
+            log_path.display()
+        ));
+    }
+    for (level, frames, average, max) in &profiles {
+        let over = if *max > WORST_FRAME_GOAL {
+            " (over the 60 000 goal)"
+        } else {
+            ""
+        };
+        say!("profile {level}: {frames} frames, physics {average} per frame, worst {max}{over}");
     }
     Ok(())
 }
@@ -908,6 +1030,26 @@ mod tests {
         assert_eq!(parse_ram(log), Some((5084, 8364)));
         assert_eq!(parse_cpu(log), Some(1858));
         assert_eq!(parse_cpu("cpu load: x = 1.5 % of a 16 MHz"), None);
+    }
+
+    #[test]
+    fn watchdog_lines() {
+        let log = "34.1 INFO  watchdog: longest wait without a pet 600 ms (it resets at 2000 ms)";
+        assert_eq!(parse_watchdog(log), Some((600, 2000)));
+        assert_eq!(
+            parse_watchdog("watchdog: longest wait without a pet x ms"),
+            None
+        );
+    }
+
+    #[test]
+    fn profile_lines() {
+        let line = "44.6 INFO  profile grand-tour: 293 frames, instructions per frame: physics 33309 (max 894523), autopilot 5558, render 2535";
+        assert_eq!(
+            parse_profile(line),
+            Some(("grand-tour".to_string(), 293, 33309, 894523))
+        );
+        assert_eq!(parse_profile("profile x: 3 frames"), None);
     }
 
     #[test]

@@ -23,6 +23,7 @@ use critical_section::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use marble_rolling::app::{Latest, MatrixOutput};
+use marble_rolling::board::microbit::Task;
 use marble_rolling::board::microbit_v1::leds::{COL_PINS, MATRIX_PINS, ROW_PINS};
 use marble_rolling::board::microbit_v1::{
     frame_from_refresh, rows_hex, schedule, Picture, Schedule, DARK_SCHEDULE,
@@ -79,7 +80,10 @@ pub fn start() {
     let timer = pac::TIMER1;
     timer.tasks_stop().write_value(1);
     timer.mode().write_value(pac::timer::regs::Mode(0));
-    timer.bitmode().write_value(pac::timer::regs::Bitmode(3));
+    // 16 bits: the nRF51's TIMER1 has no more (only TIMER0 counts 32 bits;
+    // QEMU emulates 32 everywhere, so 32 here never showed). A slice is at
+    // most 8 × 222 µs, far below 65 535.
+    timer.bitmode().write_value(pac::timer::regs::Bitmode(0));
     timer
         .prescaler()
         .write_value(pac::timer::regs::Prescaler(u32::from(TIMER_PRESCALER)));
@@ -221,6 +225,7 @@ impl Matrix {
 
 impl MatrixOutput<WIDTH, HEIGHT> for Matrix {
     async fn show(&mut self, step: ScanStep) {
+        crate::HEARTBEATS.beat(Task::Display);
         // A refresh's steps add up to the picture (see `frame_from_refresh`).
         let mut lit = step.columns;
         while lit != 0 {
@@ -239,6 +244,7 @@ impl MatrixOutput<WIDTH, HEIGHT> for Matrix {
     }
 
     async fn show_refresh(&mut self, scanner: &mut Scanner<WIDTH, HEIGHT>) {
+        crate::HEARTBEATS.beat(Task::Display);
         let picture = frame_from_refresh(
             (0..Scanner::<WIDTH, HEIGHT>::STEPS_PER_REFRESH).map(|_| scanner.next_step()),
         );

@@ -47,7 +47,7 @@ use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{exception, ExceptionFrame};
 use critical_section::Mutex;
 use embassy_time_queue_utils::Queue;
-use marble_rolling::board::microbit_v1::{Options, RAM_BASE};
+use marble_rolling::board::microbit_v1::Options;
 use nrf_pac as pac;
 use pac::Interrupt;
 
@@ -408,6 +408,25 @@ pub mod cpu_meter {
         calibration
     }
 
+    /// `f`'s result and the instructions it took (interrupts off; the
+    /// timing's own overhead removed; resolution one µs, 7.8 instructions
+    /// under `-icount shift=7`).
+    pub fn count_instructions<R>(f: impl FnOnce() -> R) -> (R, u64) {
+        let calibration = calibration();
+        let (out, us) = critical_section::with(|_| {
+            let before = clock::now();
+            let out = f();
+            (out, (clock::now() - before) as u32)
+        });
+        let busy = us.saturating_sub(calibration.overhead_us);
+        (out, calibration.instructions(u64::from(busy)))
+    }
+
+    /// [`count_instructions`] as the app's `Meter` (the demo's profile).
+    pub fn meter(f: &mut dyn FnMut()) -> u64 {
+        count_instructions(f).1
+    }
+
     /// The last [`calibrate`] result.
     pub fn calibration() -> Calibration {
         critical_section::with(|cs| CALIBRATION.borrow(cs).get())
@@ -418,28 +437,31 @@ pub mod cpu_meter {
 // Stack high-water mark
 // ---------------------------------------------------------------------------
 
-/// Stack painting. Without flip-link (the workspace links only the M4
-/// firmware through it) cortex-m-rt puts the statics at the bottom of RAM
-/// and the stack at the top, growing down towards `_stack_end` (the end of
-/// the statics): [`paint`](stack::paint) fills that gap at boot, [`high_water`](stack::high_water) finds the
-/// deepest word overwritten since.
+/// Stack painting. The firmware links through flip-link
+/// (`.cargo/config.toml`): the statics sit at the top of RAM and the stack
+/// below them, growing down towards the start of RAM, so an overflow faults
+/// (no RAM below) instead of overwriting them. [`paint`](stack::paint) fills
+/// the free stack at boot, [`high_water`](stack::high_water) finds the deepest
+/// word overwritten since.
 pub mod stack {
-    use marble_rolling::board::microbit_v1::STACK_PAINT;
+    use marble_rolling::board::microbit_v1::{RAM_BASE, RAM_BYTES, STACK_PAINT};
 
     /// Bytes below the SP left unpainted.
     const RED_ZONE: usize = 64;
 
     extern "C" {
         static _stack_start: u32;
-        static _stack_end: u32;
     }
 
+    /// The initial SP: just below the statics.
     fn top() -> usize {
+        // Only the symbol's address is taken, never its value.
         core::ptr::addr_of!(_stack_start) as usize
     }
 
+    /// Where the stack would run out of RAM.
     fn bottom() -> usize {
-        core::ptr::addr_of!(_stack_end) as usize
+        RAM_BASE
     }
 
     /// Paints the free stack. Call first thing in `main`.
@@ -450,8 +472,8 @@ pub mod stack {
             let end = sp.saturating_sub(RED_ZONE) & !3;
             let mut addr = bottom();
             while addr < end {
-                // SAFETY: between the end of the statics and below the SP:
-                // RAM nothing uses yet.
+                // SAFETY: from the start of RAM to below the SP: the free
+                // stack, nothing uses it yet.
                 unsafe { core::ptr::write_volatile(addr as *mut u32, STACK_PAINT) };
                 addr += 4;
             }
@@ -463,9 +485,9 @@ pub mod stack {
     pub struct StackUse {
         /// Deepest use, bytes.
         pub used: usize,
-        /// Room the stack has (top of RAM down to the statics), bytes.
+        /// Room the stack has (below the statics), bytes.
         pub size: usize,
-        /// The statics (data + bss + uninit), bytes.
+        /// The statics (data + bss + uninit, flip-link's alignment), bytes.
         pub statics: usize,
     }
 
@@ -473,14 +495,14 @@ pub mod stack {
     pub fn high_water() -> StackUse {
         let top = top();
         let mut addr = bottom();
-        // SAFETY: word reads of RAM between the statics and the stack top.
+        // SAFETY: word reads of RAM from its start to the stack top.
         while addr < top && unsafe { core::ptr::read_volatile(addr as *const u32) } == STACK_PAINT {
             addr += 4;
         }
         StackUse {
             used: top.saturating_sub(addr),
             size: top.saturating_sub(bottom()),
-            statics: bottom().saturating_sub(super::RAM_BASE),
+            statics: (RAM_BASE + RAM_BYTES as usize).saturating_sub(top),
         }
     }
 }
@@ -539,4 +561,43 @@ static PENDED: AtomicBool = AtomicBool::new(false);
 #[unsafe(export_name = "__pender")]
 fn pender(_context: *mut ()) {
     PENDED.store(true, Ordering::SeqCst);
+}
+
+// ---------------------------------------------------------------------------
+// Watchdog
+// ---------------------------------------------------------------------------
+
+/// The nRF51's WDT: a 2 s period on its 32 768 Hz clock
+/// (`board::microbit_v1::WATCHDOG_TIMEOUT_TICKS` says why) (the WDT starts the
+/// RC oscillator itself), paused while a debugger halts the core, running
+/// while it sleeps; one reload register. Petted by the watchdog task only
+/// when every task's heartbeat moved (`board::microbit::WatchdogGate`, the
+/// v2's rule and its host tests). QEMU's `microbit` machine has no WDT (its
+/// registers are unimplemented: writes ignored): there it never resets.
+pub mod watchdog {
+    use marble_rolling::board::microbit_v1::WATCHDOG_TIMEOUT_TICKS;
+    use nrf_pac as pac;
+
+    /// The value a reload register takes to pet (nRF51 reference manual).
+    const RELOAD: u32 = 0x6E52_4635;
+
+    /// Starts the watchdog (once started it runs until a reset).
+    pub fn start() {
+        let wdt = pac::WDT;
+        if wdt.runstatus().read().0 & 1 != 0 {
+            // Already running since before a soft reset: its configuration
+            // cannot change; keep petting it.
+            return;
+        }
+        wdt.crv().write_value(WATCHDOG_TIMEOUT_TICKS);
+        // SLEEP = run while asleep, HALT = pause under the debugger.
+        wdt.config().write_value(pac::wdt::regs::Config(1));
+        wdt.rren().write_value(pac::wdt::regs::Rren(1));
+        wdt.tasks_start().write_value(1);
+    }
+
+    /// Reloads the counter.
+    pub fn pet() {
+        pac::WDT.rr(0).write_value(pac::wdt::regs::Rr(RELOAD));
+    }
 }

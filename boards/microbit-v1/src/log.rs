@@ -108,8 +108,11 @@ mod rtt {
     use core::ptr::{addr_of, addr_of_mut};
     use core::sync::atomic::{compiler_fence, Ordering};
 
-    /// Room for a few log lines: probe-rs drains it continuously.
-    const SIZE: usize = 256;
+    /// Room for a few log lines (defmt frames are 5 to 30 bytes): probe-rs
+    /// drains it continuously and sets [`BLOCK_IF_FULL`], so a burst waits
+    /// instead of being lost. 96 rather than 256 bytes: the RAM went to the
+    /// sensor path's three chips and the demo's profile (12 KiB budget).
+    const SIZE: usize = 96;
     /// `flags & 3`: block when full (probe-rs sets it while attached).
     const BLOCK_IF_FULL: u32 = 2;
 

@@ -50,21 +50,29 @@ mod hw;
 mod log;
 mod sensor;
 
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links};
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TiltInput};
+use marble_rolling::board::microbit::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::board::microbit_v1::{
-    LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WIDTH,
+    LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WATCHDOG_TIMEOUT_TICKS, WIDTH,
 };
 use marble_rolling::input::tilt::TiltConfig;
 
 /// The links between the tasks.
 static LINKS: Links<WIDTH, HEIGHT> = Links::new();
 
+/// Each task's heartbeat, for the watchdog (the v2's rule: input beats per
+/// poll, the game each time it is polled, the display per refresh).
+pub static HEARTBEATS: Heartbeats = Heartbeats::new();
+
 /// The autopilot is linked: the demo needs it.
 const PILOT: bool = true;
 
-/// Fixed physics steps: the event stepper (about 24 KiB of code) does not fit
-/// the flash (docs/boards.md, "micro:bit v1").
-const EVENTS: bool = false;
+/// The stepper every board plays (`GameConfig::DEFAULT`, events): with the v1's
+/// flash budget at 128 KiB of its 256 KiB it fits (`cargo xtask
+/// check-microbit-v1` and docs/microbit-revisions.md have the figures).
+const EVENTS: bool = marble_rolling::game::rules::DEFAULT_EVENTS;
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
@@ -104,11 +112,16 @@ fn spawn(spawner: embassy_executor::Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => hw::fatal("cannot spawn the game"),
     }
-    if !options.demo {
-        match input() {
-            Ok(token) => spawner.spawn(token),
-            Err(_) => hw::fatal("cannot spawn the input"),
-        }
+    // In the demo too: the sensor path runs (probe, configuration, polls,
+    // supervision) while the autopilot plays, so that the stack high-water
+    // covers it; there its events are counted, not given to the game.
+    match input(options.demo) {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => hw::fatal("cannot spawn the input"),
+    }
+    match watchdog() {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => hw::fatal("cannot spawn the watchdog"),
     }
     if let Some(seconds) = options.seconds {
         match stop_after(seconds) {
@@ -124,12 +137,69 @@ async fn display_task(log_frames: bool) -> ! {
     app::display_task(&LINKS, &mut matrix).await
 }
 
-/// The accelerometer and its supervision (not in the demo: the autopilot
-/// needs no tilt, and a sensor going down would pause the demo).
+/// Re-initialisations and faults of the sensor path so far (the demo's
+/// summary prints them).
+static SENSOR_REINITS: AtomicU32 = AtomicU32::new(0);
+/// See [`SENSOR_REINITS`].
+static SENSOR_FAULTS: AtomicU32 = AtomicU32::new(0);
+
+/// The accelerometer and its supervision. In the demo the autopilot needs
+/// no tilt and a sensor going down must not pause it (QEMU's TWI stub is no
+/// sensor): the events are only counted.
 #[embassy_executor::task]
-async fn input() -> ! {
+async fn input(demo: bool) -> ! {
     let mut input = sensor::Input::new();
-    app::input_task(&LINKS, &mut input).await
+    if !demo {
+        app::input_task(&LINKS, &mut input).await
+    }
+    loop {
+        if let marble_rolling::input::event::InputEvent::Tilt(tilt) = input.next_event().await {
+            // Shown in the summary only: the demo's game reads no tilt.
+            LINKS.tilt.set(tilt);
+        }
+        SENSOR_REINITS.store(input.reinits(), Ordering::Relaxed);
+        SENSOR_FAULTS.store(input.faults(), Ordering::Relaxed);
+    }
+}
+
+/// The most watchdog checks in a row without a pet (the demo prints it).
+static WATCHDOG_WORST: AtomicU32 = AtomicU32::new(0);
+
+/// Pets the watchdog whenever every task has beaten since the last pet; a
+/// stalled task stops the pets and the board resets (`hw::watchdog`).
+#[embassy_executor::task]
+async fn watchdog() -> ! {
+    let mut gate = WatchdogGate::new(HEARTBEATS.snapshot());
+    let mut ticker =
+        embassy_time::Ticker::every(embassy_time::Duration::from_millis(WATCHDOG_CHECK_MS));
+    hw::watchdog::start();
+    loop {
+        ticker.next().await;
+        match gate.check(HEARTBEATS.snapshot()) {
+            Verdict::Pet => hw::watchdog::pet(),
+            Verdict::Wait { stalled, checks } => {
+                if u32::from(checks) > WATCHDOG_WORST.load(Ordering::Relaxed) {
+                    WATCHDOG_WORST.store(u32::from(checks), Ordering::Relaxed);
+                }
+                if checks == 5 {
+                    defmt::warn!("watchdog: no pet for 5 checks, stalled: {}", stalled);
+                }
+            }
+        }
+    }
+}
+
+/// Runs `future`, beating `task` each time it is polled (the game's loop is
+/// `app::game_task`'s: being polled at the frame rate is its proof of life).
+async fn with_heartbeat<F: core::future::Future>(
+    task: Task,
+    mut future: core::pin::Pin<&mut F>,
+) -> F::Output {
+    core::future::poll_fn(|cx| {
+        HEARTBEATS.beat(task);
+        future.as_mut().poll(cx)
+    })
+    .await
 }
 
 /// `--seconds=N`: ends a headless play after `N` seconds, with the game's
@@ -175,7 +245,11 @@ async fn game(options: Options) {
     if options.demo {
         // The baseline: display scanning and timers, no game.
         let before = hw::cpu_meter::sample();
-        embassy_time::Timer::after_secs(1).await;
+        // A second, beating for the watchdog (the game is not running yet).
+        for _ in 0..10 {
+            HEARTBEATS.beat(Task::Game);
+            embassy_time::Timer::after_millis(100).await;
+        }
         let after = hw::cpu_meter::sample();
         if let Some(load) = LoadReport::between(&hw::cpu_meter::calibration(), before, after) {
             defmt::info!(
@@ -191,7 +265,13 @@ async fn game(options: Options) {
         );
     }
     let start = hw::cpu_meter::sample();
-    let exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
+    if options.demo && options.profile {
+        // Interrupts off while a frame is counted: the display's slices
+        // stretch, so this run's LEDs and CPU load are not the demo's.
+        LINKS.meter.set(Some(hw::cpu_meter::meter));
+    }
+    let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode));
+    let exit = with_heartbeat(Task::Game, game).await;
     let end = hw::cpu_meter::sample();
     let summary = match exit {
         GameExit::Quit => DemoSummary::default(),
@@ -215,6 +295,19 @@ async fn game(options: Options) {
         ),
         None => defmt::warn!("cpu load: no time elapsed"),
     }
+    defmt::info!(
+        "demo sensor: {=u32} re-inits, {=u32} faults, last tilt {=i16} {=i16} {=i16} mg",
+        SENSOR_REINITS.load(Ordering::Relaxed),
+        SENSOR_FAULTS.load(Ordering::Relaxed),
+        LINKS.tilt.get().x,
+        LINKS.tilt.get().y,
+        LINKS.tilt.get().z
+    );
+    defmt::info!(
+        "watchdog: longest wait without a pet {=u32} ms (it resets at {=u32} ms)",
+        WATCHDOG_WORST.load(Ordering::Relaxed) * WATCHDOG_CHECK_MS as u32,
+        WATCHDOG_TIMEOUT_TICKS * 1000 / 32_768
+    );
     defmt::info!(
         "demo summary: {=u8}/{=u8} levels won, {=u64} physics steps in {=u64} frames: {=str}",
         summary.won,

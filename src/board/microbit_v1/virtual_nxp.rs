@@ -1,0 +1,406 @@
+//! Virtual MMA8653FC and FXOS8700CQ on a virtual v1 TWI: the v1's sensor
+//! stack (probe, [`super::nxp_driver`], [`Recovering`](super::twi::Recovering),
+//! the supervision) runs against them on the host, with the fidelity rules of
+//! the QEMU board's virtual LSM303AGR
+//! (`board::qemu::virtual_lsm303agr`) and its [`ChipControl`] for the tilt and
+//! the injected faults.
+//!
+//! # What is modelled (MMA8653FC data sheet rev. 2, FXOS8700CQ rev. 8)
+//!
+//! * Identity: `WHO_AM_I` (0x0D) reads 0x5A / 0xC7; only the chip's address
+//!   acknowledges.
+//! * Burst reads and writes: the register pointer is set by the first byte
+//!   written and advances by one per byte (the wrap after `OUT_Z_LSB` and the
+//!   8-bit fast read are not modelled: the driver uses neither).
+//! * Standby and active: `CTRL_REG1`'s `ACTIVE` bit. In active mode the
+//!   configuration registers (`XYZ_DATA_CFG`, `CTRL_REG2`'s oversampling
+//!   bits, `M_CTRL_REG1`, the rest of `CTRL_REG1`) ignore writes, as the data
+//!   sheets require them written in standby. `CTRL_REG2`'s `RST` resets the
+//!   chip at any time.
+//! * Data rate from `CTRL_REG1`'s `DR` (800 Hz to 1.56 Hz), the first sample
+//!   one period after going active; a new sample sets `ZYXDR` (and `ZYXOW`
+//!   if the previous one was unread); reading the three MSBs clears them.
+//! * Samples: the tilt (board frame, milli-g) turned into the chip's axes by
+//!   [`MOUNTING`] — the chip's place on the board in its own words, not the
+//!   firmware's axis map — quantised at the range in force (±2/4/8 g) to the
+//!   chip's 10 or 14 bits, left-justified, MSB first. Counts per g are
+//!   derived here from the bit count and the range, not taken from the
+//!   firmware's table.
+//! * Power-on: everything 0 (standby, no data).
+//!
+//! Faults ([`InjectedFault`], from the shared [`ChipControl`]): NAK (no
+//! acknowledge), a stuck bus (every transfer times out — the v1 TWI's
+//! deadline — and the bus **stays** stuck after the fault is lifted until it
+//! is cleared: nine clocks and a STOP), frozen data (no new samples, writes
+//! accepted), garbage (new samples at the top tenth of the range on every
+//! axis: implausible), a chip reset (registers back to power-on at the next
+//! transfer).
+
+use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
+
+use super::accel::{nxp, Accelerometer};
+use super::twi::{BusClear, TwiError};
+use crate::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
+
+/// The NXP chips' placement on the v1 (both sit on the back of the board,
+/// the same way round): for chip axis X, Y, Z, the board axis it points
+/// along (0 = x right, 1 = y out of the LEDs, 2 = z towards the player) and
+/// its sign. From the DAL's tables (`MMA8653.cpp`, `FXOS8700.cpp`: east =
+/// −Y, north = X, up = Z; `CoordinateSystem.cpp`'s upside-down micro:bit
+/// frame), restated as directions: X along the board's right, Y towards the
+/// edge connector, Z out of the back (a flat board, screen up, reads −1 g on
+/// Z).
+pub const MOUNTING: [(usize, i32); 3] = [(0, 1), (2, 1), (1, -1)];
+
+/// Registers modelled (0x00..0x80).
+const REGISTERS: usize = 0x80;
+
+/// A virtual MMA8653FC or FXOS8700CQ.
+#[derive(Clone, Debug)]
+pub struct VirtualNxp {
+    chip: Accelerometer,
+    regs: [u8; REGISTERS],
+    pointer: u8,
+    now_us: u64,
+    next_due_us: u64,
+    /// Bit per axis: MSB read since the last sample.
+    msb_read: u8,
+    tilt_mg: [i32; 3],
+    frozen: bool,
+    garbage: bool,
+    rng: u32,
+    latched: u32,
+}
+
+impl VirtualNxp {
+    /// A chip at power-on. `chip` is [`Accelerometer::Mma8653fc`] or
+    /// [`Accelerometer::Fxos8700cq`] (anything else is taken as the MMA8653FC).
+    pub const fn new(chip: Accelerometer) -> Self {
+        Self {
+            chip,
+            regs: [0; REGISTERS],
+            pointer: 0,
+            now_us: 0,
+            next_due_us: 0,
+            msb_read: 0,
+            tilt_mg: [0, 1000, 0],
+            frozen: false,
+            garbage: false,
+            rng: 0x2545_f491,
+            latched: 0,
+        }
+    }
+
+    /// The 7-bit address it answers.
+    pub const fn address(&self) -> u8 {
+        match self.chip {
+            Accelerometer::Fxos8700cq => 0x1E,
+            _ => 0x1D,
+        }
+    }
+
+    /// `WHO_AM_I`'s value.
+    pub const fn who_am_i(&self) -> u8 {
+        match self.chip {
+            Accelerometer::Fxos8700cq => 0xC7,
+            _ => 0x5A,
+        }
+    }
+
+    /// Bits per sample.
+    pub const fn bits(&self) -> u32 {
+        match self.chip {
+            Accelerometer::Fxos8700cq => 14,
+            _ => 10,
+        }
+    }
+
+    /// Full scale in force, ±g (2, 4 or 8).
+    pub const fn full_scale_g(&self) -> i32 {
+        match self.regs[nxp::XYZ_DATA_CFG as usize] & nxp::XYZ_FS {
+            0 => 2,
+            1 => 4,
+            _ => 8,
+        }
+    }
+
+    /// Whether the chip is sampling.
+    pub const fn active(&self) -> bool {
+        self.regs[nxp::CTRL_REG1 as usize] & nxp::CTRL1_ACTIVE != 0
+    }
+
+    /// The sample period in force, µs.
+    pub const fn period_us(&self) -> u64 {
+        const PERIODS: [u64; 8] = [
+            1_250, 2_500, 5_000, 10_000, 20_000, 80_000, 160_000, 640_000,
+        ];
+        PERIODS[((self.regs[nxp::CTRL_REG1 as usize] & nxp::CTRL1_DR) >> 3) as usize]
+    }
+
+    /// A register as stored (inspection, no side effects).
+    pub fn register(&self, register: u8) -> u8 {
+        if register == nxp::WHO_AM_I {
+            return self.who_am_i();
+        }
+        self.regs.get(usize::from(register)).copied().unwrap_or(0)
+    }
+
+    /// Samples latched since power-on.
+    pub const fn latched(&self) -> u32 {
+        self.latched
+    }
+
+    /// Back to the power-on state (the clock and the tilt are kept).
+    pub fn power_on_reset(&mut self) {
+        self.regs = [0; REGISTERS];
+        self.pointer = 0;
+        self.msb_read = 0;
+    }
+
+    /// Sets the tilt (board frame, milli-g) the next samples take.
+    pub fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
+        self.tilt_mg = tilt_mg;
+    }
+
+    /// Frozen (no new samples) or garbage (implausible samples).
+    pub fn set_faults(&mut self, frozen: bool, garbage: bool) {
+        self.frozen = frozen;
+        self.garbage = garbage;
+    }
+
+    /// Runs the sampling clock to `now_us`: latches a sample when one is due.
+    pub fn advance_to(&mut self, now_us: u64) {
+        self.now_us = self.now_us.max(now_us);
+        if !self.active() || self.now_us < self.next_due_us {
+            return;
+        }
+        let period = self.period_us();
+        let missed = (self.now_us - self.next_due_us) / period;
+        self.next_due_us += (missed + 1) * period;
+        if !self.frozen {
+            self.latch();
+        }
+    }
+
+    fn next_random(&mut self) -> u32 {
+        // xorshift32: deterministic garbage.
+        let mut x = self.rng;
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        self.rng = x;
+        x
+    }
+
+    fn latch(&mut self) {
+        let bits = self.bits();
+        let max = (1i32 << (bits - 1)) - 1;
+        let min = -(1i32 << (bits - 1));
+        // 2^(bits-1) counts span the full scale.
+        let counts_per_g = (1i64 << (bits - 1)) / i64::from(self.full_scale_g());
+        for (axis, &(board, sign)) in MOUNTING.iter().enumerate() {
+            let counts = if self.garbage {
+                let r = self.next_random();
+                let magnitude = max - (r % (max as u32 / 10 + 1)) as i32;
+                if r & 0x8000_0000 != 0 {
+                    -magnitude
+                } else {
+                    magnitude
+                }
+            } else {
+                let mg = i64::from(sign) * i64::from(self.tilt_mg[board]);
+                let scaled = mg * counts_per_g;
+                let rounded = if scaled >= 0 {
+                    (scaled + 500) / 1000
+                } else {
+                    (scaled - 500) / 1000
+                };
+                rounded.clamp(i64::from(min), i64::from(max)) as i32
+            };
+            let [msb, lsb] = ((counts << (16 - bits)) as i16).to_be_bytes();
+            let at = usize::from(nxp::OUT_X_MSB) + 2 * axis;
+            self.regs[at] = msb;
+            self.regs[at + 1] = lsb;
+        }
+        let status = &mut self.regs[nxp::STATUS as usize];
+        let unread = *status & nxp::STATUS_ZYXDR != 0;
+        *status = 0x0F | if unread { nxp::STATUS_ZYXOW | 0x70 } else { 0 };
+        self.msb_read = 0;
+        self.latched = self.latched.wrapping_add(1);
+    }
+
+    /// An I²C write: sub-address, then data from there on.
+    pub fn i2c_write(&mut self, bytes: &[u8]) {
+        let Some((&sub, data)) = bytes.split_first() else {
+            return;
+        };
+        self.pointer = sub & 0x7F;
+        for &byte in data {
+            self.write(self.pointer, byte);
+            self.pointer = (self.pointer + 1) & 0x7F;
+        }
+    }
+
+    /// An I²C read from the register pointer on.
+    pub fn i2c_read(&mut self, buffer: &mut [u8]) {
+        for byte in buffer.iter_mut() {
+            *byte = self.read(self.pointer);
+            self.pointer = (self.pointer + 1) & 0x7F;
+        }
+    }
+
+    fn write(&mut self, register: u8, value: u8) {
+        let active = self.active();
+        match register {
+            nxp::CTRL_REG1 => {
+                if active {
+                    // Only standby may be selected while active.
+                    self.regs[nxp::CTRL_REG1 as usize] = (self.regs[nxp::CTRL_REG1 as usize]
+                        & !nxp::CTRL1_ACTIVE)
+                        | (value & nxp::CTRL1_ACTIVE);
+                } else {
+                    self.regs[nxp::CTRL_REG1 as usize] = value;
+                    if value & nxp::CTRL1_ACTIVE != 0 {
+                        self.next_due_us = self.now_us + self.period_us();
+                    }
+                }
+            }
+            nxp::CTRL_REG2 if value & nxp::CTRL2_RST != 0 => self.power_on_reset(),
+            nxp::CTRL_REG2 | nxp::XYZ_DATA_CFG if !active => {
+                self.regs[usize::from(register)] = value;
+            }
+            nxp::M_CTRL_REG1 if !active && self.chip == Accelerometer::Fxos8700cq => {
+                self.regs[usize::from(register)] = value;
+            }
+            // Read-only, reserved, or written while active: ignored.
+            _ => {}
+        }
+    }
+
+    fn read(&mut self, register: u8) -> u8 {
+        match register {
+            nxp::WHO_AM_I => self.who_am_i(),
+            1..=6 => {
+                let value = self.regs[usize::from(register)];
+                if register % 2 == 1 {
+                    self.msb_read |= 1 << ((register - 1) / 2);
+                    if self.msb_read == 0b111 {
+                        self.regs[nxp::STATUS as usize] = 0;
+                    }
+                }
+                value
+            }
+            r => self.regs.get(usize::from(r)).copied().unwrap_or(0),
+        }
+    }
+}
+
+/// The v1's TWI with one virtual NXP chip on it, faults from `control`, time
+/// from `now_us` (µs): what the v1's blocking driver would return, as the
+/// async trait the sensor stack takes (every transfer completes at once).
+pub struct VirtualTwi<'a, C: Fn() -> u64> {
+    chip: VirtualNxp,
+    control: &'a ChipControl,
+    now_us: C,
+    stuck: bool,
+    resets_seen: u32,
+    transfers: u32,
+    clears: u32,
+}
+
+impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
+    /// `chip` on the bus.
+    pub fn new(chip: VirtualNxp, control: &'a ChipControl, now_us: C) -> Self {
+        Self {
+            chip,
+            control,
+            now_us,
+            stuck: false,
+            resets_seen: control.reset_requests(),
+            transfers: 0,
+            clears: 0,
+        }
+    }
+
+    /// The chip (inspection).
+    pub fn chip(&self) -> &VirtualNxp {
+        &self.chip
+    }
+
+    /// Whether the bus is held stuck.
+    pub const fn stuck(&self) -> bool {
+        self.stuck
+    }
+
+    /// Transfers attempted.
+    pub const fn transfers(&self) -> u32 {
+        self.transfers
+    }
+
+    /// Bus clears received.
+    pub const fn clears(&self) -> u32 {
+        self.clears
+    }
+
+    fn apply(&mut self) -> Result<(), TwiError> {
+        self.transfers = self.transfers.wrapping_add(1);
+        let fault = self.control.fault();
+        let requests = self.control.reset_requests();
+        if requests != self.resets_seen {
+            self.resets_seen = requests;
+            self.chip.power_on_reset();
+        }
+        let tilt = self.control.tilt();
+        self.chip
+            .set_tilt_mg([i32::from(tilt.x), i32::from(tilt.y), i32::from(tilt.z)]);
+        self.chip.set_faults(
+            fault == InjectedFault::FrozenData,
+            fault == InjectedFault::Garbage,
+        );
+        self.chip.advance_to((self.now_us)());
+        if fault == InjectedFault::StuckBus {
+            self.stuck = true;
+        }
+        if self.stuck {
+            return Err(TwiError::Timeout);
+        }
+        if fault == InjectedFault::Nak {
+            return Err(TwiError::AddressNack);
+        }
+        Ok(())
+    }
+}
+
+impl<C: Fn() -> u64> ErrorType for VirtualTwi<'_, C> {
+    type Error = TwiError;
+}
+
+impl<C: Fn() -> u64> I2c for VirtualTwi<'_, C> {
+    async fn transaction(
+        &mut self,
+        address: u8,
+        operations: &mut [Operation<'_>],
+    ) -> Result<(), TwiError> {
+        self.apply()?;
+        if address != self.chip.address() {
+            return Err(TwiError::AddressNack);
+        }
+        for operation in operations.iter_mut() {
+            match operation {
+                Operation::Write(bytes) => self.chip.i2c_write(bytes),
+                Operation::Read(buffer) => self.chip.i2c_read(buffer),
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<C: Fn() -> u64> BusClear for VirtualTwi<'_, C> {
+    /// Frees the bus, unless the slave is still faulty.
+    fn clear_bus(&mut self) {
+        self.clears = self.clears.wrapping_add(1);
+        if self.control.fault() != InjectedFault::StuckBus {
+            self.stuck = false;
+        }
+    }
+}
