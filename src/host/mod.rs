@@ -308,3 +308,38 @@ fn picture<S: crate::physics::Scalar, const N: usize>(
     }
     (w, h, px)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn excerpts_cut_at_60_characters() {
+        assert_eq!(excerpt("q15"), "`q15`");
+        let sixty = "é".repeat(EXCERPT_CHARS);
+        assert_eq!(excerpt(&sixty), format!("`{sixty}`"));
+        assert_eq!(excerpt(&format!("{sixty}x")), format!("`{sixty}…`"));
+    }
+
+    #[test]
+    fn clap_quotes_are_shortened() {
+        let long = "x".repeat(1000);
+        let cut = format!("{}…", "x".repeat(EXCERPT_CHARS));
+        assert_eq!(
+            shorten_quotes(&format!(
+                "error: unexpected argument '{long}' found\n\n  tip: '-- {long}'\n"
+            )),
+            format!(
+                "error: unexpected argument '{cut}' found\n\n  tip: '-- {}…'\n",
+                "x".repeat(EXCERPT_CHARS - 3)
+            )
+        );
+        // A quote inside the argument pairs the rest wrongly: the line is cut.
+        let odd = shorten_quotes(&format!(
+            "error: invalid value 'it's {long}' for '--backend'"
+        ));
+        assert!(odd.chars().count() <= 3 * EXCERPT_CHARS + 1, "{odd}");
+        assert!(odd.ends_with('…'));
+        assert_eq!(shorten_quotes("short 'ok'\n"), "short 'ok'\n");
+    }
+}

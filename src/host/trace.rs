@@ -206,6 +206,28 @@ mod tests {
     }
 
     #[test]
+    fn bytes_that_are_not_utf8_are_refused_at_their_line_and_column() {
+        let plain = b"t_s,ax_mg,ay_mg,az_mg\n0.5,-200,980,0\n";
+        assert_eq!(
+            TiltTrace::from_bytes(plain),
+            TiltTrace::parse(core::str::from_utf8(plain).unwrap())
+        );
+        for (bytes, line, message) in [
+            (
+                &b"t_s,ax_mg,ay_mg,az_mg\n\n0,1\xff"[..],
+                3,
+                "byte 0xFF, column 4",
+            ),
+            // The column counts characters, after a byte-order mark on line 1.
+            (b"\xef\xbb\xbf\xc3\xa9\xc3", 1, "byte 0xC3, column 2"),
+        ] {
+            let e = TiltTrace::from_bytes(bytes).unwrap_err();
+            assert_eq!(e.line, line);
+            assert_eq!(e.message, format!("not UTF-8 ({message})"));
+        }
+    }
+
+    #[test]
     fn reports_lines() {
         let e =
             TiltTrace::parse("t_s,ax_mg,ay_mg,az_mg\n\n0,0,1000,0\n0.1,x,1000,0\n").unwrap_err();
