@@ -560,14 +560,14 @@ fn a_byte_order_mark_is_fine_in_levels_and_tilt_traces() {
     const BOM: &str = "\u{feff}";
     let level = "name: bom\ntime_limit_s: 5\n---\n#######\n#S...G#\n#######\n";
     let plain = scratch("plain.level", level);
-    let marked = scratch("bom.level", &format!("{BOM}{level}"));
+    let marked = scratch("bom.level", format!("{BOM}{level}"));
     assert_eq!(std::fs::read(&marked).unwrap()[..3], [0xEF, 0xBB, 0xBF]);
     let o = sim(&["--check", s(&marked)]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
 
     let trace_plain = scratch("plain-right.csv", RIGHT);
-    let trace_marked = scratch("bom-right.csv", &format!("{BOM}{RIGHT}"));
+    let trace_marked = scratch("bom-right.csv", format!("{BOM}{RIGHT}"));
     let run =
         |lvl: &PathBuf, trace: &PathBuf| sim_json(&["--level", s(lvl), "--tilt-trace", s(trace)]);
     let reference = run(&plain, &trace_plain);
