@@ -727,3 +727,50 @@ fn bytes_that_are_not_utf8_are_an_error_at_their_line_and_column() {
         );
     }
 }
+
+/// Each key's range in words (its messages, the build error of a built-in
+/// level) says what the parser takes: both ends are taken, one step past
+/// either is out of range.
+#[test]
+fn each_keys_range_text_is_its_range() {
+    let words = |scaled: u64, decimals: u32| {
+        let unit = 10u64.pow(decimals);
+        let (whole, frac) = (scaled / unit, scaled % unit);
+        if frac == 0 {
+            whole.to_string()
+        } else {
+            let frac = format!("{frac:0width$}", width = decimals as usize);
+            format!("{whole}.{}", frac.trim_end_matches('0'))
+        }
+    };
+    for key in NumberKey::ALL {
+        let (lo, hi) = key.range();
+        let d = key.decimals();
+        let (lo_text, hi_text) = (words(lo, d), words(hi, d));
+        assert_eq!(
+            key.range_text(),
+            format!("{} is {lo_text} ..= {hi_text}", key.name())
+        );
+        let at = |value: String| {
+            parse::<W>(&with_header(&format!("{}: {value}\n", key.name()))).map(|_| ())
+        };
+        for inside in [lo_text, hi_text] {
+            if let Err(e) = at(inside.clone()) {
+                // The pitch and marble rules may still refuse an end: not its range.
+                assert!(
+                    !matches!(e.kind, LevelErrorKind::OutOfRange { .. }),
+                    "{} {inside}: {e}",
+                    key.name()
+                );
+            }
+        }
+        let mut outside = vec![words(hi + 1, d)];
+        if lo > 0 {
+            outside.push(words(lo - 1, d));
+        }
+        for value in outside {
+            let e = at(value.clone()).expect_err("out of range");
+            assert_eq!(e.kind, LevelErrorKind::OutOfRange { key }, "{value}");
+        }
+    }
+}
