@@ -30,7 +30,7 @@ fn sim_json(args: &[&str]) -> Value {
 /// A file under this test target's scratch directory. Written under a name
 /// of its own and renamed into place: tests run in parallel, and two of them
 /// writing the same file in place let one read it half written.
-fn scratch(name: &str, content: &str) -> PathBuf {
+fn scratch(name: &str, content: impl AsRef<[u8]>) -> PathBuf {
     static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
     std::fs::create_dir_all(&dir).unwrap();
@@ -574,14 +574,14 @@ fn a_byte_order_mark_is_fine_in_levels_and_tilt_traces() {
     const BOM: &str = "\u{feff}";
     let level = "name: bom\ntime_limit_s: 5\n---\n#######\n#S...G#\n#######\n";
     let plain = scratch("plain.level", level);
-    let marked = scratch("bom.level", &format!("{BOM}{level}"));
+    let marked = scratch("bom.level", format!("{BOM}{level}"));
     assert_eq!(std::fs::read(&marked).unwrap()[..3], [0xEF, 0xBB, 0xBF]);
     let o = sim(&["--check", s(&marked)]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
 
     let trace_plain = scratch("plain-right.csv", RIGHT);
-    let trace_marked = scratch("bom-right.csv", &format!("{BOM}{RIGHT}"));
+    let trace_marked = scratch("bom-right.csv", format!("{BOM}{RIGHT}"));
     let run =
         |lvl: &PathBuf, trace: &PathBuf| sim_json(&["--level", s(lvl), "--tilt-trace", s(trace)]);
     let reference = run(&plain, &trace_plain);
@@ -662,4 +662,186 @@ fn generate_options_are_checked() {
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         assert!(stderr(&o).contains(words), "{args:?}: {}", stderr(&o));
     }
+}
+
+/// A level whose fourth line has a byte that is not UTF-8 (0xFF) at column 3.
+const NOT_UTF8_LEVEL: &[u8] = b"name: latin\ntime_limit_s: 5\n---\n#S\xffG#\n#####\n";
+
+#[test]
+fn a_level_that_is_not_utf8_is_refused_at_its_line_and_column() {
+    let p = scratch("latin.level", NOT_UTF8_LEVEL);
+    let want = format!("{}:4:3: not UTF-8 (byte 0xFF)", s(&p));
+    let o = sim(&["--check", s(&p)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(stderr(&o), format!("{want}\n"));
+    let o = sim(&["--level", s(&p)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert_eq!(err, format!("sim: error: {want}\n"));
+    // The file exists and was read: not "neither a built-in level nor a readable file".
+    assert!(!err.contains("readable"), "{err}");
+    // After a byte-order mark, columns count from the first character after it;
+    // a character cut short by the end of the file is reported at its first byte.
+    let p = scratch("cut.level", b"\xef\xbb\xbfname: caf\xc3\xa9\n---\n\xe2\x82");
+    let o = sim(&["--check", s(&p)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr(&o),
+        format!("{}:3:1: not UTF-8 (byte 0xE2)\n", s(&p))
+    );
+}
+
+#[test]
+fn a_tilt_trace_that_is_not_utf8_is_refused_at_its_line() {
+    let t = scratch(
+        "latin.csv",
+        b"t_s,ax_mg,ay_mg,az_mg\n0,0,1000,0\n0.5,\xb5100,1000,0\n",
+    );
+    let o = sim(&["--level", "corner", "--tilt-trace", s(&t)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "sim: error: tilt trace {}:3: not UTF-8 (byte 0xB5, column 5)\n",
+            s(&t)
+        )
+    );
+}
+
+/// `err` quotes at most 60 characters of the offending text `filler` (a run of
+/// one character), cut with an ellipsis, and stays short.
+fn quotes_at_most_60(err: &str, filler: char) {
+    let longest = err
+        .split(|c| c != filler)
+        .map(|run| run.chars().count())
+        .max()
+        .unwrap_or(0);
+    assert!(
+        (1..=60).contains(&longest),
+        "a run of {longest} × {filler:?}: {err}"
+    );
+    assert!(err.contains('…'), "no ellipsis: {err}");
+    assert!(err.len() < 1000, "{} bytes: {}…", err.len(), &err[..300]);
+}
+
+#[test]
+fn error_lines_quote_at_most_60_characters() {
+    let digits = "9".repeat(100_000);
+    // Finite as an f64 (1e300): a number, out of range or out of order.
+    let big = "9".repeat(300);
+    // Tilt traces: a huge number, a huge header, a huge negative time, a huge
+    // reading and a huge time earlier than the one before.
+    let cases = [
+        (
+            format!("t_s,ax_mg,ay_mg,az_mg\n0,{digits}x,1000,0\n"),
+            "ax_mg: `999",
+        ),
+        (format!("t_s,{digits}\n"), "expected the header"),
+        (
+            format!("t_s,ax_mg,ay_mg,az_mg\n-{digits},0,1000,0\n"),
+            "t_s: `-999",
+        ),
+        (
+            format!("t_s,ax_mg,ay_mg,az_mg\n0,0,{big},0\n"),
+            "beyond ±16000 mg",
+        ),
+        (
+            format!("t_s,ax_mg,ay_mg,az_mg\n1{big},0,1000,0\n{big},0,1000,0\n"),
+            "earlier than",
+        ),
+    ];
+    for (n, (trace, words)) in cases.iter().enumerate() {
+        let t = scratch(&format!("huge-{n}.csv"), trace);
+        let o = sim(&["--level", "corner", "--tilt-trace", s(&t)]);
+        assert_eq!(o.status.code(), Some(2), "{words}");
+        let err = stderr(&o);
+        assert!(err.contains(words), "{words}: {err}");
+        quotes_at_most_60(&err, '9');
+    }
+    // Levels quote nothing but their line and column: a huge value, key or row
+    // is one short line.
+    for (n, level) in [
+        format!("time_limit_s: {digits}\n---\n#####\n#S.G#\n#####\n"),
+        format!("{digits}: 1\n---\n#####\n#S.G#\n#####\n"),
+        format!("---\n{digits}\n"),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let p = scratch(&format!("huge-{n}.level"), level);
+        let o = sim(&["--check", s(&p)]);
+        assert_eq!(o.status.code(), Some(1));
+        let err = stderr(&o);
+        assert!(err.len() < 300 && err.lines().count() == 1, "{err}");
+    }
+    // Arguments: ours and clap's.
+    let x = "x".repeat(100_000);
+    for args in [
+        vec!["--level", "corner", "--backend", &x],
+        vec!["--level", &x],
+        vec!["--level", "corner", "--seconds", &x],
+        vec!["--level", "corner", "--substeps", &x],
+        vec!["--level", "corner", "--stepping", &x],
+        vec!["--level", "corner", &x],
+    ] {
+        let o = sim(&args);
+        assert_eq!(o.status.code(), Some(2), "{:?}", &args[..args.len() - 1]);
+        quotes_at_most_60(&stderr(&o), 'x');
+    }
+}
+
+#[test]
+fn out_of_range_names_the_range() {
+    let p = scratch(
+        "bouncy.level",
+        "name: bouncy\nrestitution: 1.5\n---\n#####\n#S.G#\n#####\n",
+    );
+    let want = format!("{}:2:14: value out of range: restitution is 0 ..= 1", s(&p));
+    let o = sim(&["--check", s(&p)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(stderr(&o), format!("{want}\n"));
+    let o = sim(&["--level", s(&p)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(stderr(&o), format!("sim: error: {want}\n"));
+}
+
+/// `effects: none` slides 7/5 as far as `effects: rolling` in the same time
+/// under the same tilt (a marble that rolls turns 2/7 of the pull into spin).
+/// With events: fixed steps cap the speed at r/4 per step (875 mm/s at 1024
+/// steps/s), which a 0.3 g slide passes within the half second.
+#[test]
+fn the_effects_list_is_the_physics_from_the_command_line() {
+    let wall = "#".repeat(127);
+    let level = |effects: &str| {
+        format!(
+            "name: slide\n{effects}time_limit_s: 60\n---\n{wall}\n#S{}G#\n{wall}\n",
+            ".".repeat(123)
+        )
+    };
+    let trace = scratch("slide-right.csv", RIGHT);
+    let run = |name: &str, effects: &str| {
+        let p = scratch(name, level(effects));
+        let v = sim_json(&[
+            "--level",
+            s(&p),
+            "--tilt-trace",
+            s(&trace),
+            "--seconds",
+            "0.5",
+            "--stepping",
+            "events",
+        ]);
+        assert_eq!(v["outcome"], "timeout", "{effects:?}: {v}");
+        v["final"]["x_mm"].as_f64().unwrap() - v["start"]["x_mm"].as_f64().unwrap()
+    };
+    let sliding = run("slide-none.level", "effects: none\n");
+    let empty = run("slide-empty.level", "effects:\n");
+    let rolling = run("slide-rolling.level", "effects: rolling\n");
+    let default = run("slide-default.level", "");
+    println!("0.5 s: sliding {sliding:.3} mm, rolling {rolling:.3} mm");
+    assert_eq!(sliding, empty);
+    assert_eq!(rolling, default);
+    assert!(rolling > 50.0, "{rolling} mm");
+    let ratio = sliding / rolling;
+    assert!((ratio - 1.4).abs() < 0.01, "sliding/rolling = {ratio}");
 }

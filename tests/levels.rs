@@ -1,13 +1,19 @@
-//! The level format: built-ins, defaults, and errors with line and column.
+//! The level format: built-ins, defaults, the effects list, and errors with line
+//! and column.
+mod common;
 
 use marble_rolling::game::level::{
-    parse, words_needed, Cell, LevelError, LevelErrorKind, MAX_PITCH_UM, MIN_PITCH_UM,
+    parse, text, words_needed, Cell, LevelError, LevelErrorKind, NumberKey, MAX_PITCH_UM,
+    MIN_PITCH_UM,
 };
 use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::physics::geometry::tiles::LayoutError;
 use marble_rolling::physics::{MicroF32, Params, PhysicsSpec, Scalar, SetupError};
+
+use common::{cell_centre, spec_in, Stepping};
+use marble_rolling::physics::{Effects, World};
 
 const W: usize = 1016;
 
@@ -79,6 +85,8 @@ fn header_values_are_read() {
     );
     assert_eq!(s.rolling_resistance_ppm, 20_000);
     assert!(s.effects.friction && s.effects.board_motion && s.effects.holes && !s.effects.marbles);
+    // The list is exact: rolling is not in it, so it is off.
+    assert!(!s.effects.rolling);
     assert_eq!(l.info.time_limit_s, 90);
 }
 
@@ -89,7 +97,14 @@ fn errors_name_line_and_column() {
         ("colour: red\n---\n###\n", 1, 1, LevelErrorKind::UnknownKey),
         ("short_mm: 2.0001\n---\n", 1, 11, LevelErrorKind::BadNumber),
         ("long_mm: abc\n---\n", 1, 10, LevelErrorKind::BadNumber),
-        ("restitution: 1.5\n---\n", 1, 14, LevelErrorKind::OutOfRange),
+        (
+            "restitution: 1.5\n---\n",
+            1,
+            14,
+            LevelErrorKind::OutOfRange {
+                key: NumberKey::Restitution,
+            },
+        ),
         (
             "effects: rolling, flying\n---\n",
             1,
@@ -465,4 +480,297 @@ fn a_byte_order_mark_is_skipped_at_compile_time() {
         marble_rolling::builtin_level!("\u{feff}name: bom\n---\n#####\n#S.G#\n#####\n");
     assert_eq!(BOM.info.name, "bom");
     assert_eq!(BOM.info.goals(), &[Cell::new(3, 1, 0)]);
+}
+
+/// A corridor 127 tiles long under `header`: the marble starts at its west end.
+fn corridor(header: &str) -> String {
+    let wall = "#".repeat(127);
+    format!("{header}---\n{wall}\n#S{}G#\n{wall}\n", ".".repeat(123))
+}
+
+fn effects_of(header: &str) -> Effects {
+    parse::<W>(&corridor(header))
+        .unwrap_or_else(|e| panic!("{header:?}: {e}"))
+        .info
+        .spec
+        .effects
+}
+
+#[test]
+fn effects_is_the_exact_list() {
+    let only = |rolling, friction, board_motion| Effects {
+        rolling,
+        friction,
+        board_motion,
+        ..Effects::NONE
+    };
+    let cases: &[(&str, Effects)] = &[
+        // Without the key: rolling, as always.
+        ("", only(true, false, false)),
+        ("name: x\n", only(true, false, false)),
+        // Empty or `none`: nothing.
+        ("effects:\n", Effects::NONE),
+        ("effects:   \n", Effects::NONE),
+        ("effects: none\n", Effects::NONE),
+        ("effects: none \r\n", Effects::NONE),
+        // Exactly what is listed.
+        ("effects: rolling\n", only(true, false, false)),
+        ("effects: friction\n", only(false, true, false)),
+        ("effects: board_motion\n", only(false, false, true)),
+        ("effects: friction,board_motion\n", only(false, true, true)),
+        (
+            "effects: rolling, friction, board_motion\n",
+            only(true, true, true),
+        ),
+        ("effects: rolling, , friction,\n", only(true, true, false)),
+        // A later line replaces an earlier one.
+        (
+            "effects: friction\neffects: rolling\n",
+            only(true, false, false),
+        ),
+        ("effects: rolling\neffects:\n", Effects::NONE),
+    ];
+    for &(header, want) in cases {
+        assert_eq!(effects_of(header), want, "{header:?}");
+    }
+    // Holes and several marbles come from the grid, whatever the list says.
+    let l = parse::<W>("effects: none\n---\n#####\n#S.G#\n#O###\n#S..#\n#####\n").unwrap();
+    let e = l.info.spec.effects;
+    assert!(e.holes && e.marbles && !e.rolling && !e.friction && !e.board_motion);
+    // `none` beside an effect is refused at `none`.
+    for (header, column) in [
+        ("effects: none, rolling\n", 10),
+        ("effects: rolling, none\n", 19),
+        ("effects: none, none\n", 16),
+    ] {
+        let e = error_at(&corridor(header));
+        assert_eq!(
+            (e.line, e.column, e.kind),
+            (1, column, LevelErrorKind::UnknownEffect),
+            "{header:?}"
+        );
+        assert!(e.to_string().contains("none, alone"), "{e}");
+    }
+}
+
+/// A level's effects list is what the step runs: every effect it leaves out
+/// never runs (its `StepStats` counter stays at zero), every one it names does.
+#[test]
+fn each_effect_left_out_never_runs() {
+    type S = fixed::types::I8F24;
+    let lists = [
+        "",
+        "none",
+        "rolling",
+        "friction",
+        "board_motion",
+        "rolling, friction",
+        "rolling, board_motion",
+        "friction, board_motion",
+        "rolling, friction, board_motion",
+    ];
+    for list in lists {
+        let src = corridor(&format!("effects: {list}\n"));
+        let l = parse::<W>(&src).unwrap();
+        let fx = l.info.spec.effects;
+        for st in [Stepping::Fixed, Stepping::Events] {
+            let spec = PhysicsSpec {
+                effects: fx,
+                ..spec_in(st, fx)
+            };
+            let p = Params::<S>::new(spec).unwrap();
+            let mut w: World<'_, S, 4> =
+                World::new(p, l.grid.view(), &[cell_centre(&p, 1, 1)]).unwrap();
+            // Towards the far end and against the corridor's side wall.
+            w.set_gravity_mg([300, -950, 200]);
+            for _ in 0..steps_per_second(&p) {
+                w.step();
+            }
+            let s = w.stats;
+            assert_eq!(s.friction_runs > 0, fx.friction, "{list:?} {st:?}: {s:?}");
+            assert_eq!(
+                s.board_motion_runs > 0,
+                fx.board_motion,
+                "{list:?} {st:?}: {s:?}"
+            );
+            // No hole and one marble: neither the 3-D nor the pair code runs.
+            assert_eq!((s.space_runs, s.pair_runs), (0, 0), "{list:?} {st:?}");
+            assert!(s.contacts > 0, "{list:?} {st:?}: walls are always on");
+        }
+    }
+}
+
+fn steps_per_second<S: Scalar>(p: &Params<S>) -> u32 {
+    1 << p.k
+}
+
+/// Down a 0.05 g incline for 1 s, a level's marble slides `½·g·sinθ·t²` with
+/// `effects: none` (and with `effects:` empty) and rolls 5/7 of it with
+/// `rolling` (and without the key): the list decides the physics.
+fn incline_as_listed<S: Scalar>(st: Stepping) {
+    for (header, rolling) in [
+        ("effects: none\n", false),
+        ("effects:\n", false),
+        ("effects: rolling\n", true),
+        ("", true),
+    ] {
+        let src = corridor(header);
+        let l = parse::<W>(&src).unwrap();
+        let fx = l.info.spec.effects;
+        assert_eq!(fx.rolling, rolling, "{header:?}");
+        let p = Params::<S>::new(PhysicsSpec {
+            effects: fx,
+            ..spec_in(st, fx)
+        })
+        .unwrap();
+        let start = cell_centre(&p, 1, 1);
+        let mut w: World<'_, S, 4> = World::new(p, l.grid.view(), &[start]).unwrap();
+        w.set_gravity_mg([50, -999, 0]);
+        for _ in 0..steps_per_second(&p) {
+            w.step();
+        }
+        let x = p.layout.to_mm(w.marbles()[0].pos.x) - p.layout.to_mm(start.0);
+        let a = 0.05 * 9806.65 * if rolling { 5.0 / 7.0 } else { 1.0 };
+        let want = 0.5 * a;
+        let err = (x - want).abs();
+        // As tests/analytic.rs's incline: I16F16 resolves ½·a·dt² to 1.5·10⁻⁵ pitch.
+        let bound = if S::NAME == "i16f16" { 0.15 } else { 0.01 };
+        assert!(
+            err < bound,
+            "{} {st:?} {header:?}: {x} mm, want {want} mm",
+            S::NAME
+        );
+        // The other list is far off: 2/7 of the distance (35 mm) apart.
+        let other = 0.5 * 0.05 * 9806.65 * if rolling { 1.0 } else { 5.0 / 7.0 };
+        assert!((x - other).abs() > 30.0);
+    }
+}
+for_each_backend_and_mode!(a_levels_effects_list_is_its_physics, incline_as_listed);
+
+#[test]
+fn out_of_range_names_the_range() {
+    let cases = [
+        ("restitution: 1.001", 14, "restitution is 0 ..= 1"),
+        ("short_mm: 0", 11, "short_mm is 0.001 ..= 100"),
+        ("long_mm: 100.001", 10, "long_mm is 0.001 ..= 100"),
+        (
+            "marble_radius_mm: 0",
+            19,
+            "marble_radius_mm is 0.001 ..= 100",
+        ),
+        (
+            "rolling_resistance: 1.000001",
+            21,
+            "rolling_resistance is 0 ..= 1",
+        ),
+        ("time_limit_s: 0", 15, "time_limit_s is 1 ..= 3600"),
+        ("time_limit_s: 3601", 15, "time_limit_s is 1 ..= 3600"),
+        // Too many digits to hold is out of range too, not "not a number".
+        (
+            "restitution: 100000000000000000000000000000",
+            14,
+            "restitution is 0 ..= 1",
+        ),
+    ];
+    for (header, column, range) in cases {
+        let e = error_at(&with_header(&format!("{header}\n")));
+        assert!(
+            matches!(e.kind, LevelErrorKind::OutOfRange { .. }),
+            "{header}: {e}"
+        );
+        assert_eq!((e.line, e.column), (1, column), "{header}");
+        assert_eq!(
+            e.to_string(),
+            format!("1:{column}: value out of range: {range}")
+        );
+    }
+    // A huge token is still one short line.
+    let huge = format!("time_limit_s: {}\n", "9".repeat(100_000));
+    let e = error_at(&with_header(&huge));
+    assert_eq!(
+        e.to_string(),
+        "1:15: value out of range: time_limit_s is 1 ..= 3600"
+    );
+}
+
+#[test]
+fn bytes_that_are_not_utf8_are_an_error_at_their_line_and_column() {
+    let ok = "name: x\n---\n#####\n#S.G#\n#####\n";
+    assert_eq!(text(ok.as_bytes()), Ok(ok));
+    let cases: &[(&[u8], u32, u32, u8)] = &[
+        (b"\xff---\n", 1, 1, 0xFF),
+        (b"name: a\xe9b\n---\n", 1, 8, 0xE9),
+        (b"name: x\n---\n#####\n#S\x80G#\n", 4, 3, 0x80),
+        // Columns count characters, as the parser does; a BOM is not one.
+        ("name: é\n".as_bytes(), 0, 0, 0),
+        (b"\xef\xbb\xbfname: \xc3\xa9\xfe\n", 1, 8, 0xFE),
+        // A character cut short by the end of the file: its first byte.
+        (b"name: x\n\xe2\x82", 2, 1, 0xE2),
+        // An overlong encoding and a UTF-16 surrogate are not UTF-8.
+        (b"name: \xc0\xaf\n", 1, 7, 0xC0),
+        (b"---\n\n\xed\xa0\x80", 3, 1, 0xED),
+    ];
+    for &(bytes, line, column, byte) in cases {
+        if line == 0 {
+            assert!(text(bytes).is_ok());
+            continue;
+        }
+        let e = text(bytes).expect_err("not UTF-8");
+        assert_eq!(
+            (e.line, e.column, e.kind),
+            (line, column, LevelErrorKind::NotUtf8 { byte }),
+            "{bytes:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            format!("{line}:{column}: not UTF-8 (byte 0x{byte:02X})")
+        );
+    }
+}
+
+/// Each key's range in words (its messages, the build error of a built-in
+/// level) says what the parser takes: both ends are taken, one step past
+/// either is out of range.
+#[test]
+fn each_keys_range_text_is_its_range() {
+    let words = |scaled: u64, decimals: u32| {
+        let unit = 10u64.pow(decimals);
+        let (whole, frac) = (scaled / unit, scaled % unit);
+        if frac == 0 {
+            whole.to_string()
+        } else {
+            let frac = format!("{frac:0width$}", width = decimals as usize);
+            format!("{whole}.{}", frac.trim_end_matches('0'))
+        }
+    };
+    for key in NumberKey::ALL {
+        let (lo, hi) = key.range();
+        let d = key.decimals();
+        let (lo_text, hi_text) = (words(lo, d), words(hi, d));
+        assert_eq!(
+            key.range_text(),
+            format!("{} is {lo_text} ..= {hi_text}", key.name())
+        );
+        let at = |value: String| {
+            parse::<W>(&with_header(&format!("{}: {value}\n", key.name()))).map(|_| ())
+        };
+        for inside in [lo_text, hi_text] {
+            if let Err(e) = at(inside.clone()) {
+                // The pitch and marble rules may still refuse an end: not its range.
+                assert!(
+                    !matches!(e.kind, LevelErrorKind::OutOfRange { .. }),
+                    "{} {inside}: {e}",
+                    key.name()
+                );
+            }
+        }
+        let mut outside = vec![words(hi + 1, d)];
+        if lo > 0 {
+            outside.push(words(lo - 1, d));
+        }
+        for value in outside {
+            let e = at(value.clone()).expect_err("out of range");
+            assert_eq!(e.kind, LevelErrorKind::OutOfRange { key }, "{value}");
+        }
+    }
 }

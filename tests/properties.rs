@@ -6,7 +6,7 @@
 mod common;
 
 use common::*;
-use marble_rolling::game::level::{parse, LevelErrorKind};
+use marble_rolling::game::level::{parse, text, LevelErrorKind};
 use marble_rolling::physics::geometry::broadphase::candidates;
 use marble_rolling::physics::geometry::narrowphase::offset;
 use marble_rolling::physics::{Effects, MicroF32, PhysicsSpec, Scalar, Vec3, World};
@@ -292,24 +292,40 @@ proptest! {
     }
 
     /// The level parser never panics on arbitrary bytes, and its errors point inside
-    /// the text.
+    /// the text; bytes that are not UTF-8 are refused before it, at the first bad
+    /// byte's line and column, exactly when they are not UTF-8.
     #[test]
     fn level_parser_never_panics(bytes in prop::collection::vec(any::<u8>(), 0..400)) {
-        let text = String::from_utf8_lossy(&bytes);
-        check_parse(&text);
+        check_bytes(&bytes);
+        let lossy = String::from_utf8_lossy(&bytes);
+        check_parse(&lossy);
     }
 
-    /// … nor on near-miss levels built from the format's own alphabet.
+    /// … nor on near-miss levels built from the format's own alphabet, with
+    /// huge tokens and bytes that are not UTF-8 among them.
     #[test]
     fn level_parser_on_level_like_text(
         header in prop::collection::vec(prop::sample::select(vec![
             "name: x\n", "short_mm: 2\n", "long_mm: 9.5\n", "restitution: 0.7\n", "effects: friction\n",
             "marble_radius_mm: 9\n", "time_limit_s: 0\n", "bogus\n", "rolling_resistance: 0.0000001\n", "\n",
+            "effects:\n", "effects: none\n", "effects: none, rolling\n", "effects: board_motion,,\n",
+            "restitution: 1.001\n", "name: caf\u{e9}\n",
         ]), 0..5),
+        huge in prop::option::of((0usize..4, 1usize..20_000)),
         sep in any::<bool>(),
         rows in prop::collection::vec("[#.OSG x]{0,12}", 0..10),
+        bad in prop::option::of((any::<prop::sample::Index>(), 0x80u8..=0xFF)),
     ) {
         let mut text: String = header.concat();
+        if let Some((what, n)) = huge {
+            let token = "9".repeat(n);
+            text.push_str(&match what {
+                0 => format!("time_limit_s: {token}\n"),
+                1 => format!("restitution: 0.{token}\n"),
+                2 => format!("{token}: 1\n"),
+                _ => format!("effects: {token}\n"),
+            });
+        }
         if sep {
             text.push_str("---\n");
         }
@@ -317,7 +333,36 @@ proptest! {
             text.push_str(&r);
             text.push('\n');
         }
-        check_parse(&text);
+        let mut bytes = text.into_bytes();
+        if let Some((at, byte)) = bad {
+            if !bytes.is_empty() {
+                let at = at.index(bytes.len());
+                bytes[at] = byte;
+            }
+        }
+        check_bytes(&bytes);
+        if let Ok(text) = std::str::from_utf8(&bytes) {
+            check_parse(text);
+        }
+    }
+}
+
+/// [`text`] agrees with the standard library on what is UTF-8; where it is not,
+/// the error names the first bad byte at a line and column inside the text.
+fn check_bytes(bytes: &[u8]) {
+    match (text(bytes), std::str::from_utf8(bytes)) {
+        (Ok(t), Ok(s)) => assert_eq!(t, s),
+        (Err(e), Err(u)) => {
+            let bad = u.valid_up_to();
+            assert_eq!(e.kind, LevelErrorKind::NotUtf8 { byte: bytes[bad] });
+            let lines = bytes[..bad].iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+            assert_eq!(e.line, lines, "{e}");
+            assert!(e.column >= 1 && e.column as usize <= bad + 1, "{e}");
+            assert!(e
+                .to_string()
+                .ends_with(&format!("not UTF-8 (byte 0x{:02X})", bytes[bad])));
+        }
+        (t, s) => panic!("text says {t:?}, std says {s:?}"),
     }
 }
 
@@ -330,7 +375,10 @@ fn check_parse(text: &str) {
             let lines = text.lines().count() as u32 + 1;
             assert!(e.line >= 1 && e.line <= lines + 1, "{e:?} in {lines} lines");
             assert!(e.column >= 1);
-            let _ = e.kind == LevelErrorKind::BadTile;
+            // Text is UTF-8 by then; a message is one short line whatever the text.
+            assert!(!matches!(e.kind, LevelErrorKind::NotUtf8 { .. }), "{e}");
+            let message = e.to_string();
+            assert!(message.len() < 200 && !message.contains('\n'), "{message}");
         }
     }
 }

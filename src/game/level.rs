@@ -18,9 +18,14 @@
 //! | `long_mm` | long tile width `l` (cells), 0.001 ..= 100; pitch `s + l` 1 ..= 100 | `10` |
 //! | `marble_radius_mm` | marble radius, 0.001 ..= 100 and `2r < l` | `3.5` |
 //! | `restitution` | `e` in eq. 1, 0 ..= 1 | `0.5` |
-//! | `effects` | comma list of `rolling`, `friction`, `board_motion` | `rolling` |
+//! | `effects` | the effects that are on: a comma list of `rolling`, `friction`, `board_motion`; empty or `none` for none | `rolling` |
 //! | `rolling_resistance` | rolling-resistance coefficient (with `friction`) | `0.01` |
 //! | `time_limit_s` | seconds before the attempt times out, 1 ..= 3600 | `60` |
+//!
+//! `effects` is the exact list of what is on: `effects: friction` slides with
+//! friction (no rolling), `effects:` alone or `effects: none` is a marble that
+//! slides without friction (it accelerates at `g·sinθ`, not the rolling `5/7` of
+//! it); without the key a level rolls. A later `effects` line replaces an earlier one.
 //!
 //! Numbers take up to three decimals (`rolling_resistance` six). Grid characters:
 //! `#` wall (a tile in layer `j = 1` on top of the floor), `.` floor, `O` hole (no
@@ -56,6 +61,10 @@
 //! header (pitch `s + l` 1 ..= 100 mm, `2r < l`), at the value that breaks the rule
 //! (the later of the keys involved). A leading UTF-8 byte-order mark is skipped
 //! (columns on line 1 count from the first character after it).
+//!
+//! Text read as bytes (a file, the browser's buffer) goes through [`text`] first:
+//! bytes that are not UTF-8 are an error at their line and column
+//! ([`LevelErrorKind::NotUtf8`]), like any other.
 //!
 //! [`Params::new`]: crate::physics::world::Params::new
 
@@ -104,8 +113,11 @@ pub enum LevelErrorKind {
     /// A number that does not parse or has too many decimals.
     BadNumber,
     /// A number outside the key's range.
-    OutOfRange,
-    /// An unknown name in `effects`.
+    OutOfRange {
+        /// The key whose range it is.
+        key: NumberKey,
+    },
+    /// An unknown name in `effects`, or `none` beside another effect.
     UnknownEffect,
     /// No `---` line.
     MissingSeparator,
@@ -147,6 +159,97 @@ pub enum LevelErrorKind {
     EmptyStorey,
     /// A wall under a hole of the storey above.
     HoleAboveWall,
+    /// Bytes that are not UTF-8 ([`text`]).
+    NotUtf8 {
+        /// The first byte that is not (or does not start) a UTF-8 character.
+        byte: u8,
+    },
+}
+
+/// A header key whose value is a number: its name and its range, in one place
+/// for the parser and its messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum NumberKey {
+    /// `short_mm`.
+    ShortMm,
+    /// `long_mm`.
+    LongMm,
+    /// `marble_radius_mm`.
+    MarbleRadiusMm,
+    /// `restitution`.
+    Restitution,
+    /// `rolling_resistance`.
+    RollingResistance,
+    /// `time_limit_s`.
+    TimeLimitS,
+}
+
+impl NumberKey {
+    /// Every numeric key.
+    pub const ALL: [NumberKey; 6] = [
+        NumberKey::ShortMm,
+        NumberKey::LongMm,
+        NumberKey::MarbleRadiusMm,
+        NumberKey::Restitution,
+        NumberKey::RollingResistance,
+        NumberKey::TimeLimitS,
+    ];
+
+    /// The key as written in a level.
+    pub const fn name(self) -> &'static str {
+        match self {
+            NumberKey::ShortMm => "short_mm",
+            NumberKey::LongMm => "long_mm",
+            NumberKey::MarbleRadiusMm => "marble_radius_mm",
+            NumberKey::Restitution => "restitution",
+            NumberKey::RollingResistance => "rolling_resistance",
+            NumberKey::TimeLimitS => "time_limit_s",
+        }
+    }
+
+    /// Fraction digits the value may have; it is stored scaled by `10^decimals`.
+    pub const fn decimals(self) -> u32 {
+        match self {
+            NumberKey::RollingResistance => 6,
+            NumberKey::TimeLimitS => 0,
+            _ => 3,
+        }
+    }
+
+    /// The least and greatest value, scaled by `10^decimals`.
+    pub const fn range(self) -> (u64, u64) {
+        match self {
+            NumberKey::ShortMm | NumberKey::LongMm | NumberKey::MarbleRadiusMm => (1, 100_000),
+            NumberKey::Restitution => (0, 1000),
+            NumberKey::RollingResistance => (0, 1_000_000),
+            NumberKey::TimeLimitS => (1, 3600),
+        }
+    }
+
+    /// The range in words, as the level format's table gives it.
+    pub const fn range_text(self) -> &'static str {
+        match self {
+            NumberKey::ShortMm => "short_mm is 0.001 ..= 100",
+            NumberKey::LongMm => "long_mm is 0.001 ..= 100",
+            NumberKey::MarbleRadiusMm => "marble_radius_mm is 0.001 ..= 100",
+            NumberKey::Restitution => "restitution is 0 ..= 1",
+            NumberKey::RollingResistance => "rolling_resistance is 0 ..= 1",
+            NumberKey::TimeLimitS => "time_limit_s is 1 ..= 3600",
+        }
+    }
+
+    /// The key called `b[start..end]`.
+    const fn find(b: &[u8], start: usize, end: usize) -> Option<NumberKey> {
+        let mut n = 0;
+        while n < NumberKey::ALL.len() {
+            if eq_bytes(b, start, end, NumberKey::ALL[n].name().as_bytes()) {
+                return Some(NumberKey::ALL[n]);
+            }
+            n += 1;
+        }
+        None
+    }
 }
 
 impl LevelErrorKind {
@@ -155,10 +258,17 @@ impl LevelErrorKind {
     pub const fn message(self) -> &'static str {
         match self {
             LevelErrorKind::MissingColon => "expected `key: value`",
-            LevelErrorKind::UnknownKey => "unknown header key",
-            LevelErrorKind::BadNumber => "not a number (at most 3 decimals)",
-            LevelErrorKind::OutOfRange => "value out of range",
-            LevelErrorKind::UnknownEffect => "unknown effect (rolling, friction, board_motion)",
+            LevelErrorKind::UnknownKey => {
+                "unknown header key (name, effects, short_mm, long_mm, marble_radius_mm, \
+                 restitution, rolling_resistance, time_limit_s)"
+            }
+            LevelErrorKind::BadNumber => {
+                "not a number (at most 3 decimals, rolling_resistance 6, time_limit_s none)"
+            }
+            LevelErrorKind::OutOfRange { .. } => "value out of range",
+            LevelErrorKind::UnknownEffect => {
+                "unknown effect (rolling, friction, board_motion; or none, alone)"
+            }
             LevelErrorKind::MissingSeparator => "no `---` line between header and grid",
             LevelErrorKind::EmptyGrid => "the grid has no rows",
             LevelErrorKind::RaggedRow => "row length differs from the first row",
@@ -180,6 +290,17 @@ impl LevelErrorKind {
             LevelErrorKind::HoleAboveWall => {
                 "wall under a hole (O) of the storey above: a marble would sink onto its top"
             }
+            LevelErrorKind::NotUtf8 { .. } => "not UTF-8",
+        }
+    }
+
+    /// What [`Self::message`] leaves out that needs no numbers formatted: the
+    /// range of a value out of range (`""` for the other kinds). A built-in
+    /// level's build error, which cannot format numbers, adds it too.
+    pub const fn detail(self) -> &'static str {
+        match self {
+            LevelErrorKind::OutOfRange { key } => key.range_text(),
+            _ => "",
         }
     }
 }
@@ -218,6 +339,8 @@ impl core::fmt::Display for LevelErrorKind {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(self.message())?;
         match *self {
+            LevelErrorKind::OutOfRange { key } => write!(f, ": {}", key.range_text()),
+            LevelErrorKind::NotUtf8 { byte } => write!(f, " (byte 0x{byte:02X})"),
             LevelErrorKind::PitchOutOfRange { short_um, long_um } => write!(
                 f,
                 ", is {} + {} = {} mm",
@@ -381,6 +504,28 @@ const fn without_bom(b: &[u8]) -> &[u8] {
     }
 }
 
+/// Bytes read as a level's text (a file, the browser's buffer): the text, or a
+/// [`LevelErrorKind::NotUtf8`] error at the first byte that is not UTF-8, with
+/// its line and column counted as [`parse`] counts them (characters, line 1 after
+/// a byte-order mark).
+pub fn text(bytes: &[u8]) -> Result<&str, LevelError> {
+    let e = match core::str::from_utf8(bytes) {
+        Ok(s) => return Ok(s),
+        Err(e) => e,
+    };
+    let (valid, rest) = bytes.split_at(e.valid_up_to());
+    let valid = without_bom(valid);
+    let line_start = valid.iter().rposition(|&c| c == b'\n').map_or(0, |n| n + 1);
+    Err(LevelError {
+        line: (valid.iter().filter(|&&c| c == b'\n').count() + 1) as u32,
+        column: (count_chars(valid, line_start, valid.len()) + 1) as u32,
+        // `rest` is not empty: a prefix of UTF-8 would have been accepted.
+        kind: LevelErrorKind::NotUtf8 {
+            byte: rest.first().copied().unwrap_or_default(),
+        },
+    })
+}
+
 /// Where a header value was given: (line, line start, value start); line 0 if not.
 type At = (usize, usize, usize);
 
@@ -501,10 +646,20 @@ const fn eq_bytes(b: &[u8], start: usize, end: usize, word: &[u8]) -> bool {
     true
 }
 
+/// A well-formed header number: its value, or too many digits to hold (which is
+/// out of any key's range, not "not a number").
+enum Digits {
+    /// The value scaled by `10^decimals`.
+    Value(u64),
+    /// More than 10^12 before scaling.
+    Huge,
+}
+
 /// A decimal with at most `decimals` fraction digits, scaled by `10^decimals`.
-const fn decimal(b: &[u8], start: usize, end: usize, decimals: u32) -> Option<u64> {
+const fn decimal(b: &[u8], start: usize, end: usize, decimals: u32) -> Option<Digits> {
     let mut i = start;
     let mut value: u64 = 0;
+    let mut huge = false;
     let mut seen_digit = false;
     let mut frac: i32 = -1;
     while i < end {
@@ -521,12 +676,10 @@ const fn decimal(b: &[u8], start: usize, end: usize, decimals: u32) -> Option<u6
                 }
                 frac += 1;
             }
-            value = match value.checked_mul(10) {
-                Some(v) => v + (c - b'0') as u64,
-                None => return None,
-            };
-            if value > 1_000_000_000_000 {
-                return None;
+            if !huge {
+                // At most 10^12 · 10 + 9: no overflow.
+                value = value * 10 + (c - b'0') as u64;
+                huge = value > 1_000_000_000_000;
             }
             seen_digit = true;
         } else {
@@ -537,13 +690,16 @@ const fn decimal(b: &[u8], start: usize, end: usize, decimals: u32) -> Option<u6
     if !seen_digit {
         return None;
     }
+    if huge {
+        return Some(Digits::Huge);
+    }
     let used = if frac < 0 { 0 } else { frac as u32 };
     let mut scale = used;
     while scale < decimals {
         value *= 10;
         scale += 1;
     }
-    Some(value)
+    Some(Digits::Value(value))
 }
 
 /// Parses a level. `WORDS` must be at least [`words_needed`]`(src)`.
@@ -607,6 +763,10 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
                     Err(_) => return err(line, b, i, v, LevelErrorKind::BadName),
                 }
             } else if eq_bytes(b, s, kend, b"effects") {
+                // The exact list of what is on (holes and marbles follow from the grid).
+                effects = Effects::NONE;
+                let mut none_at = 0;
+                let mut named = 0;
                 let mut p = v;
                 while p < t {
                     let p0 = skip_spaces(b, p, t);
@@ -621,49 +781,50 @@ pub const fn parse<const WORDS: usize>(src: &str) -> Result<Level<'_, WORDS>, Le
                         effects.friction = true;
                     } else if eq_bytes(b, p0, qe, b"board_motion") {
                         effects.board_motion = true;
+                    } else if eq_bytes(b, p0, qe, b"none") {
+                        none_at = p0;
                     } else if qe > p0 {
                         return err(line, b, i, p0, LevelErrorKind::UnknownEffect);
+                    }
+                    if qe > p0 {
+                        named += 1;
+                    }
+                    // `none` beside an effect says two things: neither is taken.
+                    if none_at > 0 && named > 1 {
+                        return err(line, b, i, none_at, LevelErrorKind::UnknownEffect);
                     }
                     p = q + 1;
                 }
             } else {
-                let (decimals, lo, hi): (u32, u64, u64) = if eq_bytes(b, s, kend, b"short_mm")
-                    || eq_bytes(b, s, kend, b"long_mm")
-                    || eq_bytes(b, s, kend, b"marble_radius_mm")
-                {
-                    (3, 1, 100_000)
-                } else if eq_bytes(b, s, kend, b"restitution") {
-                    (3, 0, 1000)
-                } else if eq_bytes(b, s, kend, b"rolling_resistance") {
-                    (6, 0, 1_000_000)
-                } else if eq_bytes(b, s, kend, b"time_limit_s") {
-                    (0, 1, 3600)
-                } else {
+                let Some(key) = NumberKey::find(b, s, kend) else {
                     return err(line, b, i, s, LevelErrorKind::UnknownKey);
                 };
-                let Some(n) = decimal(b, v, t, decimals) else {
+                let Some(n) = decimal(b, v, t, key.decimals()) else {
                     return err(line, b, i, v, LevelErrorKind::BadNumber);
                 };
-                if n < lo || n > hi {
-                    return err(line, b, i, v, LevelErrorKind::OutOfRange);
-                }
-                let n = n as u32;
-                if eq_bytes(b, s, kend, b"short_mm") {
-                    spec.short_um = n;
-                    short_at = (line, i, v);
-                } else if eq_bytes(b, s, kend, b"long_mm") {
-                    spec.long_um = n;
-                    long_at = (line, i, v);
-                } else if eq_bytes(b, s, kend, b"marble_radius_mm") {
-                    spec.radius_um = n;
-                    radius_at = (line, i, v);
-                } else if eq_bytes(b, s, kend, b"restitution") {
-                    spec.restitution_milli = n;
-                } else if eq_bytes(b, s, kend, b"rolling_resistance") {
-                    spec.rolling_resistance_ppm = n;
-                } else {
+                let (lo, hi) = key.range();
+                // Past `decimal`'s bound the number is still a number: out of range.
+                let n = match n {
+                    Digits::Value(n) if n >= lo && n <= hi => n as u32,
+                    _ => return err(line, b, i, v, LevelErrorKind::OutOfRange { key }),
+                };
+                match key {
+                    NumberKey::ShortMm => {
+                        spec.short_um = n;
+                        short_at = (line, i, v);
+                    }
+                    NumberKey::LongMm => {
+                        spec.long_um = n;
+                        long_at = (line, i, v);
+                    }
+                    NumberKey::MarbleRadiusMm => {
+                        spec.radius_um = n;
+                        radius_at = (line, i, v);
+                    }
+                    NumberKey::Restitution => spec.restitution_milli = n,
+                    NumberKey::RollingResistance => spec.rolling_resistance_ppm = n,
                     // 1 ..= 3600, checked above.
-                    time_limit_s = n as u16;
+                    NumberKey::TimeLimitS => time_limit_s = n as u16,
                 }
             }
         }
@@ -895,7 +1056,9 @@ macro_rules! builtin_level {
                 ", column ",
                 e.column,
                 ": ",
-                e.kind.message()
+                e.kind.message(),
+                if e.kind.detail().is_empty() { "" } else { ": " },
+                e.kind.detail()
             ),
         };
         // The name and the grid get constants of their own: the view must not

@@ -22,7 +22,7 @@ use std::format;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use crate::game::level::{parse, LevelView};
+use crate::game::level::{parse, text, LevelView};
 use crate::game::levels::{by_name, LEVELS};
 use crate::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
 
@@ -60,7 +60,8 @@ pub fn parse_runtime(src: String) -> Result<LevelView<'static>, crate::game::lev
 }
 
 /// A built-in level by name, or else a level file. The error names the file with
-/// `FILE:line:column: message` for a malformed level.
+/// `FILE:line:column: message` for a malformed level (bytes that are not UTF-8
+/// included).
 pub fn load_level(arg: &str) -> Result<Loaded, String> {
     if let Some((i, view)) = by_name(arg) {
         return Ok(Loaded {
@@ -68,20 +69,70 @@ pub fn load_level(arg: &str) -> Result<Loaded, String> {
             builtin: Some(i),
         });
     }
-    let src = match std::fs::read_to_string(arg) {
-        Ok(s) => s,
+    let bytes = match std::fs::read(arg) {
+        Ok(b) => b,
         Err(e) => {
             return Err(format!(
-                "level `{arg}` is neither a built-in level ({}) nor a readable file: {e}",
+                "level {} is neither a built-in level ({}) nor a readable file: {e}",
+                excerpt(arg),
                 builtin_names()
             ))
         }
     };
+    let src = text(&bytes).map_err(|e| format!("{arg}:{e}"))?.to_string();
     let view = parse_runtime(src).map_err(|e| format!("{arg}:{e}"))?;
     Ok(Loaded {
         view,
         builtin: None,
     })
+}
+
+/// Characters of offending text an error line quotes at most ([`excerpt`]).
+pub const EXCERPT_CHARS: usize = 60;
+
+/// `text` quoted for an error line: in backticks, and when longer than
+/// [`EXCERPT_CHARS`] characters its first ones and an ellipsis (a 100 000-digit
+/// number is reported in a line, not echoed whole).
+pub fn excerpt(text: &str) -> String {
+    match text.char_indices().nth(EXCERPT_CHARS) {
+        Some((cut, _)) => format!("`{}…`", &text[..cut]),
+        None => format!("`{text}`"),
+    }
+}
+
+/// A message from clap with every `'…'` it quotes cut as [`excerpt`] cuts (clap
+/// echoes an argument it refuses whole). Quotes are paired in order; a line
+/// still longer than [`EXCERPT_CHARS`] · 3 characters (an argument with a quote
+/// in it) is cut there.
+pub fn shorten_quotes(message: &str) -> String {
+    let mut out = String::with_capacity(message.len().min(4096));
+    for (n, line) in message.split('\n').enumerate() {
+        if n > 0 {
+            out.push('\n');
+        }
+        let mut short = String::new();
+        for (k, part) in line.split('\'').enumerate() {
+            if k > 0 {
+                short.push('\'');
+            }
+            // Odd parts lie between a pair of quotes.
+            match part.char_indices().nth(EXCERPT_CHARS) {
+                Some((cut, _)) if k % 2 == 1 => {
+                    short.push_str(&part[..cut]);
+                    short.push('…');
+                }
+                _ => short.push_str(part),
+            }
+        }
+        match short.char_indices().nth(3 * EXCERPT_CHARS) {
+            Some((cut, _)) => {
+                out.push_str(&short[..cut]);
+                out.push('…');
+            }
+            None => out.push_str(&short),
+        }
+    }
+    out
 }
 
 /// A scalar type the physics can run on, chosen by name at run time.
@@ -133,7 +184,8 @@ impl Backend {
             .find(|b| b.name() == name)
             .ok_or_else(|| {
                 format!(
-                    "unknown backend `{name}` (known: {})",
+                    "unknown backend {} (known: {})",
+                    excerpt(name),
                     Backend::ALL
                         .iter()
                         .map(|b| b.name())
@@ -182,13 +234,15 @@ pub fn args_without_separator() -> Vec<std::ffi::OsString> {
 
 /// The process arguments (without the aliases' `--`) parsed into `A`; on failure,
 /// clap's message is printed and the exit status returned (2 for an error, 0 for
-/// `--help` and `--version`).
+/// `--help` and `--version`). An error quotes at most [`EXCERPT_CHARS`] of an
+/// argument ([`shorten_quotes`]).
 pub fn parse_args<A: clap::Parser>() -> Result<A, i32> {
     A::try_parse_from(args_without_separator()).map_err(|e| {
-        let _ = e.print();
         if e.use_stderr() {
+            std::eprint!("{}", shorten_quotes(&e.render().to_string()));
             2
         } else {
+            let _ = e.print();
             0
         }
     })
@@ -255,4 +309,39 @@ fn picture<S: crate::physics::Scalar, const N: usize>(
         px.extend_from_slice(&row[..w]);
     }
     (w, h, px)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn excerpts_cut_at_60_characters() {
+        assert_eq!(excerpt("q15"), "`q15`");
+        let sixty = "é".repeat(EXCERPT_CHARS);
+        assert_eq!(excerpt(&sixty), format!("`{sixty}`"));
+        assert_eq!(excerpt(&format!("{sixty}x")), format!("`{sixty}…`"));
+    }
+
+    #[test]
+    fn clap_quotes_are_shortened() {
+        let long = "x".repeat(1000);
+        let cut = format!("{}…", "x".repeat(EXCERPT_CHARS));
+        assert_eq!(
+            shorten_quotes(&format!(
+                "error: unexpected argument '{long}' found\n\n  tip: '-- {long}'\n"
+            )),
+            format!(
+                "error: unexpected argument '{cut}' found\n\n  tip: '-- {}…'\n",
+                "x".repeat(EXCERPT_CHARS - 3)
+            )
+        );
+        // A quote inside the argument pairs the rest wrongly: the line is cut.
+        let odd = shorten_quotes(&format!(
+            "error: invalid value 'it's {long}' for '--backend'"
+        ));
+        assert!(odd.chars().count() <= 3 * EXCERPT_CHARS + 1, "{odd}");
+        assert!(odd.ends_with('…'));
+        assert_eq!(shorten_quotes("short 'ok'\n"), "short 'ok'\n");
+    }
 }

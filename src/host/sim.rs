@@ -53,7 +53,9 @@
 //!
 //! 0 for any outcome (`won`, `fell`, `timeout`); 2 for bad input (level, tilt
 //! trace, backend, substeps, unwritable output) with a message on stderr; for
-//! `--check`, 1 when the level is invalid.
+//! `--check`, 1 when the level is invalid (2 when the file cannot be read or is
+//! not UTF-8). A message quotes at most 60 characters of the text it refuses
+//! ([`super::excerpt`]).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -67,7 +69,7 @@ use clap::Parser;
 
 use super::gif_out::GifRecorder;
 use super::trace::TiltTrace;
-use super::{json_number, json_string, load_level, Backend, WithScalar};
+use super::{excerpt, json_number, json_string, load_level, Backend, WithScalar};
 use crate::game::autopilot::Autopilot;
 use crate::game::level::{LevelError, LevelView};
 use crate::game::rules::{Game, GameConfig, Phase};
@@ -84,7 +86,7 @@ const GIF_HOLD_S: f64 = 1.5;
     version,
     about = "Simulate a Marble Rolling level headless",
     after_help = "Exit status: 0 for any outcome (won, fell, timeout); 2 for bad input; \
-                  --check: 1 for an invalid level."
+                  --check: 1 for an invalid level, 2 for a file that is not UTF-8 text."
 )]
 pub struct Args {
     /// Level: a built-in name (first-roll, corner, ...) or a level file.
@@ -147,14 +149,17 @@ pub struct Args {
 fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() && x > 0.0 && x <= 86_400.0 => Ok(x),
-        _ => Err(format!("`{s}` is not a number of seconds in (0, 86400]")),
+        _ => Err(format!(
+            "{} is not a number of seconds in (0, 86400]",
+            excerpt(s)
+        )),
     }
 }
 
 fn parse_substeps(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(n @ (1 | 2 | 4 | 8 | 16)) => Ok(n),
-        _ => Err(format!("`{s}` is not one of 1, 2, 4, 8, 16")),
+        _ => Err(format!("{} is not one of 1, 2, 4, 8, 16", excerpt(s))),
     }
 }
 
@@ -162,7 +167,7 @@ fn parse_stepping(s: &str) -> Result<Stepping, String> {
     match s {
         "fixed" => Ok(Stepping::Fixed),
         "events" => Ok(Stepping::Events),
-        _ => Err(format!("`{s}` is not one of fixed, events")),
+        _ => Err(format!("{} is not one of fixed, events", excerpt(s))),
     }
 }
 
@@ -641,13 +646,22 @@ fn replay_frame<S: Scalar>(
     Ok(rows)
 }
 
-/// `--check FILE`: 0 and `ok`, or 1 and `FILE:line:column: message`.
+/// `--check FILE`: 0 and `ok`, or 1 and `FILE:line:column: message`; 2 for a
+/// file that cannot be read or is not text (`FILE:line:column: not UTF-8 (byte
+/// 0xNN)`), as `--level` refuses it.
 fn check(path: &Path) -> i32 {
     let shown = path.display();
-    let src = match std::fs::read_to_string(path) {
-        Ok(s) => s,
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
         Err(e) => {
             eprintln!("{shown}: cannot read: {e}");
+            return 2;
+        }
+    };
+    let src = match crate::game::level::text(&bytes) {
+        Ok(s) => s.to_string(),
+        Err(e) => {
+            eprintln!("{shown}:{e}");
             return 2;
         }
     };
@@ -789,9 +803,9 @@ pub fn simulate(args: &Args) -> Result<Report, String> {
         ..base
     };
     let input = if let Some(p) = &args.tilt_trace {
-        let text = std::fs::read_to_string(p)
-            .map_err(|e| format!("cannot read tilt trace {}: {e}", p.display()))?;
-        let t = TiltTrace::parse(&text)
+        let bytes =
+            std::fs::read(p).map_err(|e| format!("cannot read tilt trace {}: {e}", p.display()))?;
+        let t = TiltTrace::from_bytes(&bytes)
             .map_err(|e| format!("tilt trace {}:{}: {}", p.display(), e.line, e.message))?;
         Input::Trace(t)
     } else if args.autopilot {

@@ -12,11 +12,15 @@
 //! holds until the next one; before the first one the board lies flat. Times must
 //! not decrease. Blank lines and lines starting with `#` are ignored; numbers may
 //! have decimals (readings are rounded to whole milli-g). A leading UTF-8
-//! byte-order mark (some editors save one) is skipped.
+//! byte-order mark (some editors save one) is skipped. A file that is not UTF-8
+//! is refused at the line of its first bad byte ([`TiltTrace::from_bytes`]);
+//! an error quotes at most 60 characters of the text it refuses.
 
 use std::format;
 use std::string::String;
 use std::vec::Vec;
+
+use super::excerpt;
 
 /// The required header.
 pub const HEADER: &str = "t_s,ax_mg,ay_mg,az_mg";
@@ -51,6 +55,28 @@ impl core::fmt::Display for TraceError {
 }
 
 impl TiltTrace {
+    /// Parses a trace read as bytes: [`Self::parse`] once they are UTF-8, else
+    /// an error at the line of the first bad byte, naming it and its column.
+    pub fn from_bytes(bytes: &[u8]) -> Result<TiltTrace, TraceError> {
+        match core::str::from_utf8(bytes) {
+            Ok(text) => Self::parse(text),
+            Err(e) => {
+                let (valid, rest) = bytes.split_at(e.valid_up_to());
+                let start = valid.iter().rposition(|&c| c == b'\n').map_or(0, |n| n + 1);
+                // The valid prefix ends on a character boundary; a BOM is a character.
+                let column = core::str::from_utf8(&valid[start..])
+                    .map_or(1, |l| l.trim_start_matches('\u{feff}').chars().count() + 1);
+                Err(TraceError {
+                    line: valid.iter().filter(|&&c| c == b'\n').count() + 1,
+                    message: format!(
+                        "not UTF-8 (byte 0x{:02X}, column {column})",
+                        rest.first().copied().unwrap_or_default()
+                    ),
+                })
+            }
+        }
+    }
+
     /// Parses a trace's text.
     /// A leading UTF-8 byte-order mark is skipped.
     pub fn parse(text: &str) -> Result<TiltTrace, TraceError> {
@@ -68,7 +94,10 @@ impl TiltTrace {
             if !header {
                 let cols: Vec<&str> = l.split(',').map(str::trim).collect();
                 if cols != names {
-                    return Err(err(format!("expected the header `{HEADER}`, found `{l}`")));
+                    return Err(err(format!(
+                        "expected the header `{HEADER}`, found {}",
+                        excerpt(l)
+                    )));
                 }
                 header = true;
                 continue;
@@ -84,17 +113,20 @@ impl TiltTrace {
             for (i, f) in fields.iter().enumerate() {
                 v[i] = match f.parse::<f64>() {
                     Ok(x) if x.is_finite() => x,
-                    _ => return Err(err(format!("{}: `{f}` is not a number", names[i]))),
+                    _ => return Err(err(format!("{}: {} is not a number", names[i], excerpt(f)))),
                 };
             }
+            // Numbers are quoted as written: `{}` of an f64 writes 1e300 in 301 digits.
             let t = v[0];
             if t < 0.0 {
-                return Err(err(format!("t_s: {t} is negative")));
+                return Err(err(format!("t_s: {} is negative", excerpt(fields[0]))));
             }
-            if let Some(&(prev, _)) = samples.last() {
+            if let Some(&(prev, _, prev_text)) = samples.last() {
                 if t < prev {
                     return Err(err(format!(
-                        "t_s: {t} is earlier than the previous sample's {prev}"
+                        "t_s: {} is earlier than the previous sample's {}",
+                        excerpt(fields[0]),
+                        excerpt(prev_text)
                     )));
                 }
             }
@@ -104,12 +136,12 @@ impl TiltTrace {
                     return Err(err(format!(
                         "{}: {} is beyond ±{MAX_READING_MG} mg",
                         names[i + 1],
-                        v[i + 1]
+                        excerpt(fields[i + 1])
                     )));
                 }
                 mg[i] = v[i + 1].round() as i32;
             }
-            samples.push((t, mg));
+            samples.push((t, mg, fields[0]));
         }
         if !header {
             return Err(TraceError {
@@ -117,6 +149,7 @@ impl TiltTrace {
                 message: format!("empty trace: expected the header `{HEADER}`"),
             });
         }
+        let samples = samples.into_iter().map(|(t, mg, _)| (t, mg)).collect();
         Ok(TiltTrace { samples, next: 0 })
     }
 
@@ -170,6 +203,28 @@ mod tests {
         assert_eq!(with_bom, TiltTrace::parse(plain).unwrap());
         // Only at the very start: anywhere else it is still a bad header or number.
         assert!(TiltTrace::parse(&format!("\u{feff}\u{feff}{plain}")).is_err());
+    }
+
+    #[test]
+    fn bytes_that_are_not_utf8_are_refused_at_their_line_and_column() {
+        let plain = b"t_s,ax_mg,ay_mg,az_mg\n0.5,-200,980,0\n";
+        assert_eq!(
+            TiltTrace::from_bytes(plain),
+            TiltTrace::parse(core::str::from_utf8(plain).unwrap())
+        );
+        for (bytes, line, message) in [
+            (
+                &b"t_s,ax_mg,ay_mg,az_mg\n\n0,1\xff"[..],
+                3,
+                "byte 0xFF, column 4",
+            ),
+            // The column counts characters, after a byte-order mark on line 1.
+            (b"\xef\xbb\xbf\xc3\xa9\xc3", 1, "byte 0xC3, column 2"),
+        ] {
+            let e = TiltTrace::from_bytes(bytes).unwrap_err();
+            assert_eq!(e.line, line);
+            assert_eq!(e.message, format!("not UTF-8 ({message})"));
+        }
     }
 
     #[test]

@@ -44,7 +44,9 @@ use core::cell::{RefCell, UnsafeCell};
 use core::fmt::Write;
 
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
-use marble_rolling::game::level::{parse, Cell, Level, LevelError, LevelErrorKind, LevelView};
+use marble_rolling::game::level::{
+    parse, text as level_text, Cell, Level, LevelError, LevelErrorKind, LevelView,
+};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Tick;
 use marble_rolling::game::player::{Player, FRAME_HZ};
@@ -379,10 +381,9 @@ unsafe fn install_custom(text: &str) -> Result<&'static [LevelView<'static>], Le
 enum TextError {
     /// More than [`TEXT_CAPACITY`] bytes.
     TooLong,
-    /// Not UTF-8 from this line and column on (the page's `TextEncoder`
-    /// always sends UTF-8; a bug there is still only a message).
-    NotUtf8 { line: usize, column: usize },
-    /// The parser's error.
+    /// The parser's error, or bytes that are not UTF-8 (the page's
+    /// `TextEncoder` always sends UTF-8; a bug there is still only a message,
+    /// the one `cargo sim` gives for such a file).
     Level(LevelError),
 }
 
@@ -390,7 +391,6 @@ impl core::fmt::Display for TextError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             TextError::TooLong => write!(f, "1:1: longer than {TEXT_CAPACITY} bytes"),
-            TextError::NotUtf8 { line, column } => write!(f, "{line}:{column}: not UTF-8"),
             // `line:column: message`, as `cargo sim -- --check` prints it after the file name.
             TextError::Level(error) => write!(f, "{error}"),
         }
@@ -405,15 +405,7 @@ fn text(len: u32) -> Result<&'static str, TextError> {
     let Some(bytes) = bytes.get(..len as usize) else {
         return Err(TextError::TooLong);
     };
-    core::str::from_utf8(bytes).map_err(|e| {
-        let valid = &bytes[..e.valid_up_to()];
-        let start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-        TextError::NotUtf8 {
-            line: valid.iter().filter(|&&b| b == b'\n').count() + 1,
-            // The valid prefix ends on a character boundary.
-            column: core::str::from_utf8(&valid[start..]).map_or(1, |s| s.chars().count() + 1),
-        }
-    })
+    level_text(bytes).map_err(TextError::Level)
 }
 
 /// The text as a valid level's source, or why it is not one.
@@ -898,4 +890,51 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
     // No panic is expected (inputs are checked, the library reports errors as
     // values); should one happen, the module traps and the page says so.
     core::arch::wasm32::unreachable()
+}
+
+/// The editor's messages, on the host (`cargo test -p marble-web`): what the
+/// page shows for a level is `cargo sim -- --check`'s after the file name.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The answer [`check_level`] gives for `bytes` in the text buffer ("" for ok).
+    fn checked_message(bytes: &[u8]) -> String {
+        // SAFETY: one test, one thread: nothing else touches TEXT or OUT.
+        let text: &mut [u8; TEXT_CAPACITY] = unsafe { &mut *TEXT.0.get() };
+        text[..bytes.len()].copy_from_slice(bytes);
+        let len = check_level(bytes.len() as u32) as usize;
+        String::from_utf8(OUT.0.borrow().bytes[..len].to_vec()).unwrap()
+    }
+
+    // One test: the buffers are statics, and the harness runs tests in parallel.
+    #[test]
+    fn messages_name_line_column_bytes_and_ranges() {
+        assert_eq!(checked_message(b"---\n#####\n#S.G#\n#####\n"), "");
+        assert_eq!(
+            checked_message(b"name: a\n---\n#####\n#S\xffG#\n#####\n"),
+            "4:3: not UTF-8 (byte 0xFF)"
+        );
+        // A character cut short at the end is reported at its first byte.
+        assert_eq!(
+            checked_message("name: é".as_bytes().split_last().unwrap().1),
+            "1:7: not UTF-8 (byte 0xC3)"
+        );
+        assert_eq!(
+            checked_message(b"restitution: 1.5\n---\n#####\n#S.G#\n#####\n"),
+            "1:14: value out of range: restitution is 0 ..= 1"
+        );
+        assert_eq!(
+            checked_message(&[b'a'; TEXT_CAPACITY]),
+            "2:1: no `---` line between header and grid"
+        );
+        // One byte more than the buffer: the length alone says it.
+        assert_eq!(
+            {
+                let len = check_level(TEXT_CAPACITY as u32 + 1) as usize;
+                String::from_utf8(OUT.0.borrow().bytes[..len].to_vec()).unwrap()
+            },
+            format!("1:1: longer than {TEXT_CAPACITY} bytes")
+        );
+    }
 }
