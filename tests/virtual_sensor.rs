@@ -781,3 +781,45 @@ fn the_pipeline_goes_down_on_each_fault_and_comes_back() {
     }
     assert_eq!(control.resets_applied(), 1);
 }
+
+#[test]
+fn power_down_before_sleep_stops_the_samples_and_a_reinit_brings_them_back() {
+    // The micro:bit v2's sleep: `input::lsm303::power_down` makes this driver
+    // call (`PowerDown`, no rate); the wake-up is a reset, whose first poll
+    // runs `configure` again.
+    let anchor = 0u8;
+    let control = ChipControl::new();
+    let clock = Cell::new(1_000);
+    let mut copy = [0u8; 8];
+    let mut bus = twim(&control, &mut copy, &clock, stack_ram(&anchor));
+    let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
+    configure(
+        &mut sensor,
+        AccelMode::HighResolution,
+        AccelOutputDataRate::Hz200,
+    )
+    .expect("configure");
+    clock.set(1_000 + 5_000);
+    assert_eq!(board(sample(read(&mut sensor))), AccelMg::LEVEL);
+    block_on(sensor.set_accel_mode_and_odr(&mut NoDelay, AccelMode::PowerDown, None))
+        .expect("power down");
+    assert_eq!(block_on(sensor.get_accel_mode()), AccelMode::PowerDown);
+    // Asleep for a minute: not one conversion.
+    for ms in (10..60_000).step_by(997) {
+        clock.set(1_000 + ms * 1_000);
+        assert_eq!(
+            read(&mut sensor),
+            Read::NotReady,
+            "{ms} ms after power-down"
+        );
+    }
+    let t0 = clock.get();
+    configure(
+        &mut sensor,
+        AccelMode::HighResolution,
+        AccelOutputDataRate::Hz200,
+    )
+    .expect("configure again");
+    clock.set(t0 + 5_000);
+    assert_eq!(board(sample(read(&mut sensor))), AccelMg::LEVEL);
+}

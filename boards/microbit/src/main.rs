@@ -15,7 +15,8 @@
 //! by the watchdog task only when every task has proved since the last pet
 //! that it runs (`board::Heartbeats`, `board::WatchdogGate`): input beats
 //! once a poll, the display on every scan step, the game each time it is
-//! polled. A loop petting on its own would miss a task parked forever at an
+//! polled, the sound at each note and the records at each flash operation
+//! (those two are excused while they wait for a sound or a win). A loop petting on its own would miss a task parked forever at an
 //! `await`; this way any stalled task, or a task hogging the thread executor
 //! (the watchdog task runs there too), stops the pets and resets the board.
 //! A panic halts in panic-probe and the watchdog restarts the board.
@@ -132,7 +133,9 @@ async fn game(self_test: bool, level: u8) {
         >(&LINKS, mode));
         let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
         if let app::GameExit::Asleep { level } = exit {
-            hw::system_off(&LINKS, level).await;
+            // The input task powers the accelerometer down and enters
+            // System OFF (hw::system_off).
+            hw::request_sleep(level).await;
         }
         defmt::warn!("game_task returned: {}", exit);
     }
@@ -198,8 +201,9 @@ async fn confirm_clear(
 }
 
 /// The records' flash: the NVMC, blocking (the CPU waits on a page erase, about
-/// 85 ms, between levels only), as the async NOR flash the records take.
-type RecordsFlash = BlockingAsync<Nvmc<'static>>;
+/// 85 ms, between levels only), as the async NOR flash the records take, each
+/// operation a heartbeat of the records task (hw::WatchedFlash).
+type RecordsFlash = hw::WatchedFlash<BlockingAsync<Nvmc<'static>>>;
 
 /// The best times in [`board::RECORDS`].
 #[embassy_executor::task]
@@ -284,7 +288,8 @@ async fn main(spawner: Spawner) {
     defmt::info!("power-on: {}", choice);
 
     // The best times: the last 16 KiB of flash (board::RECORDS).
-    let mut store = Records::new(BlockingAsync::new(Nvmc::new(p.NVMC)), board::RECORDS);
+    let flash = hw::WatchedFlash::new(BlockingAsync::new(Nvmc::new(p.NVMC)), &HEARTBEATS);
+    let mut store = Records::new(flash, board::RECORDS);
     if let (PowerOn::ClearRecords, Some(store)) = (choice, store.as_mut()) {
         confirm_clear(store, &button_a, &button_b, &mut wdt).await;
     }
@@ -298,7 +303,7 @@ async fn main(spawner: Spawner) {
     let input_dev = hw::MicrobitInput::new(sensor, button_a, button_b, &HEARTBEATS);
 
     // Speaker: P0.00, PWM0.
-    let speaker = hw::Speaker::new(p.PWM0, p.P0_00);
+    let speaker = hw::Speaker::new(p.PWM0, p.P0_00, &HEARTBEATS);
 
     match input(input_dev) {
         Ok(token) => spawner.spawn(token),
