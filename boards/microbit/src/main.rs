@@ -72,7 +72,7 @@ const PILOT: bool = false;
 /// Event stepping, the study's recommendation (README, "Stepping: fixed or
 /// events"): no speed cap, no sinking into walls. Its code (about 18 KiB here)
 /// fits the v2's 128 KiB flash budget (`cargo xtask size-report`, which reads
-/// [`STEPPING`] back from the ELF).
+/// [`MARBLE_STEPPING_EVENTS`] back from the ELF).
 const EVENTS: bool = true;
 
 /// The stepping [`EVENTS`] links, named in the ELF for `cargo xtask
