@@ -31,6 +31,7 @@ use embedded_storage_async::nor_flash;
 use heapless::Deque;
 
 use marble_rolling::app::{Links, MatrixOutput, SoundOutput, TiltInput, REFRESH_HZ};
+use marble_rolling::board::microbit::sleep;
 use marble_rolling::board::microbit::speaker::{self, SpeakerPwm};
 use marble_rolling::board::microbit::{self as board, BusClear, BusLines, Heartbeats, Task};
 use marble_rolling::input::buttons::{ButtonEvent, Buttons};
@@ -645,6 +646,32 @@ pub fn level_after_reset() -> u8 {
     level
 }
 
+/// Port 0, the GPIOTE and POWER as [`sleep::SleepRegisters`].
+struct NrfSleep;
+
+impl sleep::SleepRegisters for NrfSleep {
+    fn mask_interrupts(&mut self) {
+        cortex_m::interrupt::disable();
+    }
+
+    fn disable_port_interrupt(&mut self) {
+        pac::GPIOTE.intenclr(0).write(|w| w.set_port(true));
+        pac::GPIOTE.events_port(0).write_value(0);
+    }
+
+    fn sense_low(&mut self, pin: usize) {
+        pac::P0.pin_cnf(pin).modify(|w| w.set_sense(Sense::Low));
+    }
+
+    fn clear_latch(&mut self, bits: u32) {
+        pac::P0.latch().write(|w| w.0 = bits);
+    }
+
+    fn system_off(&mut self) {
+        pac::POWER.systemoff().write(|w| w.set_systemoff(true));
+    }
+}
+
 /// The game task's request to sleep on a level, taken by the input task (which
 /// owns the accelerometer and powers it down first): [`request_sleep`].
 static SLEEP: Signal<CriticalSectionRawMutex, u8> = Signal::new();
@@ -657,26 +684,17 @@ pub async fn request_sleep(level: u8) -> ! {
     core::future::pending().await
 }
 
-/// Button pins that wake the board from System OFF: A (P0.14), B (P0.23).
-const WAKE_PINS: [usize; 2] = [14, 23];
-
 /// Sleeps in System OFF, the nRF52833's lowest state that keeps the flash
 /// (the records) and GPREGRET: the display dark (its last frame blank for a
 /// full refresh), level `level` kept in GPREGRET, buttons A and B armed
-/// ([`WAKE_PINS`]) to wake it on a press. The wake-up is a reset
+/// (`board::sleep::WAKE_PINS`) to wake it on a press. The wake-up is a reset
 /// ([`level_after_reset`]), and the input task's first poll initialises the
 /// accelerometer again. Called by the input task, the accelerometer already
 /// powered down.
 ///
-/// **The SENSE race.** embassy-nrf 0.11 (feature `gpiote`) runs the GPIO
-/// ports in latched detection and enables the GPIOTE PORT interrupt at init
-/// (`gpiote::init`); its handler (`handle_gpiote_interrupt`) disables SENSE on
-/// every pin whose LATCH bit is set. Armed while that handler can run, a button
-/// pressed or bouncing at that moment would be disarmed again, and the board
-/// would sleep with that button dead. So interrupts are masked first, for
-/// good, and the PORT interrupt is switched off before SENSE is set; the latch
-/// is cleared after (a button still held latches again at once, and the board
-/// wakes straight away, as it should).
+/// The register writes are [`board::sleep::enter_system_off`]'s, in the
+/// order that wins the SENSE race against embassy-nrf's GPIOTE handler (that
+/// module says why; `tests/microbit_sleep.rs` checks it).
 async fn system_off(links: &'static Links<{ board::WIDTH }, { board::HEIGHT }>, level: u8) -> ! {
     links.frames.signal(Frame::new());
     // Two refreshes at 109 Hz: the blank frame is on, every row off.
@@ -685,17 +703,7 @@ async fn system_off(links: &'static Links<{ board::WIDTH }, { board::HEIGHT }>, 
         .gpregret()
         .write(|w| w.set_gpregret(board::sleep_marker(level)));
     defmt::info!("System OFF on level {=u8}: a button wakes", level + 1);
-    // Nothing runs after this but the lines below: no handler can touch SENSE.
-    cortex_m::interrupt::disable();
-    pac::GPIOTE.intenclr(0).write(|w| w.set_port(true));
-    pac::GPIOTE.events_port(0).write_value(0);
-    let mut latched = 0u32;
-    for pin in WAKE_PINS {
-        pac::P0.pin_cnf(pin).modify(|w| w.set_sense(Sense::Low));
-        latched |= 1 << pin;
-    }
-    pac::P0.latch().write(|w| w.0 = latched);
-    pac::POWER.systemoff().write(|w| w.set_systemoff(true));
+    sleep::enter_system_off(&mut NrfSleep);
     // Under a debugger System OFF is only emulated, and the core runs on.
     loop {
         cortex_m::asm::wfe();

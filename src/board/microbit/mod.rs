@@ -62,6 +62,7 @@
 //! ends, or a flash operation that never returns, stops the pets.
 
 pub mod power_on;
+pub mod sleep;
 pub mod speaker;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
