@@ -36,12 +36,15 @@ fn no_pet_before_every_task_beat() {
     }
     h.beat(Task::Input);
     h.beat(Task::Display);
+    h.beat(Task::Sound);
+    h.beat(Task::Records);
     match gate.check(h.snapshot()) {
         Verdict::Wait { stalled, checks } => {
             assert_eq!(checks, 2);
             assert!(stalled.contains(Task::Game));
-            assert!(!stalled.contains(Task::Input));
-            assert!(!stalled.contains(Task::Display));
+            for task in Task::ALL.into_iter().filter(|&t| t != Task::Game) {
+                assert!(!stalled.contains(task), "{task:?}");
+            }
         }
         Verdict::Pet => panic!("petted without the game"),
     }
@@ -101,6 +104,8 @@ fn a_slow_task_delays_the_pet_without_losing_it() {
     for _ in 0..3 {
         h.beat(Task::Game);
         h.beat(Task::Display);
+        h.beat(Task::Sound);
+        h.beat(Task::Records);
         assert!(matches!(gate.check(h.snapshot()), Verdict::Wait { .. }));
     }
     h.beat(Task::Input);
@@ -109,10 +114,10 @@ fn a_slow_task_delays_the_pet_without_losing_it() {
 
 #[test]
 fn counters_wrapping_around_still_count() {
-    let start = [u32::MAX, u32::MAX - 1, 7];
+    let start = [u32::MAX, u32::MAX - 1, 7, u32::MAX, 0];
     let mut gate = WatchdogGate::new(start);
     assert_eq!(
-        gate.check([0, u32::MAX, 8]),
+        gate.check([0, u32::MAX, 8, 0, 1]),
         Verdict::Pet,
         "a wrapped counter moved"
     );
@@ -138,7 +143,7 @@ fn beats_from_other_threads_are_seen() {
     for worker in workers {
         worker.join().expect("worker");
     }
-    assert_eq!(h.snapshot(), [1000; 3]);
+    assert_eq!(h.snapshot().counts, [1000; Task::ALL.len()]);
     assert_eq!(gate.check(h.snapshot()), Verdict::Pet);
 }
 
@@ -152,4 +157,99 @@ fn the_timing_leaves_every_task_room() {
     const { assert!(INPUT_PERIOD_MS * 5 <= WATCHDOG_CHECK_MS) };
     const { assert!(FRAME_HZ as u64 * WATCHDOG_CHECK_MS / 1000 >= 5) };
     assert!(Tasks::NONE.is_empty());
+}
+
+#[test]
+fn the_sound_and_records_tasks_are_watched() {
+    assert!(Task::ALL.contains(&Task::Sound));
+    assert!(Task::ALL.contains(&Task::Records));
+}
+
+/// The other tasks beat; `task` does what `act` says, once per check.
+fn checks_with(task: Task, act: impl Fn(&Heartbeats, u32)) -> Vec<Verdict> {
+    let h = Heartbeats::new();
+    let mut gate = WatchdogGate::new(h.snapshot());
+    (0..20)
+        .map(|check| {
+            for other in Task::ALL.into_iter().filter(|&t| t != task) {
+                h.beat(other);
+            }
+            act(&h, check);
+            gate.check(h.snapshot())
+        })
+        .collect()
+}
+
+#[test]
+fn a_task_waiting_for_work_is_excused() {
+    for task in [Task::Sound, Task::Records] {
+        // Waiting from the start (the queue empty for minutes): every check pets.
+        let verdicts = checks_with(task, |h, check| {
+            if check == 0 {
+                h.waiting(task);
+            }
+        });
+        assert!(verdicts.iter().all(|v| *v == Verdict::Pet), "{task:?}");
+    }
+}
+
+#[test]
+fn a_working_task_that_stops_beating_stops_the_pets() {
+    for task in [Task::Sound, Task::Records] {
+        // Waits, gets work at check 5 (a sound, a win), and hangs there (a
+        // note's timer that never ends, a flash operation that never returns).
+        let verdicts = checks_with(task, |h, check| match check {
+            0 => h.waiting(task),
+            5 => h.working(task),
+            _ => {}
+        });
+        assert!(verdicts[..6].iter().all(|v| *v == Verdict::Pet), "{task:?}");
+        for (n, verdict) in verdicts[6..].iter().enumerate() {
+            match verdict {
+                Verdict::Wait { stalled, checks } => {
+                    assert_eq!(*checks as usize, n + 1, "{task:?}");
+                    assert!(stalled.contains(task), "{task:?}");
+                }
+                Verdict::Pet => panic!("{task:?} hung at work and the watchdog was petted"),
+            }
+        }
+    }
+}
+
+#[test]
+fn a_working_task_that_beats_and_then_waits_keeps_the_pets() {
+    for task in [Task::Sound, Task::Records] {
+        // Work from check 3 to 8 (a beat per note or flash operation), then
+        // waiting again.
+        let verdicts = checks_with(task, |h, check| match check {
+            0 | 9 => h.waiting(task),
+            3 => h.working(task),
+            4..=8 => h.beat(task),
+            _ => {}
+        });
+        assert!(
+            verdicts.iter().all(|v| *v == Verdict::Pet),
+            "{task:?}: {verdicts:?}"
+        );
+    }
+}
+
+#[test]
+fn waiting_is_not_an_excuse_for_the_other_tasks() {
+    // A task that never said it waits is held to the rule even while another
+    // waits.
+    let h = Heartbeats::new();
+    let mut gate = WatchdogGate::new(h.snapshot());
+    h.waiting(Task::Sound);
+    h.waiting(Task::Records);
+    h.beat(Task::Input);
+    h.beat(Task::Display);
+    match gate.check(h.snapshot()) {
+        Verdict::Wait { stalled, .. } => {
+            assert!(stalled.contains(Task::Game));
+            assert!(!stalled.contains(Task::Sound));
+            assert!(!stalled.contains(Task::Records));
+        }
+        Verdict::Pet => panic!("petted without the game"),
+    }
 }

@@ -16,13 +16,13 @@ use lsm303agr::{AccelMode, AccelOutputDataRate, AccelScale, Lsm303agr};
 
 use marble_rolling::board::qemu::virtual_i2c::{Ram, RamRange, TwimError, VirtualTwim};
 use marble_rolling::board::qemu::virtual_lsm303agr::{
-    reg, AccelMode as ChipMode, ChipControl, InjectedFault, VirtualLsm303agr, ACCEL_ADDRESS,
-    CTRL4_BDU, CTRL_REG1_A_RESET, MAG_ADDRESS,
+    reg, AccelMode as ChipMode, ChipControl, InjectedFault, Placement, VirtualLsm303agr,
+    ACCEL_ADDRESS, CTRL4_BDU, CTRL_REG1_A_RESET, MAG_ADDRESS, MICROBIT_V2,
 };
 use marble_rolling::board::qemu::{QEMU_RAM, SENSOR_AXIS_MAP, SUPERVISOR};
 use marble_rolling::input::event::Tilt;
 use marble_rolling::input::sensor::{
-    AccelMg, Action, Fault, Plausibility, Read, TiltPipeline, Transition,
+    AccelMg, Action, Axis, AxisMap, AxisSource, Fault, Plausibility, Read, TiltPipeline, Transition,
 };
 
 /// The driver's mode changes take a blocking delay; the tests step time
@@ -52,7 +52,7 @@ fn twim<'a, R: Ram>(
     ram: R,
 ) -> Twim<'a, R> {
     VirtualTwim::new(
-        VirtualLsm303agr::new(SENSOR_AXIS_MAP),
+        VirtualLsm303agr::placed(MICROBIT_V2),
         control,
         copy,
         Box::new(move || clock.get()),
@@ -780,4 +780,100 @@ fn the_pipeline_goes_down_on_each_fault_and_comes_back() {
         }
     }
     assert_eq!(control.resets_applied(), 1);
+}
+
+#[test]
+fn power_down_before_sleep_stops_the_samples_and_a_reinit_brings_them_back() {
+    // The micro:bit v2's sleep: `input::lsm303::power_down` makes this driver
+    // call (`PowerDown`, no rate); the wake-up is a reset, whose first poll
+    // runs `configure` again.
+    let anchor = 0u8;
+    let control = ChipControl::new();
+    let clock = Cell::new(1_000);
+    let mut copy = [0u8; 8];
+    let mut bus = twim(&control, &mut copy, &clock, stack_ram(&anchor));
+    let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
+    configure(
+        &mut sensor,
+        AccelMode::HighResolution,
+        AccelOutputDataRate::Hz200,
+    )
+    .expect("configure");
+    clock.set(1_000 + 5_000);
+    assert_eq!(board(sample(read(&mut sensor))), AccelMg::LEVEL);
+    block_on(sensor.set_accel_mode_and_odr(&mut NoDelay, AccelMode::PowerDown, None))
+        .expect("power down");
+    assert_eq!(block_on(sensor.get_accel_mode()), AccelMode::PowerDown);
+    // Asleep for a minute: not one conversion.
+    for ms in (10..60_000).step_by(997) {
+        clock.set(1_000 + ms * 1_000);
+        assert_eq!(
+            read(&mut sensor),
+            Read::NotReady,
+            "{ms} ms after power-down"
+        );
+    }
+    let t0 = clock.get();
+    configure(
+        &mut sensor,
+        AccelMode::HighResolution,
+        AccelOutputDataRate::Hz200,
+    )
+    .expect("configure again");
+    clock.set(t0 + 5_000);
+    assert_eq!(board(sample(read(&mut sensor))), AccelMg::LEVEL);
+}
+
+#[test]
+fn the_chips_placement_and_the_firmwares_axis_table_agree() {
+    // Each tilt of the board, read by the chip placed as on the micro:bit v2
+    // and turned back by the firmware's table: the tilt itself.
+    for tilt in [[0, 1000, 0], [1000, 0, 0], [0, 0, 1000], [-700, 700, 100]] {
+        let raw = MICROBIT_V2.raw(tilt);
+        let read = SENSOR_AXIS_MAP.apply(AccelMg::new(raw[0], raw[1], raw[2]));
+        assert_eq!(
+            read,
+            AccelMg::new(tilt[0], tilt[1], tilt[2]),
+            "tilt {tilt:?}"
+        );
+    }
+    assert_eq!(Placement::assumed_by(&SENSOR_AXIS_MAP), MICROBIT_V2);
+}
+
+#[test]
+fn a_sign_error_in_the_firmwares_table_shows() {
+    // The firmware's table with one sign flipped at a time: the chip, which
+    // keeps its own placement, no longer reads back the board's tilt.
+    let flip = |s: AxisSource| AxisSource {
+        negate: !s.negate,
+        ..s
+    };
+    let m = SENSOR_AXIS_MAP;
+    for wrong in [
+        AxisMap { x: flip(m.x), ..m },
+        AxisMap { y: flip(m.y), ..m },
+        AxisMap { z: flip(m.z), ..m },
+        AxisMap {
+            x: AxisSource::pos(Axis::X),
+            y: AxisSource::pos(Axis::Y),
+            z: AxisSource::pos(Axis::Z),
+        },
+    ] {
+        let caught = [[1000, 0, 0], [0, 1000, 0], [0, 0, 1000]]
+            .into_iter()
+            .any(|tilt| {
+                let raw = MICROBIT_V2.raw(tilt);
+                wrong.apply(AccelMg::new(raw[0], raw[1], raw[2]))
+                    != AccelMg::new(tilt[0], tilt[1], tilt[2])
+            });
+        assert!(caught, "{wrong:?} reads every tilt right");
+        // A chip that took its placement from the wrong table would not
+        // have caught it.
+        let assumed = Placement::assumed_by(&wrong);
+        let raw = assumed.raw([1000, 0, 0]);
+        assert_eq!(
+            wrong.apply(AccelMg::new(raw[0], raw[1], raw[2])),
+            AccelMg::new(1000, 0, 0)
+        );
+    }
 }

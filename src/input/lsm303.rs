@@ -88,6 +88,21 @@ where
     Ok(())
 }
 
+/// Powers the accelerometer down (`CTRL_REG1_A` ODR = 0: no conversions;
+/// measuring at 200 Hz it would draw more than the whole nRF in System OFF),
+/// before the board sleeps. [`configure`] brings it back; the magnetometer stays in the
+/// idle mode it starts in (the driver never starts it).
+pub async fn power_down<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
+where
+    I2C: I2c,
+    I2C::Error: BusFault,
+{
+    sensor
+        .set_accel_mode_and_odr(&mut NoDelay, AccelMode::PowerDown, None)
+        .await
+        .map_err(fault)
+}
+
 /// One poll in the sensor's frame, milli-g: a new sample, none yet (not a
 /// fault), or the bus's fault.
 pub async fn read<I2C>(sensor: &mut Sensor<I2C>) -> Read<AccelMg>

@@ -89,7 +89,7 @@ enum Task {
     /// the CPU budget (CPU_BUDGET_CENTIPERCENT, default 300).
     CheckDemo,
     /// The micro:bit firmware's flash and RAM against their budgets (FLASH_BUDGET,
-    /// RAM_BUDGET), as a markdown table.
+    /// RAM_BUDGET), as a markdown table, and the stepping it links (must be events).
     SizeReport {
         /// Measure the existing build.
         #[arg(long)]

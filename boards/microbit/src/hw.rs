@@ -23,11 +23,16 @@ use embassy_nrf::pac::gpio::vals::Sense;
 use embassy_nrf::pwm::{DutyCycle, Prescaler, SimpleConfig, SimplePwm};
 use embassy_nrf::twim::{self, Twim};
 use embassy_nrf::{peripherals, Peri};
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::signal::Signal;
 use embassy_time::{with_timeout, Duration, Instant, Ticker, Timer};
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
+use embedded_storage_async::nor_flash;
 use heapless::Deque;
 
 use marble_rolling::app::{Links, MatrixOutput, SoundOutput, TiltInput, REFRESH_HZ};
+use marble_rolling::board::microbit::sleep;
+use marble_rolling::board::microbit::speaker::{self, SpeakerPwm};
 use marble_rolling::board::microbit::{self as board, BusClear, BusLines, Heartbeats, Task};
 use marble_rolling::input::buttons::{ButtonEvent, Buttons};
 use marble_rolling::input::event::{Command, InputEvent};
@@ -329,41 +334,68 @@ impl BusLines for GpioLines<'_> {
 /// The speaker on P0.00, driven by PWM0: each [`sound::Note`] is a square
 /// wave the PWM makes by itself while the task awaits the note's end, so
 /// nothing busy-waits and the game never waits for a sound (its queue drops
-/// what does not fit). The level sets the duty cycle: 50 % is the loudest a
-/// square wave gets.
+/// what does not fit). The order of the PWM calls, and the duty for a note's
+/// level, are [`board::speaker`]'s (host-tested against a model of the PWM).
+///
+/// The sound task waits for sounds ([`Heartbeats::waiting`]) except while it
+/// plays, when each note is a heartbeat: a note whose timer never ended
+/// would stop the watchdog's pets.
 pub struct Speaker {
     pwm: SimplePwm<'static>,
+    heartbeats: &'static Heartbeats,
 }
 
 impl Speaker {
-    /// PWM0 on `pin`, silent.
+    /// PWM0 on `pin`, silent; the sound task starts waiting for a sound.
     pub fn new(
         pwm: Peri<'static, peripherals::PWM0>,
         pin: Peri<'static, peripherals::P0_00>,
+        heartbeats: &'static Heartbeats,
     ) -> Self {
         let mut config = SimpleConfig::default();
-        // 1 MHz: 330 Hz .. 2 kHz tones have a top of 500 .. 3 030.
+        // board::speaker::PWM_CLOCK_HZ: 16 MHz / 16.
         config.prescaler = Prescaler::Div16;
         let pwm = SimplePwm::new_1ch(pwm, pin, &config);
         pwm.disable();
-        Speaker { pwm }
+        heartbeats.waiting(Task::Sound);
+        Speaker { pwm, heartbeats }
+    }
+}
+
+impl SpeakerPwm for Speaker {
+    fn enable(&mut self) {
+        self.pwm.enable();
+    }
+
+    fn disable(&mut self) {
+        self.pwm.disable();
+    }
+
+    fn set_period(&mut self, hz: u32) {
+        self.pwm.set_period(hz);
+    }
+
+    fn counter_top(&self) -> u16 {
+        self.pwm.max_duty()
+    }
+
+    fn start_sequence(&mut self, compare: u16) {
+        // embassy-nrf: the duty into the sequence's RAM, then SEQSTART.
+        self.pwm.set_duty(0, DutyCycle::normal(compare));
     }
 }
 
 impl SoundOutput for Speaker {
     async fn play(&mut self, sound: Sound) {
+        self.heartbeats.working(Task::Sound);
         for note in sound::notes(sound) {
-            // Set up while stopped: embassy-nrf's `set_duty` on a running PWM
-            // spins until the period ends (up to 3 ms at 330 Hz).
-            self.pwm.disable();
-            self.pwm.set_period(u32::from(note.hz).max(1));
-            let top = u32::from(self.pwm.max_duty());
-            let high = top * u32::from(note.level) / 510;
-            self.pwm.set_duty(0, DutyCycle::normal((top - high) as u16));
-            self.pwm.enable();
+            speaker::start_note(self, note);
             Timer::after_millis(u64::from(note.ms)).await;
+            self.heartbeats.beat(Task::Sound);
         }
-        self.pwm.disable();
+        speaker::silence(self);
+        // Back to app::sound_task's queue, with no await before it.
+        self.heartbeats.waiting(Task::Sound);
     }
 }
 
@@ -440,6 +472,14 @@ impl MicrobitInput {
         self.pipeline.reinit_done(outcome);
     }
 
+    /// Powers the accelerometer down (System OFF ahead): a bus error is
+    /// logged and ignored, the board sleeps anyway.
+    pub async fn power_down(&mut self) {
+        if let Err(fault) = lsm303::power_down(&mut self.sensor).await {
+            defmt::warn!("accelerometer: power-down failed: {}", fault);
+        }
+    }
+
     /// One polling period: buttons, then the sensor through the pipeline.
     async fn poll(&mut self) -> Option<Command> {
         let command = match self
@@ -483,13 +523,19 @@ impl TiltInput for MicrobitInput {
         match &mut self.ticker {
             Some(ticker) => ticker.next().await,
             None => {
-                // First call: bring the sensor up (a failure is handled by the
-                // supervisor like any other).
+                // First call: the chip's boot time since power-up (the
+                // firmware may be here sooner), then bring the sensor up (a
+                // failure is handled by the supervisor like any other).
+                Timer::at(Instant::from_millis(board::ACCEL_BOOT_MS)).await;
                 self.reinit().await;
                 self.ticker = Some(Ticker::every(period));
             }
         }
         self.heartbeats.beat(Task::Input);
+        if let Some(level) = SLEEP.try_take() {
+            self.power_down().await;
+            system_off(&crate::LINKS, level).await;
+        }
         let started = Instant::now();
         let command = self.poll().await;
         if Instant::now() >= started + period {
@@ -527,6 +573,68 @@ pub async fn with_heartbeat<F: Future>(
 }
 
 // ---------------------------------------------------------------------------
+// Records' flash: each operation a heartbeat
+// ---------------------------------------------------------------------------
+
+/// The records' NOR flash, telling the watchdog ([`Task::Records`]) when the
+/// records task works: from the start of each flash operation to its end.
+/// Between operations, and waiting for a win, the task has no other await
+/// (`app::records_task`), so it counts as waiting; a flash operation that
+/// never returned would stop the pets.
+pub struct WatchedFlash<F> {
+    flash: F,
+    heartbeats: &'static Heartbeats,
+}
+
+impl<F> WatchedFlash<F> {
+    /// `flash`, the records task waiting (also when no records task runs).
+    pub fn new(flash: F, heartbeats: &'static Heartbeats) -> Self {
+        heartbeats.waiting(Task::Records);
+        Self { flash, heartbeats }
+    }
+
+    /// Runs one flash operation as the records task's work.
+    async fn watched<T>(&mut self, operation: impl AsyncFnOnce(&mut F) -> T) -> T {
+        self.heartbeats.working(Task::Records);
+        let out = operation(&mut self.flash).await;
+        self.heartbeats.waiting(Task::Records);
+        out
+    }
+}
+
+impl<F: nor_flash::ErrorType> nor_flash::ErrorType for WatchedFlash<F> {
+    type Error = F::Error;
+}
+
+impl<F: nor_flash::ReadNorFlash> nor_flash::ReadNorFlash for WatchedFlash<F> {
+    const READ_SIZE: usize = F::READ_SIZE;
+
+    async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        self.watched(async |flash: &mut F| flash.read(offset, bytes).await)
+            .await
+    }
+
+    fn capacity(&self) -> usize {
+        self.flash.capacity()
+    }
+}
+
+impl<F: nor_flash::NorFlash> nor_flash::NorFlash for WatchedFlash<F> {
+    const WRITE_SIZE: usize = F::WRITE_SIZE;
+    const ERASE_SIZE: usize = F::ERASE_SIZE;
+
+    async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        self.watched(async |flash: &mut F| flash.erase(from, to).await)
+            .await
+    }
+
+    async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        self.watched(async |flash: &mut F| flash.write(offset, bytes).await)
+            .await
+    }
+}
+
+// ---------------------------------------------------------------------------
 // Idle sleep: System OFF
 // ---------------------------------------------------------------------------
 
@@ -538,26 +646,64 @@ pub fn level_after_reset() -> u8 {
     level
 }
 
+/// Port 0, the GPIOTE and POWER as [`sleep::SleepRegisters`].
+struct NrfSleep;
+
+impl sleep::SleepRegisters for NrfSleep {
+    fn mask_interrupts(&mut self) {
+        cortex_m::interrupt::disable();
+    }
+
+    fn disable_port_interrupt(&mut self) {
+        pac::GPIOTE.intenclr(0).write(|w| w.set_port(true));
+        pac::GPIOTE.events_port(0).write_value(0);
+    }
+
+    fn sense_low(&mut self, pin: usize) {
+        pac::P0.pin_cnf(pin).modify(|w| w.set_sense(Sense::Low));
+    }
+
+    fn clear_latch(&mut self, bits: u32) {
+        pac::P0.latch().write(|w| w.0 = bits);
+    }
+
+    fn system_off(&mut self) {
+        pac::POWER.systemoff().write(|w| w.set_systemoff(true));
+    }
+}
+
+/// The game task's request to sleep on a level, taken by the input task (which
+/// owns the accelerometer and powers it down first): [`request_sleep`].
+static SLEEP: Signal<CriticalSectionRawMutex, u8> = Signal::new();
+
+/// Asks the input task to put the board in System OFF on `level`; the caller
+/// (the game task) then waits forever. Should the input task never take it,
+/// the game task's silence makes the watchdog reset the board.
+pub async fn request_sleep(level: u8) -> ! {
+    SLEEP.signal(level);
+    core::future::pending().await
+}
+
 /// Sleeps in System OFF, the nRF52833's lowest state that keeps the flash
 /// (the records) and GPREGRET: the display dark (its last frame blank for a
-/// full refresh), level `level` kept in GPREGRET, buttons A (P0.14) and B
-/// (P0.23) armed to wake it on a press. The wake-up is a reset
-/// ([`level_after_reset`]). Called by the game task after two minutes idle.
-pub async fn system_off(
-    links: &'static Links<{ board::WIDTH }, { board::HEIGHT }>,
-    level: u8,
-) -> ! {
+/// full refresh), level `level` kept in GPREGRET, buttons A and B armed
+/// (`board::sleep::WAKE_PINS`) to wake it on a press. The wake-up is a reset
+/// ([`level_after_reset`]), and the input task's first poll initialises the
+/// accelerometer again. Called by the input task, the accelerometer already
+/// powered down.
+///
+/// The register writes are [`board::sleep::enter_system_off`]'s, in the
+/// order that wins the SENSE race against embassy-nrf's GPIOTE handler (that
+/// module says why; `tests/microbit_sleep.rs` checks it).
+async fn system_off(links: &'static Links<{ board::WIDTH }, { board::HEIGHT }>, level: u8) -> ! {
     links.frames.signal(Frame::new());
     // Two refreshes at 109 Hz: the blank frame is on, every row off.
     embassy_time::Timer::after_millis(25).await;
     pac::POWER
         .gpregret()
         .write(|w| w.set_gpregret(board::sleep_marker(level)));
-    for pin in [14, 23] {
-        pac::P0.pin_cnf(pin).modify(|w| w.set_sense(Sense::Low));
-    }
     defmt::info!("System OFF on level {=u8}: a button wakes", level + 1);
-    pac::POWER.systemoff().write(|w| w.set_systemoff(true));
+    sleep::enter_system_off(&mut NrfSleep);
     // Under a debugger System OFF is only emulated, and the core runs on.
     loop {
         cortex_m::asm::wfe();

@@ -15,7 +15,8 @@
 //! by the watchdog task only when every task has proved since the last pet
 //! that it runs (`board::Heartbeats`, `board::WatchdogGate`): input beats
 //! once a poll, the display on every scan step, the game each time it is
-//! polled. A loop petting on its own would miss a task parked forever at an
+//! polled, the sound at each note and the records at each flash operation
+//! (those two are excused while they wait for a sound or a win). A loop petting on its own would miss a task parked forever at an
 //! `await`; this way any stalled task, or a task hogging the thread executor
 //! (the watchdog task runs there too), stops the pets and resets the board.
 //! A panic halts in panic-probe and the watchdog restarts the board.
@@ -68,9 +69,19 @@ const STALL_LOG_CHECKS: u16 = 5;
 /// leaving it out saves about 6 KiB of flash.
 const PILOT: bool = false;
 
-/// Fixed physics steps: the event stepper (about 18 KiB of code here) does not fit
-/// the 64 KiB flash budget (docs/boards.md, "Budget").
-const EVENTS: bool = false;
+/// The stepper every board plays (`GameConfig::DEFAULT`, events: no speed cap,
+/// no sinking into walls). Its code (about 18 KiB here) fits the v2's 128 KiB
+/// flash budget (`cargo xtask size-report`, which reads
+/// [`MARBLE_STEPPING_EVENTS`] back from the ELF).
+const EVENTS: bool = marble_rolling::game::rules::DEFAULT_EVENTS;
+
+/// The stepping [`EVENTS`] links, named in the ELF for `cargo xtask
+/// size-report` to print (`xtask/src/size.rs` reads this symbol's byte:
+/// 1 events, 0 fixed). One byte of flash; `#[used]` keeps it though nothing
+/// reads it here.
+#[used]
+#[no_mangle]
+static MARBLE_STEPPING_EVENTS: u8 = EVENTS as u8;
 
 /// Runs the display above thread mode.
 static EXECUTOR_DISPLAY: InterruptExecutor = InterruptExecutor::new();
@@ -122,7 +133,9 @@ async fn game(self_test: bool, level: u8) {
         >(&LINKS, mode));
         let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
         if let app::GameExit::Asleep { level } = exit {
-            hw::system_off(&LINKS, level).await;
+            // The input task powers the accelerometer down and enters
+            // System OFF (hw::system_off).
+            hw::request_sleep(level).await;
         }
         defmt::warn!("game_task returned: {}", exit);
     }
@@ -188,8 +201,9 @@ async fn confirm_clear(
 }
 
 /// The records' flash: the NVMC, blocking (the CPU waits on a page erase, about
-/// 85 ms, between levels only), as the async NOR flash the records take.
-type RecordsFlash = BlockingAsync<Nvmc<'static>>;
+/// 85 ms, between levels only), as the async NOR flash the records take, each
+/// operation a heartbeat of the records task (hw::WatchedFlash).
+type RecordsFlash = hw::WatchedFlash<BlockingAsync<Nvmc<'static>>>;
 
 /// The best times in [`board::RECORDS`].
 #[embassy_executor::task]
@@ -274,7 +288,8 @@ async fn main(spawner: Spawner) {
     defmt::info!("power-on: {}", choice);
 
     // The best times: the last 16 KiB of flash (board::RECORDS).
-    let mut store = Records::new(BlockingAsync::new(Nvmc::new(p.NVMC)), board::RECORDS);
+    let flash = hw::WatchedFlash::new(BlockingAsync::new(Nvmc::new(p.NVMC)), &HEARTBEATS);
+    let mut store = Records::new(flash, board::RECORDS);
     if let (PowerOn::ClearRecords, Some(store)) = (choice, store.as_mut()) {
         confirm_clear(store, &button_a, &button_b, &mut wdt).await;
     }
@@ -288,7 +303,7 @@ async fn main(spawner: Spawner) {
     let input_dev = hw::MicrobitInput::new(sensor, button_a, button_b, &HEARTBEATS);
 
     // Speaker: P0.00, PWM0.
-    let speaker = hw::Speaker::new(p.PWM0, p.P0_00);
+    let speaker = hw::Speaker::new(p.PWM0, p.P0_00, &HEARTBEATS);
 
     match input(input_dev) {
         Ok(token) => spawner.spawn(token),

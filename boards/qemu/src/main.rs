@@ -30,9 +30,9 @@ use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, Terminal
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
-use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr};
+use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
-use marble_rolling::board::qemu::{Options, HEIGHT, QEMU_RAM, SENSOR_AXIS_MAP, WIDTH};
+use marble_rolling::board::qemu::{Options, HEIGHT, QEMU_RAM, WIDTH};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
@@ -156,7 +156,7 @@ async fn sensor_input(options: Options) -> ! {
         None => &mut [],
     };
     let twim = VirtualTwim::new(
-        VirtualLsm303agr::new(SENSOR_AXIS_MAP),
+        VirtualLsm303agr::placed(MICROBIT_V2),
         &CHIP,
         copy,
         sensor::now_us as fn() -> u64,

@@ -53,9 +53,18 @@
 //! [`WatchdogGate`] has seen every counter move since the last pet. The
 //! watchdog task itself runs in thread mode, so its pets also prove the
 //! thread executor is not hogged.
+//!
+//! Some tasks wait for work that may not come for minutes (the sound task for
+//! a sound, the records task for a win): a silent counter there is not a stall.
+//! Such a task says when it waits ([`Heartbeats::waiting`]) and when it works
+//! ([`Heartbeats::working`]); the gate excuses a waiting task and holds a
+//! working one to the same rule as the others, so a sound whose timer never
+//! ends, or a flash operation that never returns, stops the pets.
 
 pub mod power_on;
-use core::sync::atomic::{AtomicU32, Ordering};
+pub mod sleep;
+pub mod speaker;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use crate::input::buttons::ButtonConfig;
 use crate::input::sensor::{Axis, AxisMap, AxisSource, SupervisorConfig};
@@ -105,6 +114,12 @@ pub const ACCEL_ODR_HZ: u32 = 200;
 /// Time to wait after (re)configuring the accelerometer before trusting its
 /// output: high-resolution mode needs 7 samples at [`ACCEL_ODR_HZ`] (35 ms).
 pub const ACCEL_SETTLE_MS: u64 = 40;
+
+/// The LSM303AGR's boot time after power-up, ms: its datasheet's 5 ms, before
+/// which it does not answer. The input task waits until this long after the
+/// firmware's start (a power-on reset starts both together) before its first
+/// `WHO_AM_I`, which would otherwise be a fault the supervisor has to recover.
+pub const ACCEL_BOOT_MS: u64 = 5;
 
 /// Watchdog period in ticks of its 32 768 Hz clock: 1 s. The watchdog task
 /// must pet within it, which it does only while every task in [`Task::ALL`]
@@ -364,11 +379,22 @@ pub enum Task {
     Game,
     /// The LED matrix (interrupt executor): beats on every scan step.
     Display,
+    /// The speaker (thread mode): waiting between sounds, beats at each note.
+    Sound,
+    /// The best times (thread mode): waiting between wins, beats at each
+    /// flash operation.
+    Records,
 }
 
 impl Task {
     /// Every task the watchdog waits for.
-    pub const ALL: [Task; 3] = [Task::Input, Task::Game, Task::Display];
+    pub const ALL: [Task; 5] = [
+        Task::Input,
+        Task::Game,
+        Task::Display,
+        Task::Sound,
+        Task::Records,
+    ];
 
     const fn index(self) -> usize {
         self as usize
@@ -399,7 +425,8 @@ impl Tasks {
     }
 }
 
-/// One counter per [`Task`], shared between executors (a `static`).
+/// One counter per [`Task`], and whether it waits for work, shared between
+/// executors (a `static`).
 ///
 /// Each counter has a single writer, its task, so a load and a store suffice
 /// (no read-modify-write atomics: this builds for Cortex-M0 too). Only a
@@ -407,13 +434,34 @@ impl Tasks {
 #[derive(Debug, Default)]
 pub struct Heartbeats {
     counts: [AtomicU32; Task::ALL.len()],
+    waiting: [AtomicBool; Task::ALL.len()],
+}
+
+/// What the watchdog task reads of [`Heartbeats`] at one check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Snapshot {
+    /// The counters, indexed like [`Task::ALL`].
+    pub counts: [u32; Task::ALL.len()],
+    /// The tasks waiting for work.
+    pub waiting: Tasks,
+}
+
+impl From<[u32; Task::ALL.len()]> for Snapshot {
+    /// Counters only, no task waiting.
+    fn from(counts: [u32; Task::ALL.len()]) -> Self {
+        Snapshot {
+            counts,
+            waiting: Tasks::NONE,
+        }
+    }
 }
 
 impl Heartbeats {
-    /// No beat yet.
+    /// No beat yet, no task waiting.
     pub const fn new() -> Self {
         Self {
-            counts: [AtomicU32::new(0), AtomicU32::new(0), AtomicU32::new(0)],
+            counts: [const { AtomicU32::new(0) }; Task::ALL.len()],
+            waiting: [const { AtomicBool::new(false) }; Task::ALL.len()],
         }
     }
 
@@ -426,13 +474,30 @@ impl Heartbeats {
         );
     }
 
-    /// The counters now, indexed like [`Task::ALL`].
-    pub fn snapshot(&self) -> [u32; Task::ALL.len()] {
-        [
-            self.counts[0].load(Ordering::Relaxed),
-            self.counts[1].load(Ordering::Relaxed),
-            self.counts[2].load(Ordering::Relaxed),
-        ]
+    /// `task` waits for work (its queue is empty): excused until
+    /// [`Heartbeats::working`]. Call it only from `task` itself.
+    pub fn waiting(&self, task: Task) {
+        self.waiting[task.index()].store(true, Ordering::Relaxed);
+    }
+
+    /// `task` has work: it beats, and must go on beating until it waits again.
+    pub fn working(&self, task: Task) {
+        self.waiting[task.index()].store(false, Ordering::Relaxed);
+        self.beat(task);
+    }
+
+    /// The counters and the waiting tasks now.
+    pub fn snapshot(&self) -> Snapshot {
+        let mut waiting = Tasks::NONE;
+        for task in Task::ALL {
+            if self.waiting[task.index()].load(Ordering::Relaxed) {
+                waiting = waiting.with(task);
+            }
+        }
+        Snapshot {
+            counts: core::array::from_fn(|i| self.counts[i].load(Ordering::Relaxed)),
+            waiting,
+        }
     }
 }
 
@@ -453,8 +518,8 @@ pub enum Verdict {
 }
 
 /// The watchdog task's rule: pet only when every task's counter moved since
-/// the last pet. A task parked forever stops its counter, the pets stop, and
-/// the watchdog resets the board.
+/// the last pet, or the task waits for work. A working task parked forever
+/// stops its counter, the pets stop, and the watchdog resets the board.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WatchdogGate {
@@ -463,25 +528,28 @@ pub struct WatchdogGate {
 }
 
 impl WatchdogGate {
-    /// Starts from the counters now (every task must beat before the first
-    /// pet).
-    pub const fn new(start: [u32; Task::ALL.len()]) -> Self {
+    /// Starts from the counters now (every task must beat, or wait, before
+    /// the first pet).
+    pub fn new(start: impl Into<Snapshot>) -> Self {
         Self {
-            at_last_pet: start,
+            at_last_pet: start.into().counts,
             checks_since_pet: 0,
         }
     }
 
-    /// One check with the counters `now` ([`Heartbeats::snapshot`]).
-    pub fn check(&mut self, now: [u32; Task::ALL.len()]) -> Verdict {
+    /// One check with the heartbeats `now` ([`Heartbeats::snapshot`]).
+    pub fn check(&mut self, now: impl Into<Snapshot>) -> Verdict {
+        let now = now.into();
         let mut stalled = Tasks::NONE;
         for task in Task::ALL {
-            if now[task.index()] == self.at_last_pet[task.index()] {
+            if now.counts[task.index()] == self.at_last_pet[task.index()]
+                && !now.waiting.contains(task)
+            {
                 stalled = stalled.with(task);
             }
         }
         if stalled.is_empty() {
-            self.at_last_pet = now;
+            self.at_last_pet = now.counts;
             self.checks_since_pet = 0;
             Verdict::Pet
         } else {

@@ -60,7 +60,9 @@ pub const QEMU_RAM: RamRange = RamRange {
 // The virtual accelerometer is a micro:bit's: the same axis table, polling,
 // rate and supervision, so the QEMU board runs the micro:bit's input stack.
 
-/// How the virtual LSM303AGR is mounted: the micro:bit's [`AXIS_MAP`](crate::board::microbit::AXIS_MAP).
+/// The axis table the QEMU board's input reads through: the micro:bit's
+/// [`AXIS_MAP`](crate::board::microbit::AXIS_MAP). The virtual chip has its own
+/// placement ([`virtual_lsm303agr::MICROBIT_V2`]), so a sign error here shows.
 pub const SENSOR_AXIS_MAP: AxisMap = crate::board::microbit::AXIS_MAP;
 /// Sensor polling period, ms (the micro:bit's).
 pub const INPUT_PERIOD_MS: u64 = crate::board::microbit::INPUT_PERIOD_MS;

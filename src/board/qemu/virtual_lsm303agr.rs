@@ -34,8 +34,11 @@
 //!   that range a real chip reads 1.5× what the driver reports. The toy runs
 //!   at ±2 g, where both agree.)
 //! * The tilt: a board-frame reading in milli-g, turned into the chip's raw
-//!   axes through the inverse of the board's [`AxisMap`], then quantised
-//!   (rounded to the nearest LSB, saturated at full scale).
+//!   axes by the chip's own [`Placement`] on the board (where each of its
+//!   axes points: [`MICROBIT_V2`]), then quantised (rounded to the nearest
+//!   LSB, saturated at full scale). The firmware turns raw axes back with its
+//!   own table, `board::microbit::AXIS_MAP`; the two are written apart, so a
+//!   sign or axis wrong in either reads a wrong tilt in the tests and in QEMU.
 //! * Power-on values: `CTRL_REG1_A` = 0x07 (power-down, axes enabled), the
 //!   other control registers 0, no data ready; [`VirtualLsm303agr::power_on_reset`]
 //!   brings them back (the injected chip reset).
@@ -61,7 +64,7 @@
 use core::sync::atomic::{AtomicI16, AtomicU32, AtomicU8, Ordering};
 
 use crate::input::event::Tilt;
-use crate::input::sensor::{Axis, AxisMap};
+use crate::input::sensor::{Axis, AxisMap, AxisSource};
 
 /// The accelerometer's 7-bit I²C address.
 pub const ACCEL_ADDRESS: u8 = 0x19;
@@ -203,6 +206,83 @@ pub const fn quantise(mode: AccelMode, full_scale_g: u32, mg: i32) -> u16 {
     };
     ((lsb << (16 - bits)) as i16) as u16
 }
+
+/// Where a chip's axes point on the board: for each chip axis, the board axis
+/// (`x` right, `y` up out of the LEDs, `z` towards the player) it lies along,
+/// negated when it points the other way. At rest a chip axis reads the
+/// board-frame reading along it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Placement {
+    /// The board direction of the chip's `x`.
+    pub x: AxisSource,
+    /// The board direction of the chip's `y`.
+    pub y: AxisSource,
+    /// The board direction of the chip's `z`.
+    pub z: AxisSource,
+}
+
+impl Placement {
+    /// The placement a board's firmware table assumes (its inverse): for a
+    /// board with no table of the chip's own, where a sign error cannot show.
+    pub const fn assumed_by(map: &AxisMap) -> Placement {
+        let sources = [map.x, map.y, map.z];
+        let board_axes = [Axis::X, Axis::Y, Axis::Z];
+        let mut chip = [AxisSource::pos(Axis::X); 3];
+        let mut i = 0;
+        while i < 3 {
+            let slot = match sources[i].axis {
+                Axis::X => 0,
+                Axis::Y => 1,
+                Axis::Z => 2,
+            };
+            chip[slot] = AxisSource {
+                axis: board_axes[i],
+                negate: sources[i].negate,
+            };
+            i += 1;
+        }
+        Placement {
+            x: chip[0],
+            y: chip[1],
+            z: chip[2],
+        }
+    }
+
+    /// A board-frame reading in the chip's axes.
+    pub const fn raw(&self, board: [i32; 3]) -> [i32; 3] {
+        let chip = [self.x, self.y, self.z];
+        let mut raw = [0i32; 3];
+        let mut i = 0;
+        while i < 3 {
+            let value = board[match chip[i].axis {
+                Axis::X => 0,
+                Axis::Y => 1,
+                Axis::Z => 2,
+            }];
+            raw[i] = if chip[i].negate {
+                value.saturating_neg()
+            } else {
+                value
+            };
+            i += 1;
+        }
+        raw
+    }
+}
+
+/// The LSM303AGR on the micro:bit v2, in the chip's terms: its `x` points to
+/// the left edge (button A), its `y` to the edge connector (the player), its
+/// `z` out of the back (the chip sits on the back of the board). Read off the
+/// raw readings of a board held in each orientation, as the micro:bit runtime
+/// (CODAL's LSM303 driver with its upside-down coordinate space) and the Rust
+/// "micro:bit v2 book" give them: raw x +1 g with the right edge down, raw y
+/// +1 g with the logo edge down, raw z +1 g lying screen-down; an axis reads
+/// +1 g when it points up. Not derived from the firmware's `AXIS_MAP`.
+pub const MICROBIT_V2: Placement = Placement {
+    x: AxisSource::neg(Axis::X),
+    y: AxisSource::pos(Axis::Z),
+    z: AxisSource::neg(Axis::Y),
+};
 
 /// A board-frame reading expressed in the chip's axes: the inverse of `map`
 /// (which gives each board axis from a sensor axis and a sign).
@@ -426,7 +506,7 @@ const MAG_COUNT: usize = 0x30;
 /// the sample source; host tests can drive it directly too.
 #[derive(Clone, Debug)]
 pub struct VirtualLsm303agr {
-    map: AxisMap,
+    placement: Placement,
     accel: [u8; 0x40],
     mag: [u8; MAG_COUNT],
     /// Register pointers (sub-address, with the auto-increment bit for the
@@ -452,11 +532,18 @@ pub struct VirtualLsm303agr {
 }
 
 impl VirtualLsm303agr {
-    /// A chip at power-on whose board reads through `map` (the tilt set later
-    /// is in the board frame and goes through the inverse of `map`).
+    /// A chip at power-on, placed as the board's firmware table `map`
+    /// assumes ([`Placement::assumed_by`]): a sign error in `map` cannot
+    /// show. Prefer [`VirtualLsm303agr::placed`].
     pub const fn new(map: AxisMap) -> Self {
+        Self::placed(Placement::assumed_by(&map))
+    }
+
+    /// A chip at power-on, mounted on its board as `placement` says (the
+    /// tilt set later is in the board frame).
+    pub const fn placed(placement: Placement) -> Self {
         let mut chip = Self {
-            map,
+            placement,
             accel: [0; 0x40],
             mag: [0; MAG_COUNT],
             accel_pointer: 0,
@@ -483,7 +570,7 @@ impl VirtualLsm303agr {
     /// Back to the power-on state (registers, outputs, flags, pointers); the
     /// clock, the tilt and the sample source are kept.
     pub fn power_on_reset(&mut self) {
-        let fresh = Self::new(self.map);
+        let fresh = Self::placed(self.placement);
         self.accel = fresh.accel;
         self.mag = fresh.mag;
         self.accel_pointer = 0;
@@ -621,7 +708,7 @@ impl VirtualLsm303agr {
     fn latch(&mut self, skipped: bool) {
         let mode = self.mode();
         let fs = self.full_scale_g();
-        let sensor = to_sensor_frame(&self.map, self.tilt_mg);
+        let sensor = self.placement.raw(self.tilt_mg);
         for (axis, &mg) in sensor.iter().enumerate() {
             let raw = match self.source {
                 SampleSource::Garbage => {
