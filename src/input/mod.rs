@@ -16,5 +16,6 @@ pub mod keys;
 pub mod lsm303;
 pub mod buttons;
 pub mod idle;
+pub mod pacing;
 pub mod sensor;
 pub mod tilt;

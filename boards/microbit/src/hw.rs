@@ -37,6 +37,7 @@ use marble_rolling::board::microbit::{self as board, BusClear, BusLines, Heartbe
 use marble_rolling::input::buttons::{ButtonEvent, Buttons};
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::input::lsm303::{self, BusFault};
+use marble_rolling::input::pacing;
 use marble_rolling::input::sensor::{Action, Fault, Read, TiltPipeline};
 use marble_rolling::matrix::{Frame, ScanStep};
 use marble_rolling::sound::{self, Sound};
@@ -429,6 +430,8 @@ pub struct MicrobitInput {
     buttons: Buttons,
     pipeline: TiltPipeline,
     ticker: Option<Ticker>,
+    /// When the sensor was last polled (`input::pacing`).
+    last_poll: Option<Instant>,
     /// Events of this poll still to hand out, in order.
     pending: Deque<InputEvent, 4>,
     heartbeats: &'static Heartbeats,
@@ -449,6 +452,7 @@ impl MicrobitInput {
             buttons: Buttons::new(board::BUTTONS),
             pipeline: TiltPipeline::new(board::AXIS_MAP, board::SUPERVISOR),
             ticker: None,
+            last_poll: None,
             pending: Deque::new(),
             heartbeats,
         }
@@ -537,8 +541,14 @@ impl TiltInput for MicrobitInput {
             system_off(&crate::LINKS, level).await;
         }
         let started = Instant::now();
+        // A tick after a stall (a flash page erase holds the CPU some 85 ms)
+        // polls once and starts the period over (`input::pacing`).
+        let late = self.last_poll.is_some_and(|last| {
+            pacing::late(last.as_micros(), started.as_micros(), period.as_micros())
+        });
+        self.last_poll = Some(started);
         let command = self.poll().await;
-        if Instant::now() >= started + period {
+        if late || Instant::now() >= started + period {
             // Slow work (a re-init, a timed-out transfer and its bus clear):
             // the ticker would fire every missed period back to back, polling
             // a sensor with no new sample yet and squeezing the button

@@ -33,6 +33,7 @@ use marble_rolling::board::qemu::{
 };
 use marble_rolling::input::event::InputEvent;
 use marble_rolling::input::lsm303::{self, BusFault};
+use marble_rolling::input::pacing;
 use marble_rolling::input::sensor::{Action, Fault, Read, TiltPipeline};
 
 /// The firmware's clock for the virtual chip, µs.
@@ -242,6 +243,8 @@ pub struct QemuInput<'a, S, C> {
     report: &'static SensorReport,
     pipeline: TiltPipeline,
     ticker: Option<Ticker>,
+    /// When the sensor was last polled (`input::pacing`).
+    last_poll: Option<Instant>,
     /// Events of this poll still to hand out, in order.
     pending: Deque<InputEvent, 4>,
     polls: u32,
@@ -262,6 +265,7 @@ impl<'a, S: ByteSource, C: Console> QemuInput<'a, S, C> {
             report,
             pipeline: TiltPipeline::new(SENSOR_AXIS_MAP, SUPERVISOR),
             ticker: None,
+            last_poll: None,
             pending: Deque::new(),
             polls: 0,
         }
@@ -387,7 +391,15 @@ impl<S: ByteSource, C: Console> TiltInput for QemuInput<'_, S, C> {
             } else {
                 ticker.next().await;
             }
-            if self.poll().await {
+            // A tick after a stall (another task held the CPU) polls once and
+            // starts the period over, rather than catch up in a burst of polls
+            // that find no new sample (`input::pacing`).
+            let now = Instant::now();
+            let late = self.last_poll.is_some_and(|last| {
+                pacing::late(last.as_micros(), now.as_micros(), period.as_micros())
+            });
+            self.last_poll = Some(now);
+            if self.poll().await || late {
                 // Slow work: start the period over rather than poll back to
                 // back (as the micro:bit does).
                 if let Some(ticker) = &mut self.ticker {
