@@ -39,7 +39,7 @@
 //! every other tile found as always, and the fixed step's contact passes (the
 //! push-out of `respond`) at the slice's end. Two marbles pressed together go on
 //! the same way, pushed apart by the fixed step's pair code. A marble rolling
-//! round an edge that holds it is flown in [`pivot`] slices instead: the pull's
+//! round an edge that holds it is flown in pivot slices (`events/pivot.rs`) instead: the pull's
 //! part into the edge dropped, the centre put back on the sphere about the edge
 //! at each end, so the slice is bounded by the turn and not by the sink — about
 //! 8 a frame where plain slices took 32.
@@ -135,7 +135,7 @@ struct Slice<S> {
     /// When it started and ends (fractions of the step).
     from: S,
     to: S,
-    /// A pivot slice ([`pivot`]): `skip` is an edge the marble rolls around.
+    /// A pivot slice (`pivot.rs`): `skip` is an edge the marble rolls around.
     pivot: bool,
 }
 
