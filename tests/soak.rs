@@ -31,7 +31,9 @@ fn twenty_four_hours_of_play() {
 /// 1 513 082 (3.3 simulated hours, 6 s in the soak profile), in grand-tour,
 /// after a bout of shaking (readings up to ±2 g), a marble ends a frame off the
 /// board's extent (x' = −0.32 pitch, above the floor) — through or past the
-/// outer wall. Kept as the regression to fix (issue 27/29); CI does not run it.
+/// outer wall. Not new: the event stepper as it was before pivot slices fails the
+/// same way (frame 1 297 819, grand-tour, a marble at 117 pitch/s past the outer
+/// wall). Kept as the regression to fix (issue 27/29); CI does not run it.
 ///
 ///     cargo test --profile soak --test soak events -- --ignored
 #[test]
