@@ -204,8 +204,10 @@ pub fn parse_worst_frames(log: &str) -> Vec<(String, u64)> {
 /// the board's CPU): a level's frame over it is a problem. The stress scenes
 /// (`game::stress`, every other `profile` line) are measured and reported
 /// against the same bound, but not yet enforced: four marbles shaken in a box
-/// still take up to three times it (the pair timeline re-checks every pair at
-/// every flight of every marble).
+/// take up to 2.3 times it (the pair timeline re-checks every pair at every
+/// flight of every marble), a marble landing on another up to 6 times (the pair
+/// is flown in plain slices until it rests), a long fall's landing just over it
+/// (docs/performance.md has the figures).
 fn check_worst_frames(
     log: &str,
     levels: &[String],
