@@ -574,3 +574,35 @@ fn narrow_corridor_regression_top_speed_with_friction() {
     };
     narrow_never_sinks::<fixed::types::I8F24>(&c);
 }
+
+/// Found by CI (session 9's submission): a marble 40 µm narrower than its 8.7 mm
+/// corridor, `e = 0.947`, launched at top speed and shaken by ±3.6 g with
+/// friction; i8f24 ended step 5 of the third tilt 1.02·10⁻³ r inside a wall.
+#[test]
+fn narrow_corridor_regression_shaken_with_friction() {
+    let rows = [
+        "###############",
+        "#...#.#...#...#",
+        "##.#.####....##",
+        "#.............#",
+        "###############",
+    ];
+    let c = Narrow {
+        maze: Maze {
+            rows: rows.iter().map(|r| r.to_string()).collect(),
+        },
+        short_um: 1567,
+        long_um: 8685,
+        slack_um: 40,
+        e_milli: 947,
+        v0: (121, -112),
+        tilts: vec![
+            (104, [-3233, -1000, 2921]),
+            (112, [3676, -1000, -1282]),
+            (48, [-877, -1000, 1145]),
+        ],
+        friction: true,
+    };
+    narrow_never_sinks::<fixed::types::I8F24>(&c);
+    narrow_never_sinks::<f64>(&c);
+}

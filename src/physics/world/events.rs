@@ -810,6 +810,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             if f.slice.is_some() {
                 // A slice under way ends here (its passes), the new one begins.
                 self.end_slice::<SPACE>(m, f);
+                // Ending a pivot slice turns the velocity to the old edge's
+                // tangent, which can point back into the contact just made: a
+                // marble over a slot, rolling on one edge, touches the other and
+                // would fly the new slice into it at the speed the touch took
+                // away (CI, the narrow-corridor property: 1.02·10⁻³ r in).
+                if let Event::Touch(c, _) = ev {
+                    let vn = m.vel.dot(c.normal);
+                    if vn < S::ZERO {
+                        m.vel -= c.normal.scale(vn);
+                    }
+                }
             }
             f.want = Some(t);
             f.around = if edge && t != EVERY {
