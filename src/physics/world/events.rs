@@ -551,7 +551,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // would be sunk into over the pivot slice's length (two edges under a
         // marble over a slot), so it is found at once and a plain slice takes over.
         let slicing = rest_out && skip != EVERY && skip != LID;
-        let skip = if skip == EVERY || skip == LID || self.still_skipped(seg, skip) {
+        let skip = if skip == EVERY || skip == LID || self.still_skipped(seg, skip, limit) {
             skip
         } else {
             EVERY
@@ -566,7 +566,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut i = range.lo.i;
                 while i <= range.hi.i {
                     let t = TileIndex::new(i, j, k);
-                    if tiles.is_solid(t) && t != skip && !(slicing && self.still_skipped(seg, t)) {
+                    if tiles.is_solid(t)
+                        && t != skip
+                        && !(slicing && self.still_skipped(seg, t, limit))
+                    {
                         let b = layout.tile_box(t);
                         // `leave_out_held` left exactly the tiles not behind a held face.
                         debug_assert!(!behind_held(m, &b));
@@ -671,8 +674,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// searched against it like against any tile: the passes at the slice's end
     /// are for the slow contact the slice was begun for, and a return at speed
     /// would sink into the tile until then (the narrow-corridor regression, 47 µm
-    /// at 1 pitch/s).
-    fn still_skipped(&self, seg: &Segment<S>, skip: TileIndex) -> bool {
+    /// at 1 pitch/s). Nor while it closes fast enough to sink more than `2^-12·r`
+    /// into the tile within the slice's `limit` steps: a marble over a slot,
+    /// rolling round one edge, closes on the other at up to the threshold, and
+    /// over a slice that sank it `1.3·10⁻³ r` in (the storey property).
+    fn still_skipped(&self, seg: &Segment<S>, skip: TileIndex, limit: S) -> bool {
         let p = &self.params;
         let (r, tol) = (p.radius, self.tol());
         let d = offset(seg.p, &p.layout.tile_box(skip));
@@ -692,7 +698,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         } else {
             p.threshold.shl(T_LOG2 - p.k)
         };
-        !(ud < S::ZERO && ud.times(ud) > w_t.times(w_t).times(d2))
+        if ud >= S::ZERO {
+            return true;
+        }
+        // Sinking `w·limit` with `|d| ≈ r` (resting, a tolerance off): `−u·d·limit`
+        // against `r²/4096`; |u| < 1 per axis and |d| ≤ 2r keep both in range.
+        ud.times(ud) <= w_t.times(w_t).times(d2)
+            && (S::ZERO - ud).times(limit) <= r.times(r).shr(12)
     }
 
     /// When the centre, flying `seg`, first enters a column whose tile behind held
@@ -733,8 +745,20 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     if self.tiles.is_solid(t) {
                         continue;
                     }
+                    // Eq. 5's columns are `[lo, hi)`: a centre on `hi` is still in
+                    // the next one, which holds the face (eq. 6 says so, and the
+                    // hold asks eq. 6). Entering through `hi` at the closed end
+                    // released the face on the seam, a touch held it again at
+                    // once, and the two took turns until the idle rule flew a
+                    // blind slice at 28 pitch/s into the next wall (3.7·10⁻³ r
+                    // in: the storey property).
                     let b = layout.tile_box(t);
-                    if let Some(e) = entry(seg, b.min, b.max, axes, limit) {
+                    let hi = Vec3::new(
+                        b.max.x.next_down(),
+                        b.max.y.next_down(),
+                        b.max.z.next_down(),
+                    );
+                    if let Some(e) = entry(seg, b.min, hi, axes, limit) {
                         if first.is_none_or(|f| e.0 < f.0) {
                             first = Some(e);
                         }
