@@ -967,21 +967,23 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     fn check_out<const SPACE: bool>(&self, m: &mut Marble<S>) {
         let (ex, ez) = self.extent;
         let p = m.pos;
+        // Past the board's edge: the border walls and the lid close every
+        // storey, so a centre beyond them went under the board through a hole
+        // (a board shaken hard rolled a fallen marble round the border slab's
+        // lower edges and out sideways: the events soak, frame 659 548).
+        let beyond = p.x < S::ZERO || p.z < S::ZERO || p.x > ex || p.z > ez;
         if SPACE {
-            let margin = S::from_int(2);
-            // Through a hole once entirely below the floor slab (top below −s): there
-            // is nothing down there to hold it, not even under the neighbouring tiles.
+            // Through a hole once entirely below the floor slab (top at or below
+            // −s): there is nothing down there to hold it, not even under the
+            // neighbouring tiles. At exactly −s the slab's underside could hold it
+            // up: a board shaken hard (its surface velocity in eq. 1) carried a
+            // fallen marble along the underside at 120 pitch/s (the events soak,
+            // frame 539 521).
             let depth = self.params.layout.s + self.params.radius;
-            if p.y < -depth
-                || p.y > S::from_int(self.tiles.storeys() as i32 + 3)
-                || p.x < -margin
-                || p.z < -margin
-                || p.x > ex + margin
-                || p.z > ez + margin
-            {
+            if beyond || p.y <= -depth || p.y > S::from_int(self.tiles.storeys() as i32 + 3) {
                 m.out = true;
             }
-        } else if p.x < S::ZERO || p.z < S::ZERO || p.x > ex || p.z > ez {
+        } else if beyond {
             m.out = true;
         }
         if m.out {
