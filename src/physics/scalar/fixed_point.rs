@@ -1,0 +1,271 @@
+//! The fixed-point backends (I8F24, the firmware's; I16F16; I32F32): products on
+//! the format's bits, conversions rounded once, and the inverse root of `rsqrt.rs`.
+
+use super::rsqrt::rsqrt_bits;
+use super::*;
+
+/// The fixed-point product on a format's bits: bits `FRAC..FRAC + N` of the
+/// exact `2N`-bit product, wrapping.
+trait FracProduct {
+    fn mul_shr<const FRAC: u32>(self, rhs: Self) -> Self;
+}
+
+impl FracProduct for i32 {
+    #[inline(always)]
+    fn mul_shr<const FRAC: u32>(self, rhs: i32) -> i32 {
+        mul_shr::<FRAC>(self, rhs)
+    }
+}
+
+impl FracProduct for i64 {
+    #[inline(always)]
+    fn mul_shr<const FRAC: u32>(self, rhs: i64) -> i64 {
+        ((self as i128 * rhs as i128) >> FRAC) as i64
+    }
+}
+
+/// Bits `FRAC..FRAC + 32` of the exact product `a · b`, wrapping: the fixed-point
+/// product of two 32-bit formats with `FRAC` fraction bits. One `smull` and a
+/// shift where the core has a 32 × 32 → 64 multiply.
+#[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+#[inline(always)]
+fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
+    ((a as i64 * b as i64) >> FRAC) as i32
+}
+
+/// Bits `FRAC..FRAC + 32` of the exact product `a · b` on ARMv6-M (the
+/// Cortex-M0 of the micro:bit v1: recognised by its lack of 32-bit atomic
+/// read-modify-write, as the architecture's own `target_feature`s are unstable).
+///
+/// Its `muls` keeps the low 32 bits only, so LLVM builds an `i64` product from a
+/// call to the generic 64 × 64 library multiply (`__aeabi_lmul`, 37 instructions
+/// with its stack frame), which was 27 % of the v1 demo's instructions. Both
+/// operands are 32-bit here, which [`mul_shr_halves`] uses. Not inlined: one copy
+/// for all the step's products keeps the v1 within its flash.
+#[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+#[inline(never)]
+fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
+    mul_shr_halves::<FRAC>(a, b)
+}
+
+/// `mul_shr` from four 16 × 16 → 32 products, exact. With `a = ah·2¹⁶ + al`
+/// (`ah` signed, `al` in `0..2¹⁶`) and `b` likewise, `a·b = ah·bh·2³² +
+/// (ah·bl + al·bh)·2¹⁶ + al·bl`, and every partial product fits 32 bits:
+/// `|ah·bh| ≤ 2³⁰`, `ah·bl` and `al·bh` lie in `[−2³¹ + 2¹⁵, 2³¹)`, `al·bl < 2³²`
+/// unsigned. Only their sums need 64 bits, which are adds with carry.
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+pub(super) fn mul_shr_halves<const FRAC: u32>(a: i32, b: i32) -> i32 {
+    let (ah, al) = (a >> 16, a & 0xffff);
+    let (bh, bl) = (b >> 16, b & 0xffff);
+    let low = (al as u32 * bl as u32) as i64;
+    let cross = (ah * bl) as i64 + (al * bh) as i64;
+    let high = (ah * bh) as i64;
+    (((high << 32) + (cross << 16) + low) >> FRAC) as i32
+}
+
+macro_rules! fixed_scalar {
+    ($t:ty, $wide:ty, $name:literal) => {
+        impl Scalar for $t {
+            const ZERO: Self = <$t>::ZERO;
+            const ONE: Self = <$t>::ONE;
+            const NAME: &'static str = $name;
+            #[inline(always)]
+            fn times(self, rhs: Self) -> Self {
+                // The operator keeps bits NBITS..2·NBITS of `a · (b << INT_NBITS)`,
+                // wrapping; those are bits FRAC..FRAC+NBITS of the exact `a · b`
+                // (it fits the wide type), which is what this keeps.
+                // The operator's own check: that shifted product must not wrap.
+                debug_assert!(
+                    {
+                        let (a, b) = (self.to_bits() as $wide, rhs.to_bits() as $wide);
+                        !a.overflowing_mul(b << <$t>::INT_NBITS).1
+                    },
+                    "overflow"
+                );
+                <$t>::from_bits(
+                    self.to_bits()
+                        .mul_shr::<{ <$t>::FRAC_NBITS }>(rhs.to_bits()),
+                )
+            }
+            #[inline]
+            fn from_int(n: i32) -> Self {
+                // A shift with a range check: the generic conversion costs far more.
+                let int_bits = <$t>::INT_NBITS as i64 - 1;
+                let n64 = n as i64;
+                if n64 < (1i64 << int_bits) && n64 >= -(1i64 << int_bits) {
+                    <$t>::from_bits(((n as i64) << <$t>::FRAC_NBITS) as _)
+                } else if n < 0 {
+                    <$t>::MIN
+                } else {
+                    <$t>::MAX
+                }
+            }
+            fn from_f64(x: f64) -> Self {
+                <$t>::saturating_from_num(x)
+            }
+            fn ratio(num: i64, den: i64) -> Self {
+                // Exact rational → fixed, rounded to nearest, without going through f64.
+                let frac = <$t>::FRAC_NBITS;
+                // i64 when it fits: i128 division is a slow library call on Cortex-M.
+                if num.unsigned_abs() < (1u64 << (62 - frac)) && den > 0 {
+                    let scaled = num << frac;
+                    let q = scaled.div_euclid(den);
+                    let r = scaled.rem_euclid(den);
+                    let q = if 2 * r >= den { q + 1 } else { q };
+                    let bits = q.clamp(<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
+                    return <$t>::from_bits(bits as _);
+                }
+                let scaled = (num as i128) << frac;
+                let den = den as i128;
+                let q = scaled.div_euclid(den);
+                let r = scaled.rem_euclid(den);
+                let q = if 2 * r.abs() >= den.abs() {
+                    q + den.signum()
+                } else {
+                    q
+                };
+                let bits = q.clamp(<$t>::MIN.to_bits() as i128, <$t>::MAX.to_bits() as i128);
+                <$t>::from_bits(bits as _)
+            }
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self.to_num::<f64>()
+            }
+            #[inline]
+            fn floor_int(self) -> i32 {
+                // Arithmetic shift is floor division by 2^FRAC: exact for negatives too.
+                (self.to_bits() >> <$t>::FRAC_NBITS) as i32
+            }
+            #[inline]
+            fn shr(self, n: u32) -> Self {
+                if n == 0 {
+                    return self;
+                }
+                let bits = self.to_bits();
+                // Round half away from zero so that +v and -v move by mirror amounts;
+                // on the magnitude, so that neither MAX nor MIN can overflow.
+                let m = bits.unsigned_abs();
+                let q = ((m >> n) + ((m >> (n - 1)) & 1)) as i64;
+                <$t>::from_bits((if bits < 0 { -q } else { q }) as _)
+            }
+            #[inline]
+            fn shl(self, n: u32) -> Self {
+                // A range check and a shift (the generic saturating multiply is a call).
+                let bits = self.to_bits();
+                let limit = <$t>::MAX.to_bits() >> n;
+                if bits > limit {
+                    <$t>::MAX
+                } else if bits < -limit {
+                    <$t>::MIN
+                } else {
+                    <$t>::from_bits(bits << n)
+                }
+            }
+            fn sqrt(self) -> Self {
+                if self <= <$t>::ZERO {
+                    <$t>::ZERO
+                } else {
+                    <$t>::sqrt(self)
+                }
+            }
+            fn div(self, rhs: Self) -> Self {
+                if rhs == <$t>::ZERO {
+                    <$t>::ZERO
+                } else {
+                    self.saturating_div(rhs)
+                }
+            }
+            // Inlined: at its callers the product (i32 × i64) is known to be narrow,
+            // which leaves a few 32×32 multiplies and word moves.
+            #[inline(always)]
+            fn from_scaled(n: i128, shift: u32, away: bool) -> Self {
+                let frac = <$t>::FRAC_NBITS;
+                let lo = <$t>::MIN.to_bits() as i64;
+                let hi = <$t>::MAX.to_bits() as i64;
+                // The per-sample kicks (|n| < 2^94, a right shift by 32..=63): the same
+                // rounding as `scaled_bits` with 64-bit words, exact. `m + bias` is split
+                // at bit 32: the low words' sum (< 2^33) carries into the high one
+                // (< 2^62 + 2^32), and for s ≥ 32 shifting the high sum by s − 32 is
+                // shifting the whole by s. i128 shifts, adds and compares are a loop of
+                // library code on Cortex-M, several times the cost.
+                let m = n.unsigned_abs();
+                if shift > frac && (32..64).contains(&(shift - frac)) && m >> 94 == 0 {
+                    let s = shift - frac;
+                    let bias = if away {
+                        (1u64 << s) - 1
+                    } else {
+                        1u64 << (s - 1)
+                    };
+                    let low = (m as u32) as u64 + (bias as u32) as u64;
+                    let high = (m >> 32) as u64 + (bias >> 32) + (low >> 32);
+                    // high < 2^63, so the quotient fits i64 and its negation too.
+                    let q = (high >> (s - 32)) as i64;
+                    let bits = if n < 0 { -q } else { q };
+                    return <$t>::from_bits(bits.clamp(lo, hi) as _);
+                }
+                <$t>::from_bits(scaled_bits(n, shift, away, frac, lo, hi) as _)
+            }
+            fn rsqrt(self) -> Self {
+                let bits = self.to_bits();
+                if bits <= 0 {
+                    return <$t>::ZERO;
+                }
+                let r = rsqrt_bits(bits as u64, <$t>::FRAC_NBITS);
+                let max = <$t>::MAX.to_bits() as u64;
+                <$t>::from_bits(r.min(max) as _)
+            }
+            fn next_down(self) -> Self {
+                <$t>::from_bits(self.to_bits().saturating_sub(1))
+            }
+            #[inline]
+            fn sat_add(self, o: Self) -> Self {
+                self.saturating_add(o)
+            }
+            #[inline]
+            fn ilog2(self) -> i32 {
+                let m = self.to_bits().unsigned_abs();
+                if m == 0 {
+                    i32::MIN
+                } else {
+                    m.ilog2() as i32 - <$t>::FRAC_NBITS as i32
+                }
+            }
+            #[inline]
+            fn hash_bits(self) -> u64 {
+                self.to_bits() as i64 as u64
+            }
+        }
+    };
+}
+
+fixed_scalar!(I8F24, i64, "i8f24");
+fixed_scalar!(I16F16, i64, "i16f16");
+fixed_scalar!(I32F32, i128, "i32f32");
+
+/// `n·2^-shift` as the bits of a fixed-point number with `frac` fraction bits,
+/// rounded to nearest (away from zero when `away`) and clamped to `[lo, hi]`: the
+/// general case of the fixed-point `from_scaled`, in i128.
+#[inline(never)]
+pub(super) fn scaled_bits(n: i128, shift: u32, away: bool, frac: u32, lo: i64, hi: i64) -> i64 {
+    let bits = if shift <= frac {
+        n.saturating_mul(1i128 << (frac - shift))
+    } else {
+        let s = shift - frac;
+        let m = n.unsigned_abs();
+        let q = if away {
+            (m + (1u128 << s) - 1) >> s
+        } else {
+            (m + (1u128 << (s - 1))) >> s
+        };
+        if n < 0 {
+            -(q as i128)
+        } else {
+            q as i128
+        }
+    };
+    bits.clamp(lo as i128, hi as i128) as i64
+}

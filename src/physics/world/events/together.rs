@@ -1,0 +1,303 @@
+//! Several marbles that may touch: one timeline for all, every event — a
+//! marble's own or a pair's — in time order; a pair pressed together goes on in
+//! slices with the fixed step's pair code.
+
+use super::*;
+
+impl<S: Scalar, const M: usize> World<'_, S, M> {
+    /// Several marbles that touch each other: one timeline for all, every event —
+    /// a marble's own or a pair's — in time order.
+    pub(super) fn fly_together<const SPACE: bool, O: StepObserver<S>>(&mut self, obs: &mut O) {
+        self.stats.pair_runs = self.stats.pair_runs.wrapping_add(1);
+        let count = self.marbles.len();
+        let before = self.marbles.clone();
+        let mut fl = [Flight::start(); M];
+        let mut plan: [Option<(S, Event<S>)>; M] = [None; M];
+        let mut live = [false; M];
+        for (n, alive) in live.iter_mut().enumerate().take(count) {
+            let m = self.marbles[n];
+            *alive = !m.out;
+            if *alive && !m.asleep {
+                self.count_runs::<SPACE>(&m);
+            }
+        }
+        let (p, tol) = (self.params, self.tol());
+        let r2 = p.radius + p.radius;
+        let point = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ZERO,
+        };
+        let mut now = S::ZERO;
+        let mut rounds = 0u32;
+        loop {
+            rounds += 1;
+            if rounds > 2 * MAX_EVENTS * (count as u32 + 1) {
+                // Out of events: every marble finishes its step on its own, then the
+                // fixed step's pair code.
+                for n in 0..count {
+                    let mut m = self.marbles[n];
+                    if !live[n] || m.asleep {
+                        continue;
+                    }
+                    self.stats.event_limits = self.stats.event_limits.wrapping_add(1);
+                    fl[n].events = fl[n].events.max(2 * MAX_EVENTS);
+                    self.fly_out::<SPACE, O>(n, &mut m, &mut fl[n], obs);
+                    self.marbles[n] = m;
+                }
+                self.collide_marbles::<SPACE>();
+                break;
+            }
+            // Each moving marble's next event of its own.
+            for n in 0..count {
+                if !live[n] || plan[n].is_some() {
+                    continue;
+                }
+                let mut m = self.marbles[n];
+                if m.asleep || fl[n].t >= S::ONE {
+                    fl[n].t = if m.asleep { now } else { fl[n].t };
+                    fl[n].seg = Segment::still(m.pos);
+                    plan[n] = Some((S::ONE, Event::End));
+                    continue;
+                }
+                let (s, ev) = self.next::<SPACE>(&mut m, &mut fl[n]);
+                self.marbles[n] = m;
+                plan[n] = Some((fl[n].after(s), ev));
+            }
+            let mut first: Option<(S, usize)> = None;
+            for (n, pl) in plan.iter().enumerate().take(count) {
+                if let (true, Some((t, _))) = (live[n], pl) {
+                    if first.is_none_or(|(b, _)| *t < b) {
+                        first = Some((*t, n));
+                    }
+                }
+            }
+            let Some((mut when, mut who)) = first else {
+                break;
+            };
+            // Pairs, in their relative motion: each a sphere of radius 2r.
+            let mut pair: Option<(usize, usize, Option<Contact<S>>)> = None;
+            for a in 0..count {
+                for b in a + 1..count {
+                    // Two marbles asleep against each other stay so: they fell
+                    // asleep because a whole step under this same pull changed
+                    // neither, and the step is deterministic. Waking them for their
+                    // own contact cost a stacked pair 47 events and 35 slices a
+                    // frame, every frame (the drop-onto-marble stress scene:
+                    // 370 k instructions a frame at rest).
+                    if !live[a] || !live[b] || (self.marbles[a].asleep && self.marbles[b].asleep) {
+                        continue;
+                    }
+                    // Both at the later of their own times (a marble a slice
+                    // ahead of the others is checked from where it is).
+                    let t0 = now.max(fl[a].t).max(fl[b].t);
+                    if t0 >= when {
+                        continue;
+                    }
+                    let at = |n: usize| {
+                        let g = &fl[n].seg;
+                        let s = t0 - fl[n].t;
+                        (g.pos_at(s), g.u_at(s), g.h)
+                    };
+                    let ((pa, ua, ha), (pb, ub, hb)) = (at(a), at(b));
+                    let rel = Segment {
+                        p: pb - pa,
+                        v: Vec3::ZERO,
+                        u: ub - ua,
+                        dv: Vec3::ZERO,
+                        h: hb - ha,
+                    };
+                    let horizon = when - t0;
+                    // Out of reach over the horizon: no touch, and no square of a
+                    // far separation (I8F24's |d|² leaves its range past 11.3
+                    // pitch; wrapped, a pair 16 pitches apart read as touching).
+                    // Within reach every axis is under 2r + tol plus a step's
+                    // relative travel (2 pitch at 127 pitch/s): squares under 48.
+                    let path = swept(rel.p, rel.pos_at(horizon), rel.h, horizon);
+                    let near = r2 + tol;
+                    if path.min.x > near
+                        || path.max.x < -near
+                        || path.min.y > near
+                        || path.max.y < -near
+                        || path.min.z > near
+                        || path.max.z < -near
+                    {
+                        continue;
+                    }
+                    match toi_box(&rel, r2, &point, horizon, tol) {
+                        Toi::Hit { at, contact, .. }
+                            if t0 + at < when || (at == S::ZERO && t0 <= when) =>
+                        {
+                            when = t0 + at;
+                            pair = Some((a, b, Some(contact)));
+                        }
+                        Toi::Inside { at } if t0 + at <= when => {
+                            when = t0 + at;
+                            pair = Some((a, b, None));
+                        }
+                        Toi::Later(at) if t0 + at < when => {
+                            // Re-check the pair from there: an event of marble a.
+                            when = t0 + at;
+                            who = a;
+                            pair = None;
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            if pair.is_none() && when >= S::ONE && plan[who].is_some_and(|(_, e)| e == Event::End) {
+                // Nothing before the end of the step: everyone flies there.
+                for n in 0..count {
+                    if live[n] && fl[n].t < S::ONE && !self.marbles[n].asleep {
+                        let mut m = self.marbles[n];
+                        let s = S::ONE - fl[n].t;
+                        let ev = plan[n].map_or(Event::End, |(_, e)| e);
+                        self.land::<SPACE, O>(n, &mut m, &mut fl[n], s, ev, obs);
+                        self.marbles[n] = m;
+                    }
+                }
+                if (0..count).all(|n| !live[n] || fl[n].t >= S::ONE || self.marbles[n].asleep) {
+                    break;
+                }
+                for pl in plan.iter_mut() {
+                    *pl = None;
+                }
+                continue;
+            }
+            match pair {
+                Some((a, b, contact)) => {
+                    for n in [a, b] {
+                        let mut m = self.marbles[n];
+                        if m.asleep {
+                            m.asleep = false;
+                            self.count_runs::<SPACE>(&m);
+                            fl[n].t = when;
+                        } else if when > fl[n].t {
+                            let s = when - fl[n].t;
+                            self.fly(n, &mut m, &mut fl[n], s, obs);
+                        }
+                        self.marbles[n] = m;
+                        plan[n] = None;
+                    }
+                    self.stats.events = self.stats.events.wrapping_add(1);
+                    let slow = match contact {
+                        Some(c) => self.pair_touch(a, b, &c),
+                        None => true,
+                    };
+                    if slow {
+                        self.pair_slice::<SPACE, O>(a, b, &mut fl, obs);
+                    }
+                }
+                None => {
+                    let n = who;
+                    let (t, ev) = plan[n].unwrap_or((when, Event::Later));
+                    let (t, ev) = if when < t {
+                        (when, Event::Later)
+                    } else {
+                        (t, ev)
+                    };
+                    let mut m = self.marbles[n];
+                    let s = (t - fl[n].t).max(S::ZERO);
+                    self.land::<SPACE, O>(n, &mut m, &mut fl[n], s, ev, obs);
+                    self.marbles[n] = m;
+                    plan[n] = None;
+                }
+            }
+            now = now.max(when);
+        }
+        for n in 0..count {
+            if !live[n] {
+                continue;
+            }
+            let mut m = self.marbles[n];
+            if !SPACE {
+                m.supported = true;
+            }
+            self.check_out::<SPACE>(&mut m);
+            m.asleep = self.sleeping && m == before[n] && !self.params.spec.effects.board_motion;
+            self.marbles[n] = m;
+        }
+    }
+
+    /// Two marbles touching (eq. 1 between them, each taking half, as
+    /// `collide_marbles` does). Returns `true` when the contact is slow and the pair
+    /// must go on in slices.
+    fn pair_touch(&mut self, a: usize, b: usize, c: &Contact<S>) -> bool {
+        let p = self.params;
+        let n = c.normal;
+        let (ma, mb) = (self.marbles[a], self.marbles[b]);
+        let (va, vb) = (ma.vel.shr(T_LOG2), mb.vel.shr(T_LOG2));
+        let approach = -(vb - va).dot(n);
+        let (na, nb, bounce) = marble_pair(va, vb, n, p.restitution, p.threshold);
+        if bounce > S::ZERO {
+            self.impacts.record(bounce.shl(T_LOG2));
+        }
+        let set = |m: &mut Marble<S>, v: Vec3<S>| {
+            let old = m.vel.dot(n);
+            let new = n.scale(v.dot(n).shl(T_LOG2).clamp(-p.v_max, p.v_max));
+            // The sum can pass the speed limit (a fast marble struck sideways):
+            // saturated, then scaled back to it.
+            let t = m.vel - n.scale(old);
+            m.vel = cap_speed(Vec3::new(
+                t.x.sat_add(new.x),
+                t.y.sat_add(new.y),
+                t.z.sat_add(new.z),
+            ));
+            m.asleep = false;
+        };
+        set(&mut self.marbles[a], na);
+        set(&mut self.marbles[b], nb);
+        approach <= p.threshold
+    }
+
+    /// Two marbles pressed together: both fly one slice, then the fixed step's pair
+    /// code pushes them apart and runs their tile passes.
+    fn pair_slice<const SPACE: bool, O: StepObserver<S>>(
+        &mut self,
+        a: usize,
+        b: usize,
+        fl: &mut [Flight<S>; M],
+        obs: &mut O,
+    ) {
+        let p = self.params;
+        let r = p.radius;
+        let mut len = S::ONE.shr(3);
+        for n in [a, b] {
+            let mut m = self.marbles[n];
+            self.prepare::<SPACE>(&mut m, &mut fl[n]);
+            self.marbles[n] = m;
+            let seg = fl[n].seg;
+            let (um, hm) = (max_abs(seg.u), max_abs(seg.h));
+            let mut j = 3;
+            while j < 10 && (um.times(len) > r.shr(3) || hm.times(len.times(len)) > r.shr(12)) {
+                len = len.half();
+                j += 1;
+            }
+            len = len.min(fl[n].len);
+        }
+        for n in [a, b] {
+            let mut m = self.marbles[n];
+            let f = &mut fl[n];
+            let to = f.after(len);
+            obs.flight(n, f.t, to, &f.seg);
+            let start = m.pos;
+            m.pos = f.seg.pos_at(len);
+            m.vel = cap_speed(f.seg.vel_at(len));
+            f.t = to;
+            let solver = Solver {
+                acc: self.solver(f.seg.dv, p.k).acc,
+                dt: len.shr(p.k - T_LOG2),
+            };
+            let floor = m.rest_mask & (1 << 3) != 0;
+            let supported = self.contact_passes::<SPACE>(&mut m, &solver, start);
+            if SPACE {
+                m.supported = supported || floor;
+            }
+            self.marbles[n] = m;
+        }
+        self.collide_pair::<SPACE>(a, b);
+        for n in [a, b] {
+            self.marbles[n].vel = cap_speed(self.marbles[n].vel);
+        }
+        self.stats.slices = self.stats.slices.wrapping_add(1);
+    }
+}

@@ -1,0 +1,219 @@
+//! Handling an event: a touch is eq. 1 at that instant or a contact (and, slow
+//! against an edge, a slice); a held face's support ends; rolling resistance
+//! stops the marble; a slice ends with the fixed step's contact passes.
+
+use super::*;
+
+impl<S: Scalar, const M: usize> World<'_, S, M> {
+    /// Handles event `ev`, reached after a flight of `s` steps.
+    pub(super) fn handle<const SPACE: bool>(
+        &mut self,
+        m: &mut Marble<S>,
+        f: &mut Flight<S>,
+        s: S,
+        ev: Event<S>,
+    ) {
+        self.stats.events = self.stats.events.wrapping_add(1);
+        f.events += 1;
+        if f.events == MAX_EVENTS {
+            self.stats.event_limits = self.stats.event_limits.wrapping_add(1);
+            f.inelastic = true;
+        }
+        f.idle = if s == S::ZERO { f.idle + 1 } else { 0 };
+        // A slow touch on an edge pivots, unless it is a second contact found
+        // inside a pivot slice (two supports: plain slices, passes for both).
+        let edge = matches!(ev, Event::Touch(c, _) if c.feature == Feature::Edge)
+            && !f.slice.is_some_and(|sl| sl.pivot);
+        let slice = match ev {
+            Event::Touch(c, t) => self.touch::<SPACE>(m, &f.seg, &c, f.inelastic).then_some(t),
+            Event::Inside(t) => Some(t),
+            Event::Release(bit) => {
+                m.rest_mask &= !(1 << bit);
+                if bit == 3 {
+                    m.supported = false;
+                }
+                None
+            }
+            Event::Stop => {
+                self.drag.stopped(&mut m.vel, f.dir, f.holds);
+                None
+            }
+            Event::Later | Event::End | Event::SliceEnd => None,
+        };
+        // A contact that keeps coming back with no time passing is not a parabola.
+        let slice = match (slice, f.idle > IDLE_EVENTS) {
+            (None, true) => Some(EVERY),
+            (s, _) => s,
+        };
+        if let Some(t) = slice {
+            f.idle = 0;
+            if f.slice.is_some() {
+                // A slice under way ends here (its passes), the new one begins.
+                self.end_slice::<SPACE>(m, f);
+                // Ending a pivot slice turns the velocity to the old edge's
+                // tangent, which can point back into the contact just made: a
+                // marble over a slot, rolling on one edge, touches the other and
+                // would fly the new slice into it at the speed the touch took
+                // away (CI, the narrow-corridor property: 1.02·10⁻³ r in).
+                if let Event::Touch(c, _) = ev {
+                    let vn = m.vel.dot(c.normal);
+                    if vn < S::ZERO {
+                        m.vel -= c.normal.scale(vn);
+                    }
+                }
+            }
+            f.want = Some(t);
+            f.around = if edge && t != EVERY {
+                Around::Touched
+            } else {
+                Around::Slice
+            };
+        }
+    }
+
+    /// A touch (the marble is at the contact, `seg` the flight that brought it):
+    /// eq. 1 at this instant, or a contact. Returns `true` when the marble must go on
+    /// in slices (a slow contact with an edge it is pulled against).
+    fn touch<const SPACE: bool>(
+        &mut self,
+        m: &mut Marble<S>,
+        seg: &Segment<S>,
+        c: &Contact<S>,
+        inelastic: bool,
+    ) -> bool {
+        let p = self.params;
+        let e = if inelastic { S::ZERO } else { p.restitution };
+        let (k, r, n) = (p.k, p.radius, c.normal);
+        self.stats.contacts = self.stats.contacts.wrapping_add(1);
+        // Half the approach acceleration (pitch/step²).
+        let beta = -seg.h.dot(n);
+        // The normal speed at impact from the energy along the normal: for a face
+        // from the flight's start to the exact contact plane, where the marble is
+        // put; for an edge from where it is, put back on the rounded edge.
+        let (w, d) = match c.feature {
+            Feature::Face(a) => {
+                let a = a as usize;
+                let up = n.axis(a) > S::ZERO;
+                let at = if up { c.plane + r } else { c.plane - r };
+                let d0 = if up {
+                    seg.p.axis(a) - at
+                } else {
+                    at - seg.p.axis(a)
+                };
+                m.pos.set_axis(a, at);
+                (-seg.u.dot(n), d0)
+            }
+            _ => {
+                m.pos += n.scale(c.depth);
+                (-m.vel.shr(k).dot(n), -c.depth)
+            }
+        };
+        let wc = impact_speed(w, beta, d, k);
+        let vn = m.vel.dot(n);
+        if wc <= p.threshold.shl(T_LOG2) || e == S::ZERO {
+            // A contact: no normal speed left (no bounce, no jitter, no Zeno).
+            m.vel -= n.scale(vn);
+            if beta <= S::ZERO {
+                // Not pulled in: it leaves by itself. Off a slanted normal, what
+                // rounding leaves of the normal speed could read as a touch again
+                // at once: set it a hair off the edge (outwards, with the pull).
+                if c.feature == Feature::Edge {
+                    let hair = self.tol();
+                    m.pos += n.scale(hair + hair);
+                }
+                return false;
+            }
+            if let Feature::Face(a) = c.feature {
+                let a = a as usize;
+                let up = n.axis(a) > S::ZERO;
+                if self.behind_solid::<SPACE>(m.pos, a, up, c.plane) {
+                    m.rest_mask |= 1 << (2 * a + up as usize);
+                    m.rest_plane[a] = c.plane;
+                    if SPACE && a == 1 && up {
+                        m.supported = true;
+                    }
+                    return false;
+                }
+            }
+            return true;
+        }
+        // A bounce. The impact speed is the energy's, and never more than the
+        // flight's own.
+        let wc = wc.min((-vn).max(S::ZERO));
+        let v_c = m.vel - n.scale(vn + wc);
+        // Eq. 1, `v' = v − (1 + e)((v − v_b)·n)n`, with its `(1 + e)` split so that
+        // no intermediate leaves the format's range at top speed.
+        let out = if p.spec.effects.board_motion {
+            // Against the board's surface velocity, in pitch/T (1/32 s) where their
+            // sum fits.
+            let v_b = self
+                .motion
+                .surface_velocity(m.pos - n.scale(r))
+                .shl(k - T_LOG2)
+                .clamp_abs(p.v_max.shr(T_LOG2 + 1));
+            let vt = v_c.shr(T_LOG2);
+            let vn_rel = (vt - v_b).dot(n);
+            (vt - n.scale(vn_rel) - n.scale(e.times(vn_rel))).shl(T_LOG2)
+        } else {
+            // v_c's normal part is −w_c: v' = (v_c + w_c·n) + e·w_c·n.
+            m.vel - n.scale(vn) + n.scale(e.times(wc))
+        };
+        // A still board takes no energy in and gives none: a slanted normal's
+        // rounding (or an approximate root's) must not either.
+        m.vel = if p.spec.effects.board_motion {
+            cap_speed(out)
+        } else {
+            no_faster(cap_speed(out), v_c)
+        };
+        self.stats.collisions = self.stats.collisions.wrapping_add(1);
+        self.impacts.record(wc);
+        if SPACE && n.y > S::ONE.half() {
+            m.supported = false;
+        }
+        false
+    }
+
+    /// A slice's length: `2^-j` of the step, `j ≥ 3` (1/1024 s at 128 steps/s), short
+    /// enough that each axis moves at most `r/4` (the fixed step's bound against
+    /// tunnelling) and the pull sinks the marble at most `2^-12·r` into what it
+    /// rolls around before the passes push it out (inside the `10⁻³·r` clearance the
+    /// tests hold everything to).
+    pub(super) fn slice_len(&self, seg: &Segment<S>) -> S {
+        let r = self.params.radius;
+        let (um, hm) = (max_abs(seg.u), max_abs(seg.h));
+        let mut len = S::ONE.shr(3);
+        let mut j = 3;
+        while j < 10 && (um.times(len) > r.shr(2) || hm.times(len.times(len)) > r.shr(12)) {
+            len = len.half();
+            j += 1;
+        }
+        len
+    }
+
+    /// The end of a slice: the fixed step's contact passes, over the slice, from
+    /// where it started.
+    pub(super) fn end_slice<const SPACE: bool>(&mut self, m: &mut Marble<S>, f: &mut Flight<S>) {
+        let Some(sl) = f.slice.take() else {
+            return;
+        };
+        if sl.pivot {
+            self.onto_pivot(m, sl.skip);
+        }
+        let k = self.params.k;
+        let solver = Solver {
+            acc: self.solver(f.seg.dv, k).acc,
+            dt: (f.t - sl.from).shr(k - T_LOG2),
+        };
+        let floor = m.rest_mask & (1 << 3) != 0;
+        let supported = self.contact_passes::<SPACE>(m, &solver, sl.start);
+        m.vel = cap_speed(m.vel);
+        if SPACE {
+            m.supported = supported || floor;
+        }
+        if sl.pivot {
+            // On round the edge while it holds (asked at the next flight).
+            f.want = Some(sl.skip);
+            f.around = Around::Rolling;
+        }
+    }
+}
