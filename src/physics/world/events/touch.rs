@@ -113,24 +113,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if wc <= p.threshold.shl(T_LOG2) || e == S::ZERO {
             // A contact: no normal speed left (no bounce, no jitter, no Zeno).
             m.vel -= n.scale(vn);
-            // Round an edge, the tangent leaves the sphere about it by
-            // `u_t²·s²/(2r)` while the pull brings it back by `β·s²`: past what the
-            // pull can hold (`u_t² ≥ 2rβ`, where a pivot slice stops holding) the
-            // marble flies off the edge as a real one does. A slice would fly it
-            // into the edge and push it out again, touching again a hundredth of a
-            // step later (a marble rolling off the rim of a hole at 15 pitch/s:
-            // eight slices, the long-fall scene's worst frame). The search finds
-            // the edge again if the flight comes back to it.
-            // |u| < 1 per axis (pitch/step): the square stays under 3.
-            let flies_off = c.feature == Feature::Edge && {
-                let u = m.vel.shr(k);
-                u.length_sq() >= (r + r).times(beta)
-            };
-            if beta <= S::ZERO || flies_off {
-                // Not pulled in, or not enough: it leaves by itself. Off a slanted
-                // normal, what rounding leaves of the normal speed could read as a
-                // touch again at once: set it a hair off the edge (outwards, with
-                // the pull).
+            if beta <= S::ZERO {
+                // Not pulled in: it leaves by itself. Off a slanted normal, what
+                // rounding leaves of the normal speed could read as a touch again
+                // at once: set it a hair off the edge (outwards, with the pull).
                 if c.feature == Feature::Edge {
                     let hair = self.tol();
                     m.pos += n.scale(hair + hair);
