@@ -742,3 +742,51 @@ fn tight_corridor<S: Scalar>() {
     assert_eq!(w.stats.event_limits, 0, "{}", S::NAME);
 }
 for_each_backend!(tight_corridor_elastic_never_sinks, tight_corridor);
+
+/// **Over a slot.** A marble lying still across a 2 mm gap (short tile 8 is a
+/// hole), on both of its edges, while a hand on the board changes the pull by a
+/// few milli-g every frame: held on the two edges as on a rail, a couple of
+/// slices a frame (plain slices bounded by the sink took 64, every frame, and it
+/// never fell asleep), never sinking into either edge, never falling through.
+fn slot_rest<S: Scalar>() {
+    let g = grid(&["###########", "#.......O.#", "###########"]);
+    let p = params::<S>(events_spec(space()));
+    let (x0, _) = p.layout.span_xz(8);
+    let (_, z) = cell_centre(&p, 1, 1);
+    let at = Vec3::new(x0 + p.layout.s.half(), p.radius, z);
+    let mut w: W4<'_, S> = World::with_centres(p, g.view(), &[at]).expect("valid world");
+    w.set_gravity_mg([0, -1000, 0]);
+    for _ in 0..256 {
+        w.step();
+    }
+    let before = w.stats;
+    let r = p.radius.to_f64();
+    for i in 0..256 {
+        w.set_gravity_mg([(i % 3) * 4, -1000, (i % 2) * 3 - 1]);
+        w.step();
+        let c = min_clearance(&w, 0);
+        assert!(
+            c >= r * (1.0 - 1e-3),
+            "{} frame {i}: clearance {c} < r {r}",
+            S::NAME
+        );
+        assert!(!w.marbles()[0].out, "{}: fell through the slot", S::NAME);
+    }
+    let slices = w.stats.slices - before.slices;
+    let events = w.stats.events - before.events;
+    println!(
+        "{}: {slices} slices, {events} events in 256 frames",
+        S::NAME
+    );
+    assert!(
+        slices <= 4 * 256,
+        "{}: {slices} slices in 256 frames",
+        S::NAME
+    );
+    assert!(
+        events <= 4 * 256,
+        "{}: {events} events in 256 frames",
+        S::NAME
+    );
+}
+for_each_backend!(slot_rest_is_held_on_both_edges, slot_rest);

@@ -177,6 +177,9 @@ struct Flight<S> {
     idle: u32,
     /// A slice asked for (around this tile), started at the next flight.
     want: Option<TileIndex>,
+    /// The edge a pivot slice rolled round when a second edge ended it: the
+    /// slice asked for may be a rail slice on both (`pivot.rs`).
+    rail: Option<TileIndex>,
     /// How the slice asked for begins.
     around: Around,
     /// The slice under way.
@@ -196,6 +199,7 @@ impl<S: Scalar> Flight<S> {
             inelastic: false,
             idle: 0,
             want: None,
+            rail: None,
             around: Around::Slice,
             slice: None,
         }
@@ -379,8 +383,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if let Some(skip) = f.want.take() {
             let around = core::mem::replace(&mut f.around, Around::Slice);
             let pivot = around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, skip);
+            let rail = f.rail.take();
+            let rail = !pivot && rail.is_some_and(|first| self.rail_hold(m, f, first, skip));
             if pivot || around != Around::Rolling {
-                let len = if pivot {
+                let len = if pivot || rail {
                     self.pivot_len(m, f, skip)
                 } else {
                     self.slice_len(&f.seg).min(f.len)

@@ -150,4 +150,82 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             m.vel = wt.shl(T_LOG2);
         }
     }
+
+    /// Whether a marble resting on two parallel edges at once — over a slot, the
+    /// pull pressing it into both — is held by them; if so the flight keeps only
+    /// its parts along the edges (the rail) and the slice is bounded like a pivot
+    /// slice's, not by the sink.
+    ///
+    /// Two supports used to mean plain slices of `2^-5` step, short enough that
+    /// the pull sinks the marble at most `2^-12·r` into either edge before the
+    /// passes push it out: 32 slices and 32 touches a frame for a marble lying
+    /// still over a slot, every frame a hand on the board changes the pull by a
+    /// milli-g (380 k Cortex-M4 instructions; it never falls asleep). Held here
+    /// when the pull's part across the edges lies between the two normals
+    /// (`−h⊥ = λ₁n₁ + λ₂n₂`, `λ ≥ 0`: the edges' normal forces carry it all) and
+    /// the marble moves across them slower than the restitution threshold (a
+    /// resting contact: that motion is dropped, as a contact drops it). Moving
+    /// along the edges keeps the centre its distance from both: nothing to put
+    /// back at the slice's end.
+    pub(super) fn rail_hold(
+        &self,
+        m: &mut Marble<S>,
+        f: &mut Flight<S>,
+        first: TileIndex,
+        second: TileIndex,
+    ) -> bool {
+        let (Some((_, n1, Some(a1))), Some((_, n2, Some(a2)))) = (
+            self.pivot_point(m.pos, first),
+            self.pivot_point(m.pos, second),
+        ) else {
+            return false;
+        };
+        if a1 != a2 || first == second {
+            return false;
+        }
+        let p = &self.params;
+        let seg = f.seg;
+        // The two axes across the edges, and 2-D cross products in that plane:
+        // unit normals and a pull under 1 pitch/step² keep every product in range.
+        let (b, c) = match a1 {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        let cross =
+            |u: Vec3<S>, v: Vec3<S>| u.axis(b).times(v.axis(c)) - u.axis(c).times(v.axis(b));
+        // The pull across the edges presses into both...
+        let mut pull = seg.h;
+        pull.set_axis(a1, S::ZERO);
+        if pull.dot(n1) >= S::ZERO || pull.dot(n2) >= S::ZERO {
+            return false;
+        }
+        // ...and `−h⊥` lies between `n₁` and `n₂`: on the same side of each as
+        // the other.
+        let up = Vec3::ZERO - pull;
+        let (s12, s1u, su2) = (cross(n1, n2), cross(n1, up), cross(up, n2));
+        let same = |x: S| (x >= S::ZERO) == (s12 >= S::ZERO);
+        if s12 == S::ZERO || !same(s1u) || !same(su2) {
+            return false;
+        }
+        // Across the edges slower than the threshold (pitch/step, in squares).
+        let mut across = seg.u;
+        across.set_axis(a1, S::ZERO);
+        let w_t = if p.k >= T_LOG2 {
+            p.threshold.shr(p.k - T_LOG2)
+        } else {
+            p.threshold.shl(T_LOG2 - p.k)
+        };
+        if across.length_sq() > w_t.times(w_t) {
+            return false;
+        }
+        let along = |v: Vec3<S>| {
+            let mut o = Vec3::ZERO;
+            o.set_axis(a1, v.axis(a1));
+            o
+        };
+        m.vel = along(m.vel);
+        f.seg = Segment::new(m.pos, along(seg.v), along(seg.dv), along(seg.h), p.k);
+        true
+    }
 }

@@ -47,6 +47,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         };
         if let Some(t) = slice {
             f.idle = 0;
+            f.rail = match (ev, f.slice) {
+                (Event::Touch(c, _), Some(sl)) if sl.pivot && c.feature == Feature::Edge => {
+                    Some(sl.skip)
+                }
+                _ => None,
+            };
             if f.slice.is_some() {
                 // A slice under way ends here (its passes), the new one begins.
                 self.end_slice::<SPACE>(m, f);
