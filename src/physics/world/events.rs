@@ -140,6 +140,9 @@ struct Slice<S> {
     to: S,
     /// A pivot slice (`pivot.rs`): `skip` is an edge the marble rolls around.
     pivot: bool,
+    /// A rail slice (`pivot.rs`): the marble rests on `skip` and another edge
+    /// along the same axis.
+    rail: bool,
 }
 
 /// How a slice asked for around a tile begins.
@@ -384,7 +387,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             let around = core::mem::replace(&mut f.around, Around::Slice);
             let pivot = around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, skip);
             let rail = f.rail.take();
-            let rail = !pivot && rail.is_some_and(|first| self.rail_hold(m, f, first, skip));
+            let rail = !pivot
+                && skip != EVERY
+                && skip != LID
+                && rail.is_some_and(|first| self.rail_hold(m, f, first, skip));
             if pivot || around != Around::Rolling {
                 let len = if pivot || rail {
                     self.pivot_len(m, f, skip)
@@ -397,8 +403,19 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     from: f.t,
                     to: f.after(len),
                     pivot,
+                    rail,
                 });
                 self.stats.slices = self.stats.slices.wrapping_add(1);
+            }
+        } else if f.slice.is_some_and(|sl| sl.rail) {
+            // An event inside a rail slice (a bounce off a wall at its end, say)
+            // leaves the flight its whole pull again: the rest of the slice is a
+            // plain one, bounded by the sink (the storey property: a rail slice
+            // of 3/4 step went on after a bounce and sank the marble 3.4 % of r).
+            let to = f.after(self.slice_len(&f.seg).min(f.len));
+            if let Some(sl) = f.slice.as_mut() {
+                sl.rail = false;
+                sl.to = sl.to.min(to);
             }
         } else if let Some(sl) = f.slice.as_mut().filter(|sl| sl.pivot) {
             // A pivot slice goes on after an event inside it: the edge still holds
