@@ -19,9 +19,21 @@
 //! the [`Player`] type (a board links one), so the page holds either player
 //! ([`AnyPlayer`]); both cost the module their code, which a browser can spare.
 //!
+//! # Generated mazes and the ghost
+//!
+//! [`play_generated`] plays the maze of a seed from the core's generator
+//! (`game::generate`, with `cargo sim -- --generate`'s defaults), parsed from
+//! its text as the editor's level is, alone in its list: a win plays it again.
+//! Every attempt is written as a ghost while it plays ([`Recorder`], the
+//! core's `game::ghost` format); a win's ghost is handed to the page
+//! ([`finished_ghost_len`], [`record_ptr`]), which keeps the best per level in
+//! `localStorage` and hands it back at the next attempt ([`load_ghost`]): it
+//! is taken only if its replay wins the level on its recorded state hash, and
+//! then a second session fed its readings plays one frame per live frame.
+//!
 //! # Why no wasm-bindgen
 //!
-//! The interface is a few dozen numbers and two byte buffers, so it is plain
+//! The interface is numbers and a few byte buffers, so it is plain
 //! `extern "C"` functions over linear memory and a hand-written loader.
 //! wasm-bindgen would need its CLI at exactly the crate's version (a
 //! multi-minute `cargo install` on every fresh CI machine) and a generated JS
@@ -32,28 +44,34 @@
 //! # State without an allocator
 //!
 //! Everything lives in statics: the game (about what the firmware keeps in
-//! RAM) and the one level typed into the editor, parsed in place. A
+//! RAM), the one level typed into the editor (or generated), parsed in place,
+//! and three ghost buffers (the attempt's, the page's, the one on show). A
 //! `wasm32-unknown-unknown` module without the atomics feature runs on one
 //! thread, the page's, and every export runs to its end before the next one
 //! starts; `Single` states that. The other `unsafe` code reads the text
-//! buffer the page writes and keeps the editor's level (see `Custom`). A wrong input — a malformed level, an
-//! out-of-range index — is an answer (an error message, a zero), never a trap.
+//! buffer the page writes, keeps the editor's level (see `Custom`) and lends
+//! the ghost buffers to the ghost's writer and reader (see `Recorder`,
+//! `load_ghost`). A wrong input — a malformed level, an out-of-range index, a
+//! broken ghost — is an answer (an error message, a zero), never a trap.
 #![cfg_attr(target_arch = "wasm32", no_std)]
 
 use core::cell::{RefCell, UnsafeCell};
 use core::fmt::Write;
 
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
+use marble_rolling::game::generate::{generate, MAX_TEXT_BYTES};
+use marble_rolling::game::ghost::{replay, Ghost, GhostWriter, Readings};
 use marble_rolling::game::level::{
-    parse, text as level_text, Cell, Level, LevelError, LevelErrorKind, LevelView,
+    parse, text as level_text, Cell, Level, LevelError, LevelErrorKind, LevelView, MAX_MARBLES,
 };
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Tick;
 use marble_rolling::game::player::{Player, FRAME_HZ};
 use marble_rolling::game::rules::{Game, Phase};
-use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::input::event::Tilt;
 use marble_rolling::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
+use marble_rolling::physics::world::World;
 use marble_rolling::physics::{Fx, TileIndex};
 use marble_rolling::render;
 
@@ -103,8 +121,11 @@ impl AnyPlayer {
     fn level_index(&self) -> usize {
         each!(self, p => p.level_index())
     }
+    fn session(&self) -> &Session<'static, Fx> {
+        each!(self, p => p.session())
+    }
     fn state_hash(&self) -> u64 {
-        each!(self, p => p.session().state_hash())
+        self.session().state_hash()
     }
     fn reading(&self) -> [i32; 3] {
         each!(self, p => p.session().reading())
@@ -133,6 +154,17 @@ const TEXT_CAPACITY: usize = 32 * 1024;
 const OUT_CAPACITY: usize = 1024;
 /// The editor's level, then the built-in ones (`next level` goes on there).
 const CUSTOM_LIST: usize = 1 + LEVELS.len();
+/// Bytes of a ghost (its format: `marble_rolling::game::ghost`). The
+/// autopilot's runs take 188 to 279 B per second, a run with a sensor's noise
+/// 489 (docs/ghost.md): 64 KiB keep about four minutes, or two of the noisy
+/// run, longer than any built-in level's limit; a longer run leaves no ghost.
+const GHOST_CAPACITY: usize = 64 * 1024;
+/// `cargo sim -- --generate SEED`'s defaults (`src/host/generated.rs`, which
+/// the no_std build does not have): the same seed gives the same maze here.
+/// The browser test holds the page to that text.
+const DEFAULT_MAZE_SIZE: u8 = 6;
+const DEFAULT_MAZE_STOREYS: u8 = 1;
+const DEFAULT_MAZE_DIFFICULTY: u8 = 2;
 
 /// A value of this module's single thread (see the module doc).
 struct Single<T>(T);
@@ -153,11 +185,22 @@ static OUT: Single<RefCell<Out>> = Single(RefCell::new(Out {
 /// The editor's level (see [`Custom`]).
 static CUSTOM: Single<UnsafeCell<Custom>> = Single(UnsafeCell::new(Custom {
     text: [0; TEXT_CAPACITY],
+    len: 0,
     level: None,
     list: None,
 }));
 /// The game, set up by [`init`].
 static APP: Single<RefCell<Option<App>>> = Single(RefCell::new(None));
+/// Where the page writes a stored ghost for [`load_ghost`].
+static GHOST_IN: Single<UnsafeCell<[u8; GHOST_CAPACITY]>> =
+    Single(UnsafeCell::new([0; GHOST_CAPACITY]));
+/// The ghost on show, copied from [`GHOST_IN`]: its replay reads it frame by
+/// frame (see [`GhostRun`]).
+static GHOST: Single<UnsafeCell<[u8; GHOST_CAPACITY]>> =
+    Single(UnsafeCell::new([0; GHOST_CAPACITY]));
+/// The attempt in play, written as a ghost while it is played (see [`Recorder`]).
+static RECORD: Single<UnsafeCell<[u8; GHOST_CAPACITY]>> =
+    Single(UnsafeCell::new([0; GHOST_CAPACITY]));
 
 /// The level the editor started, kept where the player can borrow it for as
 /// long as it plays it: the player takes `'static` levels (the firmware's are
@@ -169,6 +212,8 @@ static APP: Single<RefCell<Option<App>>> = Single(RefCell::new(None));
 /// no reference into it is alive while it changes.
 struct Custom {
     text: [u8; TEXT_CAPACITY],
+    /// Bytes of `text` in use.
+    len: usize,
     level: Option<Level<'static, MAX_WORDS>>,
     list: Option<[LevelView<'static>; CUSTOM_LIST]>,
 }
@@ -209,25 +254,52 @@ struct Finished {
     /// Attempts finished since [`init`]: the page notices a new one by it.
     count: u32,
     level: u32,
-    custom: bool,
+    source: Source,
     phase: Phase,
     frames: u32,
     /// Frames on the level clock (the time a player is shown and a record keeps).
     clock: u32,
     hash: u64,
+    /// Bytes of the attempt's ghost in [`RECORD`] (a win played whole from its
+    /// first frame, that fitted); 0 for none.
+    ghost_len: u32,
+}
+
+/// Where the level list in play comes from.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Source {
+    /// The built-in levels.
+    Builtin,
+    /// The editor's level, then the built-in ones.
+    Editor,
+    /// A generated maze alone: a win plays it again, against the ghost of
+    /// that win if it is the best.
+    Generated(MazeArgs),
+}
+
+/// The arguments of [`generate`] a generated maze came from.
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct MazeArgs {
+    seed: u32,
+    size: u8,
+    storeys: u8,
+    difficulty: u8,
 }
 
 struct App {
     player: AnyPlayer,
     /// The level list in play (the built-ins, or the editor's level and them).
     levels: &'static [LevelView<'static>],
-    /// Whether the player's list starts with the editor's level.
-    custom: bool,
+    /// Where that list comes from.
+    source: Source,
     /// The page's tilt, as the accelerometer reading the player is fed.
     reading: [i32; 3],
     /// The matrix as the last frame drew it, row by row (brightness 0..=15).
     led: [u8; WIDTH * HEIGHT],
     finished: Finished,
+    recorder: Recorder,
+    /// The stored best run of the level in play, replayed beside it.
+    ghost: Option<GhostRun>,
 }
 
 impl App {
@@ -241,18 +313,25 @@ impl App {
         Some(App {
             player,
             levels: &LEVELS,
-            custom: false,
+            source: Source::Builtin,
             reading: Tilt::FLAT.reading_mg(),
             led: [0; WIDTH * HEIGHT],
             finished: Finished {
                 count: 0,
                 level: 0,
-                custom: false,
+                source: Source::Builtin,
                 phase: Phase::Playing,
                 frames: 0,
                 clock: 0,
                 hash: 0,
+                ghost_len: 0,
             },
+            recorder: Recorder::new(),
+            ghost: None,
+        })
+        .map(|mut app| {
+            app.recorder.start();
+            app
         })
     }
 
@@ -274,6 +353,9 @@ impl App {
             Some(player) => {
                 self.player = player;
                 self.levels = levels;
+                // Another level (or stepper): the ghost on show was not for it.
+                self.ghost = None;
+                self.recorder.start();
                 true
             }
             None => false,
@@ -288,38 +370,68 @@ impl App {
                 self.led[y * WIDTH..(y + 1) * WIDTH].copy_from_slice(row);
             }
         }
+        let moved_on = self.player.level_index() != level;
+        if moved_on {
+            self.ghost = None;
+        }
+        self.follow_attempt();
         let mut flags = 0;
         if let Some(phase) = tick.finished {
+            let ghost_len = match phase {
+                Phase::Won => self.recorder.finish(self.player.session()),
+                _ => 0,
+            };
             let game = self.player.game();
             self.finished = Finished {
                 count: self.finished.count.wrapping_add(1),
                 level: self.level_number(),
-                custom: self.is_custom_level(),
+                source: self.level_source(),
                 phase,
                 frames: game.frames(),
                 clock: game.clock_frames(),
                 hash: self.player.state_hash(),
+                ghost_len,
             };
             flags |= TICK_FINISHED;
         }
-        if self.player.level_index() != level || self.player.game().frames() == 0 {
+        if moved_on || self.player.game().frames() == 0 {
             flags |= TICK_NEW_ATTEMPT;
         }
         flags
     }
 
-    /// Whether the level in play is the editor's.
-    fn is_custom_level(&self) -> bool {
-        self.custom && self.player.level_index() == 0
+    /// After a frame (or a restart, a new level): the attempt's reading goes
+    /// into its ghost, and the ghost on show plays as far as the attempt.
+    fn follow_attempt(&mut self) {
+        let session = self.player.session();
+        self.recorder.observe(session);
+        if let Some(ghost) = &mut self.ghost {
+            ghost.follow(session.game().frames());
+        }
     }
 
-    /// The level in play as a built-in index (the editor's: the built-ins' count).
+    /// Where the level in play comes from (the built-ins after the editor's
+    /// level are built-in).
+    fn level_source(&self) -> Source {
+        match self.source {
+            Source::Editor if self.player.level_index() > 0 => Source::Builtin,
+            source => source,
+        }
+    }
+
+    /// Whether the level in play is the editor's.
+    fn is_custom_level(&self) -> bool {
+        self.level_source() == Source::Editor
+    }
+
+    /// The level in play as a built-in index (the editor's or a generated
+    /// maze: the built-ins' count).
     fn level_number(&self) -> u32 {
         let index = self.player.level_index();
-        let builtin = if self.custom {
-            index.checked_sub(1)
-        } else {
-            Some(index)
+        let builtin = match self.source {
+            Source::Builtin => Some(index),
+            Source::Editor => index.checked_sub(1),
+            Source::Generated(_) => None,
         };
         builtin.unwrap_or(LEVELS.len()) as u32
     }
@@ -327,6 +439,181 @@ impl App {
     fn level(&self) -> &LevelView<'static> {
         self.player.game().level()
     }
+}
+
+/// The attempt in play, written as a ghost frame by frame into [`RECORD`]: a
+/// win is then a ghost already, without a copy of its readings.
+struct Recorder {
+    writer: Option<GhostWriter<'static>>,
+    /// Frames of the attempt seen so far.
+    frames: u32,
+    /// The writer has every reading of the attempt from its first frame.
+    whole: bool,
+}
+
+impl Recorder {
+    fn new() -> Self {
+        Recorder {
+            writer: None,
+            frames: 0,
+            whole: false,
+        }
+    }
+
+    /// Starts over, for an attempt at its first frame.
+    fn start(&mut self) {
+        // The old writer goes first: it holds the only reference into RECORD.
+        self.writer = None;
+        // SAFETY: single thread (see `Single`). The writer just dropped was
+        // the only reference into RECORD (a finished ghost is handed out as a
+        // length, its slice dropped at once), so this one is alone.
+        let buf: &'static mut [u8; GHOST_CAPACITY] = unsafe { &mut *RECORD.0.get() };
+        self.writer = GhostWriter::new(buf).ok();
+        self.frames = 0;
+        self.whole = self.writer.is_some();
+    }
+
+    /// After a frame, a restart or a new level: keeps the frame's reading.
+    fn observe(&mut self, session: &Session<'static, Fx>) {
+        let frames = session.game().frames();
+        if frames == 0 {
+            if self.frames != 0 || self.writer.is_none() {
+                self.start();
+            }
+            return;
+        }
+        if frames == self.frames {
+            // A finished attempt on show: no frame played.
+            return;
+        }
+        let pushed = frames == self.frames + 1
+            && self
+                .writer
+                .as_mut()
+                .is_some_and(|w| w.push(session.reading()).is_ok());
+        // A frame missed, or no room left: this attempt leaves no ghost.
+        self.whole &= pushed;
+        self.frames = frames;
+    }
+
+    /// The ghost of the attempt that just ended (a win) in [`RECORD`]: its
+    /// length, or 0 if the attempt was not kept whole.
+    fn finish(&mut self, session: &Session<'static, Fx>) -> u32 {
+        let Some(writer) = self.writer.take() else {
+            return 0;
+        };
+        if !self.whole || writer.frames() != session.game().frames() {
+            return 0;
+        }
+        writer
+            .finish(session.state_hash(), session.tilt().calibration())
+            .map_or(0, |bytes| bytes.len() as u32)
+    }
+}
+
+/// A stored ghost played beside the live game, one frame per live frame.
+struct GhostRun {
+    session: Session<'static, Fx>,
+    ghost: Ghost<'static>,
+    readings: Readings<'static>,
+    /// Its time on the level clock, frames (measured by the replay that
+    /// checked it).
+    clock: u32,
+}
+
+impl GhostRun {
+    /// Plays the ghost as far as frame `frames` of the live attempt (from its
+    /// start again if the live game started over), or to its end.
+    fn follow(&mut self, frames: u32) {
+        if frames < self.session.game().frames() {
+            // A restart keeps the calibration, the ghost's.
+            self.session.restart();
+            self.readings = self.ghost.readings();
+        }
+        while self.session.game().frames() < frames && self.session.game().phase() == Phase::Playing
+        {
+            match self.readings.next() {
+                Some(Ok(reading)) => {
+                    self.session.frame(reading);
+                }
+                // Checked when loaded: the readings neither end early nor break.
+                _ => break,
+            }
+        }
+    }
+}
+
+/// A [`Write`] into a byte buffer that fails, rather than cut the text, when
+/// it is full (a cut level text would be another level).
+struct Cursor<'a> {
+    bytes: &'a mut [u8],
+    len: usize,
+}
+
+impl Write for Cursor<'_> {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        let end = self.len + s.len();
+        let slot = self.bytes.get_mut(self.len..end).ok_or(core::fmt::Error)?;
+        slot.copy_from_slice(s.as_bytes());
+        self.len = end;
+        Ok(())
+    }
+}
+
+/// Writes the maze's level text into [`TEXT`]: its length, or the length of
+/// the generator's error in the answer buffer.
+fn generated_text(maze: MazeArgs) -> Result<u32, u32> {
+    let generated = generate(maze.seed, maze.size, maze.storeys, maze.difficulty)
+        .map_err(|e| answer(format_args!("{e}")))?;
+    // SAFETY: single thread (see `Single`); no reference into TEXT is alive
+    // between calls, and this one ends here.
+    let bytes: &mut [u8; TEXT_CAPACITY] = unsafe { &mut *TEXT.0.get() };
+    let mut cursor = Cursor { bytes, len: 0 };
+    write!(cursor, "{generated}").map_err(|_| {
+        answer(format_args!(
+            "internal error: maze {} is longer than {MAX_TEXT_BYTES} bytes",
+            maze.seed
+        ))
+    })?;
+    Ok(cursor.len as u32)
+}
+
+/// A `u32` argument as a `u8` one (too large: `u8::MAX`, which every range
+/// check of [`generate`] refuses with its range).
+fn small(n: u32) -> u8 {
+    u8::try_from(n).unwrap_or(u8::MAX)
+}
+
+type WebWorld = World<'static, Fx, MAX_MARBLES>;
+
+/// Coordinate `axis` (0 x, 1 y, 2 z) of marble `index` in `world`, mm (0 for none).
+fn marble_coord(world: &WebWorld, index: u32, axis: u32) -> f64 {
+    let Some(marble) = world.marbles().get(index as usize) else {
+        return 0.0;
+    };
+    let value = match axis {
+        0 => marble.pos.x,
+        1 => marble.pos.y,
+        _ => marble.pos.z,
+    };
+    world.params().layout.to_mm(value)
+}
+
+/// The storey marble `index` of `world` is on, within the level's `storeys`.
+fn storey_of(world: &WebWorld, index: u32, storeys: u8) -> u32 {
+    world.marbles().get(index as usize).map_or(0, |m| {
+        let storeys = i32::from(storeys).max(1);
+        world
+            .params()
+            .layout
+            .storey_of(m.pos.y)
+            .clamp(0, storeys - 1) as u32
+    })
+}
+
+/// Whether marble `index` of `world` is out of play (or there is none).
+fn is_out(world: &WebWorld, index: u32) -> bool {
+    world.marbles().get(index as usize).is_none_or(|m| m.out)
 }
 
 /// [`tick`]'s result bit: an attempt finished in this frame.
@@ -342,23 +629,29 @@ fn with_app<R>(default: R, f: impl FnOnce(&mut App) -> R) -> R {
     }
 }
 
-/// Puts `text` in [`CUSTOM`] and returns the list it heads.
+/// Puts `text` in [`CUSTOM`] and returns the list it heads: with the built-in
+/// levels after it, or `alone`.
 ///
 /// # Safety
 ///
 /// No reference into [`CUSTOM`] may be alive: the player must be on a built-in
 /// level (see [`Custom`]).
-unsafe fn install_custom(text: &str) -> Result<&'static [LevelView<'static>], LevelError> {
+unsafe fn install_custom(
+    text: &str,
+    alone: bool,
+) -> Result<&'static [LevelView<'static>], LevelError> {
     // SAFETY: the caller guarantees nothing borrows CUSTOM; from here on the
     // level and list borrow it for as long as the next player plays them, and
     // the next install replaces that player first.
     let Custom {
         text: stored,
+        len,
         level,
         list,
     }: &'static mut Custom = unsafe { &mut *CUSTOM.0.get() };
     *level = None;
     *list = None;
+    *len = 0;
     // `text` comes from TEXT, which is no larger: this only keeps a slip from trapping.
     let Some(stored) = stored.get_mut(..text.len()) else {
         return Err(LevelError {
@@ -368,13 +661,15 @@ unsafe fn install_custom(text: &str) -> Result<&'static [LevelView<'static>], Le
         });
     };
     stored.copy_from_slice(text.as_bytes());
+    *len = text.len();
     let stored: &'static [u8] = stored;
     // The bytes are `text`'s, which is UTF-8.
     let stored = core::str::from_utf8(stored).unwrap_or_default();
     let level: &'static Level<'static, MAX_WORDS> = level.insert(parse(stored)?);
     let mut views = [level.view(); CUSTOM_LIST];
     views[1..].copy_from_slice(&LEVELS);
-    Ok(list.insert(views))
+    let list: &'static [LevelView<'static>] = list.insert(views);
+    Ok(if alone { &list[..1] } else { list })
 }
 
 /// Why text from the page is not even a level to parse.
@@ -529,7 +824,7 @@ pub extern "C" fn select_level(index: u32) -> u32 {
         }
         let ok = app.start(&LEVELS, index as usize);
         if ok {
-            app.custom = false;
+            app.source = Source::Builtin;
         }
         ok as u32
     })
@@ -538,13 +833,23 @@ pub extern "C" fn select_level(index: u32) -> u32 {
 /// Starts the level over.
 #[no_mangle]
 pub extern "C" fn restart() {
-    with_app((), |app| app.player.restart())
+    with_app((), |app| {
+        app.player.restart();
+        app.follow_attempt();
+    })
 }
 
 /// Moves on to the next level (after the last built-in: the first).
 #[no_mangle]
 pub extern "C" fn next_level() {
-    with_app((), |app| app.player.next_level())
+    with_app((), |app| {
+        let level = app.player.level_index();
+        app.player.next_level();
+        if app.player.level_index() != level {
+            app.ghost = None;
+        }
+        app.follow_attempt();
+    })
 }
 
 /// Hands the board to the autopilot (`on` ≠ 0) or takes it back.
@@ -593,32 +898,36 @@ pub extern "C" fn check_level(len: u32) -> u32 {
 /// same rules) is reported too, and the game goes on where it was.
 #[no_mangle]
 pub extern "C" fn play_level(len: u32) -> u32 {
-    let source = match checked(len) {
-        Ok(source) => source,
-        Err(error) => return error_answer(error),
+    match checked(len) {
+        Ok(source) => with_app(0, |app| play_source(app, source, Source::Editor)),
+        Err(error) => error_answer(error),
+    }
+}
+
+/// Plays `source` (valid level text) as the level from `kind` (the editor's
+/// or a generated maze): 0, or the length of the error in the answer buffer.
+fn play_source(app: &mut App, source: &'static str, kind: Source) -> u32 {
+    let resume = app.level_number() as usize;
+    // First off the editor's old level: nothing may borrow it while it changes.
+    if !app.start(&LEVELS, 0) {
+        return answer(format_args!("1:1: the built-in levels cannot be set up"));
+    }
+    app.source = Source::Builtin;
+    let alone = matches!(kind, Source::Generated(_));
+    // SAFETY: the player is on a built-in level, so nothing borrows CUSTOM.
+    let list = match unsafe { install_custom(source, alone) } {
+        Ok(list) => list,
+        Err(error) => return error_answer(TextError::Level(error)),
     };
-    with_app(0, |app| {
-        let resume = app.level_number() as usize;
-        // First off the editor's old level: nothing may borrow it while it changes.
-        if !app.start(&LEVELS, 0) {
-            return answer(format_args!("1:1: the built-in levels cannot be set up"));
-        }
-        app.custom = false;
-        // SAFETY: the player is on a built-in level, so nothing borrows CUSTOM.
-        let list = match unsafe { install_custom(source) } {
-            Ok(list) => list,
-            Err(error) => return error_answer(TextError::Level(error)),
-        };
-        if app.start(list, 0) {
-            app.custom = true;
-            0
-        } else {
-            app.start(&LEVELS, resume.min(LEVELS.len() - 1));
-            answer(format_args!(
-                "1:1: the level cannot be set up by the physics"
-            ))
-        }
-    })
+    if app.start(list, 0) {
+        app.source = kind;
+        0
+    } else {
+        app.start(&LEVELS, resume.min(LEVELS.len() - 1));
+        answer(format_args!(
+            "1:1: the level cannot be set up by the physics"
+        ))
+    }
 }
 
 /// 1 while the editor's level is the one in play.
@@ -712,7 +1021,23 @@ pub extern "C" fn finished_level() -> u32 {
 /// 1 if the last finished attempt was on the editor's level.
 #[no_mangle]
 pub extern "C" fn finished_custom() -> u32 {
-    with_app(0, |app| app.finished.custom as u32)
+    with_app(0, |app| (app.finished.source == Source::Editor) as u32)
+}
+
+/// 1 if the last finished attempt was on a generated maze.
+#[no_mangle]
+pub extern "C" fn finished_generated() -> u32 {
+    with_app(0, |app| {
+        matches!(app.finished.source, Source::Generated(_)) as u32
+    })
+}
+
+/// Bytes of the last finished attempt's ghost at [`record_ptr`]: a win played
+/// whole from its first frame (0 for a loss, or a run longer than the buffer
+/// holds). They stay there until the next attempt starts.
+#[no_mangle]
+pub extern "C" fn finished_ghost_len() -> u32 {
+    with_app(0, |app| app.finished.ghost_len)
 }
 
 /// How the last finished attempt ended (as [`phase`]).
@@ -793,15 +1118,7 @@ pub extern "C" fn tile_kind(i: u32, k: u32, storey: u32) -> u32 {
 #[no_mangle]
 pub extern "C" fn marble_storey(index: u32) -> u32 {
     with_app(0, |app| {
-        let world = app.player.game().world();
-        world.marbles().get(index as usize).map_or(0, |m| {
-            let storeys = i32::from(app.level().info.storeys).max(1);
-            world
-                .params()
-                .layout
-                .storey_of(m.pos.y)
-                .clamp(0, storeys - 1) as u32
-        })
+        storey_of(app.player.game().world(), index, app.level().info.storeys)
     })
 }
 
@@ -862,25 +1179,301 @@ pub extern "C" fn marble_count() -> u32 {
 #[no_mangle]
 pub extern "C" fn marble_mm(index: u32, axis: u32) -> f64 {
     with_app(0.0, |app| {
-        let world = app.player.game().world();
-        let Some(marble) = world.marbles().get(index as usize) else {
-            return 0.0;
-        };
-        let value = match axis {
-            0 => marble.pos.x,
-            1 => marble.pos.y,
-            _ => marble.pos.z,
-        };
-        world.params().layout.to_mm(value)
+        marble_coord(app.player.game().world(), index, axis)
     })
 }
 
 /// 1 if marble `index` is out of play (fell).
 #[no_mangle]
 pub extern "C" fn marble_out(index: u32) -> u32 {
+    with_app(1, |app| is_out(app.player.game().world(), index) as u32)
+}
+
+// ---------------------------------------------------------------------------
+// Generated mazes.
+// ---------------------------------------------------------------------------
+
+/// `cargo sim -- --generate`'s default maze size (cells a side).
+#[no_mangle]
+pub extern "C" fn default_maze_size() -> u32 {
+    u32::from(DEFAULT_MAZE_SIZE)
+}
+
+/// `cargo sim -- --generate`'s default storeys.
+#[no_mangle]
+pub extern "C" fn default_maze_storeys() -> u32 {
+    u32::from(DEFAULT_MAZE_STOREYS)
+}
+
+/// `cargo sim -- --generate`'s default difficulty.
+#[no_mangle]
+pub extern "C" fn default_maze_difficulty() -> u32 {
+    u32::from(DEFAULT_MAZE_DIFFICULTY)
+}
+
+/// Generates the maze of `seed` (`marble_rolling::game::generate`, as
+/// `cargo sim -- --generate SEED --size SIZE --storeys STOREYS --difficulty
+/// DIFFICULTY` does) and writes its level text into [`text_ptr`]'s buffer:
+/// its length; or, negated, the length of the generator's error (an argument
+/// out of its range, which it names) in the answer buffer.
+#[no_mangle]
+pub extern "C" fn generate_level(seed: u32, size: u32, storeys: u32, difficulty: u32) -> i32 {
+    let maze = MazeArgs {
+        seed,
+        size: small(size),
+        storeys: small(storeys),
+        difficulty: small(difficulty),
+    };
+    match generated_text(maze) {
+        Ok(len) => len as i32,
+        Err(len) => -(len as i32),
+    }
+}
+
+/// Plays the maze of [`generate_level`] alone (a win plays it again): 0, or
+/// the length of the error in the answer buffer (the game goes on where it
+/// was). Its text stays at [`source_text_ptr`].
+#[no_mangle]
+pub extern "C" fn play_generated(seed: u32, size: u32, storeys: u32, difficulty: u32) -> u32 {
+    let maze = MazeArgs {
+        seed,
+        size: small(size),
+        storeys: small(storeys),
+        difficulty: small(difficulty),
+    };
+    let len = match generated_text(maze) {
+        Ok(len) => len,
+        Err(len) => return len,
+    };
+    let source = match checked(len) {
+        Ok(source) => source,
+        Err(error) => {
+            return answer(format_args!(
+                "internal error: generated maze {seed} does not parse: {error}"
+            ))
+        }
+    };
+    with_app(0, |app| play_source(app, source, Source::Generated(maze)))
+}
+
+/// The text of the editor's level or generated maze last played (see
+/// [`source_text_len`]).
+#[no_mangle]
+pub extern "C" fn source_text_ptr() -> *const u8 {
+    // SAFETY: only the address is taken; the page reads it between calls.
+    unsafe { (*CUSTOM.0.get()).text.as_ptr() }
+}
+
+/// Bytes at [`source_text_ptr`].
+#[no_mangle]
+pub extern "C" fn source_text_len() -> u32 {
+    // SAFETY: single thread (see `Single`); a read of a number between calls.
+    unsafe { (*CUSTOM.0.get()).len as u32 }
+}
+
+/// The generated maze in play: its argument `what` (0 seed, 1 size, 2
+/// storeys, 3 difficulty); 0 if the level in play is not a generated maze.
+#[no_mangle]
+pub extern "C" fn level_maze(what: u32) -> u32 {
+    with_app(0, |app| match app.level_source() {
+        Source::Generated(maze) => match what {
+            0 => maze.seed,
+            1 => u32::from(maze.size),
+            2 => u32::from(maze.storeys),
+            _ => u32::from(maze.difficulty),
+        },
+        _ => 0,
+    })
+}
+
+/// 1 while a generated maze is in play.
+#[no_mangle]
+pub extern "C" fn level_is_generated() -> u32 {
+    with_app(0, |app| {
+        matches!(app.level_source(), Source::Generated(_)) as u32
+    })
+}
+
+// ---------------------------------------------------------------------------
+// The ghost: the best run of a level, replayed beside the next attempt.
+// ---------------------------------------------------------------------------
+
+/// Where the last win's ghost is ([`finished_ghost_len`] bytes).
+#[no_mangle]
+pub extern "C" fn record_ptr() -> *const u8 {
+    RECORD.0.get().cast()
+}
+
+/// Where the page writes a stored ghost for [`load_ghost`].
+#[no_mangle]
+pub extern "C" fn ghost_in_ptr() -> *mut u8 {
+    GHOST_IN.0.get().cast()
+}
+
+/// Bytes a ghost can have.
+#[no_mangle]
+pub extern "C" fn ghost_capacity() -> u32 {
+    GHOST_CAPACITY as u32
+}
+
+/// Takes the `len` bytes at [`ghost_in_ptr`] as the ghost of the level in
+/// play, if its replay (with the stepper in play) wins the level and ends on
+/// the ghost's state hash; it then plays beside the attempt, from the
+/// attempt's frame. 0, or the length of why not in the answer buffer (a
+/// ghost of another build, level or stepper; the page then forgets it).
+#[no_mangle]
+pub extern "C" fn load_ghost(len: u32) -> u32 {
+    with_app(0, |app| {
+        // Nothing borrows GHOST from here on.
+        app.ghost = None;
+        // SAFETY: single thread; the page writes GHOST_IN only between calls.
+        let input: &[u8; GHOST_CAPACITY] = unsafe { &*GHOST_IN.0.get() };
+        let Some(bytes) = input.get(..len as usize) else {
+            return answer(format_args!("a ghost is at most {GHOST_CAPACITY} bytes"));
+        };
+        // SAFETY: the ghost just dropped was the only reference into GHOST;
+        // from here on the new one borrows it until the next load or clear.
+        let stored: &'static mut [u8; GHOST_CAPACITY] = unsafe { &mut *GHOST.0.get() };
+        stored[..bytes.len()].copy_from_slice(bytes);
+        let stored: &'static [u8] = &stored[..bytes.len()];
+        let ghost = match Ghost::parse(stored) {
+            Ok(ghost) => ghost,
+            Err(e) => return answer(format_args!("{e}")),
+        };
+        let level = *app.level();
+        let config = app.player.game().config();
+        let (Ok(mut check), Ok(mut session)) = (
+            Session::<Fx>::new(level, config, SYNTHETIC_TILT),
+            Session::<Fx>::new(level, config, SYNTHETIC_TILT),
+        ) else {
+            return answer(format_args!("the level cannot be set up for the ghost"));
+        };
+        match replay(&mut check, &ghost) {
+            Ok((Phase::Won, true)) => {}
+            Ok((phase, same)) => {
+                return answer(format_args!(
+                    "the ghost's replay ends {} after {} frames{}: not a run of this level",
+                    match phase {
+                        Phase::Won => "won",
+                        Phase::Playing => "unfinished",
+                        Phase::Fell => "fallen",
+                        Phase::TimeUp => "timed out",
+                    },
+                    check.game().frames(),
+                    if same { "" } else { " on another state hash" }
+                ))
+            }
+            Err(e) => return answer(format_args!("{e}")),
+        }
+        session.tilt_mut().set_calibration(ghost.calibration);
+        let mut run = GhostRun {
+            session,
+            ghost,
+            readings: ghost.readings(),
+            clock: check.game().clock_frames(),
+        };
+        run.follow(app.player.game().frames());
+        app.ghost = Some(run);
+        0
+    })
+}
+
+/// Drops the ghost on show.
+#[no_mangle]
+pub extern "C" fn clear_ghost() {
+    with_app((), |app| app.ghost = None)
+}
+
+/// 1 while a ghost plays beside the attempt.
+#[no_mangle]
+pub extern "C" fn ghost_active() -> u32 {
+    with_app(0, |app| app.ghost.is_some() as u32)
+}
+
+/// The ghost's recorded run: `what` 0 its frames, 1 its time on the level
+/// clock (frames); 0 without a ghost.
+#[no_mangle]
+pub extern "C" fn ghost_record(what: u32) -> u32 {
+    with_app(0, |app| {
+        app.ghost.as_ref().map_or(0, |g| match what {
+            0 => g.ghost.frames,
+            _ => g.clock,
+        })
+    })
+}
+
+/// The state hash the ghost's run ended on (its header's).
+#[no_mangle]
+pub extern "C" fn ghost_record_hash() -> u64 {
+    with_app(0, |app| {
+        app.ghost.as_ref().map_or(0, |g| g.ghost.state_hash)
+    })
+}
+
+/// Frames the ghost has played so far in this attempt.
+#[no_mangle]
+pub extern "C" fn ghost_frames() -> u32 {
+    with_app(0, |app| {
+        app.ghost.as_ref().map_or(0, |g| g.session.game().frames())
+    })
+}
+
+/// Where the ghost's replay stands (as [`phase`]).
+#[no_mangle]
+pub extern "C" fn ghost_phase() -> u32 {
+    with_app(0, |app| {
+        app.ghost
+            .as_ref()
+            .map_or(0, |g| phase_code(g.session.game().phase()))
+    })
+}
+
+/// The ghost's replay's state hash now: the record's once it has ended.
+#[no_mangle]
+pub extern "C" fn ghost_state_hash() -> u64 {
+    with_app(0, |app| {
+        app.ghost.as_ref().map_or(0, |g| g.session.state_hash())
+    })
+}
+
+/// Marbles of the ghost (0 without one).
+#[no_mangle]
+pub extern "C" fn ghost_marble_count() -> u32 {
+    with_app(0, |app| {
+        app.ghost
+            .as_ref()
+            .map_or(0, |g| g.session.game().world().marbles().len() as u32)
+    })
+}
+
+/// As [`marble_mm`], for the ghost's marble `index`.
+#[no_mangle]
+pub extern "C" fn ghost_marble_mm(index: u32, axis: u32) -> f64 {
+    with_app(0.0, |app| {
+        app.ghost
+            .as_ref()
+            .map_or(0.0, |g| marble_coord(g.session.game().world(), index, axis))
+    })
+}
+
+/// As [`marble_out`], for the ghost's marble `index`.
+#[no_mangle]
+pub extern "C" fn ghost_marble_out(index: u32) -> u32 {
     with_app(1, |app| {
-        let marbles = app.player.game().world().marbles();
-        marbles.get(index as usize).is_none_or(|m| m.out) as u32
+        app.ghost
+            .as_ref()
+            .is_none_or(|g| is_out(g.session.game().world(), index)) as u32
+    })
+}
+
+/// As [`marble_storey`], for the ghost's marble `index`.
+#[no_mangle]
+pub extern "C" fn ghost_marble_storey(index: u32) -> u32 {
+    with_app(0, |app| {
+        let storeys = app.level().info.storeys;
+        app.ghost
+            .as_ref()
+            .map_or(0, |g| storey_of(g.session.game().world(), index, storeys))
     })
 }
 

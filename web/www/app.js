@@ -19,6 +19,8 @@ const ORIENTATION_MAX_MG = 600;
 const MAX_CATCH_UP = 8;
 // Frames whose mean cost the HUD shows.
 const COST_WINDOW = 256;
+// The ghost marble's opacity: dimmer than the live one, which is drawn opaque.
+const GHOST_ALPHA = 0.4;
 
 const PHASES = ['playing', 'won', 'fell', 'timeout'];
 const PHASE_WON = 1;
@@ -42,6 +44,9 @@ let boardCache = null; // the storeys on show drawn at the canvas's size: { key,
 // The storey the followed marble (the first in play, as the LEDs follow it)
 // was on after the last frame, and the frame it last dropped to a lower one.
 const drop = { storey: null, at: null };
+// The stored ghost the module plays (its storage key and base64), so that a
+// restart does not load and check it again.
+let ghostShown = null;
 
 async function load() {
   const response = fetch('marble_web.wasm');
@@ -109,6 +114,7 @@ function onKey(event, down) {
     case 'KeyR': restart(); break;
     case 'KeyN': nextLevel(); break;
     case 'KeyP': toggleAutopilot(); break;
+    case 'KeyM': newMaze(); break;
     default: return;
   }
   event.preventDefault();
@@ -286,18 +292,19 @@ function finished() {
   const name = levelName();
   const time = `${seconds.toFixed(2)} s`;
   if (phase === PHASE_WON) {
+    const ghost = saveGhost() ? ' · ghost saved' : '';
     // The best time is a person's: the autopilot's runs do not count.
     if (!w.autopilot()) {
       const key = bestKey();
       const best = Number(localStorage.getItem(key));
       if (!best || seconds < best) {
         localStorage.setItem(key, seconds.toFixed(3));
-        status(`${name}: won in ${time}, a new best!`);
+        status(`${name}: won in ${time}, a new best!${ghost}`);
       } else {
-        status(`${name}: won in ${time} (best ${best.toFixed(2)} s)`);
+        status(`${name}: won in ${time} (best ${best.toFixed(2)} s)${ghost}`);
       }
     } else {
-      status(`${name}: the autopilot won in ${time}`);
+      status(`${name}: the autopilot won in ${time}${ghost}`);
     }
   } else if (phase === 2) {
     status(`${name}: fell into a hole after ${time}, again`);
@@ -310,6 +317,162 @@ function bestKey() {
   return `marble-rolling.best.${w.level_is_custom() ? 'editor:' : ''}${levelName()}`;
 }
 
+// --- the ghost ------------------------------------------------------------------
+
+// Where the level's ghost is kept: by stepper (a run replays only on the one
+// it was played with) and level name (a generated maze's holds its seed, size,
+// storeys and difficulty).
+function ghostKey() {
+  const stepping = w.stepping_events() ? 'events' : 'fixed';
+  return `marble-rolling.ghost.${stepping}.${w.level_is_custom() ? 'editor:' : ''}${levelName()}`;
+}
+
+function storedGhost() {
+  try {
+    const entry = JSON.parse(localStorage.getItem(ghostKey()));
+    return entry && typeof entry.ghost === 'string' && Number.isFinite(entry.clock) ? entry : null;
+  } catch {
+    return null;
+  }
+}
+
+function toBase64(bytes) {
+  let binary = '';
+  for (let i = 0; i < bytes.length; i += 0x8000) {
+    binary += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+  }
+  return btoa(binary);
+}
+
+function fromBase64(text) {
+  const binary = atob(text);
+  const bytes = new Uint8Array(binary.length);
+  for (let i = 0; i < binary.length; i++) bytes[i] = binary.charCodeAt(i);
+  return bytes;
+}
+
+// The win just finished, kept as the level's ghost if it is the first or
+// faster on the clock than the one kept (the autopilot's runs too: racing its
+// line is a fair challenge, and the HUD says whose run it is). True if kept.
+function saveGhost() {
+  const len = w.finished_ghost_len();
+  if (!len) return false;
+  const clock = w.finished_clock();
+  const kept = storedGhost();
+  if (kept && kept.clock <= clock) return false;
+  const bytes = new Uint8Array(w.memory.buffer, w.record_ptr(), len);
+  const entry = { clock, frames: w.finished_frames(), by: w.autopilot() ? 'autopilot' : 'you', ghost: toBase64(bytes) };
+  try {
+    localStorage.setItem(ghostKey(), JSON.stringify(entry));
+  } catch (e) {
+    // Storage full (or off): the run is not kept, the game goes on.
+    return false;
+  }
+  return true;
+}
+
+// Hands the level's stored ghost to the module (it checks that its replay
+// wins this level on its hash; one that does not is forgotten), or drops the
+// one on show if there is none.
+function showGhost() {
+  const key = ghostKey();
+  const entry = storedGhost();
+  if (!entry) {
+    w.clear_ghost();
+    ghostShown = null;
+    return;
+  }
+  if (w.ghost_active() && ghostShown === `${key} ${entry.ghost}`) return;
+  ghostShown = null;
+  const bytes = fromBase64(entry.ghost);
+  if (bytes.length > w.ghost_capacity()) {
+    localStorage.removeItem(key);
+    w.clear_ghost();
+    return;
+  }
+  new Uint8Array(w.memory.buffer, w.ghost_in_ptr(), bytes.length).set(bytes);
+  const err = w.load_ghost(bytes.length);
+  if (err) {
+    // From another build or an edited level: the next win replaces it.
+    localStorage.removeItem(key);
+    console.info(`ghost of ${levelName()} dropped: ${answer(err)}`);
+    return;
+  }
+  ghostShown = `${key} ${entry.ghost}`;
+}
+
+function ghostNote() {
+  if (!w.ghost_active()) return 'win to leave one';
+  const entry = storedGhost();
+  const by = entry && entry.by === 'autopilot' ? ' (autopilot)' : '';
+  return `${(w.ghost_record(1) / hz).toFixed(2)} s${by}`;
+}
+
+// --- generated mazes ------------------------------------------------------------
+
+// The maze of `seed` (the arguments of `cargo sim -- --generate`; those not
+// given take its defaults): true if it plays, else the generator's message.
+function playMaze(seed, { size, storeys, difficulty } = {}) {
+  const err = w.play_generated(seed >>> 0, size ?? w.default_maze_size(),
+    storeys ?? w.default_maze_storeys(), difficulty ?? w.default_maze_difficulty());
+  if (err) {
+    status(`maze ${seed}: ${answer(err)}`);
+    return false;
+  }
+  newAttempt();
+  status(`maze ${seed}: ${level.name}, generated (the URL plays it again)`);
+  return true;
+}
+
+// A new seed (the browser's random numbers), with the storeys picked beside
+// the button and the size and difficulty of the maze in play, if one is.
+function newMaze() {
+  const seed = crypto.getRandomValues(new Uint32Array(1))[0];
+  const generated = w.level_is_generated();
+  playMaze(seed, {
+    storeys: Number($('maze-storeys').value),
+    size: generated ? w.level_maze(1) : undefined,
+    difficulty: generated ? w.level_maze(3) : undefined,
+  });
+}
+
+// The URL says which maze is in play (`?seed=N&storeys=S`, size and
+// difficulty when not the defaults), so it can be bookmarked or shared; for
+// the other levels it has no query.
+function updateUrl() {
+  const url = new URL(window.location.href);
+  url.search = '';
+  if (w.level_is_generated()) {
+    url.searchParams.set('seed', String(w.level_maze(0)));
+    url.searchParams.set('storeys', String(w.level_maze(2)));
+    if (w.level_maze(1) !== w.default_maze_size()) url.searchParams.set('size', String(w.level_maze(1)));
+    if (w.level_maze(3) !== w.default_maze_difficulty()) url.searchParams.set('difficulty', String(w.level_maze(3)));
+  }
+  if (url.href !== window.location.href) history.replaceState(null, '', url);
+}
+
+// The maze a URL asks for: `seed` (0 ..= 4294967295) and the other arguments
+// as whole numbers; none if there is no seed; an error message if malformed.
+function mazeFromUrl() {
+  const params = new URLSearchParams(window.location.search);
+  if (!params.has('seed')) return null;
+  const whole = (name, max) => {
+    if (!params.has(name)) return undefined;
+    const text = params.get(name);
+    const n = Number(text);
+    if (!/^\d+$/.test(text) || n > max) throw new Error(`${name}=${text} in the URL is not a whole number 0 ..= ${max}`);
+    return n;
+  };
+  try {
+    return {
+      seed: whole('seed', 0xffffffff),
+      size: whole('size', 255), storeys: whole('storeys', 255), difficulty: whole('difficulty', 255),
+    };
+  } catch (e) {
+    return { error: e.message };
+  }
+}
+
 // A new level or a restart: its geometry, the picker, the best time; held
 // input is let go at a new level.
 function newAttempt() {
@@ -319,7 +482,9 @@ function newAttempt() {
   for (let i = 0; i < edges.length; i++) edges[i] = w.tile_edge_mm(i);
   const name = levelName();
   const index = w.level_is_custom() ? -1 : w.level_index();
-  if (level && (level.index !== index || level.name !== name)) releaseInput();
+  // Also after a win on the same level (a generated maze plays again).
+  const won = level && w.finished_count() !== level.finishedCount && w.finished_phase() === PHASE_WON;
+  if (level && (level.index !== index || level.name !== name || won)) releaseInput();
   level = {
     nx, nz, edges, name, index,
     storeys: w.level_storeys(),
@@ -328,6 +493,7 @@ function newAttempt() {
     pitch: w.pitch_mm(),
     restAbove: 0,
     shown: null, // the storeys on show (top first), kept while no marble is in play
+    finishedCount: w.finished_count(),
   };
   // Where a marble rests above its storey's floor: it starts there.
   level.restAbove = w.marble_mm(0, 1) - storeyFloorMm(w.marble_storey(0));
@@ -338,15 +504,18 @@ function newAttempt() {
   fitBoard();
   const select = $('level');
   const custom = w.level_is_custom();
+  const generated = w.level_is_generated();
   select.querySelector('option[value="editor"]')?.remove();
-  if (custom) {
-    const option = new Option(`${level.name} (editor)`, 'editor');
-    select.add(option);
-  }
-  select.value = custom ? 'editor' : String(w.level_index());
+  select.querySelector('option[value="maze"]')?.remove();
+  if (custom) select.add(new Option(`${level.name} (editor)`, 'editor'));
+  if (generated) select.add(new Option(`maze ${w.level_maze(0)} (generated)`, 'maze'));
+  select.value = custom ? 'editor' : generated ? 'maze' : String(w.level_index());
   $('stepping').value = w.stepping_events() ? 'events' : 'fixed';
   const best = Number(localStorage.getItem(bestKey()));
   $('hud-best').textContent = best ? `${best.toFixed(2)} s` : '–';
+  showGhost();
+  $('hud-ghost').textContent = ghostNote();
+  updateUrl();
 }
 
 // The tile kinds of storey `s` (row by row), read from the module once per attempt.
@@ -400,7 +569,20 @@ function placements() {
     m.k = tileOf(m.z);
     m.kind = m.i < 0 || m.k < 0 ? 5 : kindsOf(m.storey)[m.k * level.nx + m.i];
   }
-  return { storeys: level.storeys, shown: level.shown, marbles };
+  // The ghost's marbles, on the maps on show (on another storey: not drawn).
+  const ghosts = [];
+  const g = w.ghost_marble_count();
+  for (let m = 0; m < g; m++) {
+    if (w.ghost_marble_out(m)) continue;
+    const storey = w.ghost_marble_storey(m);
+    const map = level.shown.indexOf(storey);
+    if (map < 0) continue;
+    ghosts.push({
+      marble: m, storey, map, alpha: GHOST_ALPHA,
+      x: w.ghost_marble_mm(m, 0), y: w.ghost_marble_mm(m, 1), z: w.ghost_marble_mm(m, 2),
+    });
+  }
+  return { storeys: level.storeys, shown: level.shown, marbles, ghosts };
 }
 
 function restart() {
@@ -554,6 +736,19 @@ function drawBoard() {
     }
   }
   const r = level.radius * scale;
+  // The ghost first, under the live marbles: translucent, no shadow.
+  for (const m of list.ghosts) {
+    const x = x0 + m.map * stride + m.x * scale;
+    const z = y0 + m.z * scale;
+    const sunk = level.restAbove - (m.y - storeyFloorMm(m.storey));
+    const rr = r * (1 - 0.5 * Math.max(0, Math.min(1, sunk / (2 * level.radius))));
+    g.globalAlpha = m.alpha;
+    g.fillStyle = '#cfe3ff';
+    g.beginPath();
+    g.arc(x, z, rr, 0, 2 * Math.PI);
+    g.fill();
+    g.globalAlpha = 1;
+  }
   for (const m of list.marbles) {
     const x = x0 + m.map * stride + m.x * scale;
     const z = y0 + m.z * scale;
@@ -625,7 +820,8 @@ function drawLeds() {
 
 function drawHud() {
   const frames = w.clock_frames();
-  $('hud-level').textContent = `${level.name}${w.level_is_custom() ? ' (editor)' : ` (${w.level_index() + 1})`}`;
+  const where = w.level_is_custom() ? ' (editor)' : w.level_is_generated() ? ' (generated)' : ` (${w.level_index() + 1})`;
+  $('hud-level').textContent = `${level.name}${where}`;
   // The level clock: it starts at the first tilt that rolls the marble.
   $('hud-time').textContent = frames || w.phase() !== 0
     ? `${(frames / hz).toFixed(1)} / ${w.time_limit_s()} s`
@@ -732,6 +928,16 @@ function testHooks() {
     level: w.level_index(),
     name: levelName(),
     custom: !!w.level_is_custom(),
+    generated: !!w.level_is_generated(),
+    maze: w.level_is_generated()
+      ? { seed: w.level_maze(0), size: w.level_maze(1), storeys: w.level_maze(2), difficulty: w.level_maze(3) }
+      : null,
+    ghost: w.ghost_active()
+      ? {
+        frames: w.ghost_frames(), phase: PHASES[w.ghost_phase()], hash: hex(w.ghost_state_hash()),
+        record: { frames: w.ghost_record(0), clock: w.ghost_record(1), hash: hex(w.ghost_record_hash()) },
+      }
+      : null,
     phase: PHASES[w.phase()],
     frames: w.frames(),
     clock: w.clock_frames(),
@@ -743,7 +949,10 @@ function testHooks() {
     })),
     finished: finishedRecord(),
     // What the next frame would take as the tilt, and what the game took last.
-    input: { tilt: tilt(), reading: [w.reading_x(), w.reading_z()], orientation: { ...orientation } },
+    input: {
+      tilt: tilt(), reading: [w.reading_x(), w.reading_z()], orientation: { ...orientation },
+      stick: stick.active, keys: [...keys],
+    },
   });
   window.marbleTest = {
     levels: () => Array.from({ length: w.level_count() }, (_, i) => answer(w.builtin_name(i))),
@@ -772,6 +981,39 @@ function testHooks() {
     },
     placements,
     status: () => $('status').textContent,
+    // The level text of a generated maze (as `cargo sim -- --generate SEED
+    // --print-level` prints it), or the generator's error.
+    mazeText(seed, { size, storeys, difficulty } = {}) {
+      const n = w.generate_level(seed >>> 0, size ?? w.default_maze_size(),
+        storeys ?? w.default_maze_storeys(), difficulty ?? w.default_maze_difficulty());
+      return n >= 0
+        ? { text: decoder.decode(new Uint8Array(w.memory.buffer, w.text_ptr(), n)) }
+        : { error: answer(-n) };
+    },
+    playMaze,
+    // The text of the editor's level or generated maze in play.
+    sourceText: () => decoder.decode(new Uint8Array(w.memory.buffer, w.source_text_ptr(), w.source_text_len())),
+    ghostKey,
+    storedGhost,
+    restartLevel: restart,
+    // How far the board's pixel at the first ghost's and the first live
+    // marble's centre is from the maze drawn under them (summed over RGB).
+    contrast() {
+      const canvas = $('board');
+      const list = placements();
+      const { scale, x0, y0, stride } = view(canvas, list.shown.length);
+      const board = canvas.getContext('2d');
+      const maze = boardCache.canvas.getContext('2d');
+      const at = (m) => {
+        if (!m) return null;
+        const x = Math.round(x0 + m.map * stride + m.x * scale);
+        const y = Math.round(y0 + m.z * scale);
+        const a = board.getImageData(x, y, 1, 1).data;
+        const b = maze.getImageData(x, y, 1, 1).data;
+        return Math.abs(a[0] - b[0]) + Math.abs(a[1] - b[1]) + Math.abs(a[2] - b[2]);
+      };
+      return { ghost: at(list.ghosts[0]), live: at(list.marbles[0]) };
+    },
     editor: toggleEditor,
     // Game frames played by `seconds` of animation frames at `refreshHz`
     // (the loop's own accumulator, fed the timestamps such a screen gives).
@@ -857,7 +1099,7 @@ async function main() {
     select.add(new Option(`${i + 1}. ${answer(w.builtin_name(i))}`, String(i)));
   }
   select.addEventListener('change', () => {
-    if (select.value === 'editor') return;
+    if (select.value === 'editor' || select.value === 'maze') return;
     w.select_level(Number(select.value));
     newAttempt();
     status('');
@@ -871,6 +1113,8 @@ async function main() {
   $('restart').addEventListener('click', restart);
   $('next').addEventListener('click', nextLevel);
   $('autopilot').addEventListener('click', toggleAutopilot);
+  $('new-maze').addEventListener('click', () => { newMaze(); $('new-maze').blur(); });
+  $('maze-storeys').addEventListener('change', () => $('maze-storeys').blur());
   $('orientation').addEventListener('click', toggleOrientation);
   window.addEventListener('keydown', (e) => onKey(e, true));
   window.addEventListener('keyup', (e) => onKey(e, false));
@@ -879,7 +1123,15 @@ async function main() {
   setupStick($('board'));
   setupEditor();
   testHooks();
+  // Read before the first level's attempt takes the query off the URL.
+  const wanted = mazeFromUrl();
   newAttempt();
+  if (wanted?.error) {
+    status(wanted.error);
+  } else if (wanted) {
+    if (wanted.storeys >= 1 && wanted.storeys <= 4) $('maze-storeys').value = String(wanted.storeys);
+    playMaze(wanted.seed, wanted);
+  }
   document.body.dataset.ready = 'true';
   requestAnimationFrame(loop);
 }
