@@ -675,6 +675,15 @@ async function main() {
         && loaded.search === `?seed=${maze.seed}&storeys=${maze.storeys}`,
       `generated: the URL ?seed=${maze.seed}&storeys=${maze.storeys} plays ${loaded.state.name}, cargo sim's maze`,
       JSON.stringify({ ...loaded, text: loaded.text.length }));
+      // The largest seed: the page's numbers stay unsigned.
+      await tab.goto(`${url}?seed=4294967295&storeys=1`);
+      await tab.waitForSelector('body[data-ready="true"]', { timeout: 20000 });
+      const top = await tab.evaluate(() => ({ state: window.marbleState(), search: window.location.search }));
+      check(top.state.name === 'maze-4294967295-6x6x1-d2' && top.state.maze.seed === 4294967295
+        && top.search === '?seed=4294967295&storeys=1',
+      `generated: the URL's largest seed plays ${top.state.name} and stays in the URL: ${top.search}`,
+      JSON.stringify({ maze: top.state.maze, search: top.search }));
+      await tab.evaluate(() => window.marbleTest.setRunning(false));
       await tab.selectOption('#maze-storeys', '3');
       await tab.click('#new-maze');
       const fresh = await tab.evaluate(() => ({ state: window.marbleState(), search: window.location.search }));

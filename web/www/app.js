@@ -410,6 +410,13 @@ function ghostNote() {
 
 // --- generated mazes ------------------------------------------------------------
 
+// Argument `what` of the generated maze in play (0 seed, 1 size, 2 storeys, 3
+// difficulty): the export's u32 arrives as a signed i32, so a seed from 2³¹ up
+// would read negative.
+function mazeArg(what) {
+  return w.level_maze(what) >>> 0;
+}
+
 // The maze of `seed` (the arguments of `cargo sim -- --generate`; those not
 // given take its defaults): true if it plays, else the generator's message.
 function playMaze(seed, { size, storeys, difficulty } = {}) {
@@ -431,8 +438,8 @@ function newMaze() {
   const generated = w.level_is_generated();
   playMaze(seed, {
     storeys: Number($('maze-storeys').value),
-    size: generated ? w.level_maze(1) : undefined,
-    difficulty: generated ? w.level_maze(3) : undefined,
+    size: generated ? mazeArg(1) : undefined,
+    difficulty: generated ? mazeArg(3) : undefined,
   });
 }
 
@@ -443,10 +450,10 @@ function updateUrl() {
   const url = new URL(window.location.href);
   url.search = '';
   if (w.level_is_generated()) {
-    url.searchParams.set('seed', String(w.level_maze(0)));
-    url.searchParams.set('storeys', String(w.level_maze(2)));
-    if (w.level_maze(1) !== w.default_maze_size()) url.searchParams.set('size', String(w.level_maze(1)));
-    if (w.level_maze(3) !== w.default_maze_difficulty()) url.searchParams.set('difficulty', String(w.level_maze(3)));
+    url.searchParams.set('seed', String(mazeArg(0)));
+    url.searchParams.set('storeys', String(mazeArg(2)));
+    if (mazeArg(1) !== w.default_maze_size()) url.searchParams.set('size', String(mazeArg(1)));
+    if (mazeArg(3) !== w.default_maze_difficulty()) url.searchParams.set('difficulty', String(mazeArg(3)));
   }
   if (url.href !== window.location.href) history.replaceState(null, '', url);
 }
@@ -508,7 +515,7 @@ function newAttempt() {
   select.querySelector('option[value="editor"]')?.remove();
   select.querySelector('option[value="maze"]')?.remove();
   if (custom) select.add(new Option(`${level.name} (editor)`, 'editor'));
-  if (generated) select.add(new Option(`maze ${w.level_maze(0)} (generated)`, 'maze'));
+  if (generated) select.add(new Option(`maze ${mazeArg(0)} (generated)`, 'maze'));
   select.value = custom ? 'editor' : generated ? 'maze' : String(w.level_index());
   $('stepping').value = w.stepping_events() ? 'events' : 'fixed';
   const best = Number(localStorage.getItem(bestKey()));
@@ -930,7 +937,7 @@ function testHooks() {
     custom: !!w.level_is_custom(),
     generated: !!w.level_is_generated(),
     maze: w.level_is_generated()
-      ? { seed: w.level_maze(0), size: w.level_maze(1), storeys: w.level_maze(2), difficulty: w.level_maze(3) }
+      ? { seed: mazeArg(0), size: mazeArg(1), storeys: mazeArg(2), difficulty: mazeArg(3) }
       : null,
     ghost: w.ghost_active()
       ? {
