@@ -17,14 +17,14 @@
 //! default (the accuracy study's recommendation), and can switch to fixed
 //! steps, the study's baseline: [`set_stepping`]. The stepper is a constant of
 //! the [`Player`] type (a board links one), so the page holds either player
-//! ([`AnyPlayer`]); both cost the module their code, which a browser can spare.
+//! (`AnyPlayer`); both cost the module their code, which a browser can spare.
 //!
 //! # Generated mazes and the ghost
 //!
 //! [`play_generated`] plays the maze of a seed from the core's generator
 //! (`game::generate`, with `cargo sim -- --generate`'s defaults), parsed from
 //! its text as the editor's level is, alone in its list: a win plays it again.
-//! Every attempt is written as a ghost while it plays ([`Recorder`], the
+//! Every attempt is written as a ghost while it plays (`Recorder`, the
 //! core's `game::ghost` format); a win's ghost is handed to the page
 //! ([`finished_ghost_len`], [`record_ptr`]), which keeps the best per level in
 //! `localStorage` and hands it back at the next attempt ([`load_ghost`]): it
@@ -1500,9 +1500,12 @@ mod tests {
         String::from_utf8(OUT.0.borrow().bytes[..len].to_vec()).unwrap()
     }
 
-    // One test: the buffers are statics, and the harness runs tests in parallel.
+    /// The buffers are statics, and the harness runs tests in parallel: one at a time.
+    static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
     #[test]
     fn messages_name_line_column_bytes_and_ranges() {
+        let _alone = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
         assert_eq!(checked_message(b"---\n#####\n#S.G#\n#####\n"), "");
         assert_eq!(
             checked_message(b"name: a\n---\n#####\n#S\xffG#\n#####\n"),
@@ -1529,5 +1532,53 @@ mod tests {
             },
             format!("1:1: longer than {TEXT_CAPACITY} bytes")
         );
+    }
+
+    /// The page's round trip, natively (with overflow checks): a generated
+    /// maze's autopilot win is recorded, handed back as the stored ghost,
+    /// replayed beside the next attempt to the win's hash; a ghost with one
+    /// byte changed is refused.
+    #[test]
+    fn ghost_of_a_generated_maze_replays_to_its_hash() {
+        let _alone = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+        assert_eq!(init(), 1);
+        assert_eq!(play_generated(7, 6, 2, 2), 0);
+        // SAFETY: one test at a time; the page reads these buffers the same way.
+        let text = unsafe {
+            std::slice::from_raw_parts(source_text_ptr(), source_text_len() as usize).to_vec()
+        };
+        let maze = generate(7, 6, 2, 2).unwrap().to_string();
+        assert_eq!(String::from_utf8(text).unwrap(), maze);
+        set_autopilot(1);
+        let count = finished_count();
+        ticks(4000 * FRAME_HZ, 1);
+        assert_eq!((finished_count(), finished_phase()), (count + 1, 1));
+        let (frames, hash) = (finished_frames(), finished_hash());
+        let len = finished_ghost_len() as usize;
+        assert!(len > 24, "{len} bytes");
+        // SAFETY: as above.
+        let ghost = unsafe { std::slice::from_raw_parts(record_ptr(), len).to_vec() };
+        set_autopilot(0);
+        // The win's pause, then the maze again.
+        ticks(FRAME_HZ + 1, 0);
+        assert_eq!((level_is_generated(), super::frames()), (1, 0));
+        let load = |bytes: &[u8]| {
+            // SAFETY: as above.
+            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ghost_in_ptr(), bytes.len()) };
+            load_ghost(bytes.len() as u32)
+        };
+        assert_eq!(load(&ghost), 0);
+        ticks(frames + 10, 0);
+        assert_eq!(
+            (ghost_phase(), ghost_frames(), ghost_state_hash()),
+            (1, frames, hash)
+        );
+        // The player never tilted: its attempt still waits for the first roll.
+        assert_eq!((phase(), clock_frames()), (0, 0));
+        let mut other = ghost.clone();
+        let last = other.len() - 1;
+        other[last] ^= 1;
+        assert_ne!(load(&other), 0);
+        assert_eq!(ghost_active(), 0);
     }
 }
