@@ -76,10 +76,50 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let still = self.solver(Vec3::ZERO, p.k);
         // The passes themselves (what `collide_tiles` comes to), without its
         // inline shortcut for the common case: this one is rare.
+        let pushed = (na.pos, nb.pos);
         na.supported = self.contact_passes::<SPACE>(&mut na, &still, ma.pos) || na.supported;
         nb.supported = self.contact_passes::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
+        if !p.events() && bounce == S::ZERO {
+            self.settle_on::<SPACE>(&mut na, &mut nb, n, pushed, &still);
+        }
         self.marbles[a] = na;
         self.marbles[b] = nb;
         true
+    }
+
+    /// Fixed steps, a resting pair (no bounce): when a tile pass took back one
+    /// marble's share of the push (a marble on the floor, another on top of it),
+    /// the pair overlaps again by that share; the other marble, the one free to
+    /// go, takes it (and its tile passes once more). A bounce is left alone: there
+    /// the overlap is a step's travel, and moving the marble out of it without
+    /// its velocity would add energy. Without it a stack sank into itself by half a step's pull every
+    /// step: 14 µm at 1024 steps/s. The event stepper's pair slices are short
+    /// enough for that share to stay under `2^-12·r`; they are left as they are.
+    fn settle_on<const SPACE: bool>(
+        &mut self,
+        na: &mut Marble<S>,
+        nb: &mut Marble<S>,
+        n: Vec3<S>,
+        (pa, pb): (Vec3<S>, Vec3<S>),
+        still: &Solver<S>,
+    ) {
+        // How far the tile passes moved each marble towards the other, along the
+        // pair's normal: at most a tile pass's push-out (`r/4` per axis, checked by
+        // the passes), so the products stay in range.
+        let towards_b = (na.pos - pa).dot(n);
+        let towards_a = (pb - nb.pos).dot(n);
+        let closed = towards_b + towards_a;
+        if closed <= S::ZERO {
+            return;
+        }
+        if towards_a >= towards_b {
+            let from = na.pos;
+            na.pos -= n.scale(closed);
+            na.supported = self.contact_passes::<SPACE>(na, still, from) || na.supported;
+        } else {
+            let from = nb.pos;
+            nb.pos += n.scale(closed);
+            nb.supported = self.contact_passes::<SPACE>(nb, still, from) || nb.supported;
+        }
     }
 }
