@@ -21,6 +21,9 @@ pub enum InjectedFault {
     Nak = 1,
     /// A transfer starts and never completes (a slave holding SDA low): the
     /// transfer's future stays pending; only the caller's timeout ends it.
+    /// The bus stays stuck after the fault is lifted, until the firmware
+    /// clears it (nine clocks and a STOP) or the chip is reset; a bus clear
+    /// while the fault is in force does not free it.
     StuckBus = 2,
     /// Conversions stall: the output registers keep their last values and no
     /// new data is flagged; writes are accepted, a re-init does not help.
