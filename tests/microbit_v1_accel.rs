@@ -1,95 +1,98 @@
-//! The micro:bit v1's sensor stack (board::microbit_v1: the probe, the NXP
-//! driver, the bus-clear rule, the v2's supervision) against the virtual
-//! MMA8653FC and FXOS8700CQ (board::microbit_v1::virtual_nxp): identity,
-//! configuration in standby, data-ready at the data rate, the sample format,
-//! the axis map against the chips' mounting, each injected fault, and the
-//! game played through the chip. Every test runs for both chips: its name
-//! says which (`mma8653_…`, `fxos8700_…`).
+//! The micro:bit v1's sensor stack against the virtual MMA8653FC and
+//! FXOS8700CQ (board::microbit_v1::virtual_nxp): identity, configuration in
+//! standby, data-ready at the data rate, the sample format, the axis map
+//! against the chips' mounting, and the game played through each chip, each
+//! injected fault included. Every test runs for both chips: its name says
+//! which (`mma8653_…`, `fxos8700_…`).
 //!
-//! The poll loop is the firmware's (`boards/microbit-v1/src/sensor.rs`,
-//! `Input::next_event`): every 10 ms a read, fed to the pipeline; a
-//! re-initialisation when the supervisor asks for one.
+//! The poll loop is the firmware's own (`board::microbit_v1::sensor::
+//! PollLoop`, which `boards/microbit-v1/src/sensor.rs` runs on the nRF51's
+//! TWI): probe by identity, configure, poll, supervise, re-initialise, clear
+//! the bus after a failure. The tests only step the clock and hand the
+//! transitions and the tilt to the game as the app does.
 
 use std::cell::Cell;
 
 use embassy_futures::block_on;
 use embedded_hal_async::i2c::I2c;
 
-use marble_rolling::board::microbit::{INPUT_PERIOD_MS, SUPERVISOR};
+use marble_rolling::board::microbit::INPUT_PERIOD_MS;
 use marble_rolling::board::microbit_v1::accel::{nxp, Accelerometer, NxpChip};
-use marble_rolling::board::microbit_v1::nxp_driver::{configure, probe, read};
+use marble_rolling::board::microbit_v1::nxp_driver::{probe, read};
+use marble_rolling::board::microbit_v1::sensor::{PollLoop, Polled, Probed};
 use marble_rolling::board::microbit_v1::twi::{Recovering, TwiError};
 use marble_rolling::board::microbit_v1::virtual_nxp::{VirtualNxp, VirtualTwi};
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
+use marble_rolling::game::player::{fault_frame, Player};
 use marble_rolling::input::event::Tilt;
-use marble_rolling::input::sensor::{AccelMg, Action, Fault, Read, TiltPipeline, Transition};
+use marble_rolling::input::sensor::{AccelMg, Fault, Read, Transition};
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::physics::Scalar;
 
-type Bus<'a> = Recovering<VirtualTwi<'a, Box<dyn Fn() -> u64 + 'a>>>;
+type Twi<'a> = VirtualTwi<'a, Box<dyn Fn() -> u64 + 'a>>;
 
-/// The v1's stack over one virtual chip, with a hand-stepped clock.
+/// The poll period, µs.
+const PERIOD_US: u64 = INPUT_PERIOD_MS * 1000;
+
+/// The firmware's poll loop over one virtual chip, with a hand-stepped clock.
 struct Stack<'a> {
-    bus: Bus<'a>,
+    sensor: PollLoop<Twi<'a>>,
     chip: &'static NxpChip,
-    pipeline: TiltPipeline,
     clock: &'a Cell<u64>,
-    reinits: u32,
     transitions: Vec<Transition>,
 }
 
 impl<'a> Stack<'a> {
-    /// Probes, then configures what it found.
+    /// The firmware's bring-up: it must find `chip` by its identity.
     fn up(chip: Accelerometer, control: &'a ChipControl, clock: &'a Cell<u64>) -> Self {
         let twi = VirtualTwi::new(
             VirtualNxp::new(chip),
             control,
             Box::new(move || clock.get()) as Box<dyn Fn() -> u64>,
         );
-        let mut bus = Recovering::new(twi);
-        let found = block_on(probe(&mut bus));
-        assert_eq!(found, Some(chip), "the probe finds the chip on the bus");
-        let chip = found.and_then(Accelerometer::nxp).expect("an NXP chip");
-        let mut pipeline = TiltPipeline::new(chip.chip.axis_map(), SUPERVISOR);
-        pipeline.reinit_done(block_on(configure(&mut bus, chip)));
+        let mut sensor = PollLoop::new(twi);
+        let probed = block_on(sensor.bring_up());
+        assert_eq!(
+            probed,
+            Some(Probed::Found(chip)),
+            "the probe finds the chip on the bus"
+        );
+        assert_eq!(sensor.found(), Some(chip));
+        let nxp = chip.nxp().expect("an NXP chip");
         Self {
-            bus,
-            chip,
-            pipeline,
+            sensor,
+            chip: nxp,
             clock,
-            reinits: 0,
             transitions: Vec::new(),
         }
     }
 
-    /// One poll period later: read, supervise, re-initialise if asked.
-    fn poll(&mut self) -> AccelMg {
-        self.clock.set(self.clock.get() + INPUT_PERIOD_MS * 1000);
-        let reading = block_on(read(&mut self.bus, self.chip));
-        let step = self.pipeline.feed(reading);
-        if let Action::Reinit = step.action {
-            self.reinits += 1;
-            let outcome = block_on(configure(&mut self.bus, self.chip));
-            self.pipeline.reinit_done(outcome);
-        }
-        if let Some(transition) = step.transition {
+    /// One poll period later: the firmware's poll.
+    fn poll(&mut self) -> Polled {
+        self.clock.set(self.clock.get() + PERIOD_US);
+        let polled = block_on(self.sensor.poll());
+        assert_eq!(polled.probed, None, "the chip stays known");
+        if let Some(transition) = polled.transition {
             self.transitions.push(transition);
         }
-        self.pipeline.tilt()
+        polled
     }
 
     fn polls(&mut self, n: usize) -> AccelMg {
-        let mut last = self.pipeline.tilt();
         for _ in 0..n {
-            last = self.poll();
+            self.poll();
         }
-        last
+        self.sensor.tilt()
+    }
+
+    /// The recovering bus (an NXP chip has no driver owning it).
+    fn bus(&mut self) -> &mut Recovering<Twi<'a>> {
+        self.sensor.bus().expect("the NXP chips own no driver")
     }
 
     fn chip_state(&mut self) -> &VirtualNxp {
-        self.bus.bus().chip()
+        self.bus().bus().chip()
     }
 }
 
@@ -126,7 +129,7 @@ fn identity_and_configuration(chip: Accelerometer) {
         0x1D
     };
     let mut id = [0u8];
-    let answer = block_on(stack.bus.write_read(other, &[nxp::WHO_AM_I], &mut id));
+    let answer = block_on(stack.bus().write_read(other, &[nxp::WHO_AM_I], &mut id));
     assert_eq!(answer, Err(TwiError::AddressNack));
 }
 
@@ -134,21 +137,22 @@ fn standby_rule(chip: Accelerometer) {
     let control = ChipControl::new();
     let clock = Cell::new(0);
     let mut stack = Stack::up(chip, &control, &clock);
-    let address = stack.chip.address;
+    let nxp = stack.chip;
+    let address = nxp.address;
     // Active: the range and the rate ignore writes.
-    block_on(stack.bus.write(address, &[nxp::XYZ_DATA_CFG, 2])).unwrap();
-    block_on(stack.bus.write(address, &[nxp::CTRL_REG1, 0x38 | 1])).unwrap();
+    block_on(stack.bus().write(address, &[nxp::XYZ_DATA_CFG, 2])).unwrap();
+    block_on(stack.bus().write(address, &[nxp::CTRL_REG1, 0x38 | 1])).unwrap();
     let state = stack.chip_state();
     assert_eq!(state.full_scale_g(), 2);
     assert_eq!(state.period_us(), 5_000);
     // Standby first, then they take.
-    block_on(stack.bus.write(address, &[nxp::CTRL_REG1, 0])).unwrap();
-    block_on(stack.bus.write(address, &[nxp::XYZ_DATA_CFG, 2])).unwrap();
+    block_on(stack.bus().write(address, &[nxp::CTRL_REG1, 0])).unwrap();
+    block_on(stack.bus().write(address, &[nxp::XYZ_DATA_CFG, 2])).unwrap();
     assert_eq!(stack.chip_state().full_scale_g(), 8);
     // Standby: no samples, whatever the time.
     let latched = stack.chip_state().latched();
     clock.set(clock.get() + 1_000_000);
-    assert_eq!(block_on(read(&mut stack.bus, stack.chip)), Read::NotReady);
+    assert_eq!(block_on(read(stack.bus(), nxp)), Read::NotReady);
     assert_eq!(stack.chip_state().latched(), latched);
 }
 
@@ -156,33 +160,28 @@ fn data_ready_follows_the_rate(chip: Accelerometer) {
     let control = ChipControl::new();
     let clock = Cell::new(0);
     let mut stack = Stack::up(chip, &control, &clock);
+    let nxp = stack.chip;
     // Not before one period.
     clock.set(4_999);
-    assert_eq!(block_on(read(&mut stack.bus, stack.chip)), Read::NotReady);
+    assert_eq!(block_on(read(stack.bus(), nxp)), Read::NotReady);
     clock.set(5_000);
-    assert!(matches!(
-        block_on(read(&mut stack.bus, stack.chip)),
-        Read::Sample(_)
-    ));
+    assert!(matches!(block_on(read(stack.bus(), nxp)), Read::Sample(_)));
     // Read: data-ready cleared until the next sample.
-    assert_eq!(block_on(read(&mut stack.bus, stack.chip)), Read::NotReady);
+    assert_eq!(block_on(read(stack.bus(), nxp)), Read::NotReady);
     clock.set(10_000);
-    assert!(matches!(
-        block_on(read(&mut stack.bus, stack.chip)),
-        Read::Sample(_)
-    ));
+    assert!(matches!(block_on(read(stack.bus(), nxp)), Read::Sample(_)));
     // A burst of the status alone does not clear it; reading the three
     // MSBs does.
     clock.set(15_000);
-    let address = stack.chip.address;
+    let address = nxp.address;
     let mut status = [0u8];
-    block_on(stack.bus.write_read(address, &[nxp::STATUS], &mut status)).unwrap();
+    block_on(stack.bus().write_read(address, &[nxp::STATUS], &mut status)).unwrap();
     assert_ne!(status[0] & nxp::STATUS_ZYXDR, 0);
-    block_on(stack.bus.write_read(address, &[nxp::STATUS], &mut status)).unwrap();
+    block_on(stack.bus().write_read(address, &[nxp::STATUS], &mut status)).unwrap();
     assert_ne!(status[0] & nxp::STATUS_ZYXDR, 0);
     // Two samples unread: overwrite flagged.
     clock.set(25_000);
-    block_on(stack.bus.write_read(address, &[nxp::STATUS], &mut status)).unwrap();
+    block_on(stack.bus().write_read(address, &[nxp::STATUS], &mut status)).unwrap();
     assert_ne!(status[0] & nxp::STATUS_ZYXOW, 0);
 }
 
@@ -216,59 +215,153 @@ fn orientations(chip: Accelerometer) {
     }
 }
 
-/// Down on `fault`, back up once it is lifted.
-fn fault_and_recovery(chip: Accelerometer, fault: InjectedFault) -> (u32, u32) {
+/// Game frames per second (`app::FRAME_HZ`).
+const FRAME_HZ: u64 = 128;
+
+/// A game on "switchback" (no holes: nothing ends the attempt early), no
+/// autopilot, event stepping (the v1's).
+fn game() -> Player<5, 5, false, true> {
+    Player::new(&LEVELS, 2, TiltConfig::DEFAULT, false).expect("built-in level")
+}
+
+/// The hand's tilt at game frame `frame`: half a second each way along the
+/// first corridor, so the marble keeps moving.
+fn scripted_tilt(frame: u64) -> Tilt {
+    const STEPS: [(i16, i16); 4] = [(-250, 0), (250, 60), (-250, -60), (250, 0)];
+    let (x, z) = STEPS[(frame / (FRAME_HZ / 2)) as usize % STEPS.len()];
+    Tilt { x, y: 965, z }
+}
+
+/// What one game through a fault showed.
+#[derive(Debug)]
+struct Outage {
+    /// The sensor's transitions, with the game frame they reached the game.
+    transitions: Vec<(u64, Transition)>,
+    /// Game frames the game stood still, the sensor down.
+    paused_frames: u64,
+    /// Frames the game played after it resumed.
+    played_after: u64,
+    reinits: u32,
+    clears: u32,
+}
+
+/// Frame at which the fault is injected, and at which it is lifted.
+const FAULT_FRAME: u64 = FRAME_HZ;
+const HEALED_FRAME: u64 = 3 * FRAME_HZ;
+/// Frames played in all.
+const END_FRAME: u64 = 6 * FRAME_HZ;
+
+/// The app's game loop fed by the firmware's poll loop over `chip`, with
+/// `fault` injected from 1 s to 3 s: the transitions go to
+/// [`Player::handle`], the tilt to [`Player::tick`], polls every 10 ms
+/// between the frames (128 a second). While the sensor is down the game must
+/// stand still (frame count and state hash unchanged, the fault picture
+/// shown); whenever it plays it must be, frame count and state hash, a
+/// reference game fed the same readings on the same frames with no outage
+/// at all: a pause changes no bit of the game, and it resumes where it was.
+fn through_the_game(chip: Accelerometer, fault: InjectedFault) -> Outage {
     let control = ChipControl::new();
-    control.set_tilt(Tilt {
-        x: -300,
-        y: 950,
-        z: 0,
-    });
     let clock = Cell::new(0);
     let mut stack = Stack::up(chip, &control, &clock);
-    let good = stack.polls(5);
-    assert!(close(good, [-300, 950, 0], 4), "{good:?}");
-    assert!(stack.transitions.is_empty());
-    control.inject(fault);
-    stack.polls(60);
-    if fault == InjectedFault::ChipReset {
-        // A reset is an event: the stack must bring the chip back itself.
-        assert!(stack.chip_state().active(), "{chip:?}: re-initialised");
-        assert!(!stack.pipeline.is_down());
-        let after = stack.polls(5);
-        assert!(close(after, [-300, 950, 0], 4), "{after:?}");
-        return (stack.reinits, stack.bus.clears());
-    }
-    let Some(Transition::Down(why)) = stack.transitions.first().copied() else {
-        panic!(
-            "{chip:?} {fault:?}: the sensor never went down ({:?})",
-            stack.transitions
+    let mut player = game();
+    let mut reference = game();
+    let start_hash = reference.session().state_hash();
+    let mut outage = Outage {
+        transitions: Vec::new(),
+        paused_frames: 0,
+        played_after: 0,
+        reinits: 0,
+        clears: 0,
+    };
+    let mut was_down = false;
+    for frame in 0..END_FRAME {
+        if frame == FAULT_FRAME {
+            control.inject(fault);
+        }
+        if frame == HEALED_FRAME && fault != InjectedFault::ChipReset {
+            control.inject(InjectedFault::Healthy);
+        }
+        control.set_tilt(scripted_tilt(frame));
+        let now_us = frame * 1_000_000 / FRAME_HZ;
+        while clock.get() + PERIOD_US <= now_us {
+            if let Some(transition) = stack.poll().transition {
+                outage.transitions.push((frame, transition));
+                assert!(player.handle(transition.event()));
+            }
+        }
+        let tilt = stack.sensor.tilt();
+        let reading = [tilt.x, tilt.y, tilt.z];
+        let (frames, hash) = (player.game().frames(), player.session().state_hash());
+        let tick = player.tick(reading, true);
+        let down = player.status().sensor_down;
+        assert_eq!(
+            down,
+            stack.sensor.pipeline().is_down(),
+            "{chip:?} {fault:?} frame {frame}: the game knows what the sensor is"
         );
-    };
-    let expected = match fault {
-        InjectedFault::Nak => Fault::Bus,
-        InjectedFault::StuckBus => Fault::Timeout,
-        InjectedFault::FrozenData => Fault::NoData,
-        _ => Fault::Implausible,
-    };
-    assert_eq!(why, expected, "{chip:?} {fault:?}");
-    // While down the last good tilt is kept.
-    assert!(close(stack.pipeline.tilt(), [-300, 950, 0], 4));
-    control.inject(InjectedFault::Healthy);
-    control.set_tilt(Tilt {
-        x: 400,
-        y: 900,
-        z: 0,
-    });
-    // Retries come every retry period (50 polls) while down.
-    let back = stack.polls(120);
-    assert_eq!(
-        stack.transitions.last(),
-        Some(&Transition::Up),
-        "{chip:?} {fault:?}: the sensor came back"
+        if down {
+            assert_eq!(
+                player.game().frames(),
+                frames,
+                "{chip:?} {fault:?}: the level clock stopped"
+            );
+            assert_eq!(
+                player.session().state_hash(),
+                hash,
+                "{chip:?} {fault:?} frame {frame}: no physics while down"
+            );
+            if !was_down {
+                assert_eq!(
+                    tick.frame,
+                    Some(fault_frame::<5, 5>()),
+                    "{chip:?} {fault:?}: the fault picture is shown"
+                );
+            }
+            outage.paused_frames += 1;
+        } else {
+            reference.tick(reading, false);
+            assert_eq!(
+                (player.game().frames(), player.session().state_hash()),
+                (reference.game().frames(), reference.session().state_hash()),
+                "{chip:?} {fault:?} frame {frame}: the game is the reference game"
+            );
+            if outage.paused_frames > 0 {
+                outage.played_after += 1;
+            }
+        }
+        was_down = down;
+    }
+    assert_ne!(
+        reference.session().state_hash(),
+        start_hash,
+        "the marble moved: the hash comparisons compare something"
     );
-    assert!(close(back, [400, 900, 0], 4), "{back:?}");
-    (stack.reinits, stack.bus.clears())
+    outage.reinits = stack.sensor.reinits();
+    outage.clears = stack.bus().clears();
+    outage
+}
+
+/// `fault` takes the sensor down for `why` within 1 s, the game pauses, and
+/// within 0.5 s of the chip being healthy again the game resumes where it
+/// was and plays on.
+fn fault_pauses_the_game(chip: Accelerometer, fault: InjectedFault, why: Fault) -> Outage {
+    let outage = through_the_game(chip, fault);
+    let [(down_at, Transition::Down(seen)), (up_at, Transition::Up)] = outage.transitions[..]
+    else {
+        panic!("{chip:?} {fault:?}: not one outage: {outage:?}");
+    };
+    assert_eq!(seen, why, "{chip:?} {fault:?}: down for the fault's reason");
+    assert!(
+        (FAULT_FRAME..FAULT_FRAME + FRAME_HZ).contains(&down_at),
+        "{chip:?} {fault:?}: down at frame {down_at}, injected at {FAULT_FRAME}"
+    );
+    assert!(
+        (HEALED_FRAME..HEALED_FRAME + FRAME_HZ / 2).contains(&up_at),
+        "{chip:?} {fault:?}: back at frame {up_at}, healthy at {HEALED_FRAME}"
+    );
+    assert_eq!(outage.paused_frames, up_at - down_at, "{outage:?}");
+    assert_eq!(outage.played_after, END_FRAME - up_at, "{outage:?}");
+    outage
 }
 
 /// The stuck bus stays stuck without a bus clear: the bare virtual bus
@@ -310,12 +403,12 @@ fn drives_the_game(chip: Accelerometer) {
         let mut player = Player::<5, 5, false, true>::new(&LEVELS, 1, TiltConfig::DEFAULT, false)
             .expect("level");
         let start = player.game().world().marbles()[0].pos.x.to_f64();
-        // 128 frames/s, a poll every 10 ms: one second of play.
-        for frame in 0..128 {
-            if frame % 13 == 0 || frame % 13 == 6 {
+        // One second of play: 128 frames, a poll every 10 ms between them.
+        for frame in 0..FRAME_HZ {
+            while clock.get() + PERIOD_US <= frame * 1_000_000 / FRAME_HZ {
                 stack.poll();
             }
-            let t = stack.pipeline.tilt();
+            let t = stack.sensor.tilt();
             player.tick([t.x, t.y, t.z], false);
         }
         moved[i] = player.game().world().marbles()[0].pos.x.to_f64() - start;
@@ -349,16 +442,26 @@ for_chip! {
     mma8653_axis_map_matches_the_mounting => orientations;
     mma8653_a_stuck_bus_needs_a_clear => a_stuck_bus_needs_a_clear;
     mma8653_drives_the_game => drives_the_game;
-    mma8653_nak_down_and_back => |c| { fault_and_recovery(c, InjectedFault::Nak); };
-    mma8653_stuck_bus_down_and_back => |c| {
-        let (_, clears) = fault_and_recovery(c, InjectedFault::StuckBus);
-        assert!(clears > 1, "cleared after the timeouts ({clears})");
+    mma8653_nak_pauses_the_game_until_healthy => |c| {
+        fault_pauses_the_game(c, InjectedFault::Nak, Fault::Bus);
     };
-    mma8653_frozen_data_down_and_back => |c| { fault_and_recovery(c, InjectedFault::FrozenData); };
-    mma8653_garbage_down_and_back => |c| { fault_and_recovery(c, InjectedFault::Garbage); };
-    mma8653_chip_reset_reinitialised => |c| {
-        let (reinits, _) = fault_and_recovery(c, InjectedFault::ChipReset);
-        assert!(reinits >= 1);
+    mma8653_stuck_bus_pauses_the_game_until_cleared => |c| {
+        let outage = fault_pauses_the_game(c, InjectedFault::StuckBus, Fault::Timeout);
+        assert!(outage.clears > 1, "cleared after the timeouts ({outage:?})");
+    };
+    mma8653_frozen_data_pauses_the_game_until_healthy => |c| {
+        fault_pauses_the_game(c, InjectedFault::FrozenData, Fault::NoData);
+    };
+    mma8653_garbage_pauses_the_game_until_healthy => |c| {
+        fault_pauses_the_game(c, InjectedFault::Garbage, Fault::Implausible);
+    };
+    mma8653_chip_reset_reinitialised_without_a_pause => |c| {
+        // A reset is an event: the stack brings the chip back itself, before
+        // the supervisor would call the sensor down.
+        let outage = through_the_game(c, InjectedFault::ChipReset);
+        assert!(outage.transitions.is_empty(), "{outage:?}");
+        assert_eq!(outage.paused_frames, 0);
+        assert!(outage.reinits >= 1, "{outage:?}");
     };
 }
 
@@ -370,16 +473,26 @@ for_chip! {
     fxos8700_axis_map_matches_the_mounting => orientations;
     fxos8700_a_stuck_bus_needs_a_clear => a_stuck_bus_needs_a_clear;
     fxos8700_drives_the_game => drives_the_game;
-    fxos8700_nak_down_and_back => |c| { fault_and_recovery(c, InjectedFault::Nak); };
-    fxos8700_stuck_bus_down_and_back => |c| {
-        let (_, clears) = fault_and_recovery(c, InjectedFault::StuckBus);
-        assert!(clears > 1, "cleared after the timeouts ({clears})");
+    fxos8700_nak_pauses_the_game_until_healthy => |c| {
+        fault_pauses_the_game(c, InjectedFault::Nak, Fault::Bus);
     };
-    fxos8700_frozen_data_down_and_back => |c| { fault_and_recovery(c, InjectedFault::FrozenData); };
-    fxos8700_garbage_down_and_back => |c| { fault_and_recovery(c, InjectedFault::Garbage); };
-    fxos8700_chip_reset_reinitialised => |c| {
-        let (reinits, _) = fault_and_recovery(c, InjectedFault::ChipReset);
-        assert!(reinits >= 1);
+    fxos8700_stuck_bus_pauses_the_game_until_cleared => |c| {
+        let outage = fault_pauses_the_game(c, InjectedFault::StuckBus, Fault::Timeout);
+        assert!(outage.clears > 1, "cleared after the timeouts ({outage:?})");
+    };
+    fxos8700_frozen_data_pauses_the_game_until_healthy => |c| {
+        fault_pauses_the_game(c, InjectedFault::FrozenData, Fault::NoData);
+    };
+    fxos8700_garbage_pauses_the_game_until_healthy => |c| {
+        fault_pauses_the_game(c, InjectedFault::Garbage, Fault::Implausible);
+    };
+    fxos8700_chip_reset_reinitialised_without_a_pause => |c| {
+        // A reset is an event: the stack brings the chip back itself, before
+        // the supervisor would call the sensor down.
+        let outage = through_the_game(c, InjectedFault::ChipReset);
+        assert!(outage.transitions.is_empty(), "{outage:?}");
+        assert_eq!(outage.paused_frames, 0);
+        assert!(outage.reinits >= 1, "{outage:?}");
     };
 }
 
@@ -392,5 +505,58 @@ fn mma8653_and_fxos8700_the_probe_finds_nothing_on_an_empty_bus() {
         assert_eq!(block_on(probe(&mut bus)), None);
         // One clear before the first transfer, one after each failed probe.
         assert_eq!(bus.clears(), 4);
+    }
+}
+
+/// A chip silent at boot (NAK to every probe) is probed again at each
+/// re-initialisation the supervisor asks for, found once it answers, and
+/// then read with its own axis map.
+#[test]
+fn mma8653_and_fxos8700_found_when_they_answer_after_a_silent_boot() {
+    for chip in [Accelerometer::Mma8653fc, Accelerometer::Fxos8700cq] {
+        let control = ChipControl::new();
+        control.inject(InjectedFault::Nak);
+        control.set_tilt(Tilt {
+            x: -500,
+            y: 866,
+            z: 0,
+        });
+        let clock = Cell::new(0);
+        let twi = VirtualTwi::new(
+            VirtualNxp::new(chip),
+            &control,
+            Box::new(|| clock.get()) as Box<dyn Fn() -> u64>,
+        );
+        let mut sensor = PollLoop::new(twi);
+        assert_eq!(block_on(sensor.bring_up()), Some(Probed::NoneAnswered));
+        assert_eq!(sensor.found(), None);
+        let mut probes = 0;
+        let mut down = false;
+        for _ in 0..200 {
+            clock.set(clock.get() + PERIOD_US);
+            let polled = block_on(sensor.poll());
+            down |= polled.transition == Some(Transition::Down(Fault::Implausible));
+            if polled.probed == Some(Probed::NoneAnswered) {
+                probes += 1;
+            }
+        }
+        assert!(down, "{chip:?}: no chip is a sensor down");
+        assert!(probes >= 3, "{chip:?}: probed again while down ({probes})");
+        control.inject(InjectedFault::Healthy);
+        let mut found = None;
+        let mut up = false;
+        for _ in 0..100 {
+            clock.set(clock.get() + PERIOD_US);
+            let polled = block_on(sensor.poll());
+            found = found.or(polled.probed);
+            up |= polled.transition == Some(Transition::Up);
+        }
+        assert_eq!(found, Some(Probed::Found(chip)), "{chip:?}");
+        assert!(up, "{chip:?}: the sensor came up");
+        assert!(
+            close(sensor.tilt(), [-500, 866, 0], lsb_mg(chip)),
+            "{chip:?}: {:?}",
+            sensor.tilt()
+        );
     }
 }

@@ -14,6 +14,7 @@ use lsm303agr::interface::I2cInterface;
 use lsm303agr::mode::MagOneShot;
 use lsm303agr::{AccelMode, AccelOutputDataRate, AccelScale, Lsm303agr};
 
+use marble_rolling::board::microbit::BusClear;
 use marble_rolling::board::qemu::virtual_i2c::{Ram, RamRange, TwimError, VirtualTwim};
 use marble_rolling::board::qemu::virtual_lsm303agr::{
     reg, AccelMode as ChipMode, ChipControl, InjectedFault, Placement, VirtualLsm303agr,
@@ -403,13 +404,64 @@ fn a_stuck_bus_never_completes_until_the_caller_gives_up() {
         deadline,
     ));
     assert!(matches!(raced, embassy_futures::select::Either::Second(())));
+    assert!(bus.stuck());
+    assert_eq!(
+        bus.clear_bus(),
+        BusClear::SdaStuck,
+        "a wedged slave holds on"
+    );
+    assert!(bus.stuck());
+    // Healthy again, but the slave still holds SDA low: stuck until cleared.
     control.inject(InjectedFault::Healthy);
+    {
+        let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
+        let mut status = pin!(sensor.accel_status());
+        for _ in 0..10 {
+            assert!(
+                poll_once(status.as_mut()).is_pending(),
+                "the fault lifted does not free the bus"
+            );
+        }
+    }
+    assert!(
+        matches!(bus.clear_bus(), BusClear::Released { clocks } if clocks <= 9),
+        "nine clocks free it"
+    );
+    assert!(!bus.stuck());
+    assert_eq!(bus.clears(), 2);
+    assert_eq!(bus.clear_bus(), BusClear::Free, "a free bus: a STOP alone");
+    // A fresh driver knows no mode: the firmware's re-init configures again.
+    let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
+    configure(&mut sensor, AccelMode::Normal, AccelOutputDataRate::Hz100).expect("configure");
     let got = sample(read(&mut sensor));
     assert_eq!(
         board(got),
         AccelMg::LEVEL,
         "the sample the stuck transfer did not take"
     );
+}
+
+#[test]
+fn a_chip_reset_frees_a_stuck_bus() {
+    let anchor = 0u8;
+    let control = ChipControl::new();
+    let clock = Cell::new(0);
+    let mut copy = [0u8; 8];
+    let mut bus = twim(&control, &mut copy, &clock, stack_ram(&anchor));
+    control.inject(InjectedFault::StuckBus);
+    {
+        let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
+        let mut id = pin!(sensor.accelerometer_id());
+        assert!(poll_once(id.as_mut()).is_pending());
+    }
+    assert!(bus.stuck());
+    // A brown-out resets the chip's I²C state machine with its registers.
+    control.inject(InjectedFault::ChipReset);
+    let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
+    configure(&mut sensor, AccelMode::Normal, AccelOutputDataRate::Hz100)
+        .expect("the reset chip answers");
+    assert!(!bus.stuck());
+    assert_eq!(bus.clears(), 0, "freed without a bus clear");
 }
 
 #[test]

@@ -120,7 +120,8 @@ extern "C" fn TIMER1() {
         // The counter runs on from the compare that cleared it: if this
         // interrupt came later than the new slice is long (a long critical
         // section elsewhere), the compare has passed and would next match
-        // after a 32-bit wrap, 71 minutes on. Start the slice from now.
+        // only after the 16-bit counter wraps, 65.5 ms on at 1 MHz: six
+        // refreshes with one row lit. Start the slice from now.
         timer.tasks_capture(1).write_value(1);
         if timer.cc(1).read() >= slice.us {
             timer.tasks_clear().write_value(1);

@@ -122,13 +122,16 @@ impl embedded_hal_async::i2c::Error for BusError {
     }
 }
 
-/// The virtual TWIM with a deadline on every transfer: a stuck transfer is
-/// dropped after [`TRANSFER_TIMEOUT_MS`] (the virtual bus needs no bus clear:
-/// it is free again as soon as the fault is). Logs the first failure of each
+/// The virtual TWIM with a deadline on every transfer and the micro:bit's
+/// bus-clear rule (`boards/microbit/src/hw.rs`, `Bus`): a clear before the
+/// first transfer and after every transfer that failed on the wire; a stuck
+/// transfer is dropped after [`TRANSFER_TIMEOUT_MS`]. The virtual bus stays
+/// stuck until cleared, as a real one does. Logs the first failure of each
 /// kind in a row.
 pub struct Bus<'a> {
     twim: QemuTwim<'a>,
     last_logged: Option<BusError>,
+    clear_first: bool,
 }
 
 impl<'a> Bus<'a> {
@@ -137,6 +140,14 @@ impl<'a> Bus<'a> {
         Self {
             twim,
             last_logged: None,
+            clear_first: true,
+        }
+    }
+
+    fn clear(&mut self) {
+        let outcome = self.twim.clear_bus();
+        if !outcome.is_clear() {
+            defmt::warn!("i2c: bus clear #{=u32}: {}", self.twim.clears(), outcome);
         }
     }
 }
@@ -151,16 +162,23 @@ impl I2c for Bus<'_> {
         address: u8,
         operations: &mut [Operation<'_>],
     ) -> Result<(), BusError> {
+        if self.clear_first {
+            self.clear_first = false;
+            self.clear();
+        }
         let copy_buffer = self.twim.copy_buffer_len();
-        let mut transfer = pin!(self.twim.transaction(address, operations));
         // A virtual transfer normally completes at its first poll: the
         // deadline (a clock read and a timer) is armed only for one that does
         // not, from that moment on — a stuck bus is caught just the same, and
-        // the demo's CPU load does not pay for a timer per transfer.
-        let outcome = match poll_once(transfer.as_mut()) {
-            Poll::Ready(outcome) => Ok(outcome),
-            Poll::Pending => {
-                with_timeout(Duration::from_millis(TRANSFER_TIMEOUT_MS), transfer).await
+        // the demo's CPU load does not pay for a timer per transfer. The
+        // transfer is dropped at the end of the block, before a bus clear.
+        let outcome = {
+            let mut transfer = pin!(self.twim.transaction(address, operations));
+            match poll_once(transfer.as_mut()) {
+                Poll::Ready(outcome) => Ok(outcome),
+                Poll::Pending => {
+                    with_timeout(Duration::from_millis(TRANSFER_TIMEOUT_MS), transfer).await
+                }
             }
         };
         let result = match outcome {
@@ -168,6 +186,13 @@ impl I2c for Bus<'_> {
             Ok(Err(e)) => Err(BusError::Twim(e)),
             Err(_) => Err(BusError::Timeout),
         };
+        // Only failures on the wire: a refused buffer never reached the bus.
+        if matches!(
+            result,
+            Err(BusError::Timeout | BusError::Twim(TwimError::AddressNack))
+        ) {
+            self.clear();
+        }
         match result {
             Ok(()) => self.last_logged = None,
             Err(e) if self.last_logged != Some(e) => {

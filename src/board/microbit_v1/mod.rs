@@ -16,6 +16,9 @@
 //!   accelerometers a v1 may carry ([`Accelerometer`], identified by
 //!   `WHO_AM_I`), and the memory map ([`FLASH_BYTES`], [`RAM_BYTES`],
 //!   [`FLASH_PAGE_BYTES`]).
+//! * [`sensor`]: the accelerometer's poll loop (probe, configure, poll,
+//!   faults, bus clear), generic over the bus: the firmware runs it on its
+//!   TWI, the host tests on the virtual chips ([`virtual_nxp`]).
 //!
 //! # Memory map
 //!
@@ -28,6 +31,7 @@
 pub mod accel;
 pub mod leds;
 pub mod nxp_driver;
+pub mod sensor;
 pub mod twi;
 pub mod virtual_nxp;
 

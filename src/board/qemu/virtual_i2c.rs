@@ -32,7 +32,13 @@
 //! (as does any address but the chip's two), no register changes;
 //! [`InjectedFault::StuckBus`] never completes it (the future stays pending:
 //! the caller's timeout must end it; dropping it is safe, nothing was
-//! applied); frozen data, garbage and a chip reset are the chip's
+//! applied) and leaves the bus stuck, as a slave holding SDA low leaves a
+//! real one: every later transfer hangs too, the fault lifted or not, until
+//! the firmware runs its bus clear ([`VirtualTwim::clear_bus`], the v2's
+//! [`clear_bus`] on the virtual lines: nine clocks free the slave once the
+//! fault is lifted, none while it is in force) or the chip is reset (a
+//! brown-out resets its I²C state machine too); frozen data, garbage and a
+//! chip reset are the chip's
 //! ([`VirtualLsm303agr`]). Time comes from the caller's clock (`now_us`),
 //! read once per chunk, so host tests step it by hand and the firmware passes
 //! embassy-time's.
@@ -40,6 +46,7 @@
 use embedded_hal_async::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 
 use super::virtual_lsm303agr::{ChipControl, InjectedFault, SampleSource, VirtualLsm303agr};
+use crate::board::microbit::{clear_bus, BusClear, BusLines};
 
 /// The largest transfer the TWIM's EasyDMA takes (nRF52833, embassy-nrf's
 /// `EASY_DMA_SIZE`).
@@ -113,6 +120,10 @@ pub struct VirtualTwim<'a, C, R> {
     ram: R,
     resets_seen: u32,
     last_error: Option<TwimError>,
+    /// A transfer hung with the slave holding SDA low; only a bus clear or
+    /// a chip reset frees it.
+    stuck: bool,
+    clears: u32,
 }
 
 impl<'a, C: FnMut() -> u64, R: Ram> VirtualTwim<'a, C, R> {
@@ -132,7 +143,37 @@ impl<'a, C: FnMut() -> u64, R: Ram> VirtualTwim<'a, C, R> {
             now_us,
             ram,
             last_error: None,
+            stuck: false,
+            clears: 0,
         }
+    }
+
+    /// Whether the bus is held stuck (see the module doc).
+    pub fn stuck(&self) -> bool {
+        self.stuck
+    }
+
+    /// Bus clears run so far.
+    pub fn clears(&self) -> u32 {
+        self.clears
+    }
+
+    /// The I²C bus clear on the bus lines (the v2's [`clear_bus`]): frees a
+    /// stuck bus unless the stuck-bus fault is still in force.
+    pub fn clear_bus(&mut self) -> BusClear {
+        let mut lines = Lines {
+            scl: true,
+            sda: true,
+            holding: self.stuck,
+            wedged: self.control.fault() == InjectedFault::StuckBus,
+            bits_left: HELD_BITS,
+        };
+        let outcome = clear_bus(&mut lines);
+        self.clears = self.clears.wrapping_add(1);
+        if outcome.is_clear() {
+            self.stuck = false;
+        }
+        outcome
     }
 
     /// The chip (inspection).
@@ -231,7 +272,13 @@ impl<'a, C: FnMut() -> u64, R: Ram> VirtualTwim<'a, C, R> {
         copy: bool,
     ) -> Result<(), TwimError> {
         self.control.count_transfer();
+        if self.control.reset_requests() != self.resets_seen {
+            self.stuck = false;
+        }
         if self.control.fault() == InjectedFault::StuckBus {
+            self.stuck = true;
+        }
+        if self.stuck {
             core::future::pending::<()>().await;
         }
         self.sync();
@@ -276,6 +323,48 @@ impl<'a, C: FnMut() -> u64, R: Ram> VirtualTwim<'a, C, R> {
         }
         Ok(())
     }
+}
+
+/// Bits a stuck slave still has to shift out once it may let go: a slave
+/// transmitter stopped after the first bits of a `0x0X` byte holds SDA low
+/// for the rest of it.
+const HELD_BITS: u8 = 5;
+
+/// The two lines during a bus clear, the slave's side modelled: while it
+/// holds SDA, each SCL pulse shifts out one more bit; a wedged slave (the
+/// fault still in force) never lets go. Nobody stretches the clock.
+struct Lines {
+    scl: bool,
+    sda: bool,
+    holding: bool,
+    wedged: bool,
+    bits_left: u8,
+}
+
+impl BusLines for Lines {
+    fn set_scl(&mut self, high: bool) {
+        if high && !self.scl && self.holding && !self.wedged {
+            self.bits_left = self.bits_left.saturating_sub(1);
+            if self.bits_left == 0 {
+                self.holding = false;
+            }
+        }
+        self.scl = high;
+    }
+
+    fn set_sda(&mut self, high: bool) {
+        self.sda = high;
+    }
+
+    fn scl(&mut self) -> bool {
+        self.scl
+    }
+
+    fn sda(&mut self) -> bool {
+        self.sda && !self.holding
+    }
+
+    fn half_period(&mut self) {}
 }
 
 impl<C, R> ErrorType for VirtualTwim<'_, C, R> {
