@@ -4,10 +4,13 @@
 //! touching and took a 1.7 m/s kick). Pairs at the largest separations the level
 //! format allows (a 127-tile grid: 63 pitches), along every combination of axes,
 //! at the largest speed (127 pitch/s), on every backend, with overflow checks on
-//! (the test profile's), in both steppers; and random far pairs against f64.
+//! (the test profile's), in both steppers; the same across the four storeys of
+//! the largest 3-D grid (127 × 8 × 127 tiles), where the vertical separation
+//! adds to the horizontal ones; and random far pairs against f64.
 mod common;
 
 use common::*;
+use marble_rolling::physics::geometry::grid::TileGrid;
 use marble_rolling::physics::{Effects, Scalar, Vec3, World};
 use proptest::prelude::*;
 
@@ -92,6 +95,103 @@ fn far_pairs_keep_their_energy<S: Scalar>(stepping: Stepping) {
         }
     }
 }
+
+/// The largest grid the level format takes: 127 × 127 tiles on each of four
+/// storeys (slabs `j = 0, 2, 4, 6`, open floors, no walls).
+const STOREYS_WORDS: usize = 4033;
+
+fn four_storeys() -> TileGrid<STOREYS_WORDS> {
+    let mut g = TileGrid::<STOREYS_WORDS>::new(127, 8, 127).expect("the largest grid");
+    for j in [0, 2, 4, 6] {
+        for k in 0..127 {
+            for i in 0..127 {
+                g.set(i, j, k, true);
+            }
+        }
+    }
+    g
+}
+
+/// Two marbles on the floors of storeys `sa`, `sb` at cells `a`, `b`, closing
+/// along their horizontal line at `speed` (pitch/s) for one frame: the energy
+/// before and after (pitch²/s²).
+fn fly_apart_3d<S: Scalar>(
+    stepping: Stepping,
+    (a, sa): ((i32, i32), i32),
+    (b, sb): ((i32, i32), i32),
+    speed: f64,
+) -> (f64, f64) {
+    let g = four_storeys();
+    let effects = Effects {
+        holes: true,
+        ..EFFECTS
+    };
+    let p = params::<S>(spec_in(stepping, effects));
+    let centre = |c: (i32, i32), storey: i32| {
+        let (x, z) = cell_centre(&p, c.0, c.1);
+        Vec3::new(x, S::from_int(storey) + p.radius, z)
+    };
+    let mut w: World<'_, S, 4> = World::with_centres(p, g.view(), &[centre(a, sa), centre(b, sb)])
+        .expect("marbles on open floors");
+    w.set_gravity_mg([0, -1000, 0]);
+    let (dx, dz) = (f64::from(b.0 - a.0), f64::from(b.1 - a.1));
+    let len = dx.hypot(dz).max(1.0);
+    let (ux, uz) = (speed * dx / len, speed * dz / len);
+    let v = |x: f64, z: f64| Vec3::new(S::from_f64(x), S::ZERO, S::from_f64(z));
+    w.marbles_mut()[0].vel = v(ux, uz);
+    w.marbles_mut()[1].vel = v(-ux, -uz);
+    let before = energy(&w);
+    for _ in 0..steps_of(&p, 8) {
+        w.step();
+    }
+    (before, energy(&w))
+}
+
+/// Every combination of axes at the largest separations of the largest 3-D grid
+/// (x and z up to 62 pitches, y up to 3 storeys: `|d|²` up to 7 700 pitch², 60
+/// times I8F24's range), at the stepper's top speed and half of it.
+fn far_pairs_across_storeys<S: Scalar>(stepping: Stepping) {
+    let v_max = params::<S>(spec_in(stepping, EFFECTS)).v_max.to_f64();
+    let top = v_max.min(127.0) / 2f64.sqrt();
+    let (lo, hi) = (1, 125);
+    for (a, b) in [
+        (((lo, lo), 0), ((hi, lo), 0)), // x
+        (((lo, lo), 0), ((lo, hi), 0)), // z
+        (((lo, lo), 0), ((lo, lo), 3)), // y
+        (((lo, lo), 0), ((hi, hi), 0)), // x, z
+        (((lo, lo), 0), ((hi, lo), 3)), // x, y
+        (((lo, lo), 3), ((lo, hi), 0)), // z, y
+        (((lo, lo), 0), ((hi, hi), 3)), // x, y, z
+        (((hi, lo), 3), ((lo, hi), 0)), // x, y, z, crossed
+        (((63, 63), 0), ((63, 63), 2)), // y only, two storeys
+    ] {
+        for speed in [top, top / 2.0] {
+            let (before, after) = fly_apart_3d::<S>(stepping, a, b, speed);
+            assert!(
+                after <= before * (1.0 + 1e-3) + 1e-6,
+                "{} {stepping:?} {a:?}–{b:?} at {speed}: energy {before} → {after}",
+                S::NAME
+            );
+            assert!(
+                after >= before * 0.9,
+                "{} {stepping:?} {a:?}–{b:?} at {speed}: energy {before} → {after} (a far kick?)",
+                S::NAME
+            );
+        }
+    }
+}
+
+fn far_pairs_3d_events<S: Scalar>() {
+    far_pairs_across_storeys::<S>(Stepping::Events);
+}
+fn far_pairs_3d_fixed<S: Scalar>() {
+    far_pairs_across_storeys::<S>(Stepping::Fixed);
+}
+for_each_backend!(far_pairs_across_storeys_with_events, far_pairs_3d_events);
+for_each_backend!(
+    far_pairs_across_storeys_with_fixed_steps,
+    far_pairs_3d_fixed
+);
 
 fn far_pairs_events<S: Scalar>() {
     far_pairs_keep_their_energy::<S>(Stepping::Events);
