@@ -38,6 +38,7 @@
 //!
 //! [`Command::Calibrate`]: crate::input::event::Command::Calibrate
 
+pub use super::event::Fault;
 use super::event::InputEvent;
 
 /// One accelerometer sample in milli-g (1000 = 1 g).
@@ -258,24 +259,6 @@ const fn clamp_i32(v: i32, limit: i32) -> i32 {
     } else {
         v
     }
-}
-
-/// Why a poll produced no usable sample.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Fault {
-    /// The bus transfer failed (NACK, arbitration loss, driver refusal, …).
-    Bus,
-    /// A bus transfer did not finish in time (a hung bus, cleared by the
-    /// board before reporting).
-    Timeout,
-    /// The sensor answered but had no new data for longer than expected
-    /// (see [`SupervisorConfig::not_ready_before_fault`]), or its samples
-    /// are stuck.
-    NoData,
-    /// The sample failed the [`Plausibility`] check (or the sensor is not
-    /// the one expected).
-    Implausible,
 }
 
 /// The outcome of one poll of the sensor, in the sensor's frame.
