@@ -43,25 +43,24 @@ use embassy_sync::signal::Signal;
 use embassy_time::{Duration, Ticker};
 
 use crate::game::levels::LEVELS;
-use crate::game::player::{win_flash, win_frame, Player, Status, WIN_PAUSE_FRAMES};
+use crate::game::player::{Player, Status, WIN_PAUSE_FRAMES};
 use crate::game::rules::Phase;
 use crate::game::session::SYNTHETIC_TILT;
 use crate::input::event::{Command, InputEvent, Tilt};
 use crate::input::keys::KeyTilt;
 use crate::input::tilt::TiltConfig;
-use crate::matrix::{Frame, ScanStep, Scanner};
+use crate::matrix::{Frame, Scanner};
 use crate::physics::world::SetupError;
 #[cfg(feature = "records")]
 use crate::records::{Offer, Records};
+use crate::render::screens::{win_flash, win_frame};
 #[cfg(feature = "sound")]
 use crate::sound::Sound;
 #[cfg(feature = "records")]
 use embedded_storage_async::nor_flash::NorFlash;
 
 pub use crate::game::player::FRAME_HZ;
-
-/// Full LED-matrix refreshes per second.
-pub const REFRESH_HZ: u32 = 100;
+pub use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 
 /// A source of tilt readings and commands (accelerometer, keyboard, script).
 pub trait TiltInput {
@@ -73,12 +72,6 @@ pub trait TiltInput {
 pub trait ByteSource {
     /// Waits for the next received byte.
     fn read_byte(&mut self) -> impl Future<Output = u8>;
-}
-
-/// A blocking byte sink for an interactive terminal.
-pub trait Console {
-    /// Writes all of `bytes`.
-    fn write(&mut self, bytes: &[u8]);
 }
 
 // ---------------------------------------------------------------------------
@@ -614,28 +607,6 @@ async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
         sensor = player.sensor_down();
     }
     GameExit::DemoDone(summary)
-}
-
-/// Something that can show BCM scan steps on a `W`×`H` LED matrix.
-pub trait MatrixOutput<const W: usize, const H: usize> {
-    /// Lights row `step.row` with the columns set in `step.columns`, holds it
-    /// for `step.ticks` base ticks of the board's scan clock, then returns
-    /// (the caller immediately shows the next step).
-    fn show(&mut self, step: ScanStep) -> impl Future<Output = ()>;
-
-    /// Shows one full refresh: the next [`Scanner::STEPS_PER_REFRESH`] steps
-    /// of `scanner` (which is at the start of a refresh), in order, and
-    /// returns when the refresh is over. By default, step by step with
-    /// [`show`](Self::show); an output with nothing to wait for between steps
-    /// (the virtual matrix) takes the whole refresh at once and saves an
-    /// await per step.
-    fn show_refresh(&mut self, scanner: &mut Scanner<W, H>) -> impl Future<Output = ()> {
-        async move {
-            for _ in 0..Scanner::<W, H>::STEPS_PER_REFRESH {
-                self.show(scanner.next_step()).await;
-            }
-        }
-    }
 }
 
 /// Scans the latest frame from [`Links::frames`] onto `output`, forever. A
