@@ -11,6 +11,7 @@
 //! and host tests drive the same code.
 
 pub mod accel_timing;
+pub mod axes;
 pub mod event;
 pub mod keys;
 #[cfg(feature = "lsm303agr")]
