@@ -47,9 +47,9 @@ async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: b
     tilt: TiltConfig,
     #[cfg(feature = "sleep")] level: u8,
 ) -> GameExit {
-    // Without `sleep` the start is the literal 0, as it always was: on the
-    // micro:bit v1 even a start level passed in as a constant measured 2 KB
-    // more stack (`cargo xtask check-microbit-v1`), over its RAM budget.
+    // Without `sleep` the start is the literal 0: on the micro:bit v1 even a
+    // start level passed in as a constant measured 2 KB more stack (`cargo
+    // xtask check-microbit-v1`), over its RAM budget.
     #[cfg(feature = "sleep")]
     let start = usize::from(level);
     #[cfg(not(feature = "sleep"))]

@@ -58,8 +58,6 @@ const V_GAP: i64 = 6 * ONE;
 /// (see [`step_mg`]), mg: a small relay step that makes the loop brake and correct
 /// sooner than the tilt path's low-pass lag alone allows (without it the marble
 /// overshoots corner's first run into the end wall: 334 frames instead of 241).
-/// (Before the tilt path lost its 20 mg dead zone, the whole step was a flat 30 mg,
-/// 20 of which the dead zone ate.)
 const STEP_MG: i64 = 10;
 /// The tilt over which the step ([`STEP_MG`] plus the resistance) ramps in (avoids
 /// chatter around zero).
