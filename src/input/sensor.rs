@@ -14,7 +14,7 @@
 //!
 //! A poll may find no new sample for harmless reasons: the poll came a little
 //! early, or the sensor was just re-initialised. Counting that as a failure
-//! turned poll-timing jitter into spurious re-inits and fault pictures, so the
+//! would turn poll-timing jitter into spurious re-inits and fault pictures, so the
 //! supervisor tolerates [`SupervisorConfig::not_ready_before_fault`] − 1
 //! not-ready polls in a row uncounted; only data missing for longer is
 //! [`Fault::NoData`].
