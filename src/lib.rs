@@ -1,7 +1,9 @@
 //! Marble Rolling: the no_std core of a tilt-controlled marble maze.
 //!
 //! Data flows one way: board → [`input`] → [`game`] (with its [`physics`]) →
-//! [`render`] → [`matrix`] (the display), and [`sound`] beside the picture. The [`board`] modules hold the safe,
+//! [`render`] → [`matrix`] (the display), and [`sound`] beside the picture;
+//! imports point down the layers of docs/architecture.md (`tests/layers.rs`
+//! checks them). The [`board`] modules hold the safe,
 //! host-tested half of each board; the firmware's tasks are `app` (feature
 //! `app`); best times live in flash through `records` (feature `records`).
 #![no_std]

@@ -3,8 +3,8 @@
 use marble_rolling::board::microbit::{
     refresh_millihz, rtc_ticks_per_base_tick, HEIGHT, RTC_HZ, WIDTH,
 };
-use marble_rolling::game::player::fault_frame;
 use marble_rolling::matrix::{OnTimeIntegrator, Scanner, LEVELS, MAX_BRIGHTNESS};
+use marble_rolling::render::screens::fault_frame;
 
 #[test]
 fn bcm_slices_fit_the_rtc_at_100_hz() {

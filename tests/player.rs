@@ -3,12 +3,13 @@
 //! the terminal player's keys give the firmware's readings and game.
 
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::{fault_frame, Player, LOSS_PAUSE_FRAMES, WIN_PAUSE_FRAMES};
+use marble_rolling::game::player::{Player, LOSS_PAUSE_FRAMES, WIN_PAUSE_FRAMES};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::event::{Command, InputEvent, Tilt};
 use marble_rolling::input::keys::KeyTilt;
 use marble_rolling::input::sensor::Fault;
+use marble_rolling::render::screens::fault_frame;
 
 type FivePlayer = Player<5, 5, true, false>;
 
@@ -194,7 +195,7 @@ fn key_bytes_give_the_same_game_on_every_front_end() {
 /// win, and the next level starts without it.
 #[test]
 fn a_new_record_shows_growing_squares_until_the_next_level() {
-    use marble_rolling::game::player::{record_frame, win_frame};
+    use marble_rolling::render::screens::{record_frame, win_frame};
     let mut p = FivePlayer::new(&LEVELS, 0, SYNTHETIC_TILT, true).expect("level");
     // Not during play.
     p.announce_record();
@@ -219,7 +220,7 @@ fn a_new_record_shows_growing_squares_until_the_next_level() {
     let mut rings = std::collections::BTreeSet::new();
     for left in (1..left).rev() {
         let frame = p.tick([0, 1000, 0], true).frame.expect("drawn");
-        assert_eq!(frame, record_frame::<5, 5>(left));
+        assert_eq!(frame, record_frame::<5, 5>(WIN_PAUSE_FRAMES - left));
         // One square around the centre at a time.
         let lit: Vec<(usize, usize)> = (0..25)
             .map(|i| (i % 5, i / 5))

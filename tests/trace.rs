@@ -1,10 +1,10 @@
-//! The `sim` trace's sampler ([`marble_rolling::host::sim::step_sampled`]) on
+//! The `sim` trace's sampler ([`marble_rolling::host::motion_trace::step_sampled`]) on
 //! worlds driven directly: event steps sampled every 1/1024 s end where the step
 //! ends, and two marbles pressed together never overlap in any sample.
 
 use marble_rolling::game::levels::by_name;
 use marble_rolling::game::rules::{Game, GameConfig};
-use marble_rolling::host::sim::{sample, samples_per_step, step_sampled, FlightLog};
+use marble_rolling::host::motion_trace::{sample, samples_per_step, step_sampled, FlightLog};
 use marble_rolling::physics::{Fx, Scalar};
 
 /// The built-in two-marble level in event stepping, one step per 1/128 s frame.

@@ -60,9 +60,9 @@ pub const MAX_DIFFICULTY: u8 = 9;
 /// The largest maze (cells a side) that gets more than one marble. Two marbles
 /// farther apart than about 11 pitches overflow the event stepper's
 /// marble–marble search in the firmware's `I8F24` (a square of the distance
-/// passes its range of 128; found by `survey` in `tests/generate.rs`: debug
-/// builds panicked from size 9 on, event steps only), and on larger mazes the
-/// autopilot lost some three-marble runs on time. Up to 7 every one was won.
+/// passes its range of 128: `survey` in `tests/generate.rs` shows debug builds
+/// panicking from size 9 on, event steps only), and on larger mazes the
+/// autopilot loses some three-marble runs on time. Up to 7 it wins every one.
 pub const MAX_SIZE_FOR_MARBLES: u8 = 7;
 /// The longest level text [`Maze`] writes (four storeys of the largest size).
 pub const MAX_TEXT_BYTES: usize = 128 + MAX_STOREYS * (TILES * (TILES + 1) + 4);

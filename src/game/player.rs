@@ -24,12 +24,12 @@ use super::level::LevelView;
 use super::level::MAX_MARBLES;
 use super::rules::{Game, GameConfig, Phase};
 use super::session::Session;
-use crate::input::event::{Command, InputEvent};
-use crate::input::sensor::Fault;
+use crate::input::event::{Command, Fault, InputEvent};
 use crate::input::tilt::TiltConfig;
-use crate::matrix::{Frame, MAX_BRIGHTNESS};
+use crate::matrix::Frame;
 use crate::physics::world::SetupError;
 use crate::physics::Fx;
+use crate::render::screens::{fault_frame, record_frame, win_frame};
 #[cfg(feature = "storey-maps")]
 use crate::render::tile_point;
 use crate::render::Renderer;
@@ -43,8 +43,6 @@ const _: () = assert!(GameConfig::EVENTS.frame_hz() == FRAME_HZ);
 pub const WIN_PAUSE_FRAMES: u32 = FRAME_HZ;
 /// How long a lost attempt (fell, time up) is shown before the restart.
 pub const LOSS_PAUSE_FRAMES: u32 = FRAME_HZ / 2;
-/// Flash period of the win display, frames (on and off for this long each).
-const WIN_FLASH_FRAMES: u32 = FRAME_HZ / 8;
 
 /// What the game is doing, for status displays (QEMU's terminal).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -396,7 +394,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
                 draw.then(|| {
                     let frame = self.render();
                     match (phase, record) {
-                        (Phase::Won, true) => record_frame(left),
+                        (Phase::Won, true) => record_frame(WIN_PAUSE_FRAMES.saturating_sub(left)),
                         (Phase::Won, false) => win_frame(&frame, left),
                         _ => frame,
                     }
@@ -459,47 +457,4 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         defmt::info!("calibrate: {}", result);
         let _ = result;
     }
-}
-
-/// The won level's display: the final picture flashing with a full-on
-/// screen, an eighth of a second each; `left` counts the frames down.
-pub fn win_frame<const W: usize, const H: usize>(last: &Frame<W, H>, left: u32) -> Frame<W, H> {
-    if win_flash(left) {
-        Frame::filled(MAX_BRIGHTNESS)
-    } else {
-        *last
-    }
-}
-
-/// A new record's display: squares growing from the centre to the edge, an
-/// eighth of a second each, over and over; `left` counts the frames down.
-pub fn record_frame<const W: usize, const H: usize>(left: u32) -> Frame<W, H> {
-    let (cx, cy) = (W / 2, H / 2);
-    let rings = cx.max(cy) as u32 + 1;
-    let ring = (WIN_PAUSE_FRAMES.saturating_sub(left) / WIN_FLASH_FRAMES.max(1) % rings) as usize;
-    let mut frame = Frame::new();
-    for y in 0..H {
-        for x in 0..W {
-            if x.abs_diff(cx).max(y.abs_diff(cy)) == ring {
-                frame.set(x, y, MAX_BRIGHTNESS);
-            }
-        }
-    }
-    frame
-}
-
-/// Whether [`win_frame`] shows the full-on screen with `left` frames to go.
-pub fn win_flash(left: u32) -> bool {
-    (left / WIN_FLASH_FRAMES.max(1)).is_multiple_of(2)
-}
-
-/// Shown while the accelerometer is down: a cross from corner to corner.
-pub fn fault_frame<const W: usize, const H: usize>() -> Frame<W, H> {
-    let mut frame = Frame::new();
-    for y in 0..H {
-        let x = if H > 1 { y * (W - 1) / (H - 1) } else { 0 };
-        frame.set(x, y, MAX_BRIGHTNESS);
-        frame.set(W - 1 - x, y, MAX_BRIGHTNESS);
-    }
-    frame
 }

@@ -18,9 +18,7 @@
 //! (or 8.5 minutes, if the limit is longer) still ends as time up, so an
 //! untouched board does not play one attempt for ever.
 
-use crate::physics::dynamics::effects::BoardMotion;
-use crate::physics::geometry::frame::Frame;
-use crate::physics::scalar::rsqrt_bits;
+use crate::physics::dynamics::board_motion::BoardTrack;
 use crate::physics::world::{Params, SetupError, Stepping, World};
 use crate::physics::{Scalar, Vec3};
 
@@ -134,7 +132,7 @@ pub struct Game<'a, S: Scalar> {
     /// measured 12 304 B of 12 288 with a `u32`).
     idle: u16,
     phase: Phase,
-    board: Option<(Frame<S>, Vec3<S>)>,
+    board: BoardTrack<S>,
 }
 
 impl<'a, S: Scalar> Game<'a, S> {
@@ -164,7 +162,7 @@ impl<'a, S: Scalar> Game<'a, S> {
             frames: 0,
             idle: 0,
             phase: Phase::Playing,
-            board: None,
+            board: BoardTrack::new(),
         })
     }
 
@@ -229,32 +227,8 @@ impl<'a, S: Scalar> Game<'a, S> {
     fn track_board(&mut self, g: [i32; 3]) {
         let (ex, ez) = self.world.extent();
         let pivot = Vec3::new(ex.half(), S::ZERO, ez.half());
-        // A board turned by the small angle θ sees gravity (−θz, −1, θx)·|g|: the
-        // angle is g/|g|, with 1/|g| from the division-free inverse root
-        // (2^60/|g| as an integer: |g|² read as a number with 40 fraction bits).
-        let norm2 = (g[0] as i64).pow(2) + (g[1] as i64).pow(2) + (g[2] as i64).pow(2);
-        let inv = rsqrt_bits(norm2.max(1) as u64, 40) as i128;
-        let angle = Vec3::new(
-            S::from_scaled(g[2] as i128 * inv, 60, false),
-            S::ZERO,
-            S::from_scaled(-(g[0] as i128) * inv, 60, false),
-        );
-        let frame = Frame::rotated(angle, pivot);
-        let sub = self.config.substeps_log2;
-        let (omega, omega_dot) = match self.board {
-            Some((prev, prev_omega)) => {
-                // Radians per frame → per step; the change per frame → per step².
-                let w = BoardMotion::rotation_between(&prev, &frame).shr(sub);
-                (w, (w - prev_omega).shr(sub))
-            }
-            None => (Vec3::ZERO, Vec3::ZERO),
-        };
-        self.board = Some((frame, omega));
-        self.world.set_board_motion(BoardMotion {
-            omega,
-            omega_dot,
-            pivot,
-        });
+        let motion = self.board.follow(g, pivot, self.config.substeps_log2);
+        self.world.set_board_motion(motion);
     }
 
     /// Plays one frame (all its substeps) and judges it.

@@ -13,9 +13,11 @@ pub mod generated;
 pub mod ghost_file;
 pub mod gif_out;
 pub mod play;
+pub mod motion_trace;
+pub mod report;
 pub mod sim;
 pub mod storey_maps;
-pub mod trace;
+pub mod tilt_trace;
 
 use std::boxed::Box;
 use std::format;

@@ -18,36 +18,10 @@
 //! player: one reading per frame (flat, from a tilt trace, or from the autopilot)
 //! → tilt path → [`crate::game::rules::Game::frame`] (`substeps` physics steps,
 //! then the judging). So the `state_hash` of a run is the firmware's for the same
-//! inputs and backend.
-//!
-//! # The trace
-//!
-//! `--trace FILE` writes at least one row per 1/1024 s of simulated time (with
-//! fixed steps: see below), each with the exact state of **every** marble at that
-//! instant, although the game steps a whole frame at a time: before each frame
-//! the marbles are saved; after it the frame is replayed step by step on a copy
-//! of the world that has the frame's gravity and board motion (everything a step
-//! reads except the marbles, which the frame changed, and the counters). The
-//! physics is deterministic, so the replay goes through exactly the frame's
-//! states; the tool checks that the replay ends where the frame did and fails
-//! loudly otherwise. The game itself, its judging and its hash are untouched by
-//! tracing.
-//!
-//! * Fixed steps (`--stepping fixed`): one row per step, the state after it (at
-//!   the default 8 substeps that is one row per 1/1024 s; fewer substeps give
-//!   fewer rows — between two fixed steps the state is not defined).
-//! * Event steps (`--stepping events`, one step per 1/128 s frame by default):
-//!   the replay records every piece of closed-form flight
-//!   ([`World::step_observed`] into a [`FlightLog`]) and samples it at every
-//!   1/1024 s instant inside the step ([`sample`]); the row at the step's end is
-//!   the world's state after the step. A state jump at an event instant (a
-//!   bounce) belongs to the flight that starts there.
-//!
-//! Columns ([`trace_header`]): `step,t_s` (the step the instant ends or lies in,
-//! 1-based, and the simulated time), then `x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s`
-//! for marble 0 and `xN_mm,yN_mm,zN_mm,vxN_mm_s,vyN_mm_s,vzN_mm_s` for each
-//! further marble `N` — one row per instant, so marble–marble distances are read
-//! off a single row.
+//! inputs and backend. `--tilt-trace FILE` feeds recorded readings
+//! ([`super::tilt_trace`]); `--trace FILE` writes the marbles' motion, sampled
+//! between the game's frames ([`super::motion_trace`]); the outcome is a
+//! [`Report`], a JSON line or a summary.
 //!
 //! # Exit status
 //!
@@ -68,13 +42,15 @@ use std::{eprintln, format, print, println};
 use clap::Parser;
 
 use super::gif_out::GifRecorder;
-use super::trace::TiltTrace;
-use super::{excerpt, json_number, json_string, load_level, Backend, WithScalar};
+use super::motion_trace::{replay_frame, trace_header, FlightLog, ReplayError};
+use super::report::{states, Report};
+use super::tilt_trace::TiltTrace;
+use super::{excerpt, load_level, Backend, WithScalar};
 use crate::game::autopilot::Autopilot;
 use crate::game::level::{LevelError, LevelView};
 use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::{Session, SYNTHETIC_TILT};
-use crate::physics::{Marble, Scalar, Segment, SetupError, StepObserver, Stepping, Vec3, World};
+use crate::physics::{Scalar, SetupError, Stepping};
 
 /// Seconds the last GIF image is held before the animation loops.
 const GIF_HOLD_S: f64 = 1.5;
@@ -117,8 +93,8 @@ pub struct Args {
     pub stepping: Stepping,
     /// Write every marble's position (mm) and velocity (mm/s) to FILE as CSV: a
     /// row per 1/1024 s with events, a row per step with fixed steps.
-    #[arg(long, value_name = "FILE")]
-    pub trace: Option<PathBuf>,
+    #[arg(long = "trace", value_name = "FILE")]
+    pub motion_trace: Option<PathBuf>,
     /// Print one JSON line instead of the human summary.
     #[arg(long)]
     pub json: bool,
@@ -182,176 +158,8 @@ pub fn stepping_name(s: Stepping) -> &'static str {
 /// Where each frame's reading comes from.
 enum Input {
     Flat,
-    Trace(TiltTrace),
+    Tilts(TiltTrace),
     Autopilot,
-}
-
-/// What a run produced.
-#[derive(Clone, Debug)]
-pub struct Report {
-    /// The level's name.
-    pub level: String,
-    /// `won`, `fell` or `timeout`.
-    pub outcome: &'static str,
-    /// Frames played.
-    pub frames: u32,
-    /// Physics steps taken.
-    pub steps: u64,
-    /// Simulated seconds.
-    pub sim_seconds: f64,
-    /// Physics step (s).
-    pub dt_s: f64,
-    /// Steps per frame.
-    pub substeps: u32,
-    /// Scalar backend.
-    pub backend: &'static str,
-    /// Short tile width (mm).
-    pub short_mm: f64,
-    /// Long tile width (mm).
-    pub long_mm: f64,
-    /// Marble radius (mm).
-    pub marble_radius_mm: f64,
-    /// Marbles in the level.
-    pub marbles: usize,
-    /// `fixed` or `events`.
-    pub stepping: &'static str,
-    /// Every marble at the start.
-    pub start: Vec<MarbleState>,
-    /// Every marble at the end.
-    pub end: Vec<MarbleState>,
-    /// `Session::state_hash` at the end.
-    pub state_hash: u64,
-    /// Readings the tilt path rejected.
-    pub tilt_errors: u32,
-    /// Wall-clock seconds of the simulation loop.
-    pub wall_s: f64,
-    /// Rows written by `--trace`.
-    pub trace_rows: u64,
-    /// GIF frames written by `--gif`.
-    pub gif_frames: usize,
-}
-
-/// One marble's state in the report (mm and mm/s, tile frame).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MarbleState {
-    /// Centre.
-    pub pos_mm: [f64; 3],
-    /// Velocity.
-    pub vel_mm_s: [f64; 3],
-    /// Fallen through a hole or off the board.
-    pub out: bool,
-}
-
-impl MarbleState {
-    fn json(&self) -> String {
-        let [x, y, z] = self.pos_mm.map(json_number);
-        let [vx, vy, vz] = self.vel_mm_s.map(json_number);
-        format!(
-            r#"{{"x_mm":{x},"y_mm":{y},"z_mm":{z},"vx_mm_s":{vx},"vy_mm_s":{vy},"vz_mm_s":{vz},"out":{}}}"#,
-            self.out
-        )
-    }
-}
-
-/// `start` and `final` in the JSON: marble 0's position at the top (the fields
-/// of old), every marble's state in `marbles`.
-fn marbles_json(ms: &[MarbleState]) -> String {
-    let [x, y, z] = ms
-        .first()
-        .map_or([f64::NAN; 3], |m| m.pos_mm)
-        .map(json_number);
-    let list: Vec<String> = ms.iter().map(MarbleState::json).collect();
-    format!(
-        r#"{{"x_mm":{x},"y_mm":{y},"z_mm":{z},"marbles":[{}]}}"#,
-        list.join(",")
-    )
-}
-
-impl Report {
-    /// Simulated seconds per wall-clock second (not deterministic).
-    pub fn speed_x(&self) -> f64 {
-        if self.wall_s > 0.0 {
-            self.sim_seconds / self.wall_s
-        } else {
-            f64::INFINITY
-        }
-    }
-
-    /// The `--json` line.
-    pub fn json(&self) -> String {
-        format!(
-            "{{\"level\":{},\"outcome\":\"{}\",\"steps\":{},\"frames\":{},\"sim_seconds\":{},\"dt_s\":{},\
-             \"substeps\":{},\"stepping\":\"{}\",\"backend\":\"{}\",\"short_mm\":{},\"long_mm\":{},\
-             \"marble_radius_mm\":{},\"marbles\":{},\"start\":{},\"final\":{},\"state_hash\":\"{:016x}\",\
-             \"tilt_errors\":{},\"wall_s\":{},\"speed_x\":{}}}",
-            json_string(&self.level),
-            self.outcome,
-            self.steps,
-            self.frames,
-            json_number(self.sim_seconds),
-            json_number(self.dt_s),
-            self.substeps,
-            self.stepping,
-            self.backend,
-            json_number(self.short_mm),
-            json_number(self.long_mm),
-            json_number(self.marble_radius_mm),
-            self.marbles,
-            marbles_json(&self.start),
-            marbles_json(&self.end),
-            self.state_hash,
-            self.tilt_errors,
-            json_number(self.wall_s),
-            json_number(self.speed_x().min(1e12)),
-        )
-    }
-
-    /// The human summary.
-    pub fn summary(&self) -> String {
-        let mut s = format!(
-            "{}: {} after {:.3} s ({} frames, {} steps of 1/{} s, {} substeps, {} stepping, {})\n",
-            self.level,
-            self.outcome,
-            self.sim_seconds,
-            self.frames,
-            self.steps,
-            (1.0 / self.dt_s).round(),
-            self.substeps,
-            self.stepping,
-            self.backend,
-        );
-        for (n, (a, b)) in self.start.iter().zip(&self.end).enumerate() {
-            let (p, q) = (a.pos_mm, b.pos_mm);
-            s.push_str(&format!(
-                "marble {n}: start ({:.2}, {:.2}, {:.2}) mm → end ({:.2}, {:.2}, {:.2}) mm{}\n",
-                p[0],
-                p[1],
-                p[2],
-                q[0],
-                q[1],
-                q[2],
-                if b.out { " (out)" } else { "" }
-            ));
-        }
-        s.push_str(&format!(
-            "state_hash {:016x}; {:.0}× real time",
-            self.state_hash,
-            self.speed_x()
-        ));
-        if self.tilt_errors > 0 {
-            s.push_str(&format!(
-                "\n{} readings rejected by the tilt path",
-                self.tilt_errors
-            ));
-        }
-        if self.trace_rows > 0 {
-            s.push_str(&format!("\ntrace: {} rows", self.trace_rows));
-        }
-        if self.gif_frames > 0 {
-            s.push_str(&format!("\ngif: {} frames", self.gif_frames));
-        }
-        s
-    }
 }
 
 /// One run, ready to go (everything that could fail on input has been checked).
@@ -360,128 +168,8 @@ struct Job<'o> {
     config: GameConfig,
     max_frames: u64,
     input: Input,
-    trace_out: Option<(&'o Path, BufWriter<File>)>,
+    motion_out: Option<(&'o Path, BufWriter<File>)>,
     gif: Option<(&'o Path, GifRecorder, u32)>,
-}
-
-fn states<S: Scalar, const M: usize>(w: &World<'_, S, M>) -> Vec<MarbleState> {
-    let l = &w.params().layout;
-    let mm = |v: Vec3<S>| [l.to_mm(v.x), l.to_mm(v.y), l.to_mm(v.z)];
-    w.marbles()
-        .iter()
-        .map(|m| MarbleState {
-            pos_mm: mm(m.pos),
-            vel_mm_s: mm(m.vel),
-            out: m.out,
-        })
-        .collect()
-}
-
-/// The trace's header for `marbles` marbles (see the module docs).
-pub fn trace_header(marbles: usize) -> String {
-    let mut h = String::from("step,t_s");
-    for n in 0..marbles {
-        let n = if n == 0 { String::new() } else { n.to_string() };
-        for q in ["x", "y", "z"] {
-            h.push_str(&format!(",{q}{n}_mm"));
-        }
-        for q in ["vx", "vy", "vz"] {
-            h.push_str(&format!(",{q}{n}_mm_s"));
-        }
-    }
-    h
-}
-
-/// Every flight of one step, per marble, in time order (a [`StepObserver`]).
-#[derive(Clone, Debug)]
-pub struct FlightLog<S> {
-    /// Per marble: `(from, to, segment)`, fractions of the step.
-    pub flights: Vec<Vec<(S, S, Segment<S>)>>,
-}
-
-impl<S> Default for FlightLog<S> {
-    fn default() -> Self {
-        FlightLog {
-            flights: Vec::new(),
-        }
-    }
-}
-
-impl<S> FlightLog<S> {
-    /// Forgets the flights so far (keeps the room).
-    pub fn clear(&mut self) {
-        for f in &mut self.flights {
-            f.clear();
-        }
-    }
-    /// Marble `n`'s flights.
-    pub fn of(&self, n: usize) -> &[(S, S, Segment<S>)] {
-        self.flights.get(n).map_or(&[][..], |f| &f[..])
-    }
-}
-
-impl<S: Copy> StepObserver<S> for FlightLog<S> {
-    fn flight(&mut self, marble: usize, from: S, to: S, seg: &Segment<S>) {
-        if self.flights.len() <= marble {
-            self.flights.resize_with(marble + 1, Vec::new);
-        }
-        self.flights[marble].push((from, to, *seg));
-    }
-}
-
-/// A marble's position and velocity at `tau` (a fraction of the step) from its
-/// `flights` in that step: on the flight with `from ≤ tau < to` (a jump at a
-/// flight's end belongs to the next one); between flights (asleep for a while)
-/// where the last one ended; before any, `start` (its state before the step).
-pub fn sample<S: Scalar>(
-    flights: &[(S, S, Segment<S>)],
-    start: &Marble<S>,
-    tau: S,
-) -> (Vec3<S>, Vec3<S>) {
-    match flights.iter().rev().find(|(from, _, _)| *from <= tau) {
-        Some(&(from, to, ref seg)) => {
-            let s = if tau < to { tau - from } else { to - from };
-            (seg.pos_at(s), seg.vel_at(s))
-        }
-        None => (start.pos, start.vel),
-    }
-}
-
-/// Trace rows per step: one per 1/1024 s with events (at least one), one per
-/// step with fixed steps.
-pub fn samples_per_step<S: Scalar, const M: usize>(w: &World<'_, S, M>) -> u32 {
-    if w.params().events() {
-        1 << 10u32.saturating_sub(w.params().k)
-    } else {
-        1
-    }
-}
-
-/// Advances `w` by one step and returns `samples` rows: the instants `j/samples`
-/// of the step (`j = 1 ..= samples`), every marble's position and velocity at
-/// each (pitch, pitch/s). The last row is the world's state after the step; the
-/// others are sampled from the step's flights ([`sample`]; only event steps have
-/// flights, so with fixed steps ask for one sample).
-pub fn step_sampled<S: Scalar, const M: usize>(
-    w: &mut World<'_, S, M>,
-    log: &mut FlightLog<S>,
-    samples: u32,
-) -> Vec<Vec<(Vec3<S>, Vec3<S>)>> {
-    let before: Vec<Marble<S>> = w.marbles().to_vec();
-    log.clear();
-    w.step_observed(log);
-    let mut rows = Vec::with_capacity(samples as usize);
-    for j in 1..samples {
-        let tau = S::from_int(j as i32).div(S::from_int(samples as i32));
-        let row = before
-            .iter()
-            .enumerate()
-            .map(|(n, m)| sample(log.of(n), m, tau))
-            .collect();
-        rows.push(row);
-    }
-    rows.push(w.marbles().iter().map(|m| (m.pos, m.vel)).collect());
-    rows
 }
 
 impl WithScalar for Job<'_> {
@@ -499,7 +187,7 @@ impl WithScalar for Job<'_> {
         let start = states(session.game().world());
         let mut trace_rows = 0u64;
         let write_err = |p: &Path, e: std::io::Error| format!("cannot write {}: {e}", p.display());
-        if let Some((p, w)) = &mut self.trace_out {
+        if let Some((p, w)) = &mut self.motion_out {
             writeln!(w, "{}", trace_header(start.len())).map_err(|e| write_err(p, e))?;
         }
         if let Some((p, gif, _)) = &mut self.gif {
@@ -512,19 +200,19 @@ impl WithScalar for Job<'_> {
         let mut frames = 0u64;
         while session.game().phase() == Phase::Playing && frames < self.max_frames {
             let reading = match &mut self.input {
-                Input::Flat => super::trace::FLAT,
-                Input::Trace(t) => t.reading_at(frames as f64 / hz),
+                Input::Flat => super::tilt_trace::FLAT,
+                Input::Tilts(t) => t.reading_at(frames as f64 / hz),
                 Input::Autopilot => autopilot
                     .as_mut()
-                    .map_or(super::trace::FLAT, |a| a.reading_mg(session.game())),
+                    .map_or(super::tilt_trace::FLAT, |a| a.reading_mg(session.game())),
             };
-            let before = self.trace_out.is_some().then(|| {
+            let before = self.motion_out.is_some().then(|| {
                 let w = session.game().world();
                 (w.marbles().to_vec(), w.stats)
             });
             session.frame(reading);
             frames += 1;
-            if let (Some((p, w)), Some((marbles, stats))) = (&mut self.trace_out, before) {
+            if let (Some((p, w)), Some((marbles, stats))) = (&mut self.motion_out, before) {
                 trace_rows += replay_frame(&session, &marbles, stats, substeps, dt, &mut log, w)
                     .map_err(|e| match e {
                         ReplayError::Io(e) => write_err(p, e),
@@ -543,7 +231,7 @@ impl WithScalar for Job<'_> {
                 }
             }
         }
-        if let Some((p, w)) = &mut self.trace_out {
+        if let Some((p, w)) = &mut self.motion_out {
             w.flush().map_err(|e| write_err(p, e))?;
         }
         let wall_s = started.elapsed().as_secs_f64();
@@ -583,67 +271,6 @@ impl WithScalar for Job<'_> {
             gif_frames,
         })
     }
-}
-
-enum ReplayError {
-    Io(std::io::Error),
-    Diverged,
-}
-
-/// Replays the frame just played step by step (see the module docs) and writes
-/// its rows; returns the rows written.
-fn replay_frame<S: Scalar>(
-    session: &Session<'_, S>,
-    before: &[Marble<S>],
-    stats: crate::physics::StepStats,
-    substeps: u32,
-    dt: f64,
-    log: &mut FlightLog<S>,
-    out: &mut impl Write,
-) -> Result<u64, ReplayError> {
-    let game = session.game();
-    let after = game.world();
-    let mut w = after.clone();
-    w.marbles_mut().copy_from_slice(before);
-    // The frame's new pull woke the marbles before its first step, which the
-    // copies from before it do not know. Waking them all is exact: a marble that
-    // stayed asleep through the frame is one whose step changes nothing, and
-    // stepping it falls asleep again with the same state.
-    for m in w.marbles_mut() {
-        m.asleep = false;
-    }
-    w.stats = stats;
-    let layout = after.params().layout;
-    let c = |v: S| layout.to_mm(v);
-    let samples = samples_per_step(&w);
-    let first_step = game.steps() - substeps as u64;
-    let mut rows = 0u64;
-    let mut line = String::new();
-    for n in 1..=substeps as u64 {
-        let step = first_step + n;
-        for (j, row) in step_sampled(&mut w, log, samples).iter().enumerate() {
-            let t = (step - 1) as f64 * dt + (j + 1) as f64 / samples as f64 * dt;
-            line.clear();
-            line.push_str(&format!("{step},{}", json_number(t)));
-            for (p, v) in row {
-                line.push_str(&format!(
-                    ",{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
-                    c(p.x),
-                    c(p.y),
-                    c(p.z),
-                    c(v.x),
-                    c(v.y),
-                    c(v.z)
-                ));
-            }
-            writeln!(out, "{line}").map_err(ReplayError::Io)?;
-            rows += 1;
-        }
-    }
-    if w.marbles() != after.marbles() {
-        return Err(ReplayError::Diverged);
-    }
-    Ok(rows)
 }
 
 /// `--check FILE`: 0 and `ok`, or 1 and `FILE:line:column: message`; 2 for a
@@ -807,7 +434,7 @@ pub fn simulate(args: &Args) -> Result<Report, String> {
             std::fs::read(p).map_err(|e| format!("cannot read tilt trace {}: {e}", p.display()))?;
         let t = TiltTrace::from_bytes(&bytes)
             .map_err(|e| format!("tilt trace {}:{}: {}", p.display(), e.line, e.message))?;
-        Input::Trace(t)
+        Input::Tilts(t)
     } else if args.autopilot {
         Input::Autopilot
     } else {
@@ -817,7 +444,7 @@ pub fn simulate(args: &Args) -> Result<Report, String> {
         Some(s) => (s * config.frame_hz() as f64).ceil() as u64,
         None => u64::MAX,
     };
-    let trace_out = match &args.trace {
+    let motion_out = match &args.motion_trace {
         Some(p) => {
             let f = File::create(p).map_err(|e| format!("cannot create {}: {e}", p.display()))?;
             Some((p.as_path(), BufWriter::with_capacity(1 << 16, f)))
@@ -838,7 +465,7 @@ pub fn simulate(args: &Args) -> Result<Report, String> {
         config,
         max_frames,
         input,
-        trace_out,
+        motion_out,
         gif,
     })
 }

@@ -1,6 +1,6 @@
 //! The host GIF's image of a game: the LED-matrix picture and, for a level of
-//! several storeys, a map of every storey beside it (issue 18: "QEMU shows the
-//! storeys side by side; the host GIF too").
+//! several storeys, a map of every storey beside it, as QEMU's terminal shows
+//! them side by side.
 //!
 //! ```text
 //! ┌ picture ┐     ┌ storey n−1 ┐     ┌ storey n−2 ┐ … ┌ storey 0 ┐

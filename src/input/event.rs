@@ -3,8 +3,6 @@
 //! accelerometer and buttons or from a terminal's keys; the game consumes
 //! them without knowing which.
 
-use super::sensor::Fault;
-
 /// One g in milli-g.
 pub const ONE_G_MG: i32 = 1000;
 
@@ -90,4 +88,22 @@ pub enum InputEvent {
     /// The accelerometer delivers plausible samples again: the game resumes
     /// where it paused.
     SensorUp,
+}
+
+/// Why a poll produced no usable sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Fault {
+    /// The bus transfer failed (NACK, arbitration loss, driver refusal, …).
+    Bus,
+    /// A bus transfer did not finish in time (a hung bus, cleared by the
+    /// board before reporting).
+    Timeout,
+    /// The sensor answered but had no new data for longer than expected
+    /// (see [`SupervisorConfig::not_ready_before_fault`](super::sensor::SupervisorConfig::not_ready_before_fault)), or its samples
+    /// are stuck.
+    NoData,
+    /// The sample failed the [`Plausibility`](super::sensor::Plausibility) check (or the sensor is not
+    /// the one expected).
+    Implausible,
 }

@@ -15,19 +15,19 @@ use lsm303agr::interface::I2cInterface;
 use lsm303agr::mode::MagOneShot;
 use lsm303agr::{AccelMode, AccelOutputDataRate, Error, Lsm303agr};
 
-use super::event::Tilt;
-use super::sensor::{AccelMg, Fault, Read};
+use super::event::{Fault, Tilt};
+use super::sensor::{AccelMg, Read};
 
 /// The driver on bus `I2C`.
 pub type Sensor<I2C> = Lsm303agr<I2cInterface<I2C>, MagOneShot>;
 
 /// How long the output takes to become valid after a mode change at 200 Hz
-/// (the datasheet's 1/ODR plus margin; `board::microbit` holds the figure).
-pub const SETTLE_MS: u64 = crate::board::microbit::ACCEL_SETTLE_MS;
+/// (the datasheet's 1/ODR plus margin).
+pub const SETTLE_MS: u64 = super::accel_timing::ACCEL_SETTLE_MS;
 
-// The driver is configured for the rate the board constants name.
+// The driver is configured for the rate the input path names.
 const _: () = assert!(
-    crate::board::microbit::ACCEL_ODR_HZ == 200,
+    super::accel_timing::ACCEL_ODR_HZ == 200,
     "configure() sets AccelOutputDataRate::Hz200"
 );
 

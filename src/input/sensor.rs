@@ -14,7 +14,7 @@
 //!
 //! A poll may find no new sample for harmless reasons: the poll came a little
 //! early, or the sensor was just re-initialised. Counting that as a failure
-//! turned poll-timing jitter into spurious re-inits and fault pictures, so the
+//! would turn poll-timing jitter into spurious re-inits and fault pictures, so the
 //! supervisor tolerates [`SupervisorConfig::not_ready_before_fault`] − 1
 //! not-ready polls in a row uncounted; only data missing for longer is
 //! [`Fault::NoData`].
@@ -23,143 +23,16 @@
 //!
 //! The pipeline does not calibrate: the game's tilt filter
 //! ([`crate::input::tilt::TiltFilter`]) does, on [`Command::Calibrate`]
-//! (e.g. the micro:bit's A+B hold). Two calibrations in series stacked their
+//! (e.g. the micro:bit's A+B hold). Two calibrations in series would stack their
 //! offsets, and only the filter knows the filtered reading the player sees as
-//! "level". [`Calibration`] (the offset arithmetic) lives here because it is
-//! expressed in the board frame defined here.
-//!
-//! # Board frame
-//!
-//! Samples handed to the game are in milli-g in the **board frame**: `x` to
-//! the right, `y` up out of the display, `z` towards the player. The sensor
-//! reports the reaction to gravity, so a board lying flat reads
-//! `(0, +1000, 0)`, and tilting the right edge down (the marble rolls towards
-//! `+x`) makes `x` negative.
+//! "level". [`Calibration`] is the offset arithmetic on board-frame samples
+//! ([`super::axes`]), which the filter applies.
 //!
 //! [`Command::Calibrate`]: crate::input::event::Command::Calibrate
 
+pub use super::axes::{AccelMg, Axis, AxisMap, AxisSource};
+pub use super::event::Fault;
 use super::event::InputEvent;
-
-/// One accelerometer sample in milli-g (1000 = 1 g).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct AccelMg {
-    /// X component, milli-g.
-    pub x: i32,
-    /// Y component, milli-g.
-    pub y: i32,
-    /// Z component, milli-g.
-    pub z: i32,
-}
-
-impl AccelMg {
-    /// A sample from its three components.
-    pub const fn new(x: i32, y: i32, z: i32) -> Self {
-        Self { x, y, z }
-    }
-
-    /// What a board lying flat and still reads in the board frame.
-    pub const LEVEL: Self = Self::new(0, 1000, 0);
-
-    /// Squared magnitude in mg², saturating (never overflows).
-    pub const fn magnitude_sq(&self) -> u64 {
-        let x = self.x.unsigned_abs() as u64;
-        let y = self.y.unsigned_abs() as u64;
-        let z = self.z.unsigned_abs() as u64;
-        // Each term is at most 2^62, so the sum of three cannot overflow.
-        x * x + y * y + z * z
-    }
-}
-
-/// One of the sensor's three axes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Axis {
-    /// Sensor X.
-    X,
-    /// Sensor Y.
-    Y,
-    /// Sensor Z.
-    Z,
-}
-
-/// Where one board axis comes from: a sensor axis, possibly negated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct AxisSource {
-    /// The sensor axis read.
-    pub axis: Axis,
-    /// Whether its value is negated.
-    pub negate: bool,
-}
-
-impl AxisSource {
-    /// `+axis`.
-    pub const fn pos(axis: Axis) -> Self {
-        Self {
-            axis,
-            negate: false,
-        }
-    }
-
-    /// `-axis`.
-    pub const fn neg(axis: Axis) -> Self {
-        Self { axis, negate: true }
-    }
-
-    const fn pick(&self, raw: AccelMg) -> i32 {
-        let v = match self.axis {
-            Axis::X => raw.x,
-            Axis::Y => raw.y,
-            Axis::Z => raw.z,
-        };
-        if self.negate {
-            v.saturating_neg()
-        } else {
-            v
-        }
-    }
-}
-
-/// How a sensor is mounted: for each board axis (x, y, z), which sensor axis
-/// and sign feed it. One table per board, easy to correct on the bench.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct AxisMap {
-    /// Source of board `x` (right).
-    pub x: AxisSource,
-    /// Source of board `y` (up, out of the display).
-    pub y: AxisSource,
-    /// Source of board `z` (towards the player).
-    pub z: AxisSource,
-}
-
-impl AxisMap {
-    /// The sensor frame already is the board frame.
-    pub const IDENTITY: Self = Self {
-        x: AxisSource::pos(Axis::X),
-        y: AxisSource::pos(Axis::Y),
-        z: AxisSource::pos(Axis::Z),
-    };
-
-    /// A sensor sample expressed in the board frame.
-    pub const fn apply(&self, raw: AccelMg) -> AccelMg {
-        AccelMg {
-            x: self.x.pick(raw),
-            y: self.y.pick(raw),
-            z: self.z.pick(raw),
-        }
-    }
-
-    /// Whether every sensor axis is used exactly once (a permutation with
-    /// signs). A table failing this is a typo.
-    pub const fn is_permutation(&self) -> bool {
-        let a = self.x.axis as u8;
-        let b = self.y.axis as u8;
-        let c = self.z.axis as u8;
-        a != b && b != c && a != c
-    }
-}
 
 /// Bounds a sample must lie within to be believed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -258,24 +131,6 @@ const fn clamp_i32(v: i32, limit: i32) -> i32 {
     } else {
         v
     }
-}
-
-/// Why a poll produced no usable sample.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Fault {
-    /// The bus transfer failed (NACK, arbitration loss, driver refusal, …).
-    Bus,
-    /// A bus transfer did not finish in time (a hung bus, cleared by the
-    /// board before reporting).
-    Timeout,
-    /// The sensor answered but had no new data for longer than expected
-    /// (see [`SupervisorConfig::not_ready_before_fault`]), or its samples
-    /// are stuck.
-    NoData,
-    /// The sample failed the [`Plausibility`] check (or the sensor is not
-    /// the one expected).
-    Implausible,
 }
 
 /// The outcome of one poll of the sensor, in the sensor's frame.

@@ -67,7 +67,8 @@
 //! cheap on a Cortex-M0. Every operation is saturating or provably in range,
 //! so no `i32` input can overflow or panic.
 
-use crate::input::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
+use crate::input::event::Fault;
+use crate::input::sensor::{AccelMg, Axis, Calibration, Plausibility};
 use crate::physics::world::MAX_MG;
 
 /// Fractional bits of the low-pass state (the state is mg · 2^12).

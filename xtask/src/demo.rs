@@ -510,7 +510,7 @@ INFO  demo summary: 10/10 levels won
 
     const LOG: &str = "\
 \x1b[32mINFO \x1b[0m demo 1/3 level=corner outcome=won steps=1234 state_hash=00ab12CD34ef5678
-└─ app::demo @ src/app.rs:463
+└─ app::demo @ src/app/demo.rs:201
 INFO  demo 2/3 level=pit outcome=fell steps=99 state_hash=ffffffffffffffff
 noise demo 3/3 level=last outcome=won steps=7 state_hash=0123456789abcdef
 INFO  cpu load: 123 busy instructions in 456 us of firmware time = 789 instructions/s = 1.23 % of a 64 MHz Cortex-M4 (60 frames/s, 1000 refreshes/s)

@@ -689,7 +689,7 @@ pub fn check() -> Outcome {
 }
 
 /// The fault picture the game shows while the sensor is down (a cross from
-/// corner to corner, `game::player::fault_frame`), full brightness.
+/// corner to corner, `render::screens::fault_frame`), full brightness.
 pub const FAULT_CROSS: [[u8; leds::SIZE]; leds::SIZE] = [
     [15, 0, 0, 0, 15],
     [0, 15, 0, 15, 0],

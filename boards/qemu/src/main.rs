@@ -181,11 +181,12 @@ async fn display(interactive: bool) -> ! {
     if interactive {
         app::display_task(
             &LINKS,
-            &mut VirtualMatrix::new(&LINKS.status, Some(UartConsole), 0),
+            &mut VirtualMatrix::new(|| LINKS.status.get(), Some(UartConsole), 0),
         )
         .await
     } else {
-        let mut matrix = VirtualMatrix::<UartConsole>::new(&LINKS.status, None, LOG_MATRIX_EVERY);
+        let mut matrix =
+            VirtualMatrix::<UartConsole>::new(|| LINKS.status.get(), None, LOG_MATRIX_EVERY);
         app::display_task(&LINKS, &mut matrix).await
     }
 }

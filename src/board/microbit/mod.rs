@@ -106,14 +106,9 @@ pub const fn refresh_millihz(rtc_ticks: u32) -> u32 {
 /// Sensor and button polling period. 100 Hz: twice the game's step rate.
 pub const INPUT_PERIOD_MS: u64 = 10;
 
-/// Accelerometer output data rate, Hz. Twice the polling rate, so a poll
-/// normally finds a fresh sample; one that does not is "not ready yet", not a
-/// fault (see [`SUPERVISOR`]).
-pub const ACCEL_ODR_HZ: u32 = 200;
-
-/// Time to wait after (re)configuring the accelerometer before trusting its
-/// output: high-resolution mode needs 7 samples at [`ACCEL_ODR_HZ`] (35 ms).
-pub const ACCEL_SETTLE_MS: u64 = 40;
+/// Accelerometer output data rate and settle time: the input path's
+/// (see [`SUPERVISOR`] for the polling they are tuned with).
+pub use crate::input::accel_timing::{ACCEL_ODR_HZ, ACCEL_SETTLE_MS};
 
 /// The LSM303AGR's boot time after power-up, ms: its datasheet's 5 ms, before
 /// which it does not answer. The input task waits until this long after the
@@ -135,7 +130,7 @@ pub const WATCHDOG_CHECK_MS: u64 = 100;
 /// sample is due every 5 ms and the poll comes every 10 ms, so a poll without
 /// new data is timing (a poll squeezed after slow work, the first poll after a
 /// re-init); three in a row, about 30 ms or six sample periods without a
-/// sample, is [`Fault::NoData`](crate::input::sensor::Fault::NoData).
+/// sample, is [`Fault::NoData`](crate::input::event::Fault::NoData).
 pub const SUPERVISOR: SupervisorConfig = SupervisorConfig {
     not_ready_before_fault: 3,
     ..SupervisorConfig::DEFAULT

@@ -35,9 +35,10 @@ use core::fmt::Write as _;
 use embassy_time::{Duration, Ticker};
 
 use super::{HEIGHT, WIDTH};
-use crate::app::{Console, Latest, MatrixOutput, FRAME_HZ, REFRESH_HZ};
 use crate::game::levels::LEVELS;
 use crate::game::player::Status;
+use crate::game::player::FRAME_HZ;
+use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 use crate::matrix::{Brightness, Frame, OnTimeIntegrator, ScanStep, Scanner};
 #[cfg(feature = "storey-maps")]
 pub use storey_maps::{map_window, MapWindow, MAPS_COLUMNS, MAP_ROWS};
@@ -53,7 +54,7 @@ const TICKS_PER_REFRESH: u32 = Scanner::<WIDTH, HEIGHT>::TICKS_PER_REFRESH;
 
 /// The virtual matrix, drawing on `C` (or only logging when `C` is absent).
 pub struct VirtualMatrix<C: Console> {
-    status: &'static Latest<Status>,
+    status: fn() -> Status,
     integrator: OnTimeIntegrator<WIDTH, HEIGHT>,
     ticks_in_refresh: u32,
     refreshes: u32,
@@ -66,9 +67,9 @@ pub struct VirtualMatrix<C: Console> {
 
 impl<C: Console> VirtualMatrix<C> {
     /// A matrix drawn on `console` (`None`: headless) with the game's
-    /// `status` below it, that logs the perceived frame with defmt every
+    /// status (as `status` reads it, e.g. from the game task's link) below it, that logs the perceived frame with defmt every
     /// `log_every` refreshes when it changed (0: never).
-    pub fn new(status: &'static Latest<Status>, console: Option<C>, log_every: u32) -> Self {
+    pub fn new(status: fn() -> Status, console: Option<C>, log_every: u32) -> Self {
         Self {
             status,
             integrator: OnTimeIntegrator::new(),
@@ -99,7 +100,7 @@ impl<C: Console> VirtualMatrix<C> {
             defmt::info!("matrix {}", frame.rows());
         }
         if let (true, Some(console)) = (draw_due, self.console.as_mut()) {
-            let mut status = self.status.get();
+            let mut status = (self.status)();
             // Redraw for whole tenths of a second only.
             status.frames -= status.frames % (FRAME_HZ / 10).max(1);
             let first = self.drawn.is_none();
@@ -252,9 +253,10 @@ mod storey_maps {
     use core::fmt::Write as _;
 
     use super::{grey, shade, Out, HEIGHT};
-    use crate::app::{Console, FRAME_HZ};
     use crate::game::level::LevelView;
     use crate::game::player::Status;
+    use crate::game::player::FRAME_HZ;
+    use crate::matrix::output::Console;
     use crate::matrix::MAX_BRIGHTNESS;
     use crate::render::{blink_on, storey_tile};
 

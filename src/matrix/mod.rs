@@ -51,6 +51,8 @@
 //! [`base_tick_hz`]: crate::matrix::base_tick_hz
 //! [`SLICE_ORDER`]: crate::matrix::SLICE_ORDER
 
+pub mod output;
+
 /// One pixel's brightness level: 0 (off) ..= [`MAX_BRIGHTNESS`] (fully on).
 pub type Brightness = u8;
 

@@ -1,42 +1,5 @@
-//! The autopilot: tilts the board to roll a marble along the shortest cell path to
-//! a goal (demos, `cargo sim --autopilot`, the QEMU demo, end-to-end tests).
-//!
-//! It produces what a human produces — an accelerometer **reading** (board frame,
-//! milli-g; a flat board reads `(0, +1000, 0)`) — so the caller runs it through the
-//! same tilt path as a real sensor:
-//!
-//! ```text
-//! let r = autopilot.reading_mg(&game);
-//! if let Ok(g) = tilt_filter.push(r) { game.set_gravity_mg(g); }
-//! game.frame();
-//! ```
-//!
-//! # Path
-//!
-//! A breadth-first search over the long×long cells (odd `i`, odd `k`) of every storey
-//! from every goal cell. Two neighbouring cells of a storey are connected when the
-//! short tile between them has no wall (the storey's wall layer); a missing floor
-//! there is a 2 mm gap the marble rolls over, so it is passable. A cell with a wall
-//! is never entered, nor a hole in the lowest storey; a hole above it is a one-way
-//! step to the cell below (the marble rolls in and drops), so the backward search
-//! reaches it only from that cell.
-//!
-//! # Memory
-//!
-//! The search result is a distance field stored **modulo 3** in 2 bits per cell
-//! (`0` = unreachable, `1..=3` = distance mod 3 + 1): neighbouring cells differ by at
-//! most one step, so the way to the goal is always the connected neighbour whose
-//! code is one less (mod 3). For the largest grid (63×63 cells, or four storeys of
-//! up to 31×31: a larger maze of storeys gets no plan) that is 993 bytes,
-//! against 3969 for a `u8` field and 7938 for `u16` — see
-//! [`Autopilot::RAM_BYTES`]. The search needs no queue either: it sweeps the grid
-//! once per distance, relaxing the cells of the last wavefront (a cell of distance
-//! `d − 3` has the same code but no unvisited neighbour, so re-visiting it is
-//! harmless). That costs `cells × path length` cell visits once per level — a few
-//! thousand for the built-in levels; a 63×63 serpentine would take about a second
-//! on a Cortex-M0, at level start only.
-//!
-//! # Control
+//! The autopilot's control: each frame, the tilt that rolls the steered marble
+//! along the plan.
 //!
 //! All arithmetic after reading the marble's state is integer: positions and
 //! velocities are converted exactly (through the [`Scalar`]'s own floor and shifts,
@@ -64,32 +27,15 @@
 //! * **Smoothness.** The tilt is limited to ±[`Autopilot::TILT_LIMIT_MG`] and changes
 //!   by at most 10 mg a frame, like a brisk hand: with `board_motion`, faster tilting
 //!   makes the board itself throw the marbles.
-//!
-//! **Several marbles** share the tilt. The autopilot steers the one whose start is
-//! nearest a goal (any marble in a goal wins), and guards every marble against
-//! holes: whenever a marble's cell opens onto a hole (or off the board) on the side
-//! the tilt pulls it to, that tilt component is limited to what holds the marble in
-//! its cell's centre.
 
-use crate::physics::geometry::grid::{Tiles, MAX_TILES_XZ};
-use crate::physics::geometry::tiles::{TileIndex, TileLayout};
-use crate::physics::world::Marble;
-use crate::physics::world::PhysicsSpec;
+use super::planning::{connected, is_goal, is_pit, solid, Dir, STOREYS};
+use super::Autopilot;
+use crate::game::level::LevelView;
+use crate::game::rules::Game;
+use crate::physics::geometry::grid::Tiles;
+use crate::physics::geometry::tiles::TileLayout;
+use crate::physics::world::{Marble, PhysicsSpec};
 use crate::physics::Scalar;
-
-use super::level::{Cell, LevelView};
-use super::rules::Game;
-
-/// The most cells along x' or z' (63 for 127 tiles).
-pub const MAX_CELLS_XZ: usize = MAX_TILES_XZ / 2;
-/// Whether the game has storeys (feature `storeys`): without, every storey
-/// test below is a constant and the plan is the one-storey plan.
-const STOREYS: bool = cfg!(feature = "storeys");
-
-/// The most cells the plan holds, over all storeys (a 63 × 63 maze, or four
-/// storeys of 31 × 31 cells): a larger maze gets no plan.
-const MAX_PLANNED: usize = MAX_CELLS_XZ * MAX_CELLS_XZ;
-const FIELD_BYTES: usize = MAX_PLANNED.div_ceil(4);
 
 /// Fraction bits of the controller's fixed-point lengths (pitch) and speeds (pitch/s).
 const Q: u32 = 12;
@@ -112,8 +58,6 @@ const V_GAP: i64 = 6 * ONE;
 /// (see [`step_mg`]), mg: a small relay step that makes the loop brake and correct
 /// sooner than the tilt path's low-pass lag alone allows (without it the marble
 /// overshoots corner's first run into the end wall: 334 frames instead of 241).
-/// (Before the tilt path lost its 20 mg dead zone, the whole step was a flat 30 mg,
-/// 20 of which the dead zone ate.)
 const STEP_MG: i64 = 10;
 /// The tilt over which the step ([`STEP_MG`] plus the resistance) ramps in (avoids
 /// chatter around zero).
@@ -133,186 +77,7 @@ const ALIGN_POS: i64 = ONE * 15 / 100;
 /// …and moves across it slower than this (pitch/s, q12).
 const ALIGN_VEL: i64 = ONE * 6 / 10;
 
-/// One of the four moves between cells.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Dir {
-    /// −x'.
-    Left,
-    /// +x'.
-    Right,
-    /// −z'.
-    Up,
-    /// +z'.
-    Down,
-}
-
-impl Dir {
-    const ALL: [Dir; 4] = [Dir::Left, Dir::Right, Dir::Up, Dir::Down];
-
-    /// `(dx, dz)` in cells.
-    const fn delta(self) -> (i32, i32) {
-        match self {
-            Dir::Left => (-1, 0),
-            Dir::Right => (1, 0),
-            Dir::Up => (0, -1),
-            Dir::Down => (0, 1),
-        }
-    }
-}
-
-/// The autopilot for one level (see the module documentation).
-#[derive(Clone, Debug)]
-pub struct Autopilot {
-    /// Distance to the nearest goal mod 3, plus 1, 2 bits per cell (0: unreachable).
-    field: [u8; FIELD_BYTES],
-    /// Cells along x' and z', and storeys (0 when the maze is too large to plan).
-    ncx: u8,
-    ncz: u8,
-    storeys: u8,
-    /// The marble steered.
-    marble: u8,
-    /// Its start's distance to a goal in cells (`u16::MAX`: no way).
-    start_cells: u16,
-    /// The in-plane gravity asked for last frame, mg.
-    last: [i16; 2],
-    /// Extra tilt for a marble that does not move although asked to, mg.
-    boost: [i16; 2],
-    /// The steered marble's position last frame (q12 pitch).
-    last_pos: [i32; 2],
-    /// The steered marble's cell and storey last frame (`u8::MAX`: not seen yet)
-    /// and its distance to the goal (cells).
-    cell: [u8; 3],
-    dist: u16,
-    /// The least distance reached so far, and the frames since it was reached.
-    best: u16,
-    stalled: u16,
-}
-
 impl Autopilot {
-    /// The largest tilt the autopilot asks for (per in-plane axis), milli-g.
-    pub const TILT_LIMIT_MG: i32 = 250;
-    /// The tilt used only to lift a marble out of a gap it has stopped in (the slot's
-    /// edges need about 300 mg).
-    pub const ESCAPE_TILT_MG: i32 = 450;
-    /// Its size in RAM, bytes.
-    pub const RAM_BYTES: usize = core::mem::size_of::<Autopilot>();
-
-    /// Plans the paths of `level` (once; see the module documentation for the cost).
-    pub fn new(level: &LevelView) -> Self {
-        let tiles = &level.tiles;
-        let ncx = (tiles.nx() / 2).min(MAX_CELLS_XZ) as u8;
-        let ncz = (tiles.nz() / 2).min(MAX_CELLS_XZ) as u8;
-        let fits = ncx as usize * ncz as usize * tiles.storeys() <= MAX_PLANNED;
-        let mut ap = Autopilot {
-            field: [0; FIELD_BYTES],
-            ncx,
-            ncz,
-            storeys: if !STOREYS {
-                1
-            } else if fits {
-                tiles.storeys() as u8
-            } else {
-                0
-            },
-            marble: 0,
-            start_cells: u16::MAX,
-            last: [0; 2],
-            boost: [0; 2],
-            last_pos: [0; 2],
-            cell: [u8::MAX; 3],
-            dist: 0,
-            best: 0,
-            stalled: 0,
-        };
-        for goal in level.info.goals() {
-            let c = [(goal.i / 2) as i32, (goal.k / 2) as i32, goal.storey as i32];
-            if ap.inside(c) && enterable(tiles, c) {
-                ap.set_code(c, 1);
-            }
-        }
-        // Wavefront sweeps: cells at distance d (code d % 3 + 1) label their unvisited
-        // connected neighbours d + 1, and the hole above them (a drop is one way:
-        // the hole's cell is reached only from below in this backward search).
-        let mut d: u32 = 0;
-        loop {
-            let (from, to) = ((d % 3 + 1) as u8, ((d + 1) % 3 + 1) as u8);
-            let mut grew = false;
-            for cy in 0..ap.storeys() {
-                for cz in 0..ncz as i32 {
-                    for cx in 0..ncx as i32 {
-                        let c = [cx, cz, cy];
-                        if ap.code(c) != from {
-                            continue;
-                        }
-                        for dir in Dir::ALL {
-                            let (dx, dz) = dir.delta();
-                            let n = [cx + dx, cz + dz, cy];
-                            if ap.inside(n)
-                                && ap.code(n) == 0
-                                && connected(tiles, c, dir)
-                                && enterable(tiles, n)
-                            {
-                                ap.set_code(n, to);
-                                grew = true;
-                            }
-                        }
-                        let above = [cx, cz, cy + 1];
-                        if is_drop(tiles, above) && ap.inside(above) && ap.code(above) == 0 {
-                            ap.set_code(above, to);
-                            grew = true;
-                        }
-                    }
-                }
-            }
-            if !grew {
-                break;
-            }
-            d += 1;
-        }
-        // Steer the marble whose start is nearest a goal (the first on a tie).
-        for (n, start) in level.info.starts().iter().enumerate() {
-            let c = [
-                (start.i / 2) as i32,
-                (start.k / 2) as i32,
-                start.storey as i32,
-            ];
-            if let Some(len) = ap.cells_to_goal(level, c) {
-                if len < ap.start_cells {
-                    ap.start_cells = len;
-                    ap.marble = n as u8;
-                }
-            }
-        }
-        ap
-    }
-
-    /// The marble the autopilot steers (index into the level's starts).
-    pub fn marble(&self) -> usize {
-        self.marble as usize
-    }
-
-    /// Cells from the steered marble's start to a goal, or `None` when no goal can be
-    /// reached from any start.
-    pub fn path_cells(&self) -> Option<u16> {
-        (self.start_cells != u16::MAX).then_some(self.start_cells)
-    }
-
-    /// The next cell (tile indices and storey) on the way from `cell` to a goal:
-    /// a neighbour on the same storey, or from a hole the cell below it; `None` at
-    /// a goal, and from a cell with no way to one.
-    pub fn next_cell(&self, level: &LevelView, cell: Cell) -> Option<Cell> {
-        let c = [(cell.i / 2) as i32, (cell.k / 2) as i32, cell.storey as i32];
-        if is_goal(level, c) {
-            return None;
-        }
-        let n = self.next(&level.tiles, c)?;
-        Some(Cell::new(
-            (2 * n[0] + 1) as u8,
-            (2 * n[1] + 1) as u8,
-            n[2] as u8,
-        ))
-    }
-
     /// The accelerometer reading (board frame, milli-g) the autopilot wants for the
     /// next frame: a tilt of magnitude 1 g, `x` and `z` within
     /// ±[`Autopilot::TILT_LIMIT_MG`] (±[`Autopilot::ESCAPE_TILT_MG`] while lifting
@@ -532,85 +297,6 @@ impl Autopilot {
             pos >= lo
         }
     }
-
-    /// The move from cell `c` towards a goal along its storey (`None` at a goal,
-    /// over a hole, and with no way).
-    fn step_towards_goal(&self, tiles: &Tiles, c: [i32; 3]) -> Option<Dir> {
-        let here = self.code(c);
-        if here == 0 || is_drop(tiles, c) {
-            return None;
-        }
-        let want = (here + 1) % 3 + 1; // (d − 1) mod 3 + 1
-        Dir::ALL.into_iter().find(|&dir| {
-            let (dx, dz) = dir.delta();
-            self.code([c[0] + dx, c[1] + dz, c[2]]) == want && connected(tiles, c, dir)
-        })
-    }
-
-    /// The cell after `c` on the planned way: a neighbour, or under a hole the
-    /// cell below.
-    fn next(&self, tiles: &Tiles, c: [i32; 3]) -> Option<[i32; 3]> {
-        if is_drop(tiles, c) {
-            let below = [c[0], c[1], c[2] - 1];
-            return (self.code(c) != 0 && self.code(below) != 0).then_some(below);
-        }
-        let (dx, dz) = self.step_towards_goal(tiles, c)?.delta();
-        Some([c[0] + dx, c[1] + dz, c[2]])
-    }
-
-    /// Cells from cell `c` to a goal by the planned way (a drop counts as one).
-    fn cells_to_goal(&self, level: &LevelView, mut c: [i32; 3]) -> Option<u16> {
-        if self.code(c) == 0 {
-            return None;
-        }
-        let mut n: u16 = 0;
-        while !is_goal(level, c) {
-            c = self.next(&level.tiles, c)?;
-            n += 1;
-            if n as usize > MAX_PLANNED {
-                return None;
-            }
-        }
-        Some(n)
-    }
-
-    fn inside(&self, c: [i32; 3]) -> bool {
-        c[0] >= 0
-            && c[1] >= 0
-            && c[2] >= 0
-            && c[0] < self.ncx as i32
-            && c[1] < self.ncz as i32
-            && c[2] < self.storeys()
-    }
-
-    /// Storeys planned (without the feature `storeys`, the constant 1).
-    #[inline]
-    fn storeys(&self) -> i32 {
-        if STOREYS {
-            i32::from(self.storeys)
-        } else {
-            1
-        }
-    }
-
-    /// Where cell `c` is in the field: storey after storey, compact.
-    fn slot(&self, c: [i32; 3]) -> usize {
-        (c[2] as usize * self.ncz as usize + c[1] as usize) * self.ncx as usize + c[0] as usize
-    }
-
-    fn code(&self, c: [i32; 3]) -> u8 {
-        if !self.inside(c) {
-            return 0;
-        }
-        let n = self.slot(c);
-        (self.field[n / 4] >> (2 * (n % 4))) & 3
-    }
-
-    fn set_code(&mut self, c: [i32; 3], code: u8) {
-        let n = self.slot(c);
-        let shift = 2 * (n % 4);
-        self.field[n / 4] = (self.field[n / 4] & !(3 << shift)) | (code << shift);
-    }
 }
 
 /// A marble's state in the controller's integers.
@@ -737,47 +423,4 @@ fn to_q<S: Scalar>(v: S) -> i64 {
         q = (q << 6) + b as i64;
     }
     q
-}
-
-fn solid(tiles: &Tiles, i: i32, j: i32, k: i32) -> bool {
-    tiles.is_solid(TileIndex::new(i, j, k))
-}
-
-/// A cell the marble may roll into: floor, no wall (eq. 5: storey `c[2]`'s slab
-/// is layer `2·c[2]`, its walls `2·c[2] + 1`).
-fn enterable(tiles: &Tiles, c: [i32; 3]) -> bool {
-    let (i, k, j) = (2 * c[0] + 1, 2 * c[1] + 1, 2 * c[2]);
-    solid(tiles, i, j, k) && !solid(tiles, i, j + 1, k)
-}
-
-/// A hole above the lowest storey, over a cell without a wall (inside the grid):
-/// the marble that rolls in drops one storey.
-fn is_drop(tiles: &Tiles, c: [i32; 3]) -> bool {
-    let (i, k, j) = (2 * c[0] + 1, 2 * c[1] + 1, 2 * c[2]);
-    let inside = i < tiles.nx() as i32 && k < tiles.nz() as i32 && i >= 0 && k >= 0;
-    STOREYS
-        && inside
-        && c[2] > 0
-        && !solid(tiles, i, j, k)
-        && !solid(tiles, i, j + 1, k)
-        && !solid(tiles, i, j - 1, k)
-}
-
-/// A cell the marble falls out of the maze through: no floor and no wall, and
-/// no storey below to land on (also off the grid).
-fn is_pit(tiles: &Tiles, c: [i32; 3]) -> bool {
-    let (i, k, j) = (2 * c[0] + 1, 2 * c[1] + 1, 2 * c[2]);
-    !solid(tiles, i, j, k) && !solid(tiles, i, j + 1, k) && !is_drop(tiles, c)
-}
-
-/// No wall on the short tile between cell `c` and its neighbour `dir`.
-fn connected(tiles: &Tiles, c: [i32; 3], dir: Dir) -> bool {
-    let (dx, dz) = dir.delta();
-    !solid(tiles, 2 * c[0] + 1 + dx, 2 * c[2] + 1, 2 * c[1] + 1 + dz)
-}
-
-fn is_goal(level: &LevelView, c: [i32; 3]) -> bool {
-    level.info.goals().iter().any(|goal| {
-        (goal.i / 2) as i32 == c[0] && (goal.k / 2) as i32 == c[1] && goal.storey as i32 == c[2]
-    })
 }

@@ -54,6 +54,8 @@
 //! plus, per marble, a handful of [`Scalar`] shifts and compares: no division,
 //! no floating point (with a fixed-point `S`), no allocation, no panics.
 
+pub mod screens;
+
 use crate::game::level::LevelView;
 use crate::game::rules::Game;
 use crate::matrix::{Brightness, Frame, MAX_BRIGHTNESS};

@@ -1,0 +1,234 @@
+//! The headless demo ([`GameMode::Demo`](super::GameMode::Demo)): the autopilot plays every built-in
+//! level once, exactly as `cargo sim -- --level <name> --autopilot` does, and
+//! each level's outcome, physics steps and `state_hash` are logged, with an
+//! instruction profile when the board has a [`Meter`].
+
+use embassy_time::Ticker;
+
+#[cfg(feature = "records")]
+use super::links::Win;
+use super::links::{Links, Meter};
+use super::mode::{DemoSummary, GameExit};
+use crate::game::levels::LEVELS;
+use crate::game::player::{Player, WIN_PAUSE_FRAMES};
+use crate::game::rules::Phase;
+use crate::game::session::SYNTHETIC_TILT;
+use crate::input::event::{Command, InputEvent, Tilt};
+use crate::matrix::Frame;
+use crate::render::screens::{win_flash, win_frame};
+
+/// [`Player::frame`]'s two calls, each counted (out of line: the demo's
+/// own path keeps its stack).
+#[inline(never)]
+fn profiled_frame<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    player: &mut Player<W, H, PILOT, EVENTS>,
+    meter: Meter,
+    profile: &mut Profile,
+) -> Phase {
+    let mut reading = [0; 3];
+    let pilot = meter(&mut || reading = player.reading(Tilt::FLAT.reading_mg()));
+    let mut phase = Phase::Playing;
+    let physics = meter(&mut || phase = player.session_mut().frame_in::<EVENTS>(reading));
+    profile.frame(pilot, physics);
+    phase
+}
+
+/// [`Player::render`], counted.
+#[inline(never)]
+fn profiled_render<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    player: &mut Player<W, H, PILOT, EVENTS>,
+    meter: Meter,
+    profile: &mut Profile,
+) -> Frame<W, H> {
+    let mut picture = Frame::new();
+    let render = meter(&mut || picture = player.render());
+    profile.render(render);
+    picture
+}
+
+/// One level's instruction counts (see [`Meter`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Profile {
+    frames: u32,
+    physics: u64,
+    physics_max: u64,
+    pilot: u64,
+    renders: u32,
+    render: u64,
+}
+
+impl Profile {
+    fn frame(&mut self, pilot: u64, physics: u64) {
+        self.frames = self.frames.saturating_add(1);
+        self.pilot = self.pilot.saturating_add(pilot);
+        self.physics = self.physics.saturating_add(physics);
+        self.physics_max = self.physics_max.max(physics);
+    }
+
+    fn render(&mut self, render: u64) {
+        self.renders = self.renders.saturating_add(1);
+        self.render = self.render.saturating_add(render);
+    }
+
+    fn log(&self, level: &str) {
+        let frames = u64::from(self.frames.max(1));
+        #[cfg(feature = "defmt")]
+        defmt::info!(
+            "profile {=str}: {=u32} frames, instructions per frame: physics {=u64} (max {=u64}), autopilot {=u64}, render {=u64}",
+            level,
+            self.frames,
+            self.physics / frames,
+            self.physics_max,
+            self.pilot / frames,
+            self.render / u64::from(self.renders.max(1))
+        );
+        let _ = (level, frames);
+    }
+}
+
+/// Waits for the next frame tick, taking the input events meanwhile: in the
+/// demo only the sensor's (a downed sensor pauses it like a game) and Quit.
+/// Returns `false` on Quit.
+async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    links: &Links<W, H>,
+    ticker: &mut Ticker,
+    player: &mut Player<W, H, PILOT, EVENTS>,
+) -> bool {
+    ticker.next().await;
+    while let Ok(event) = links.events.try_receive() {
+        match event {
+            InputEvent::SensorDown(_) | InputEvent::SensorUp => {
+                #[cfg(feature = "defmt")]
+                defmt::info!("demo: {}", event);
+                player.handle(event);
+            }
+            InputEvent::Command(Command::Quit) => return false,
+            InputEvent::Command(_) | InputEvent::Tilt(_) => {}
+        }
+    }
+    true
+}
+
+/// [`GameMode::Demo`](super::GameMode::Demo): each level exactly as the host simulator plays it
+/// with `--autopilot` (a fresh session with the player's configuration and
+/// [`SYNTHETIC_TILT`], the autopilot's reading taken from the game before
+/// each frame, stopping at the first phase that is not
+/// [`Phase::Playing`]), one frame per tick, paused while the sensor is down;
+/// then the outcome is shown for [`WIN_PAUSE_FRAMES`].
+pub(super) async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    links: &Links<W, H>,
+    ticker: &mut Ticker,
+    records: bool,
+) -> GameExit {
+    let meter = links.meter.get();
+    let mut summary = DemoSummary::default();
+    let mut sensor = None;
+    // The checkers replay the demo with `cargo sim -- --stepping <this>`.
+    #[cfg(feature = "defmt")]
+    defmt::info!(
+        "demo stepping={=str}",
+        if EVENTS { "events" } else { "fixed" }
+    );
+    for (index, level) in LEVELS.iter().enumerate() {
+        // Named in the defmt log only.
+        let _ = level;
+        summary.levels = summary.levels.saturating_add(1);
+        let mut player =
+            match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, index, SYNTHETIC_TILT, true) {
+                Ok(player) => player,
+                Err(e) => {
+                    #[cfg(feature = "defmt")]
+                    defmt::error!(
+                        "demo {=usize}/{=usize} level={=str} outcome=setup-error ({})",
+                        index + 1,
+                        LEVELS.len(),
+                        level.info.name,
+                        e
+                    );
+                    let _ = e;
+                    continue;
+                }
+            };
+        if let Some(fault) = sensor {
+            player.handle(InputEvent::SensorDown(fault));
+        }
+        let mut profile = Profile::default();
+        let phase = loop {
+            if !demo_tick(links, ticker, &mut player).await {
+                return GameExit::Quit;
+            }
+            if player.sensor_down().is_some() {
+                // Paused: the same picture as the game's (Player::tick).
+                if let Some(frame) = player.tick(Tilt::FLAT.reading_mg(), true).frame {
+                    links.frames.signal(frame);
+                }
+                links.status.set(player.status());
+                continue;
+            }
+            let phase = match meter {
+                None => player.frame(Tilt::FLAT.reading_mg()),
+                Some(meter) => profiled_frame(&mut player, meter, &mut profile),
+            };
+            links.status.set(player.status());
+            if !links.frames.signaled() || phase != Phase::Playing {
+                links.frames.signal(match meter {
+                    None => player.render(),
+                    Some(meter) => profiled_render(&mut player, meter, &mut profile),
+                });
+            }
+            if phase != Phase::Playing {
+                break phase;
+            }
+        };
+        let game = player.game();
+        summary.steps = summary.steps.saturating_add(game.steps());
+        summary.frames = summary.frames.saturating_add(u64::from(game.frames()));
+        if phase == Phase::Won {
+            summary.won = summary.won.saturating_add(1);
+            #[cfg(feature = "records")]
+            if records {
+                links
+                    .wins
+                    .send(Win {
+                        level: index.min(usize::from(u8::MAX)) as u8,
+                        frames: game.clock_frames(),
+                    })
+                    .await;
+            }
+        }
+        let _ = records;
+        #[cfg(feature = "defmt")]
+        defmt::info!(
+            "demo {=usize}/{=usize} level={=str} outcome={=str} steps={=u64} state_hash={=u64:016x}",
+            index + 1,
+            LEVELS.len(),
+            player.level_name(),
+            phase.as_str(),
+            game.steps(),
+            player.session().state_hash()
+        );
+        if meter.is_some() {
+            profile.log(player.level_name());
+        }
+        let last = player.render();
+        // The pause's picture changes only when the flash does: each one is
+        // sent once (the display keeps showing it), not once a refresh.
+        let mut sent = None;
+        for left in (1..=WIN_PAUSE_FRAMES).rev() {
+            if !demo_tick(links, ticker, &mut player).await {
+                return GameExit::Quit;
+            }
+            let flash = phase == Phase::Won && win_flash(left);
+            if sent != Some(flash) {
+                sent = Some(flash);
+                links.frames.signal(if phase == Phase::Won {
+                    win_frame(&last, left)
+                } else {
+                    last
+                });
+            }
+        }
+        sensor = player.sensor_down();
+    }
+    GameExit::DemoDone(summary)
+}

@@ -1,0 +1,61 @@
+//! The firmware's tasks and the links between them, shared by every board.
+//!
+//! embassy tasks cannot be generic, so the shape is: this module has plain
+//! `async fn`s parameterised by small traits, and each board binary wraps them
+//! in thin `#[embassy_executor::task]` functions that pass its own hardware and
+//! its [`Links`]:
+//!
+//! ```text
+//!  input_task(TiltInput) ──tilt (latest)────────┐
+//!                       └─events (queue: commands, sensor down/up)┴─> game_task ──frames (latest)──> display_task(MatrixOutput)
+//!                                              │ Ticker at FRAME_HZ (128 Hz), each tick:
+//!                                              │ Player::handle(events), Player::tick(tilt) → Session::frame → render
+//!                                              └──sounds (queue, dropped when full)──> sound_task(SoundOutput)
+//! ```
+//!
+//! * [`TiltInput`]: where tilt and commands come from (accelerometer and
+//!   buttons, or a terminal via [`TerminalInput`]).
+//! * [`game_task`] runs the game ([`Player`](crate::game::player::Player), the game layer's synchronous
+//!   loop step) at the game's frame rate [`FRAME_HZ`] on an embassy `Ticker`
+//!   (not `Timer::after`, which rounds up to the time driver's tick and
+//!   drifts). In [`GameMode::Demo`] the autopilot plays every built-in level
+//!   once, exactly as `cargo sim -- --level <name> --autopilot` does, and each
+//!   level's outcome, physics steps and `state_hash` are logged.
+//! * [`MatrixOutput`]: how one BCM scan step of [`crate::matrix::Scanner`]
+//!   reaches LEDs (real pins, or QEMU's virtual matrix).
+//! * `SoundOutput` (feature `sound`): how a [`crate::sound::Sound`] is played (QEMU: a log line, the
+//!   terminal's bell on a win), from the game's queue by `sound_task`.
+//! * [`Console`]: a blocking byte sink for an interactive terminal.
+//!
+//! The display size `W`×`H` and whether the autopilot is linked (`PILOT`) are
+//! the board binary's choice, passed as const generics: the micro:bit's 5×5
+//! matrix, whose view scrolls with the marble, without the autopilot; or for
+//! QEMU a 19×9 virtual matrix that shows every built-in maze whole. The board
+//! binary owns the [`Links`] between its tasks in a `static`.
+
+mod demo;
+mod display_task;
+mod game_task;
+mod input_task;
+mod links;
+mod mode;
+#[cfg(feature = "records")]
+mod records_task;
+#[cfg(feature = "sound")]
+mod sound_task;
+mod terminal_input;
+
+pub use crate::game::player::FRAME_HZ;
+pub use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
+pub use display_task::display_task;
+pub use game_task::game_task;
+pub use input_task::{input_task, TiltInput};
+#[cfg(feature = "records")]
+pub use links::{Bests, Win};
+pub use links::{Latest, Links, Meter};
+pub use mode::{DemoSummary, GameExit, GameMode};
+#[cfg(feature = "records")]
+pub use records_task::records_task;
+#[cfg(feature = "sound")]
+pub use sound_task::{sound_task, SoundOutput, TerminalSound};
+pub use terminal_input::{ByteSource, TerminalInput};

@@ -1,0 +1,73 @@
+//! What the game task is asked to play ([`GameMode`]) and why it returned
+//! ([`GameExit`]), the demo's totals among the reasons.
+
+use crate::input::tilt::TiltConfig;
+use crate::physics::world::SetupError;
+
+/// How [`game_task`](super::game_task) plays.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GameMode {
+    /// A player with a tilt input: endless, levels in order, commands ([`Links::events`](super::Links::events))
+    /// obeyed. `tilt` configures the game's tilt path:
+    /// [`TiltConfig::DEFAULT`] for a real accelerometer, [`SYNTHETIC_TILT`](crate::game::session::SYNTHETIC_TILT)
+    /// for keys.
+    Play {
+        /// The tilt path's configuration.
+        tilt: TiltConfig,
+        /// The level to start at (index in [`LEVELS`](crate::game::levels::LEVELS), wrapped): 0, or the
+        /// one the toy fell asleep on. Feature `sleep` only (without it, 0).
+        #[cfg(feature = "sleep")]
+        level: u8,
+    },
+    /// The headless demo: the autopilot plays each built-in level once, in
+    /// order, then [`game_task`](super::game_task) returns.
+    Demo {
+        /// Offer the autopilot's wins to the records task (feature
+        /// `records`) as if they were a player's: the records check, which
+        /// runs the demo twice and reads the first run's records back in the
+        /// second. A player's game never records the autopilot's wins.
+        records: bool,
+    },
+}
+
+/// Why [`game_task`](super::game_task) returned.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GameExit {
+    /// The player quit.
+    Quit,
+    /// The demo played every level.
+    DemoDone(DemoSummary),
+    /// No level could be set up (a bug in the built-in levels).
+    SetupFailed(SetupError),
+    /// Nobody touched the toy for two minutes ([`crate::input::idle`]):
+    /// the board may sleep, and resume at the start of `level`. Feature
+    /// `sleep` only.
+    #[cfg(feature = "sleep")]
+    Asleep {
+        /// The level on show (index in [`LEVELS`](crate::game::levels::LEVELS)).
+        level: u8,
+    },
+}
+
+/// The demo's totals.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DemoSummary {
+    /// Levels played.
+    pub levels: u8,
+    /// Levels won.
+    pub won: u8,
+    /// Physics steps over all levels.
+    pub steps: u64,
+    /// Game frames over all levels.
+    pub frames: u64,
+}
+
+impl DemoSummary {
+    /// Every level played was won (and there was at least one).
+    pub const fn all_won(&self) -> bool {
+        self.levels > 0 && self.won == self.levels
+    }
+}

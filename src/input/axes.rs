@@ -1,0 +1,130 @@
+//! One accelerometer sample ([`AccelMg`]) and the board frame it is handed on
+//! in: how a sensor is mounted ([`AxisMap`]) decides which of its axes feeds
+//! each board axis.
+//!
+//! Samples handed to the game are in milli-g in the **board frame**: `x` to
+//! the right, `y` up out of the display, `z` towards the player. The sensor
+//! reports the reaction to gravity, so a board lying flat reads
+//! `(0, +1000, 0)`, and tilting the right edge down (the marble rolls towards
+//! `+x`) makes `x` negative.
+
+/// One accelerometer sample in milli-g (1000 = 1 g).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AccelMg {
+    /// X component, milli-g.
+    pub x: i32,
+    /// Y component, milli-g.
+    pub y: i32,
+    /// Z component, milli-g.
+    pub z: i32,
+}
+
+impl AccelMg {
+    /// A sample from its three components.
+    pub const fn new(x: i32, y: i32, z: i32) -> Self {
+        Self { x, y, z }
+    }
+
+    /// What a board lying flat and still reads in the board frame.
+    pub const LEVEL: Self = Self::new(0, 1000, 0);
+
+    /// Squared magnitude in mg², saturating (never overflows).
+    pub const fn magnitude_sq(&self) -> u64 {
+        let x = self.x.unsigned_abs() as u64;
+        let y = self.y.unsigned_abs() as u64;
+        let z = self.z.unsigned_abs() as u64;
+        // Each term is at most 2^62, so the sum of three cannot overflow.
+        x * x + y * y + z * z
+    }
+}
+
+/// One of the sensor's three axes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Axis {
+    /// Sensor X.
+    X,
+    /// Sensor Y.
+    Y,
+    /// Sensor Z.
+    Z,
+}
+
+/// Where one board axis comes from: a sensor axis, possibly negated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AxisSource {
+    /// The sensor axis read.
+    pub axis: Axis,
+    /// Whether its value is negated.
+    pub negate: bool,
+}
+
+impl AxisSource {
+    /// `+axis`.
+    pub const fn pos(axis: Axis) -> Self {
+        Self {
+            axis,
+            negate: false,
+        }
+    }
+
+    /// `-axis`.
+    pub const fn neg(axis: Axis) -> Self {
+        Self { axis, negate: true }
+    }
+
+    const fn pick(&self, raw: AccelMg) -> i32 {
+        let v = match self.axis {
+            Axis::X => raw.x,
+            Axis::Y => raw.y,
+            Axis::Z => raw.z,
+        };
+        if self.negate {
+            v.saturating_neg()
+        } else {
+            v
+        }
+    }
+}
+
+/// How a sensor is mounted: for each board axis (x, y, z), which sensor axis
+/// and sign feed it. One table per board, easy to correct on the bench.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AxisMap {
+    /// Source of board `x` (right).
+    pub x: AxisSource,
+    /// Source of board `y` (up, out of the display).
+    pub y: AxisSource,
+    /// Source of board `z` (towards the player).
+    pub z: AxisSource,
+}
+
+impl AxisMap {
+    /// The sensor frame already is the board frame.
+    pub const IDENTITY: Self = Self {
+        x: AxisSource::pos(Axis::X),
+        y: AxisSource::pos(Axis::Y),
+        z: AxisSource::pos(Axis::Z),
+    };
+
+    /// A sensor sample expressed in the board frame.
+    pub const fn apply(&self, raw: AccelMg) -> AccelMg {
+        AccelMg {
+            x: self.x.pick(raw),
+            y: self.y.pick(raw),
+            z: self.z.pick(raw),
+        }
+    }
+
+    /// Whether every sensor axis is used exactly once (a permutation with
+    /// signs). A table failing this is a typo.
+    pub const fn is_permutation(&self) -> bool {
+        let a = self.x.axis as u8;
+        let b = self.y.axis as u8;
+        let c = self.z.axis as u8;
+        a != b && b != c && a != c
+    }
+}
