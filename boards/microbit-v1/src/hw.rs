@@ -1,6 +1,8 @@
 //! The nRF51822's register-level half: emulation detection, the clock and
 //! embassy time driver on TIMER0, the CPU meter, stack painting, the WFI
-//! executor, semihosting (QEMU only), and the fault and panic handlers.
+//! executor (these two and the NOP loop are `marble_board_runtime`'s, on this
+//! board's clock and RAM), semihosting (QEMU only), and the fault and panic
+//! handlers.
 //!
 //! # Time: TIMER0 on hardware too (one code path)
 //!
@@ -339,6 +341,7 @@ pub mod cpu_meter {
     use core::cell::Cell;
 
     use critical_section::Mutex;
+    use marble_board_runtime::nop::{self, Stopwatch};
     use marble_rolling::board::microbit_v1::{Calibration, Sample};
 
     use super::clock;
@@ -363,46 +366,29 @@ pub mod cpu_meter {
         })
     }
 
-    /// Runs `iterations` (≥ 1) of a loop of exactly 8 instructions.
-    #[inline(never)]
-    fn nop_loop(iterations: u32) {
-        let iterations = iterations.max(1);
-        // SAFETY: touches only the register it declares.
-        unsafe {
-            core::arch::asm!(
-                "2:",
-                "nop", "nop", "nop", "nop", "nop", "nop",
-                "subs {n}, {n}, #1",
-                "bne 2b",
-                n = inout(reg) iterations => _,
-                options(nomem, nostack),
-            );
+    /// The clock as the runtime's stopwatch: µs, interrupts off.
+    struct Micros;
+
+    impl Stopwatch for Micros {
+        fn time(&self, f: impl FnOnce()) -> u32 {
+            critical_section::with(|_| {
+                let before = clock::now();
+                f();
+                (clock::now() - before) as u32
+            })
         }
     }
 
-    /// µs taken by `f`, interrupts off.
-    fn time(f: impl FnOnce()) -> u32 {
-        critical_section::with(|_| {
-            let before = clock::now();
-            f();
-            (clock::now() - before) as u32
-        })
-    }
-
-    /// Measures µs per instruction with two NOP loops (1 000 and 11 000
-    /// iterations: their difference, 80 000 instructions, cancels the call
-    /// and clock-read overhead), as `study/bench-m0` does. Stores and
-    /// returns it.
+    /// Measures µs per instruction with the runtime's two NOP loops
+    /// (`marble_board_runtime::nop`: their difference, 80 000 instructions,
+    /// cancels the call and clock-read overhead), as `study/bench-m0` does.
+    /// Stores and returns it.
     pub fn calibrate() -> Calibration {
-        const SHORT: u32 = 1_000;
-        const LONG: u32 = 11_000;
-        let short = time(|| nop_loop(SHORT));
-        let long = time(|| nop_loop(LONG));
-        let overhead = time(|| core::hint::black_box(()));
+        let timing = nop::time_nop_loops(&Micros);
         let calibration = Calibration {
-            instructions: 8 * (LONG - SHORT),
-            us: long.saturating_sub(short),
-            overhead_us: overhead,
+            instructions: timing.instructions,
+            us: timing.ticks,
+            overhead_us: timing.overhead_ticks,
         };
         critical_section::with(|cs| CALIBRATION.borrow(cs).set(calibration));
         calibration
@@ -437,47 +423,19 @@ pub mod cpu_meter {
 // Stack high-water mark
 // ---------------------------------------------------------------------------
 
-/// Stack painting. The firmware links through flip-link
-/// (`.cargo/config.toml`): the statics sit at the top of RAM and the stack
-/// below them, growing down towards the start of RAM, so an overflow faults
-/// (no RAM below) instead of overwriting them. [`paint`](stack::paint) fills
-/// the free stack at boot, [`high_water`](stack::high_water) finds the deepest
-/// word overwritten since.
+/// Stack painting (`marble_board_runtime::stack`) on this board's RAM. The
+/// firmware links through flip-link (`.cargo/config.toml`): the statics sit
+/// at the top of RAM and the stack below them, growing down towards the
+/// start of RAM, so an overflow faults (no RAM below) instead of overwriting
+/// them. [`paint`](stack::paint) fills the free stack at boot,
+/// [`high_water`](stack::high_water) finds the deepest word overwritten since.
 pub mod stack {
     use marble_rolling::board::microbit_v1::{RAM_BASE, RAM_BYTES, STACK_PAINT};
 
-    /// Bytes below the SP left unpainted.
-    const RED_ZONE: usize = 64;
-
-    extern "C" {
-        static _stack_start: u32;
-    }
-
-    /// The initial SP: just below the statics.
-    fn top() -> usize {
-        // Only the symbol's address is taken, never its value.
-        core::ptr::addr_of!(_stack_start) as usize
-    }
-
-    /// Where the stack would run out of RAM.
-    fn bottom() -> usize {
-        RAM_BASE
-    }
-
     /// Paints the free stack. Call first thing in `main`.
-    #[inline(never)]
+    #[inline(always)]
     pub fn paint() {
-        cortex_m::interrupt::free(|_| {
-            let sp = cortex_m::register::msp::read() as usize;
-            let end = sp.saturating_sub(RED_ZONE) & !3;
-            let mut addr = bottom();
-            while addr < end {
-                // SAFETY: from the start of RAM to below the SP: the free
-                // stack, nothing uses it yet.
-                unsafe { core::ptr::write_volatile(addr as *mut u32, STACK_PAINT) };
-                addr += 4;
-            }
-        });
+        marble_board_runtime::stack::paint(RAM_BASE, STACK_PAINT);
     }
 
     /// Stack use so far.
@@ -493,16 +451,12 @@ pub mod stack {
 
     /// The high-water mark since [`paint`].
     pub fn high_water() -> StackUse {
-        let top = top();
-        let mut addr = bottom();
-        // SAFETY: word reads of RAM from its start to the stack top.
-        while addr < top && unsafe { core::ptr::read_volatile(addr as *const u32) } == STACK_PAINT {
-            addr += 4;
-        }
+        let stack = marble_board_runtime::stack::high_water(RAM_BASE, STACK_PAINT);
         StackUse {
-            used: top.saturating_sub(addr),
-            size: top.saturating_sub(bottom()),
-            statics: (RAM_BASE + RAM_BYTES as usize).saturating_sub(top),
+            used: stack.used,
+            size: stack.size,
+            statics: (RAM_BASE + RAM_BYTES as usize)
+                .saturating_sub(marble_board_runtime::stack::top()),
         }
     }
 }
@@ -511,56 +465,29 @@ pub mod stack {
 // Executor
 // ---------------------------------------------------------------------------
 
-/// An embassy raw executor that sleeps with WFI (as the QEMU board's, and
-/// for the same reason: QEMU treats WFE as a no-op, so the stock thread
-/// executor would spin through every idle period), its sleeps timed for the
-/// [`cpu_meter`]. The M0 has no compare-and-swap: flags are plain loads and
-/// stores, with interrupts masked where it matters.
+/// The runtime's embassy executor that sleeps with WFI
+/// (`marble_board_runtime::executor`, as the QEMU board's, and for the same
+/// reason: QEMU treats WFE as a no-op, so the stock thread executor would
+/// spin through every idle period), its sleeps timed on the [`clock`] for
+/// the [`cpu_meter`].
 pub mod executor {
-    use core::mem::MaybeUninit;
-    use core::sync::atomic::Ordering;
+    use embassy_executor::Spawner;
+    use marble_board_runtime::executor::{self, Pended};
 
-    use embassy_executor::{raw, Spawner};
+    use super::{clock, cpu_meter};
 
-    use super::{clock, cpu_meter, PENDED};
+    /// The executor's wake-up flag (in this crate's statics: see [`Pended`]).
+    static PENDED: Pended = Pended::new();
 
     /// Runs the executor forever; `init` spawns the first tasks. Call once.
-    /// Not inlined, and `init` a plain function, so that nothing of the
-    /// spawning stays on the stack below the tasks for good.
-    #[inline(never)]
+    /// `init` a plain function, so that nothing of the spawning stays on the
+    /// stack below the tasks for good.
+    #[inline(always)]
     pub fn run(init: fn(Spawner)) -> ! {
-        static mut EXECUTOR: MaybeUninit<raw::Executor> = MaybeUninit::uninit();
-        // SAFETY: `run` is called once, from `main`, which never returns:
-        // this is the only reference to EXECUTOR ever made.
-        let executor: &'static raw::Executor = unsafe {
-            let slot = &mut *core::ptr::addr_of_mut!(EXECUTOR);
-            slot.write(raw::Executor::new(core::ptr::null_mut()))
-        };
-        init(executor.spawner());
-        loop {
-            PENDED.store(false, Ordering::SeqCst);
-            // SAFETY: never re-entered: the pender only sets a flag.
-            unsafe { executor.poll() };
-            cortex_m::interrupt::disable();
-            if !PENDED.load(Ordering::SeqCst) {
-                let before = clock::now();
-                cortex_m::asm::wfi();
-                let after = clock::now();
-                cpu_meter::record_sleep(before, after);
-            }
-            // SAFETY: re-enables the interrupts disabled just above.
-            unsafe { cortex_m::interrupt::enable() };
-        }
+        // SAFETY: `run` is called once, from `main`, which never returns (no
+        // guard: it would cost RAM this board does not have).
+        unsafe { executor::run(&PENDED, init, clock::now, cpu_meter::record_sleep) }
     }
-}
-
-/// Set by the pender when a task is woken; cleared before each poll.
-static PENDED: AtomicBool = AtomicBool::new(false);
-
-/// The pender embassy's raw executor calls when a task becomes ready.
-#[unsafe(export_name = "__pender")]
-fn pender(_context: *mut ()) {
-    PENDED.store(true, Ordering::SeqCst);
 }
 
 // ---------------------------------------------------------------------------

@@ -52,6 +52,7 @@ mod sensor;
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use marble_board_runtime::heartbeat::poll_beating;
 use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TiltInput};
 use marble_rolling::board::microbit::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::board::microbit_v1::{
@@ -193,19 +194,6 @@ async fn watchdog() -> ! {
     }
 }
 
-/// Runs `future`, beating `task` each time it is polled (the game's loop is
-/// `app::game_task`'s: being polled at the frame rate is its proof of life).
-async fn with_heartbeat<F: core::future::Future>(
-    task: Task,
-    mut future: core::pin::Pin<&mut F>,
-) -> F::Output {
-    core::future::poll_fn(|cx| {
-        HEARTBEATS.beat(task);
-        future.as_mut().poll(cx)
-    })
-    .await
-}
-
 /// `--seconds=N`: ends a headless play after `N` seconds, with the game's
 /// status.
 #[embassy_executor::task]
@@ -275,7 +263,9 @@ async fn game(options: Options) {
         LINKS.meter.set(Some(hw::cpu_meter::meter));
     }
     let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode));
-    let exit = with_heartbeat(Task::Game, game).await;
+    // Being polled at the frame rate is the game's proof of life (its loop is
+    // `app::game_task`'s).
+    let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
     let end = hw::cpu_meter::sample();
     let summary = match exit {
         GameExit::Quit => DemoSummary::default(),

@@ -14,9 +14,6 @@
 //! would park the input task until the watchdog reset, so each one has a
 //! deadline, and a failed one is followed by the I²C bus clear.
 
-use core::future::Future;
-use core::pin::Pin;
-
 use embassy_nrf::gpio::{AnyPin, Flex, Input, Level, Output, OutputDrive, Pull};
 use embassy_nrf::pac;
 use embassy_nrf::pac::gpio::vals::Sense;
@@ -564,22 +561,6 @@ impl TiltInput for MicrobitInput {
         let _ = self.pending.push_back(tilt);
         self.pending.pop_front().unwrap_or(tilt)
     }
-}
-
-/// Runs `future`, beating `task` in `heartbeats` each time it is polled: for
-/// a task whose loop lives elsewhere (`app::game_task`), being polled is the
-/// proof it is not parked forever. The future is pinned by the caller, in
-/// its own task's storage: taken by value here it would be stored twice.
-pub async fn with_heartbeat<F: Future>(
-    heartbeats: &'static Heartbeats,
-    task: Task,
-    mut future: Pin<&mut F>,
-) -> F::Output {
-    core::future::poll_fn(|cx| {
-        heartbeats.beat(task);
-        future.as_mut().poll(cx)
-    })
-    .await
 }
 
 // ---------------------------------------------------------------------------

@@ -41,6 +41,7 @@ use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
 use embassy_nrf::{bind_interrupts, peripherals};
 use embassy_time::{Duration, Ticker};
 use lsm303agr::Lsm303agr;
+use marble_board_runtime::heartbeat::poll_beating;
 use marble_rolling::records::Records;
 
 use marble_rolling::app::{self, Links};
@@ -115,7 +116,7 @@ async fn input(mut input: hw::MicrobitInput) -> ! {
 async fn game(self_test: bool, level: u8) {
     if self_test {
         let test = pin!(run_self_test());
-        hw::with_heartbeat(&HEARTBEATS, Task::Game, test).await;
+        poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
     }
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
@@ -131,7 +132,7 @@ async fn game(self_test: bool, level: u8) {
             PILOT,
             EVENTS,
         >(&LINKS, mode));
-        let exit = hw::with_heartbeat(&HEARTBEATS, Task::Game, game).await;
+        let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters
             // System OFF (hw::system_off).

@@ -10,7 +10,8 @@
 //! time driver (that clock + SysTick wake-ups), [`uart`] (CMSDK APB UART0
 //! driver), [`cpu_meter`] (idle accounting, calibration, instruction
 //! counting), [`stack`] (painting, high-water mark), [`executor`] (an embassy
-//! raw executor that sleeps with WFI),
+//! raw executor that sleeps with WFI; these two and the NOP loop are
+//! `marble_board_runtime`'s, on this board's clock and RAM),
 //! interrupt/fault handlers, and semihosting [`options`] / [`exit`].
 #![no_std]
 
@@ -422,6 +423,7 @@ pub mod uart {
 pub mod cpu_meter {
     use core::cell::Cell;
 
+    use marble_board_runtime::nop::{self, Stopwatch};
     use marble_rolling::board::qemu::cpu_meter::{Calibration, Sample};
 
     use super::{clock, Mutex};
@@ -447,51 +449,30 @@ pub mod cpu_meter {
         })
     }
 
-    /// Runs `iterations` (≥ 1) of a loop of exactly 8 instructions
-    /// (6 NOPs, SUBS, BNE).
-    #[inline(never)]
-    fn nop_loop(iterations: u32) {
-        let iterations = iterations.max(1);
-        // SAFETY: touches only the one register it declares.
-        unsafe {
-            core::arch::asm!(
-                "2:",
-                "nop", "nop", "nop", "nop", "nop", "nop",
-                "subs {n}, {n}, #1",
-                "bne 2b",
-                n = inout(reg) iterations => _,
-                options(nomem, nostack),
-            );
+    /// The clock as the runtime's stopwatch: ticks (it counts down),
+    /// interrupts off.
+    struct Ticks;
+
+    impl Stopwatch for Ticks {
+        fn time(&self, f: impl FnOnce()) -> u32 {
+            cortex_m::interrupt::free(|_| {
+                let before = clock::raw();
+                f();
+                before.wrapping_sub(clock::raw())
+            })
         }
     }
 
-    /// Ticks taken by `nop_loop(iterations)`, interrupts off.
-    fn time_nop_loop(iterations: u32) -> u32 {
-        cortex_m::interrupt::free(|_| {
-            let before = clock::raw();
-            nop_loop(iterations);
-            before.wrapping_sub(clock::raw())
-        })
-    }
-
-    /// Measures ticks per instruction: the difference between two NOP loops
-    /// (1 000 and 11 000 iterations, so 80 000 instructions) cancels the
-    /// call and timer-read overhead. Stores the result for
+    /// Measures ticks per instruction with the runtime's two NOP loops
+    /// (`marble_board_runtime::nop`: their difference, 80 000 instructions,
+    /// cancels the call and timer-read overhead). Stores the result for
     /// [`count_instructions`], and returns it.
     pub fn calibrate() -> Calibration {
-        const SHORT: u32 = 1_000;
-        const LONG: u32 = 11_000;
-        let short = time_nop_loop(SHORT);
-        let long = time_nop_loop(LONG);
-        let overhead = cortex_m::interrupt::free(|_| {
-            let before = clock::raw();
-            core::hint::black_box(());
-            before.wrapping_sub(clock::raw())
-        });
+        let timing = nop::time_nop_loops(&Ticks);
         let calibration = Calibration {
-            instructions: 8 * (LONG - SHORT),
-            ticks: long.saturating_sub(short),
-            overhead_ticks: overhead,
+            instructions: timing.instructions,
+            ticks: timing.ticks,
+            overhead_ticks: timing.overhead_ticks,
         };
         cortex_m::interrupt::free(|cs| CALIBRATION.borrow(cs).set(calibration));
         calibration
@@ -521,70 +502,27 @@ pub mod cpu_meter {
 // Stack high-water mark
 // ---------------------------------------------------------------------------
 
-/// Stack painting: [`paint`](stack::paint) fills the free stack with
+/// Stack painting (`marble_board_runtime::stack`) on this board's RAM:
+/// [`paint`](stack::paint) fills the free stack with
 /// [`STACK_PAINT`](marble_rolling::board::qemu::STACK_PAINT) at boot;
 /// [`high_water`](stack::high_water) later finds the lowest word that was
 /// overwritten. With flip-link the stack starts just below `.data`/`.bss`
 /// (`_stack_start`, the initial SP) and grows down towards
 /// [`RAM_BASE`](marble_rolling::board::qemu::RAM_BASE).
 pub mod stack {
+    pub use marble_board_runtime::stack::StackUse;
     use marble_rolling::board::qemu::{RAM_BASE, STACK_PAINT};
-
-    /// Bytes below the current SP left unpainted by [`paint`]: room for
-    /// anything below the stack pointer at the time (none is expected:
-    /// interrupts are off and the loop calls nothing).
-    const RED_ZONE: usize = 64;
-
-    extern "C" {
-        /// The initial stack pointer (cortex-m-rt's `link.x`, set by flip-link).
-        static _stack_start: u32;
-    }
-
-    /// The top of the stack (initial SP).
-    fn top() -> usize {
-        // Only the symbol's address is taken, never its value.
-        core::ptr::addr_of!(_stack_start) as usize
-    }
 
     /// Paints the stack from [`RAM_BASE`] up to a little below the current
     /// SP. Call first thing in `main`.
-    #[inline(never)]
+    #[inline(always)]
     pub fn paint() {
-        cortex_m::interrupt::free(|_| {
-            let sp = cortex_m::register::msp::read() as usize;
-            let end = sp.saturating_sub(RED_ZONE) & !3;
-            let mut addr = RAM_BASE;
-            while addr < end {
-                // SAFETY: [RAM_BASE, SP - RED_ZONE) is free stack: RAM that
-                // nothing uses yet (flip-link puts every static above it).
-                unsafe { core::ptr::write_volatile(addr as *mut u32, STACK_PAINT) };
-                addr += 4;
-            }
-        });
-    }
-
-    /// Stack use so far.
-    #[derive(Clone, Copy, defmt::Format)]
-    pub struct StackUse {
-        /// Deepest use, bytes (from the top down to the lowest overwritten word).
-        pub used: usize,
-        /// The whole stack region, bytes.
-        pub size: usize,
+        marble_board_runtime::stack::paint(RAM_BASE, STACK_PAINT);
     }
 
     /// The high-water mark since [`paint`].
     pub fn high_water() -> StackUse {
-        let top = top();
-        let mut addr = RAM_BASE;
-        // SAFETY: reads of stack RAM below the current SP (still painted, or
-        // left by finished calls), word-aligned.
-        while addr < top && unsafe { core::ptr::read_volatile(addr as *const u32) } == STACK_PAINT {
-            addr += 4;
-        }
-        StackUse {
-            used: top.saturating_sub(addr),
-            size: top.saturating_sub(RAM_BASE),
-        }
+        marble_board_runtime::stack::high_water(RAM_BASE, STACK_PAINT)
     }
 }
 
@@ -592,63 +530,27 @@ pub mod stack {
 // Executor
 // ---------------------------------------------------------------------------
 
-/// An embassy executor that sleeps with WFI.
-///
-/// embassy's stock Cortex-M thread executor sleeps with WFE, which QEMU
-/// treats as a no-op: the core spins, which under
-/// `-icount ...,sleep=off` burns host time instead of jumping over idle time
-/// (one firmware second took 28 s). This one polls the raw executor and, when
-/// no task was woken meanwhile, executes WFI with interrupts masked (PRIMASK):
-/// a pending interrupt still ends WFI, and its handler runs when interrupts
-/// are unmasked again, so no wake-up can be lost between the check and the
-/// sleep. Sleeps are timed for the [`cpu_meter`].
+/// The runtime's embassy executor that sleeps with WFI
+/// (`marble_board_runtime::executor`: QEMU does not sleep on the stock
+/// executor's WFE), its sleeps timed on the [`clock`] for the [`cpu_meter`].
 pub mod executor {
-    use core::mem::MaybeUninit;
     use core::sync::atomic::{AtomicBool, Ordering};
 
-    use embassy_executor::{raw, Spawner};
+    use embassy_executor::Spawner;
+    use marble_board_runtime::executor::{self, Pended};
 
-    use super::{clock, cpu_meter, PENDED};
+    use super::{clock, cpu_meter};
+
+    /// The executor's wake-up flag (in this crate's statics: see [`Pended`]).
+    static PENDED: Pended = Pended::new();
 
     /// Runs the executor forever; `init` spawns the first tasks. Call once.
     pub fn run(init: impl FnOnce(Spawner)) -> ! {
         static STARTED: AtomicBool = AtomicBool::new(false);
-        static mut EXECUTOR: MaybeUninit<raw::Executor> = MaybeUninit::uninit();
         if STARTED.swap(true, Ordering::SeqCst) {
             super::fatal("executor::run called twice");
         }
-        // SAFETY: guarded above: this is the only reference to EXECUTOR
-        // ever made.
-        let executor: &'static raw::Executor = unsafe {
-            let slot = &mut *core::ptr::addr_of_mut!(EXECUTOR);
-            slot.write(raw::Executor::new(core::ptr::null_mut()))
-        };
-        init(executor.spawner());
-        loop {
-            PENDED.store(false, Ordering::SeqCst);
-            // SAFETY: never re-entered: the pender only sets a flag.
-            unsafe { executor.poll() };
-            cortex_m::interrupt::disable();
-            if !PENDED.load(Ordering::SeqCst) {
-                let before = clock::raw();
-                cortex_m::asm::wfi();
-                let after = clock::raw();
-                cpu_meter::record_sleep(before, after);
-            }
-            // SAFETY: re-enables interrupts disabled just above.
-            unsafe { cortex_m::interrupt::enable() };
-        }
+        // SAFETY: guarded above: the only call.
+        unsafe { executor::run(&PENDED, init, clock::raw, cpu_meter::record_sleep) }
     }
-}
-
-/// Set by the pender when a task is woken; cleared before each poll.
-static PENDED: AtomicBool = AtomicBool::new(false);
-
-/// The pender embassy's raw executor calls (from any context) when a task
-/// becomes ready. embassy-executor 0.10 links it by this symbol name
-/// (`platform-cortex-m` defines its own only with `executor-thread` /
-/// `executor-interrupt`, which this board does not enable).
-#[unsafe(export_name = "__pender")]
-fn pender(_context: *mut ()) {
-    PENDED.store(true, Ordering::SeqCst);
 }
