@@ -43,6 +43,7 @@ mod mode;
 mod records_task;
 #[cfg(feature = "sound")]
 mod sound_task;
+mod summary;
 mod terminal_input;
 
 pub use crate::game::player::FRAME_HZ;
@@ -58,4 +59,5 @@ pub use mode::{DemoSummary, GameExit, GameMode};
 pub use records_task::records_task;
 #[cfg(feature = "sound")]
 pub use sound_task::{sound_task, SoundOutput, TerminalSound};
+pub use summary::{SensorTotals, Verdict};
 pub use terminal_input::{ByteSource, TerminalInput};

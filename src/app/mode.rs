@@ -51,7 +51,8 @@ pub enum GameExit {
     },
 }
 
-/// The demo's totals.
+/// The demo's totals (what its summary says: [`GameExit::demo_summary`],
+/// [`DemoSummary::verdict`]).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DemoSummary {

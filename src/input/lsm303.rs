@@ -16,7 +16,7 @@ use lsm303agr::mode::MagOneShot;
 use lsm303agr::{AccelMode, AccelOutputDataRate, Error, Lsm303agr};
 
 use super::event::{Fault, Tilt};
-use super::sensor::{AccelMg, Read};
+use super::sensor::{AccelMg, Action, Read, Step, TiltPipeline};
 
 /// The driver on bus `I2C`.
 pub type Sensor<I2C> = Lsm303agr<I2cInterface<I2C>, MagOneShot>;
@@ -86,6 +86,60 @@ where
         .map_err(fault)?;
     Timer::after_millis(SETTLE_MS).await;
     Ok(())
+}
+
+/// The (re)init every LSM303AGR board runs: the identity check
+/// ([`check_identity`]), then, if the chip is one, [`configure`]. The
+/// outcome goes to `pipeline` ([`TiltPipeline::reinit_done`]) and back to
+/// the board, which logs a failure.
+pub async fn reinit<I2C>(sensor: &mut Sensor<I2C>, pipeline: &mut TiltPipeline) -> Result<(), Fault>
+where
+    I2C: I2c,
+    I2C::Error: BusFault,
+{
+    let outcome = match check_identity(sensor).await {
+        Ok(()) => configure(sensor).await,
+        Err(fault) => Err(fault),
+    };
+    pipeline.reinit_done(outcome);
+    outcome
+}
+
+/// What one [`poll`] did, for the board to log and count.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Polled {
+    /// What the read returned.
+    pub read: Read<AccelMg>,
+    /// What the pipeline made of it.
+    pub step: Step,
+    /// The re-init's outcome, when the pipeline asked for one
+    /// ([`Action::Reinit`]).
+    pub reinit: Option<Result<(), Fault>>,
+}
+
+/// One polling period's sensor work, as every LSM303AGR board does it: a
+/// [`read`] fed to `pipeline`, then `on_step` (the board's counts and log
+/// lines, before any re-init as they always were), then a [`reinit`] when
+/// the pipeline asks for one ([`Action::Reinit`]). The board keeps its own
+/// rule for when to start its ticker over.
+pub async fn poll<I2C>(
+    sensor: &mut Sensor<I2C>,
+    pipeline: &mut TiltPipeline,
+    on_step: impl FnOnce(Read<AccelMg>, Step),
+) -> Polled
+where
+    I2C: I2c,
+    I2C::Error: BusFault,
+{
+    let read = read(sensor).await;
+    let step = pipeline.feed(read);
+    on_step(read, step);
+    let reinit = if step.action == Action::Reinit {
+        Some(reinit(sensor, pipeline).await)
+    } else {
+        None
+    };
+    Polled { read, step, reinit }
 }
 
 /// Powers the accelerometer down (`CTRL_REG1_A` ODR = 0: no conversions;

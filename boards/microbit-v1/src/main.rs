@@ -53,7 +53,7 @@ mod sensor;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use marble_board_runtime::heartbeat::poll_beating;
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TiltInput};
+use marble_rolling::app::{self, GameMode, Links, TiltInput};
 use marble_rolling::board::microbit::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::board::microbit_v1::{
     LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WATCHDOG_TIMEOUT_TICKS, WIDTH,
@@ -267,10 +267,9 @@ async fn game(options: Options) {
     // `app::game_task`'s).
     let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
     let end = hw::cpu_meter::sample();
-    let summary = match exit {
-        GameExit::Quit => DemoSummary::default(),
-        GameExit::DemoDone(summary) => summary,
-        GameExit::SetupFailed(e) => {
+    let summary = match exit.demo_summary() {
+        Ok(summary) => summary,
+        Err(e) => {
             defmt::error!("cannot set up a level: {}", e);
             hw::exit(1)
         }
@@ -308,7 +307,7 @@ async fn game(options: Options) {
         summary.levels,
         summary.steps,
         summary.frames,
-        if summary.all_won() { "PASS" } else { "FAIL" }
+        summary.verdict().as_str()
     );
-    hw::exit(if summary.all_won() { 0 } else { 1 })
+    hw::exit(summary.verdict().exit_code())
 }

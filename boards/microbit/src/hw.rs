@@ -461,16 +461,11 @@ impl MicrobitInput {
         Input::new(pin, Pull::Up)
     }
 
-    /// (Re)configures the sensor and tells the pipeline how it went.
+    /// (Re)configures the sensor and tells the pipeline how it went
+    /// ([`lsm303::reinit`]).
     async fn reinit(&mut self) {
-        let outcome = match lsm303::check_identity(&mut self.sensor).await {
-            Ok(()) => lsm303::configure(&mut self.sensor).await,
-            Err(fault) => Err(fault),
-        };
-        if let Err(fault) = outcome {
-            defmt::warn!("accelerometer: (re)init failed: {}", fault);
-        }
-        self.pipeline.reinit_done(outcome);
+        let outcome = lsm303::reinit(&mut self.sensor, &mut self.pipeline).await;
+        reinit_failed(outcome);
     }
 
     /// Powers the accelerometer down (System OFF ahead): a bus error is
@@ -493,25 +488,36 @@ impl MicrobitInput {
             Some(ButtonEvent::ToggleMute) => Some(Command::ToggleMute),
             None => None,
         };
-        let read = lsm303::read(&mut self.sensor).await;
-        let step = self.pipeline.feed(read);
-        match step.action {
-            Action::Use(_) | Action::ShowFault => {}
-            Action::KeepLast(_) => {
-                if let Read::Failed(fault) = read {
-                    defmt::debug!("accelerometer: {}", fault);
+        let polled = lsm303::poll(
+            &mut self.sensor,
+            &mut self.pipeline,
+            |read, step| match step.action {
+                Action::Use(_) | Action::ShowFault => {}
+                Action::KeepLast(_) => {
+                    if let Read::Failed(fault) = read {
+                        defmt::debug!("accelerometer: {}", fault);
+                    }
                 }
-            }
-            Action::Reinit => {
-                defmt::warn!("accelerometer: re-initialising");
-                self.reinit().await;
-            }
+                Action::Reinit => defmt::warn!("accelerometer: re-initialising"),
+            },
+        )
+        .await;
+        let step = polled.step;
+        if let Some(outcome) = polled.reinit {
+            reinit_failed(outcome);
         }
         if let Some(transition) = step.transition {
             defmt::warn!("accelerometer: {}", transition);
             let _ = self.pending.push_back(transition.event());
         }
         command
+    }
+}
+
+/// Logs a failed (re)init.
+fn reinit_failed(outcome: Result<(), Fault>) {
+    if let Err(fault) = outcome {
+        defmt::warn!("accelerometer: (re)init failed: {}", fault);
     }
 }
 

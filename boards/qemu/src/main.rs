@@ -26,7 +26,7 @@ mod fault_script;
 mod sensor;
 
 use defmt_semihosting as _;
-use marble_rolling::app::{self, DemoSummary, GameExit, GameMode, Links, TerminalSound};
+use marble_rolling::app::{self, GameExit, GameMode, Links, SensorTotals, TerminalSound};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
@@ -276,18 +276,16 @@ async fn game(options: Options) {
         exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
     }
     let end = hw::cpu_meter::sample();
-    let summary = match exit {
-        GameExit::Quit => {
-            restore_terminal(&mut UartConsole);
-            defmt::info!("quit");
-            DemoSummary::default()
-        }
-        GameExit::DemoDone(summary) => summary,
-        GameExit::SetupFailed(e) => {
+    if exit == GameExit::Quit {
+        restore_terminal(&mut UartConsole);
+        defmt::info!("quit");
+    }
+    let summary = match exit.demo_summary() {
+        Ok(summary) => summary,
+        Err(e) => {
             defmt::error!("cannot set up a level: {}", e);
             hw::exit(1)
         }
-        GameExit::Asleep { .. } => DemoSummary::default(),
     };
     let stack = hw::stack::high_water();
     defmt::info!(
@@ -317,20 +315,19 @@ async fn game(options: Options) {
     profile();
     // The first configuration is not a re-init; a fault-free demo has no other
     // and no fault (a long frame that starves the input task would show here).
-    let reinits = REPORT.reinits().saturating_sub(1);
-    let faults = REPORT.faults();
-    let pass = summary.all_won() && reinits == 0 && faults == 0;
+    let sensor = SensorTotals::from_configurations(REPORT.reinits(), REPORT.faults());
+    let verdict = summary.verdict_with_sensor(sensor);
     defmt::info!(
         "demo summary: {=u8}/{=u8} levels won, {=u64} physics steps in {=u64} frames, sensor re-inits {=u32}, sensor faults {=u32}: {=str}",
         summary.won,
         summary.levels,
         summary.steps,
         summary.frames,
-        reinits,
-        faults,
-        if pass { "PASS" } else { "FAIL" }
+        sensor.reinits,
+        sensor.faults,
+        verdict.as_str()
     );
-    hw::exit(if pass { 0 } else { 1 })
+    hw::exit(verdict.exit_code())
 }
 
 /// Instructions of one game frame, replaying up to this many frames of each

@@ -296,41 +296,50 @@ impl<'a, S: ByteSource, C: Console> QemuInput<'a, S, C> {
         }
     }
 
-    /// (Re)configures the sensor and tells the pipeline how it went.
+    /// (Re)configures the sensor and tells the pipeline how it went
+    /// ([`lsm303::reinit`]).
     async fn reinit(&mut self) {
         SensorReport::bump(&self.report.reinits);
-        let outcome = match lsm303::check_identity(&mut self.sensor).await {
-            Ok(()) => lsm303::configure(&mut self.sensor).await,
-            Err(fault) => Err(fault),
-        };
+        let outcome = lsm303::reinit(&mut self.sensor, &mut self.pipeline).await;
+        self.reinit_failed(outcome);
+    }
+
+    /// Counts and logs a failed (re)init.
+    fn reinit_failed(&self, outcome: Result<(), Fault>) {
         if let Err(fault) = outcome {
             SensorReport::bump(&self.report.failed_reinits);
             defmt::warn!("accelerometer: (re)init failed: {}", fault);
         }
-        self.pipeline.reinit_done(outcome);
     }
 
-    /// One polling period: the sensor through the pipeline. Returns whether
-    /// it took long (a re-init with its settling time, a timed-out transfer):
-    /// the only slow work here, as a virtual transfer takes no time.
+    /// One polling period: the sensor through the pipeline ([`lsm303::poll`]).
+    /// Returns whether it took long (a re-init with its settling time, a
+    /// timed-out transfer): the only slow work here, as a virtual transfer
+    /// takes no time.
     async fn poll(&mut self) -> bool {
-        let read = lsm303::read(&mut self.sensor).await;
-        let step = self.pipeline.feed(read);
-        let mut slow = read == Read::Failed(Fault::Timeout);
-        if matches!(
-            (read, step.action),
-            (Read::Failed(_), _) | (Read::Sample(_), Action::KeepLast(_))
-        ) {
-            SensorReport::bump(&self.report.faults);
-        }
-        match step.action {
-            Action::Use(_) => SensorReport::bump(&self.report.samples),
-            Action::KeepLast(_) | Action::ShowFault => {}
-            Action::Reinit => {
-                defmt::warn!("accelerometer: re-initialising");
-                self.reinit().await;
-                slow = true;
+        let report = self.report;
+        let polled = lsm303::poll(&mut self.sensor, &mut self.pipeline, |read, step| {
+            if matches!(
+                (read, step.action),
+                (Read::Failed(_), _) | (Read::Sample(_), Action::KeepLast(_))
+            ) {
+                SensorReport::bump(&report.faults);
             }
+            match step.action {
+                Action::Use(_) => SensorReport::bump(&report.samples),
+                Action::KeepLast(_) | Action::ShowFault => {}
+                Action::Reinit => {
+                    defmt::warn!("accelerometer: re-initialising");
+                    SensorReport::bump(&report.reinits);
+                }
+            }
+        })
+        .await;
+        let step = polled.step;
+        let mut slow = polled.read == Read::Failed(Fault::Timeout);
+        if let Some(outcome) = polled.reinit {
+            self.reinit_failed(outcome);
+            slow = true;
         }
         if let Some(transition) = step.transition {
             defmt::warn!(
