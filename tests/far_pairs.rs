@@ -58,6 +58,23 @@ fn fly_apart<S: Scalar>(
     (before, energy(&w))
 }
 
+/// Rolling on a level floor the speed stays (nothing gains); a far "touch"
+/// would swap or kick the velocities. `what` names the case.
+fn no_far_kick<S: Scalar>(before: f64, after: f64, what: impl Fn() -> String) {
+    assert!(
+        after <= before * (1.0 + 1e-3) + 1e-6,
+        "{} {}: energy {before} → {after}",
+        S::NAME,
+        what()
+    );
+    assert!(
+        after >= before * 0.9,
+        "{} {}: energy {before} → {after} (a far kick?)",
+        S::NAME,
+        what()
+    );
+}
+
 fn far_pairs_keep_their_energy<S: Scalar>(stepping: Stepping) {
     // 127 tiles: cells 1 ..= 125 (odd), 62 pitches apart at most.
     let n = 127;
@@ -80,18 +97,9 @@ fn far_pairs_keep_their_energy<S: Scalar>(stepping: Stepping) {
             let (ux, uz) = (speed * dx / len, speed * dz / len);
             let (va, vb) = ([ux, 0.0, uz], [-ux, 0.0, -uz]);
             let (before, after) = fly_apart::<S>(stepping, n, a, b, va, vb);
-            // Rolling on a level floor: the speed stays (nothing gains); a far
-            // "touch" would swap or kick the velocities.
-            assert!(
-                after <= before * (1.0 + 1e-3) + 1e-6,
-                "{} {stepping:?} {a:?}–{b:?} at {va:?}/{vb:?}: energy {before} → {after}",
-                S::NAME
-            );
-            assert!(
-                after >= before * 0.9,
-                "{} {stepping:?} {a:?}–{b:?}: energy {before} → {after} (a far kick?)",
-                S::NAME
-            );
+            no_far_kick::<S>(before, after, || {
+                format!("{stepping:?} {a:?}–{b:?} at {va:?}/{vb:?}")
+            });
         }
     }
 }
@@ -167,16 +175,9 @@ fn far_pairs_across_storeys<S: Scalar>(stepping: Stepping) {
     ] {
         for speed in [top, top / 2.0] {
             let (before, after) = fly_apart_3d::<S>(stepping, a, b, speed);
-            assert!(
-                after <= before * (1.0 + 1e-3) + 1e-6,
-                "{} {stepping:?} {a:?}–{b:?} at {speed}: energy {before} → {after}",
-                S::NAME
-            );
-            assert!(
-                after >= before * 0.9,
-                "{} {stepping:?} {a:?}–{b:?} at {speed}: energy {before} → {after} (a far kick?)",
-                S::NAME
-            );
+            no_far_kick::<S>(before, after, || {
+                format!("{stepping:?} {a:?}–{b:?} at {speed}")
+            });
         }
     }
 }
