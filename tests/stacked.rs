@@ -48,14 +48,9 @@ fn shaft(restitution: &str) -> String {
 const FIVE_UM: f64 = 0.005 / 12.0;
 
 fn params_of<S: Scalar>(l: &Level<'_, WORDS>, st: Stepping) -> Params<S> {
-    let mut spec = l.info.spec;
-    spec.stepping = st;
-    spec.step_log2 = match st {
-        Stepping::Fixed => 10,
-        Stepping::Events => 7,
-    };
+    let mut spec = stepped(l.info.spec, st);
     spec.effects.marbles = true;
-    Params::new(spec).expect("valid spec")
+    params(spec)
 }
 
 /// Standard gravity in pitches/s².

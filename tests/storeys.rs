@@ -134,18 +134,8 @@ fn holes_over_holes_and_lowest_holes_are_allowed() {
     }
 }
 
-fn events_or_fixed(st: Stepping) -> u32 {
-    match st {
-        Stepping::Fixed => 10,
-        Stepping::Events => 7,
-    }
-}
-
 fn params_of<S: Scalar>(l: &Level<'_, BIG>, st: Stepping) -> Params<S> {
-    let mut spec = l.info.spec;
-    spec.stepping = st;
-    spec.step_log2 = events_or_fixed(st);
-    Params::new(spec).expect("valid spec")
+    params(stepped(l.info.spec, st))
 }
 
 /// Standard gravity in pitches/s².

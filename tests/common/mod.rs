@@ -99,13 +99,19 @@ macro_rules! backend_tests {
 /// The default spec in a stepping mode: fixed steps at 1024 steps/s, or events
 /// at the firmware's 128 frames/s.
 pub fn spec_in(stepping: Stepping, effects: Effects) -> PhysicsSpec {
+    stepped(spec(effects), stepping)
+}
+
+/// `spec` (a level's, say) in a stepping mode, at that mode's rate as in
+/// [`spec_in`].
+pub fn stepped(spec: PhysicsSpec, stepping: Stepping) -> PhysicsSpec {
     PhysicsSpec {
         stepping,
         step_log2: match stepping {
             Stepping::Fixed => 10,
             Stepping::Events => 7,
         },
-        ..spec(effects)
+        ..spec
     }
 }
 
