@@ -90,11 +90,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Fixed steps, a resting pair (no bounce): when a tile pass took back one
     /// marble's share of the push (a marble on the floor, another on top of it),
     /// the pair overlaps again by that share; the other marble, the one free to
-    /// go, takes it (and its tile passes once more). A bounce is left alone: there
-    /// the overlap is a step's travel, and moving the marble out of it without
-    /// its velocity would add energy. Without it a stack sank into itself by half a step's pull every
-    /// step: 14 µm at 1024 steps/s. The event stepper's pair slices are short
-    /// enough for that share to stay under `2^-12·r`; they are left as they are.
+    /// go, takes it (and its tile passes once more). Without this a stack sank
+    /// into itself by half a step's pull every step: 14 µm at 1024 steps/s.
+    ///
+    /// A bounce is left alone: there the overlap is a step's travel, and moving
+    /// the marble out of it without its velocity would add energy. The event
+    /// stepper's pair slices are short enough for that share to stay under
+    /// `2^-12·r`; they are left as they are.
     fn settle_on<const SPACE: bool>(
         &mut self,
         na: &mut Marble<S>,
