@@ -378,6 +378,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The marble's next flight and the event that ends it (steps from `f.t`):
     /// the flight's acceleration, a slice begun if one was asked for, the search.
     fn next<const SPACE: bool>(&mut self, m: &mut Marble<S>, f: &mut Flight<S>) -> (S, Event<S>) {
+        self.stats.flights = self.stats.flights.wrapping_add(1);
         self.prepare::<SPACE>(m, f);
         if f.events >= 2 * MAX_EVENTS && f.slice.is_none() {
             // Past every bound: blind slices to the end of the step.

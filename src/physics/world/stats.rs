@@ -34,6 +34,9 @@ pub struct StepStats {
     /// Events stepping: marble-steps that ran out of events ([`events::MAX_EVENTS`])
     /// and finished in slices. Physics does not get there: 0 in every test.
     pub event_limits: u32,
+    /// Events stepping: flights flown (each search for a marble's next event,
+    /// and each marble's slice of a pair slice): the unit of a step's work.
+    pub flights: u32,
 }
 
 /// How many bounces between two [`World::take_impacts`] keep their speed.

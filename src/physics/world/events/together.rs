@@ -299,5 +299,6 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             self.marbles[n].vel = cap_speed(self.marbles[n].vel);
         }
         self.stats.slices = self.stats.slices.wrapping_add(1);
+        self.stats.flights = self.stats.flights.wrapping_add(2);
     }
 }
