@@ -278,6 +278,27 @@ pub fn intel_hex(image: &Image) -> Result<String, String> {
         .map_err(|e| format!("cannot write the Intel HEX records: {e:?}"))
 }
 
+/// What a plain Intel HEX file writes to flash: its data records, placed by
+/// its Extended Linear and Extended Segment Address records, up to its End
+/// Of File (start address records say nothing about flash).
+pub fn image_of_intel_hex(text: &str) -> Result<Image, String> {
+    let mut image = Image::default();
+    let mut base = 0u32;
+    for (number, record) in ihex::Reader::new(text).enumerate() {
+        let line = number + 1;
+        match record.map_err(|e| format!("record {line}: {e}"))? {
+            ihex::Record::Data { offset, value } => image
+                .add(base.wrapping_add(u32::from(offset)), &value)
+                .map_err(|e| format!("record {line}: {e}"))?,
+            ihex::Record::ExtendedLinearAddress(upper) => base = u32::from(upper) << 16,
+            ihex::Record::ExtendedSegmentAddress(segment) => base = u32::from(segment) << 4,
+            ihex::Record::EndOfFile => return Ok(image),
+            ihex::Record::StartLinearAddress(_) | ihex::Record::StartSegmentAddress { .. } => {}
+        }
+    }
+    Err("no End Of File record".into())
+}
+
 /// One record line (`\n` included) of any type, the universal ones too.
 fn line(kind: u8, offset: u16, data: &[u8]) -> String {
     let mut bytes = vec![data.len() as u8, (offset >> 8) as u8, offset as u8, kind];
@@ -502,27 +523,39 @@ mod tests {
         let across = bytes(100, 11);
         let image = image(&[(0x10, &low), (0x1_FFD0, &across)]);
         let text = intel_hex(&image).unwrap();
-        let mut back = Image::default();
-        let mut upper = 0u32;
-        let mut lines = 0;
-        for record in ihex::Reader::new(&text) {
-            lines += 1;
-            match record.expect("a valid record") {
-                ihex::Record::ExtendedLinearAddress(high) => upper = u32::from(high) << 16,
-                ihex::Record::Data { offset, value } => {
-                    assert!(value.len() <= PLAIN_RECORD);
-                    back.add(upper | u32::from(offset), &value).unwrap();
-                }
-                ihex::Record::EndOfFile => {}
+        assert_eq!(image_of_intel_hex(&text), Ok(image));
+        let lines = ihex::Reader::new(&text)
+            .map(|record| match record.expect("a valid record") {
+                ihex::Record::Data { value, .. } => assert!(value.len() <= PLAIN_RECORD),
+                ihex::Record::ExtendedLinearAddress(_) | ihex::Record::EndOfFile => {}
                 other => panic!("unexpected {other:?}"),
-            }
-        }
-        assert_eq!(back, image);
+            })
+            .count();
         // Three address records (0x0000, 0x0001, 0x0002): the 100 bytes cross 0x20000.
         assert_eq!(text.matches(":02000004").count(), 3);
         assert!(text.starts_with(":020000040000FA\n"));
         assert!(text.ends_with(":00000001FF\n"));
         assert_eq!(lines, text.lines().count());
+    }
+
+    #[test]
+    fn reading_plain_hex() {
+        // Segment addresses (×16) as well as linear ones (×65 536).
+        let text =
+            ":020000021000EC\n:0100040042B9\n:020000040002F8\n:020000000102FB\n:00000001FF\n";
+        assert_eq!(
+            image_of_intel_hex(text),
+            Ok(image(&[(0x1_0004, &[0x42]), (0x2_0000, &[1, 2])]))
+        );
+        let bad = text.replace("0042B9", "0042B8");
+        let error = image_of_intel_hex(&bad).unwrap_err();
+        assert!(error.starts_with("record 2:"), "{error}");
+        assert!(
+            image_of_intel_hex(":0100040042B9\n").is_err(),
+            "no End Of File"
+        );
+        let twice = ":0100040042B9\n:0100040042B9\n:00000001FF\n";
+        assert!(image_of_intel_hex(twice).unwrap_err().contains("record 2"));
     }
 
     #[test]

@@ -78,6 +78,7 @@ impl Board {
 /// A board's build: its ELF and the plain file written from it.
 struct Built {
     elf: PathBuf,
+    image: Image,
     plain: PathBuf,
 }
 
@@ -91,7 +92,6 @@ pub fn run(check: bool) -> Outcome {
     std::fs::create_dir_all(&out)
         .map_err(|e| Failure::new(format!("cannot create {}: {e}", out.display())))?;
     let mut built = Vec::new();
-    let mut images = Vec::new();
     for board in &BOARDS {
         let elf = firmware::build(&Artifact::firmware(board.package, board.bin, board.target))?;
         let image = image_of(&elf)?;
@@ -114,11 +114,10 @@ pub fn run(check: bool) -> Outcome {
             text.len(),
             plain.display()
         );
-        built.push(Built { elf, plain });
-        images.push(image);
+        built.push(Built { elf, image, plain });
     }
     let universal = out.join(UNIVERSAL);
-    let text = hex::universal_hex(&images[0], &images[1]);
+    let text = hex::universal_hex(&built[0].image, &built[1].image);
     write(&universal, &text)?;
     say!(
         "universal hex (V1 and V2): {} B in {}",
@@ -170,6 +169,24 @@ fn check(target: &Path, built: &[Built], universal: &Path) -> Result<(), Failure
             ("the plain file", &built.plain, "plain"),
         ];
         for (what, file, tag) in tried {
+            // llvm-objcopy's flat binary starts wherever the file does: the
+            // start address is compared apart.
+            let start = |image: &Image| image.runs().first().map(|run| run.0);
+            let read = std::fs::read_to_string(file)
+                .map_err(|e| format!("cannot read it: {e}"))
+                .and_then(|text| hex::image_of_intel_hex(&text));
+            match read.map(|image| start(&image)) {
+                Ok(at) if at == start(&built.image) => {}
+                Ok(at) => problems.push(format!(
+                    "{}: {what} ({}) starts at {at:x?}, the ELF's image at {:x?}",
+                    board.name,
+                    file.display(),
+                    start(&built.image)
+                )),
+                Err(e) => {
+                    problems.push(format!("{}: {what} ({}): {e}", board.name, file.display()))
+                }
+            }
             let binary = flat_binary(&objcopy, file, Some("ihex"), &dir, board.name, tag)?;
             match first_difference(&reference, &binary) {
                 None => say!(
