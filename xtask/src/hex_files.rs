@@ -15,6 +15,14 @@
 //! universal hex boots in QEMU's `microbit` machine, put in flash by QEMU's
 //! loader from that .hex (not from the ELF, which only decodes the log), and
 //! wins the demo.
+//!
+//! `--level FILE…` also writes the levels region
+//! (`marble_rolling::board::levels_region`: the format, its address on each
+//! board) into both images, after checking each level as `cargo sim --
+//! --check` does (`FILE:line:column: message`); `--check` then wants the
+//! region, read back by the firmware's own reader from each image the
+//! library split off, to hold the files' levels, and the rest of each image
+//! equal to the ELF's. The firmware does not play the region's levels yet.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -30,6 +38,9 @@ use crate::process;
 use crate::runner;
 use crate::setup::{self, M0, M4};
 use crate::workspace;
+
+use marble_rolling::board::levels_region::{self, LevelCheck};
+use marble_rolling::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
 
 /// The Foundation's library and the version CI checks against (pinned: its
 /// reading of the format is the reference, and must not move under us).
@@ -48,6 +59,8 @@ struct Board {
     target: &'static str,
     /// Its block type in the universal hex.
     block: u16,
+    /// Where its levels region is.
+    region: u32,
 }
 
 /// The two boards, V1 first (the order of their sections in the universal hex).
@@ -58,6 +71,7 @@ const BOARDS: [Board; 2] = [
         bin: microbit_v1::BIN,
         target: M0,
         block: hex::BOARD_V1,
+        region: levels_region::V1.start,
     },
     // As `cargo microbit` builds it (game::microbit).
     Board {
@@ -66,6 +80,7 @@ const BOARDS: [Board; 2] = [
         bin: "microbit",
         target: M4,
         block: hex::BOARD_V2,
+        region: levels_region::V2.start,
     },
 ];
 
@@ -78,12 +93,35 @@ impl Board {
 /// A board's build: its ELF and the plain file written from it.
 struct Built {
     elf: PathBuf,
+    /// The ELF's image alone.
+    elf_image: Image,
+    /// What the files hold: the ELF's image and the levels region, if any.
     image: Image,
     plain: PathBuf,
 }
 
-/// `cargo xtask hex [--check]`.
-pub fn run(check: bool) -> Outcome {
+/// `cargo xtask hex [--check] [--level FILE…]`.
+pub fn run(check: bool, levels: &[PathBuf]) -> Outcome {
+    let region = if levels.is_empty() {
+        None
+    } else {
+        let mut files = Vec::new();
+        for path in levels {
+            let bytes = std::fs::read(path)
+                .map_err(|e| Failure::new(format!("{}: cannot read: {e}", path.display())))?;
+            files.push((path.display().to_string(), bytes));
+        }
+        let region = region_of(&files).map_err(|e| Failure::new(e).status(2))?;
+        say!(
+            "levels region: {} level(s) in {} B of {} at {:#x} (v1) and {:#x} (v2)",
+            files.len(),
+            region.len(),
+            levels_region::SIZE,
+            levels_region::V1.start,
+            levels_region::V2.start
+        );
+        Some((files, region))
+    };
     setup::target(M0)?;
     setup::target(M4)?;
     setup::flip_link()?;
@@ -94,12 +132,23 @@ pub fn run(check: bool) -> Outcome {
     let mut built = Vec::new();
     for board in &BOARDS {
         let elf = firmware::build(&Artifact::firmware(board.package, board.bin, board.target))?;
-        let image = image_of(&elf)?;
+        let mut image = image_of(&elf)?;
         if image.is_empty() {
             return Err(Failure::new(format!(
                 "{}: no allocated section with contents: nothing to flash",
                 elf.display()
             )));
+        }
+        let elf_image = image.clone();
+        if let Some((_, bytes)) = &region {
+            image.add(board.region, bytes).map_err(|e| {
+                Failure::new(format!(
+                    "{}: the {} levels region at {:#x}: {e} (the firmware reaches into it)",
+                    elf.display(),
+                    board.name,
+                    board.region
+                ))
+            })?;
         }
         let plain = out.join(board.plain_file());
         let text =
@@ -114,7 +163,12 @@ pub fn run(check: bool) -> Outcome {
             text.len(),
             plain.display()
         );
-        built.push(Built { elf, image, plain });
+        built.push(Built {
+            elf,
+            elf_image,
+            image,
+            plain,
+        });
     }
     let universal = out.join(UNIVERSAL);
     let text = hex::universal_hex(&built[0].image, &built[1].image);
@@ -125,9 +179,78 @@ pub fn run(check: bool) -> Outcome {
         universal.display()
     );
     if check {
-        self::check(&target, &built, &universal)?;
+        let files = region.as_ref().map(|(files, _)| files.as_slice());
+        self::check(&target, &built, &universal, files)?;
     }
     Ok(0)
+}
+
+/// The occupancy words of the largest level the format allows: the files
+/// are checked as `cargo sim -- --check` checks them, whatever a board holds.
+const FORMAT_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
+
+/// The levels region's bytes for `files` (name, contents), each level
+/// checked first: `FILE:line:column: message` for the first bad one.
+pub fn region_of(files: &[(String, Vec<u8>)]) -> Result<Vec<u8>, String> {
+    for (name, bytes) in files {
+        // Boxed: the largest level's grid is 16 KiB.
+        let checked = Box::new(levels_region::level::<FORMAT_WORDS>(bytes));
+        match *checked {
+            Ok(_) => {}
+            Err(LevelCheck::Parse(e)) => return Err(format!("{name}:{e}")),
+            Err(LevelCheck::TooLarge { needs, room }) => {
+                return Err(format!(
+                    "{name}: needs {needs} occupancy words, the format allows {room}"
+                ))
+            }
+        }
+    }
+    let texts: Vec<&[u8]> = files.iter().map(|(_, bytes)| bytes.as_slice()).collect();
+    let mut region = vec![0xFF; levels_region::SIZE];
+    let used = levels_region::write(&texts, &mut region).map_err(|e| match e {
+        levels_region::WriteError::Count(n) => format!(
+            "{n} levels: the region holds 1 to {}",
+            levels_region::MAX_LEVELS
+        ),
+        levels_region::WriteError::TooLong { index } => {
+            format!("{}: longer than 65 535 bytes", files[index].0)
+        }
+        levels_region::WriteError::TooBig { needs, room } => format!(
+            "the levels need {needs} B of region, there are {room} B (header and 2 B per level included)"
+        ),
+    })?;
+    region.truncate(used);
+    Ok(region)
+}
+
+/// Whether the levels region of `image` (a board's, its region at `at`)
+/// holds exactly `files`, read with the firmware's reader.
+pub fn region_holds(image: &Image, at: u32, files: &[(String, Vec<u8>)]) -> Result<(), String> {
+    let (base, flat) = image.flat();
+    let start = at
+        .checked_sub(base)
+        .map(|offset| offset as usize)
+        .filter(|&offset| offset <= flat.len())
+        .ok_or_else(|| format!("the image holds nothing at {at:#x}"))?;
+    let end = (start + levels_region::SIZE).min(flat.len());
+    let region = levels_region::read(&flat[start..end])
+        .map_err(|e| format!("the region at {at:#x} is refused: {e:?}"))?;
+    if region.len() != files.len() {
+        return Err(format!(
+            "the region at {at:#x} holds {} levels, not {}",
+            region.len(),
+            files.len()
+        ));
+    }
+    for (index, (name, bytes)) in files.iter().enumerate() {
+        if region.bytes(index) != Some(bytes.as_slice()) {
+            return Err(format!(
+                "level {} in the region at {at:#x} is not {name}",
+                index + 1
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn image_of(elf: &Path) -> Result<Image, Failure> {
@@ -142,7 +265,12 @@ fn write(path: &Path, text: &str) -> Result<(), Failure> {
 }
 
 /// The proof (see the module doc).
-fn check(target: &Path, built: &[Built], universal: &Path) -> Result<(), Failure> {
+fn check(
+    target: &Path,
+    built: &[Built],
+    universal: &Path,
+    levels: Option<&[(String, Vec<u8>)]>,
+) -> Result<(), Failure> {
     let dir = target.join("hex-check");
     std::fs::create_dir_all(&dir)
         .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
@@ -159,7 +287,28 @@ fn check(target: &Path, built: &[Built], universal: &Path) -> Result<(), Failure
             ));
             continue;
         };
-        let reference = flat_binary(&objcopy, &built.elf, None, &dir, board.name, "elf")?;
+        let mut reference = flat_binary(&objcopy, &built.elf, None, &dir, board.name, "elf")?;
+        if let Some(files) = levels {
+            // llvm-objcopy's image of the ELF, and after it the region (read
+            // back below with the firmware's reader, not compared to ours).
+            let (base, _) = built.elf_image.flat();
+            let (_, with_region) = built.image.flat();
+            let at = (board.region - base) as usize;
+            reference.resize(at, 0);
+            reference.extend_from_slice(&with_region[at..]);
+            let split = std::fs::read_to_string(from_universal)
+                .map_err(|e| e.to_string())
+                .and_then(|text| hex::image_of_intel_hex(&text))
+                .and_then(|image| region_holds(&image, board.region, files));
+            match split {
+                Ok(()) => say!(
+                    "{}: the region in the library's split holds the {} level(s), as the firmware reads it",
+                    board.name,
+                    files.len()
+                ),
+                Err(e) => problems.push(format!("{}: {e}", board.name)),
+            }
+        }
         let tried = [
             (
                 "the library's split of the universal hex",
@@ -190,9 +339,10 @@ fn check(target: &Path, built: &[Built], universal: &Path) -> Result<(), Failure
             let binary = flat_binary(&objcopy, file, Some("ihex"), &dir, board.name, tag)?;
             match first_difference(&reference, &binary) {
                 None => say!(
-                    "{}: {what} ({}) is the ELF's image byte for byte ({} B, llvm-objcopy -O binary)",
+                    "{}: {what} ({}) is the ELF's image{} byte for byte ({} B, llvm-objcopy -O binary)",
                     board.name,
                     file.display(),
+                    if levels.is_some() { " and the levels region" } else { "" },
                     reference.len()
                 ),
                 Some(at) => problems.push(format!(
@@ -455,6 +605,59 @@ mod tests {
         assert!(parse_separated("9900 a\n9900 b\n").is_err());
         assert!(parse_separated("zz a\n").is_err());
         assert!(parse_separated("9900\n").is_err());
+    }
+
+    const CORNER: &str =
+        "name: my-corner\n---\n#########\n#S......#\n#######.#\n#G......#\n#########\n";
+
+    fn files(levels: &[(&str, &str)]) -> Vec<(String, Vec<u8>)> {
+        levels
+            .iter()
+            .map(|(name, text)| (name.to_string(), text.as_bytes().to_vec()))
+            .collect()
+    }
+
+    #[test]
+    fn the_region_of_level_files() {
+        let good = files(&[("a.level", CORNER), ("b.level", CORNER)]);
+        let region = region_of(&good).unwrap();
+        assert_eq!(region.len(), levels_region::HEADER + 2 * (2 + CORNER.len()));
+        let read = levels_region::read(&region).unwrap();
+        assert_eq!(read.bytes(1), Some(CORNER.as_bytes()));
+        // A bad level is named with its line and column, as sim --check says.
+        let bad = files(&[
+            ("a.level", CORNER),
+            ("b.level", &CORNER.replace("#G", "#x")),
+        ]);
+        assert_eq!(
+            region_of(&bad).unwrap_err(),
+            "b.level:6:2: unknown tile (use # . O S G)"
+        );
+        let nine = files(&[("a.level", CORNER); 9]);
+        assert!(region_of(&nine).unwrap_err().starts_with("9 levels"));
+    }
+
+    #[test]
+    fn a_patched_image_holds_the_region_and_the_plain_hex_too() {
+        let good = files(&[("a.level", CORNER)]);
+        let region = region_of(&good).unwrap();
+        let mut image = Image::default();
+        image.add(0, &[1, 2, 3, 4]).unwrap();
+        image.add(levels_region::V1.start, &region).unwrap();
+        let back = hex::image_of_intel_hex(&hex::intel_hex(&image).unwrap()).unwrap();
+        assert_eq!(region_holds(&back, levels_region::V1.start, &good), Ok(()));
+        let other = files(&[("b.level", &CORNER.replace("my-corner", "other"))]);
+        assert!(region_holds(&back, levels_region::V1.start, &other)
+            .unwrap_err()
+            .contains("is not b.level"));
+        // Without the region there is nothing to read.
+        let mut plain = Image::default();
+        plain.add(0, &[1, 2, 3, 4]).unwrap();
+        assert!(region_holds(&plain, levels_region::V1.start, &good).is_err());
+        // Code in the region's place: the patch is refused.
+        let mut big = Image::default();
+        big.add(levels_region::V1.start - 2, &[0; 4]).unwrap();
+        assert!(big.add(levels_region::V1.start, &region).is_err());
     }
 
     const WON: &str = "1.0 INFO  demo stepping=events\n\

@@ -141,6 +141,10 @@ enum Task {
         /// wins the demo in QEMU from that .hex.
         #[arg(long)]
         check: bool,
+        /// Level files to write into the boards' levels region (up to 8, each
+        /// checked as `cargo sim -- --check` does).
+        #[arg(long = "level", value_name = "FILE", num_args = 1..)]
+        levels: Vec<PathBuf>,
     },
     /// The accuracy/cost study (writes docs/accuracy.md and docs/accuracy.png).
     Accuracy {
@@ -198,7 +202,7 @@ impl Task {
             }
             Task::Web { port, no_serve } => web::run(port, no_serve),
             Task::WebTest { screenshot } => web::test(screenshot),
-            Task::Hex { check } => hex_files::run(check),
+            Task::Hex { check, levels } => hex_files::run(check, &levels),
             Task::Accuracy { args } => study::accuracy(&args),
         }
     }
@@ -334,11 +338,17 @@ mod tests {
             Cli::try_parse_from(alias).expect("parses").task,
             Task::Web { port: 0, .. }
         ));
-        assert!(matches!(parse(&["hex"]), Task::Hex { check: false }));
-        let hex = own_options(["xtask", "hex", "--", "--check"].map(Into::into).to_vec());
+        assert!(matches!(parse(&["hex"]), Task::Hex { check: false, levels } if levels.is_empty()));
+        let hex = own_options(
+            [
+                "xtask", "hex", "--", "--level", "a.level", "b.level", "--check",
+            ]
+            .map(Into::into)
+            .to_vec(),
+        );
         assert!(matches!(
             Cli::try_parse_from(hex).expect("parses").task,
-            Task::Hex { check: true }
+            Task::Hex { check: true, levels } if levels == [PathBuf::from("a.level"), PathBuf::from("b.level")]
         ));
         assert!(Cli::try_parse_from(["xtask", "hex", "--level"]).is_err());
         assert!(Cli::try_parse_from(["xtask", "size-report", "--bogus"]).is_err());
