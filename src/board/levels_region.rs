@@ -1,13 +1,15 @@
 //! Your levels on the board: a region of each micro:bit's flash, at a fixed
 //! address ([`V1`], [`V2`]), that holds up to [`MAX_LEVELS`] level texts for
 //! the firmware to play before the built-in ones. `cargo xtask hex --level
-//! FILE…` writes it into the .hex files ([`write`]); a board reads it with
-//! [`read`] and each level with [`level`], and plays none of it, saying why,
-//! when anything is wrong: an erased region (no levels: a plain hex leaves it
-//! so), a foreign magic, another version, a length past the region, a CRC
-//! that does not match, an entry cut short, a level the parser refuses (the
-//! error `cargo sim -- --check` gives, at its line and column) or one larger
-//! than the board can hold. Nothing here panics on any bytes.
+//! FILE…` writes it into the .hex files ([`write()`]) and reads it back
+//! from them with [`read`] in its check. A board is to read it the same way,
+//! each level with [`level`], and play none of it, saying why, when anything
+//! is wrong (no firmware reads it yet: docs/boards.md says what is left): an
+//! erased region (no levels: a plain hex leaves it so), a foreign magic,
+//! another version, a length past the region, a CRC that does not match, an
+//! entry cut short, a level the parser refuses (the error `cargo sim --
+//! --check` gives, at its line and column) or one larger than the board can
+//! hold. Nothing here panics on any bytes.
 //!
 //! # Layout (little-endian)
 //!
@@ -112,7 +114,7 @@ pub enum LevelCheck {
     },
 }
 
-/// Why [`write`] cannot make a region.
+/// Why [`write()`] cannot make a region.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WriteError {
     /// No levels, or more than [`MAX_LEVELS`].
