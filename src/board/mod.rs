@@ -13,3 +13,5 @@ pub mod qemu;
 pub mod microbit;
 // The micro:bit v1 board module (nRF51822): pure code, host-tested.
 pub mod microbit_v1;
+// The levels region both micro:bits read from flash (`cargo xtask hex --level`).
+pub mod levels_region;

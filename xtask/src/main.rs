@@ -8,6 +8,8 @@ mod demo;
 mod error;
 mod firmware;
 mod game;
+mod hex;
+mod hex_files;
 mod microbit_v1;
 mod process;
 mod profile;
@@ -131,6 +133,19 @@ enum Task {
         #[arg(long, value_name = "FILE")]
         screenshot: Option<PathBuf>,
     },
+    /// The micro:bit files to drag onto MICROBIT (target/hex/): the universal
+    /// hex for V1 and V2 and one plain Intel HEX per board.
+    Hex {
+        /// Also prove them: the micro:bit Foundation's npm library splits the
+        /// universal hex into the ELFs' images (llvm-objcopy's), and the V1's
+        /// wins the demo in QEMU from that .hex.
+        #[arg(long)]
+        check: bool,
+        /// Level files to write into the boards' levels region (up to 8, each
+        /// checked as `cargo sim -- --check` does).
+        #[arg(long = "level", value_name = "FILE", num_args = 1..)]
+        levels: Vec<PathBuf>,
+    },
     /// The accuracy/cost study (writes docs/accuracy.md and docs/accuracy.png).
     Accuracy {
         /// The study's arguments (`cargo accuracy -- --help`).
@@ -155,6 +170,7 @@ impl Task {
             Task::QemuProfile { .. } => "qemu-profile",
             Task::Web { .. } => "web",
             Task::WebTest { .. } => "web-test",
+            Task::Hex { .. } => "hex",
             Task::Accuracy { .. } => "accuracy",
         }
     }
@@ -186,6 +202,7 @@ impl Task {
             }
             Task::Web { port, no_serve } => web::run(port, no_serve),
             Task::WebTest { screenshot } => web::test(screenshot),
+            Task::Hex { check, levels } => hex_files::run(check, &levels),
             Task::Accuracy { args } => study::accuracy(&args),
         }
     }
@@ -201,11 +218,12 @@ fn with_demo(demo: bool, mut args: Vec<String>) -> Vec<String> {
 }
 
 /// The arguments without a `--` right after a task whose options are its own
-/// (`web`, `web-test`): the aliases put one there (`cargo web -- --port 0`).
+/// (`web`, `web-test`, `hex`): the aliases put one there (`cargo web -- --port
+/// 0`), and so do people (`cargo xtask hex -- --check`).
 fn own_options(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
     let own = args
         .get(1)
-        .is_some_and(|task| task == "web" || task == "web-test");
+        .is_some_and(|task| task == "web" || task == "web-test" || task == "hex");
     if own && args.get(2).is_some_and(|a| a == "--") {
         args.remove(2);
     }
@@ -320,6 +338,19 @@ mod tests {
             Cli::try_parse_from(alias).expect("parses").task,
             Task::Web { port: 0, .. }
         ));
+        assert!(matches!(parse(&["hex"]), Task::Hex { check: false, levels } if levels.is_empty()));
+        let hex = own_options(
+            [
+                "xtask", "hex", "--", "--level", "a.level", "b.level", "--check",
+            ]
+            .map(Into::into)
+            .to_vec(),
+        );
+        assert!(matches!(
+            Cli::try_parse_from(hex).expect("parses").task,
+            Task::Hex { check: true, levels } if levels == [PathBuf::from("a.level"), PathBuf::from("b.level")]
+        ));
+        assert!(Cli::try_parse_from(["xtask", "hex", "--level"]).is_err());
         assert!(Cli::try_parse_from(["xtask", "size-report", "--bogus"]).is_err());
         assert!(Cli::try_parse_from(["xtask", "properties", "many"]).is_err());
         assert!(Cli::try_parse_from(["xtask", "nonsense"]).is_err());

@@ -79,6 +79,7 @@ const FRAME_TOLERANCE: u8 = 1;
 /// command line there, to probe-rs after the ELF otherwise).
 pub fn run(args: &[String]) -> Outcome {
     let args = runner::drop_separators(args);
+    let (image, args) = take_image(args)?;
     let qemu = args.iter().any(|arg| arg == "--demo" || arg == "--qemu");
     setup::target(M0)?;
     if qemu {
@@ -87,8 +88,25 @@ pub fn run(args: &[String]) -> Outcome {
         let elf = build()?;
         let firmware_args: Vec<String> = args.into_iter().filter(|arg| arg != "--qemu").collect();
         say!("running it headless in QEMU microbit (defmt log below)");
-        let (status, _) = qemu_run(&tools, &elf, &firmware_args, None, Sink::Terminal, limit)?;
+        let (status, _) = match &image {
+            Some(image) => {
+                say!(
+                    "flash loaded from {} (the ELF only decodes the log)",
+                    image.display()
+                );
+                let cmd = qemu_image_command(&tools.qemu, image, &firmware_args);
+                qemu_run_with(cmd, &tools, &elf, None, Sink::Terminal, limit)?
+            }
+            None => qemu_run(&tools, &elf, &firmware_args, None, Sink::Terminal, limit)?,
+        };
         return Ok(status);
+    }
+    if image.is_some() {
+        return Err(Failure::new(
+            "--image runs a flash image in QEMU: give --demo or --qemu with it (on a board, \
+             drag the .hex onto MICROBIT instead)",
+        )
+        .status(2));
     }
     let elf = build()?;
     let probe = setup::probe_rs()?;
@@ -135,6 +153,50 @@ pub fn qemu_command(qemu: &Path, elf: &Path, args: &[String]) -> Command {
         .file_name()
         .map(|name| name.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let mut cmd = qemu_machine(qemu, &program, args);
+    cmd.arg("-kernel").arg(elf);
+    cmd
+}
+
+/// The QEMU command line for a flash image (`.hex`, as a person drags onto
+/// the board, or ELF) put in place by QEMU's generic loader instead of
+/// `-kernel`: the Cortex-M0 then boots from the vector table it wrote, as
+/// the nRF51 does from flash. The firmware sees BIN as its program name.
+pub fn qemu_image_command(qemu: &Path, image: &Path, args: &[String]) -> Command {
+    let mut cmd = qemu_machine(qemu, BIN, args);
+    let mut loader = std::ffi::OsString::from("loader,file=");
+    // QEMU's option syntax: a comma inside a value is doubled.
+    loader.push(image.to_string_lossy().replace(',', ",,"));
+    cmd.arg("-device").arg(loader);
+    cmd
+}
+
+/// `--image PATH` (or `--image=PATH`) taken out of the arguments.
+pub fn take_image(args: Vec<String>) -> Result<(Option<PathBuf>, Vec<String>), Failure> {
+    let mut image = None;
+    let mut rest = Vec::with_capacity(args.len());
+    let mut args = args.into_iter();
+    while let Some(arg) = args.next() {
+        let path = match arg.strip_prefix("--image") {
+            Some("") => args
+                .next()
+                .ok_or_else(|| Failure::new("--image needs a file (a .hex or an ELF)").status(2))?,
+            Some(value) if value.starts_with('=') => value[1..].to_string(),
+            _ => {
+                rest.push(arg);
+                continue;
+            }
+        };
+        if image.replace(PathBuf::from(path)).is_some() {
+            return Err(Failure::new("--image given twice").status(2));
+        }
+    }
+    Ok((image, rest))
+}
+
+/// QEMU's microbit machine, headless, its semihosting command line `program`
+/// + `args`; no firmware yet.
+fn qemu_machine(qemu: &Path, program: &str, args: &[String]) -> Command {
     let mut cmd = Command::new(qemu);
     cmd.args([
         "-M",
@@ -147,9 +209,7 @@ pub fn qemu_command(qemu: &Path, elf: &Path, args: &[String]) -> Command {
     ])
     .args(runner::ICOUNT)
     .arg("-semihosting-config")
-    .arg(runner::semihosting_config(&program, args))
-    .arg("-kernel")
-    .arg(elf);
+    .arg(runner::semihosting_config(program, args));
     cmd
 }
 
@@ -164,7 +224,35 @@ fn qemu_run(
     sink: Sink,
     limit: Duration,
 ) -> Result<(u8, Duration), Failure> {
-    let mut qemu = qemu_command(&tools.qemu, elf, args);
+    let qemu = qemu_command(&tools.qemu, elf, args);
+    qemu_run_with(qemu, tools, elf, trace, sink, limit)
+}
+
+/// Runs the flash image `image` (see [`qemu_image_command`]) headless with
+/// `args`, its defmt log decoded with `elf` (which must be the image's ELF)
+/// into `log`: QEMU's status (the firmware's), else defmt-print's.
+pub fn run_image(
+    tools: &setup::Qemu,
+    elf: &Path,
+    image: &Path,
+    args: &[String],
+    log: &File,
+    limit: Duration,
+) -> Result<u8, Failure> {
+    let qemu = qemu_image_command(&tools.qemu, image, args);
+    let (status, _) = qemu_run_with(qemu, tools, elf, None, Sink::File(log), limit)?;
+    Ok(status)
+}
+
+/// [`qemu_run`] for a QEMU command line already made.
+fn qemu_run_with(
+    mut qemu: Command,
+    tools: &setup::Qemu,
+    elf: &Path,
+    trace: Option<&Path>,
+    sink: Sink,
+    limit: Duration,
+) -> Result<(u8, Duration), Failure> {
     if let Some(trace) = trace {
         qemu.args(["-trace", "nrf51_gpio_update_output_irq"])
             .args(["-trace", "nrf51_timer_set_count"])
@@ -1078,5 +1166,41 @@ mod tests {
              shift=7,align=off,sleep=off -semihosting-config \
              enable=on,target=native,arg=microbit-v1,arg=--demo -kernel /t/microbit-v1"
         );
+    }
+
+    #[test]
+    fn an_image_is_loaded_by_the_generic_loader_not_as_the_kernel() {
+        let cmd = qemu_image_command(
+            Path::new("qemu-system-arm"),
+            Path::new("/t/a,b/v1.hex"),
+            &["--demo".into()],
+        );
+        let shown = process::shown(&cmd);
+        assert!(
+            shown.ends_with("arg=microbit-v1,arg=--demo -device loader,file=/t/a,,b/v1.hex"),
+            "{shown}"
+        );
+        assert!(!shown.contains("-kernel"), "{shown}");
+    }
+
+    #[test]
+    fn the_image_option() {
+        let strings = |list: &[&str]| list.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (image, rest) =
+            take_image(strings(&["--demo", "--image", "x.hex", "--profile"])).unwrap();
+        assert_eq!(image, Some(PathBuf::from("x.hex")));
+        assert_eq!(rest, ["--demo", "--profile"]);
+        let (image, rest) = take_image(strings(&["--image=y.hex", "--demo"])).unwrap();
+        assert_eq!(image, Some(PathBuf::from("y.hex")));
+        assert_eq!(rest, ["--demo"]);
+        let (image, rest) = take_image(strings(&["--demo", "--images"])).unwrap();
+        assert_eq!((image, rest), (None, strings(&["--demo", "--images"])));
+        assert_eq!(
+            take_image(strings(&["--demo", "--image"]))
+                .unwrap_err()
+                .status,
+            2
+        );
+        assert!(take_image(strings(&["--image=a", "--image=b"])).is_err());
     }
 }
