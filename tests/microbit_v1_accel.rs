@@ -17,12 +17,14 @@ use embassy_futures::block_on;
 use embedded_hal_async::i2c::I2c;
 
 use marble_rolling::board::microbit::INPUT_PERIOD_MS;
-use marble_rolling::board::microbit_v1::accel::{nxp, Accelerometer, NxpChip};
+use marble_rolling::board::microbit_v1::accel::{identify, nxp, Accelerometer, NxpChip, PROBES};
 use marble_rolling::board::microbit_v1::nxp_driver::{probe, read};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Polled, Probed};
 use marble_rolling::board::microbit_v1::twi::{Recovering, TwiError};
-use marble_rolling::board::microbit_v1::virtual_nxp::{VirtualNxp, VirtualTwi};
-use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
+use marble_rolling::board::microbit_v1::virtual_nxp::{VirtualChip, VirtualNxp, VirtualTwi};
+use marble_rolling::board::qemu::virtual_lsm303agr::{
+    ChipControl, InjectedFault, VirtualLsm303agr, MICROBIT_V2,
+};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Player;
 use marble_rolling::input::event::Tilt;
@@ -93,7 +95,7 @@ impl<'a> Stack<'a> {
     }
 
     fn chip_state(&mut self) -> &VirtualNxp {
-        self.bus().bus().chip()
+        self.bus().bus().nxp().expect("an NXP chip on the bus")
     }
 }
 
@@ -559,5 +561,85 @@ fn mma8653_and_fxos8700_found_when_they_answer_after_a_silent_boot() {
             "{chip:?}: {:?}",
             sensor.tilt()
         );
+    }
+}
+
+/// A v1.5 with an LSM303AGR: its magnetometer answers at 0x1E, the
+/// FXOS8700CQ's address, where register 0x0D (the NXP `WHO_AM_I`) is
+/// reserved and reads a byte no datasheet gives. For every value that byte
+/// may take, the FXOS8700CQ's identity 0xC7 included, the firmware's probe
+/// (the DAL's order: MMA8653FC, LSM303AGR, FXOS8700CQ) finds the LSM303AGR
+/// and never addresses 0x1E.
+#[test]
+fn lsm303agr_v1_5_found_whatever_its_magnetometer_answers_at_0x1e() {
+    let control = ChipControl::new();
+    let fxos_probe = PROBES
+        .iter()
+        .find(|probe| probe.chip == Accelerometer::Fxos8700cq)
+        .expect("an FXOS8700CQ probe");
+    let mut mistaken = 0;
+    for reserved in 0..=u8::MAX {
+        let mut chip = VirtualLsm303agr::placed(MICROBIT_V2);
+        chip.set_reserved_mag_read(reserved);
+        // What an FXOS8700CQ probe would read on this board: 0x1E answers.
+        let mut lone = VirtualTwi::new(chip.clone(), &control, || 0);
+        let mut id = [0u8];
+        block_on(lone.write_read(fxos_probe.address, &[fxos_probe.register], &mut id))
+            .expect("the magnetometer acknowledges 0x1E");
+        assert_eq!(id[0], reserved);
+        if identify(fxos_probe, Some(id[0])).is_some() {
+            mistaken += 1;
+        }
+        let mut bus = Recovering::new(VirtualTwi::new(chip, &control, || 0));
+        assert_eq!(
+            block_on(probe(&mut bus)),
+            Some(Accelerometer::Lsm303agr),
+            "reserved register reads {reserved:#04x}"
+        );
+        assert!(
+            !bus.bus().addressed(0x1E),
+            "{reserved:#04x}: the probe read the magnetometer"
+        );
+        assert!(bus.bus().addressed(0x1D) && bus.bus().addressed(0x19));
+    }
+    assert_eq!(
+        mistaken, 1,
+        "an FXOS8700CQ probe first would take this board for an FXOS8700CQ when 0x0D reads 0xC7"
+    );
+}
+
+/// The poll loop's bring-up on each board: the chip found is the chip
+/// fitted, and the probes stop at it (an MMA8653FC board sees no transfer
+/// to 0x19 or 0x1E; an FXOS8700CQ board's probe went through 0x19 first).
+#[test]
+fn every_v1_board_is_found_by_the_probe_order_of_the_dal() {
+    for chip in [
+        Accelerometer::Mma8653fc,
+        Accelerometer::Lsm303agr,
+        Accelerometer::Fxos8700cq,
+    ] {
+        let control = ChipControl::new();
+        let virtual_chip = VirtualChip::new(chip);
+        assert_eq!(virtual_chip.kind(), chip);
+        let mut sensor = PollLoop::new(VirtualTwi::new(virtual_chip, &control, || 0));
+        assert_eq!(block_on(sensor.bring_up()), Some(Probed::Found(chip)));
+        assert_eq!(sensor.found(), Some(chip));
+        let Some(bus) = sensor.bus() else {
+            // The LSM303AGR's driver owns the bus (feature `lsm303agr`).
+            continue;
+        };
+        let twi = bus.bus();
+        let expected: &[u8] = match chip {
+            Accelerometer::Mma8653fc => &[0x1D],
+            Accelerometer::Lsm303agr => &[0x1D, 0x19],
+            Accelerometer::Fxos8700cq => &[0x1D, 0x19, 0x1E],
+        };
+        for address in [0x1D, 0x19, 0x1E] {
+            assert_eq!(
+                twi.addressed(address),
+                expected.contains(&address),
+                "{chip:?}: address {address:#04x}"
+            );
+        }
     }
 }

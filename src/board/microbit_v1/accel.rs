@@ -56,13 +56,17 @@ pub struct Probe {
     pub id: u8,
 }
 
-/// The probes in the order the firmware tries them. Addresses and IDs from
-/// the chips' datasheets, as the DAL uses them (its 8-bit addresses 0x3A,
-/// 0x3C, 0x32). The three addresses differ, so on a board only the fitted
-/// chip answers and the order does not matter there; the MMA8653FC comes
-/// first for QEMU's `microbit` machine, whose TWI stub answers every read
-/// with a fixed sequence beginning 0x5A (the MMA8653FC's identity) whatever
-/// the address: the first probe's read gets that 0x5A.
+/// The probes in the order the firmware tries them: the DAL's
+/// (`MicroBitAccelerometer::autoDetect` in microbit-dal: MMA8653, then
+/// LSM303, then FXOS8700). Addresses and IDs from the chips' datasheets, as
+/// the DAL uses them (its 8-bit addresses 0x3A, 0x32, 0x3C). The order
+/// matters on a v1.5 with an LSM303AGR: its magnetometer sits at 0x1E, the
+/// FXOS8700CQ's address, where register 0x0D is reserved (LSM303AGR
+/// datasheet, table 21) and reads a byte nobody documents; probing the
+/// LSM303AGR's accelerometer first finds it before anything reads there.
+/// The MMA8653FC stays first for QEMU's `microbit` machine, whose TWI stub
+/// answers every read with a fixed sequence beginning 0x5A (the MMA8653FC's
+/// identity) whatever the address: the first probe's read gets that 0x5A.
 pub const PROBES: [Probe; 3] = [
     Probe {
         chip: Accelerometer::Mma8653fc,
@@ -71,16 +75,16 @@ pub const PROBES: [Probe; 3] = [
         id: MMA8653FC.who_am_i,
     },
     Probe {
-        chip: Accelerometer::Fxos8700cq,
-        address: FXOS8700CQ.address,
-        register: nxp::WHO_AM_I,
-        id: FXOS8700CQ.who_am_i,
-    },
-    Probe {
         chip: Accelerometer::Lsm303agr,
         address: 0x19,
         register: 0x0F,
         id: 0x33,
+    },
+    Probe {
+        chip: Accelerometer::Fxos8700cq,
+        address: FXOS8700CQ.address,
+        register: nxp::WHO_AM_I,
+        id: FXOS8700CQ.who_am_i,
     },
 ];
 

@@ -1,4 +1,5 @@
-//! Virtual MMA8653FC and FXOS8700CQ on a virtual v1 TWI: the v1's sensor
+//! Virtual MMA8653FC and FXOS8700CQ, and the QEMU board's virtual LSM303AGR
+//! as a v1.5 carries it ([`VirtualChip`]), on a virtual v1 TWI: the v1's sensor
 //! stack (probe, [`super::nxp_driver`], [`Recovering`](super::twi::Recovering),
 //! the supervision) runs against them on the host, with the fidelity rules of
 //! the QEMU board's virtual LSM303AGR
@@ -40,7 +41,9 @@ use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 
 use super::accel::{nxp, Accelerometer};
 use super::twi::{BusClear, TwiError};
-use crate::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
+use crate::board::qemu::virtual_lsm303agr::{
+    ChipControl, InjectedFault, SampleSource, VirtualLsm303agr, MICROBIT_V2,
+};
 
 /// The NXP chips' placement on the v1 (both sit on the back of the board,
 /// the same way round): for chip axis X, Y, Z, the board axis it points
@@ -295,36 +298,144 @@ impl VirtualNxp {
     }
 }
 
-/// The v1's TWI with one virtual NXP chip on it, faults from `control`, time
-/// from `now_us` (µs): what the v1's blocking driver would return, as the
-/// async trait the sensor stack takes (every transfer completes at once).
+/// The accelerometer a virtual v1 board carries.
+#[derive(Clone, Debug)]
+pub enum VirtualChip {
+    /// An MMA8653FC (v1.3, v1.3B) or an FXOS8700CQ (v1.5).
+    Nxp(VirtualNxp),
+    /// The LSM303AGR of a v1.5: accelerometer at 0x19, magnetometer at
+    /// 0x1E, the FXOS8700CQ's address; mounted as on the v2 (the DAL's and
+    /// CODAL's LSM303 tables agree, [`super::accel::LSM303AGR_AXIS_MAP`]).
+    Lsm303agr(VirtualLsm303agr),
+}
+
+impl VirtualChip {
+    /// `chip` at power-on, as a v1 board carries it.
+    pub const fn new(chip: Accelerometer) -> Self {
+        match chip {
+            Accelerometer::Lsm303agr => {
+                VirtualChip::Lsm303agr(VirtualLsm303agr::placed(MICROBIT_V2))
+            }
+            nxp => VirtualChip::Nxp(VirtualNxp::new(nxp)),
+        }
+    }
+
+    /// Which chip it is.
+    pub const fn kind(&self) -> Accelerometer {
+        match self {
+            VirtualChip::Nxp(chip) => chip.chip,
+            VirtualChip::Lsm303agr(_) => Accelerometer::Lsm303agr,
+        }
+    }
+
+    /// Whether a transfer to `address` is acknowledged.
+    pub fn acknowledges(&self, address: u8) -> bool {
+        match self {
+            VirtualChip::Nxp(chip) => address == chip.address(),
+            VirtualChip::Lsm303agr(chip) => chip.acknowledges(address),
+        }
+    }
+
+    fn power_on_reset(&mut self) {
+        match self {
+            VirtualChip::Nxp(chip) => chip.power_on_reset(),
+            VirtualChip::Lsm303agr(chip) => chip.power_on_reset(),
+        }
+    }
+
+    fn feed(&mut self, tilt_mg: [i32; 3], fault: InjectedFault, now_us: u64) {
+        let (frozen, garbage) = (
+            fault == InjectedFault::FrozenData,
+            fault == InjectedFault::Garbage,
+        );
+        match self {
+            VirtualChip::Nxp(chip) => {
+                chip.set_tilt_mg(tilt_mg);
+                chip.set_faults(frozen, garbage);
+                chip.advance_to(now_us);
+            }
+            VirtualChip::Lsm303agr(chip) => {
+                chip.set_tilt_mg(tilt_mg);
+                chip.set_source(if frozen {
+                    SampleSource::Frozen
+                } else if garbage {
+                    SampleSource::Garbage
+                } else {
+                    SampleSource::Tilt
+                });
+                chip.advance_to(now_us);
+            }
+        }
+    }
+
+    fn write(&mut self, address: u8, bytes: &[u8]) {
+        match self {
+            VirtualChip::Nxp(chip) => chip.i2c_write(bytes),
+            VirtualChip::Lsm303agr(chip) => chip.i2c_write(address, bytes),
+        }
+    }
+
+    fn read(&mut self, address: u8, buffer: &mut [u8]) {
+        match self {
+            VirtualChip::Nxp(chip) => chip.i2c_read(buffer),
+            VirtualChip::Lsm303agr(chip) => chip.i2c_read(address, buffer),
+        }
+    }
+}
+
+impl From<VirtualNxp> for VirtualChip {
+    fn from(chip: VirtualNxp) -> Self {
+        VirtualChip::Nxp(chip)
+    }
+}
+
+impl From<VirtualLsm303agr> for VirtualChip {
+    fn from(chip: VirtualLsm303agr) -> Self {
+        VirtualChip::Lsm303agr(chip)
+    }
+}
+
+/// The v1's TWI with one virtual accelerometer on it, faults from `control`,
+/// time from `now_us` (µs): what the v1's blocking driver would return, as
+/// the async trait the sensor stack takes (every transfer completes at once).
 pub struct VirtualTwi<'a, C: Fn() -> u64> {
-    chip: VirtualNxp,
+    chip: VirtualChip,
     control: &'a ChipControl,
     now_us: C,
     stuck: bool,
     resets_seen: u32,
     transfers: u32,
     clears: u32,
+    /// Bit per 7-bit address a transfer was started to.
+    addressed: u128,
 }
 
 impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
     /// `chip` on the bus.
-    pub fn new(chip: VirtualNxp, control: &'a ChipControl, now_us: C) -> Self {
+    pub fn new(chip: impl Into<VirtualChip>, control: &'a ChipControl, now_us: C) -> Self {
         Self {
-            chip,
+            chip: chip.into(),
             control,
             now_us,
             stuck: false,
             resets_seen: control.reset_requests(),
             transfers: 0,
             clears: 0,
+            addressed: 0,
         }
     }
 
     /// The chip (inspection).
-    pub fn chip(&self) -> &VirtualNxp {
+    pub fn chip(&self) -> &VirtualChip {
         &self.chip
+    }
+
+    /// The chip, if it is an NXP one (inspection).
+    pub fn nxp(&self) -> Option<&VirtualNxp> {
+        match &self.chip {
+            VirtualChip::Nxp(chip) => Some(chip),
+            VirtualChip::Lsm303agr(_) => None,
+        }
     }
 
     /// Whether the bus is held stuck.
@@ -342,8 +453,15 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
         self.clears
     }
 
-    fn apply(&mut self) -> Result<(), TwiError> {
+    /// Whether any transfer was started to `address` (7-bit), answered or
+    /// not.
+    pub const fn addressed(&self, address: u8) -> bool {
+        address < 128 && self.addressed & (1 << address) != 0
+    }
+
+    fn apply(&mut self, address: u8) -> Result<(), TwiError> {
         self.transfers = self.transfers.wrapping_add(1);
+        self.addressed |= 1u128 << (address & 0x7F);
         let fault = self.control.fault();
         let requests = self.control.reset_requests();
         if requests != self.resets_seen {
@@ -351,13 +469,11 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
             self.chip.power_on_reset();
         }
         let tilt = self.control.tilt();
-        self.chip
-            .set_tilt_mg([i32::from(tilt.x), i32::from(tilt.y), i32::from(tilt.z)]);
-        self.chip.set_faults(
-            fault == InjectedFault::FrozenData,
-            fault == InjectedFault::Garbage,
+        self.chip.feed(
+            [i32::from(tilt.x), i32::from(tilt.y), i32::from(tilt.z)],
+            fault,
+            (self.now_us)(),
         );
-        self.chip.advance_to((self.now_us)());
         if fault == InjectedFault::StuckBus {
             self.stuck = true;
         }
@@ -381,14 +497,14 @@ impl<C: Fn() -> u64> I2c for VirtualTwi<'_, C> {
         address: u8,
         operations: &mut [Operation<'_>],
     ) -> Result<(), TwiError> {
-        self.apply()?;
-        if address != self.chip.address() {
+        self.apply(address)?;
+        if !self.chip.acknowledges(address) {
             return Err(TwiError::AddressNack);
         }
         for operation in operations.iter_mut() {
             match operation {
-                Operation::Write(bytes) => self.chip.i2c_write(bytes),
-                Operation::Read(buffer) => self.chip.i2c_read(buffer),
+                Operation::Write(bytes) => self.chip.write(address, bytes),
+                Operation::Read(buffer) => self.chip.read(address, buffer),
             }
         }
         Ok(())

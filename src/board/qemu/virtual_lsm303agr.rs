@@ -44,7 +44,10 @@
 //!   brings them back (the injected chip reset).
 //! * Magnetometer (I²C address [`MAG_ADDRESS`]): only enough for the driver's
 //!   `init()` (it writes `CFG_REG_C_M`): `WHO_AM_I_M` (0x40), the
-//!   configuration registers stored; its outputs read 0.
+//!   configuration registers stored; its outputs read 0. The addresses below
+//!   0x40, which the datasheet's register map (table 21) leaves reserved,
+//!   read a byte the test chooses ([`VirtualLsm303agr::set_reserved_mag_read`],
+//!   0 by default): what a real chip answers there is not documented.
 //!
 //! Not modelled: the temperature sensor (reads 0), the FIFO, interrupts and
 //! click detection, self-test, the axis-enable bits (every axis converts),
@@ -118,6 +121,8 @@ pub struct VirtualLsm303agr {
     rng: u32,
     /// Samples latched since power-on (diagnostics).
     latched: u32,
+    /// What the magnetometer's reserved addresses below 0x40 read.
+    reserved_mag_read: u8,
 }
 
 impl VirtualLsm303agr {
@@ -150,6 +155,7 @@ impl VirtualLsm303agr {
             source: SampleSource::Tilt,
             rng: 0x2545_f491,
             latched: 0,
+            reserved_mag_read: 0,
         };
         chip.accel[reg::CTRL_REG1_A as usize] = CTRL_REG1_A_RESET;
         chip.mag[(reg::CFG_REG_A_M - MAG_FIRST) as usize] = CFG_REG_A_M_RESET;
@@ -178,6 +184,12 @@ impl VirtualLsm303agr {
     /// Sets where the next samples come from.
     pub fn set_source(&mut self, source: SampleSource) {
         self.source = source;
+    }
+
+    /// Sets what a read of a reserved magnetometer address below 0x40
+    /// returns (the datasheet does not say; kept across a chip reset).
+    pub fn set_reserved_mag_read(&mut self, value: u8) {
+        self.reserved_mag_read = value;
     }
 
     /// Samples latched since power-on.
@@ -233,6 +245,7 @@ impl VirtualLsm303agr {
             },
             MAG_ADDRESS => match register {
                 reg::WHO_AM_I_M => WHO_AM_I_M_VALUE,
+                r if r < MAG_FIRST => self.reserved_mag_read,
                 r => self.mag_slot(r).map_or(0, |i| self.mag[i]),
             },
             _ => 0,
