@@ -49,6 +49,10 @@
 //!   read a byte the test chooses ([`VirtualLsm303agr::set_reserved_mag_read`],
 //!   0 by default): what a real chip answers there is not documented.
 //!
+//! * Boot after power-up: none by default; a test may have the chip answer
+//!   nothing until a time of its choosing
+//!   ([`VirtualLsm303agr::set_ready_at_us`]).
+//!
 //! Not modelled: the temperature sensor (reads 0), the FIFO, interrupts and
 //! click detection, self-test, the axis-enable bits (every axis converts),
 //! the turn-on and settling time after a mode change (the first sample is
@@ -123,6 +127,9 @@ pub struct VirtualLsm303agr {
     latched: u32,
     /// What the magnetometer's reserved addresses below 0x40 read.
     reserved_mag_read: u8,
+    /// Until this time on its clock the chip is still booting and
+    /// acknowledges nothing.
+    ready_at_us: u64,
 }
 
 impl VirtualLsm303agr {
@@ -156,6 +163,7 @@ impl VirtualLsm303agr {
             rng: 0x2545_f491,
             latched: 0,
             reserved_mag_read: 0,
+            ready_at_us: 0,
         };
         chip.accel[reg::CTRL_REG1_A as usize] = CTRL_REG1_A_RESET;
         chip.mag[(reg::CFG_REG_A_M - MAG_FIRST) as usize] = CFG_REG_A_M_RESET;
@@ -257,9 +265,15 @@ impl VirtualLsm303agr {
         (i < MAG_COUNT).then_some(i)
     }
 
+    /// Makes the chip boot until `at_us` on its clock (power-up at 0): until
+    /// then it acknowledges no transfer. 0 by default (ready at once).
+    pub fn set_ready_at_us(&mut self, at_us: u64) {
+        self.ready_at_us = at_us;
+    }
+
     /// Whether a transfer to `address` is acknowledged.
     pub fn acknowledges(&self, address: u8) -> bool {
-        address == ACCEL_ADDRESS || address == MAG_ADDRESS
+        self.now_us >= self.ready_at_us && (address == ACCEL_ADDRESS || address == MAG_ADDRESS)
     }
 
     /// Runs the sampling clock up to `now_us` (earlier times are ignored):
