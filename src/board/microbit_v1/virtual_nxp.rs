@@ -15,9 +15,27 @@
 //!   8-bit fast read are not modelled: the driver uses neither).
 //! * Standby and active: `CTRL_REG1`'s `ACTIVE` bit. In active mode the
 //!   configuration registers (`XYZ_DATA_CFG`, `CTRL_REG2`'s oversampling
-//!   bits, `M_CTRL_REG1`, the rest of `CTRL_REG1`) ignore writes, as the data
+//!   bits, `M_CTRL_REG1`, `F_SETUP`, the interrupt registers `CTRL_REG4` and
+//!   `CTRL_REG5` (stored, without effect), the rest of `CTRL_REG1`) ignore
+//!   writes, as the data
 //!   sheets require them written in standby. `CTRL_REG2`'s `RST` resets the
-//!   chip at any time.
+//!   chip at any time: every register back to power-on, then nothing is
+//!   acknowledged for [`RESET_US`]; the FXOS8700CQ does not acknowledge the
+//!   byte that set `RST` either (Linux's `mma8452` driver and Zephyr's
+//!   `fxos8700` driver both note it; the model gives the MMA8653FC the
+//!   acknowledge and the same reset time, for want of a figure of its own).
+//! * Kept across a "reflash": the chip is powered by the board, not reset
+//!   by the nRF, so a new firmware finds every register as the last one
+//!   left it (a test carries the chip's state from one [`VirtualTwi`] to the
+//!   next with [`VirtualTwi::chip`]).
+//! * FXOS8700CQ FIFO (`F_SETUP`, written in standby; FXOS8700CQ data sheet
+//!   rev. 8, `F_SETUP` and `F_STATUS`): with `F_MODE` non-zero every new
+//!   sample goes into a 32-sample FIFO (circular and trigger modes drop the
+//!   oldest when full, fill mode drops the new one; both set `F_OVF`),
+//!   register 0x00 reads `F_STATUS` (`F_OVF` bit 7, the sample count in
+//!   bits 5:0; the watermark flag is not modelled), and the output
+//!   registers read the oldest sample, which a read through `OUT_Z_LSB`
+//!   takes out. Going active flushes it.
 //! * Data rate from `CTRL_REG1`'s `DR` (800 Hz to 1.56 Hz), the first sample
 //!   one period after going active; a new sample sets `ZYXDR` (and `ZYXOW`
 //!   if the previous one was unread); reading the three MSBs clears them.
@@ -40,7 +58,7 @@
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 
 use super::accel::{nxp, Accelerometer};
-use super::twi::{BusClear, TwiError};
+use super::twi::{BusClear, Pause, TwiError};
 use crate::board::qemu::virtual_lsm303agr::{
     ChipControl, InjectedFault, SampleSource, VirtualLsm303agr, MICROBIT_V2,
 };
@@ -55,8 +73,23 @@ use crate::board::qemu::virtual_lsm303agr::{
 /// Z).
 pub const MOUNTING: [(usize, i32); 3] = [(0, 1), (2, 1), (1, -1)];
 
+/// `CTRL_REG4` (interrupt enables) and `CTRL_REG5` (interrupt routing):
+/// stored, without effect (the firmware polls); the DAL sets both to route
+/// data-ready to INT1, so a board that ran a DAL program before has them
+/// non-zero.
+const CTRL_REG4: u8 = 0x2D;
+const CTRL_REG5: u8 = 0x2E;
+
 /// Registers modelled (0x00..0x80).
 const REGISTERS: usize = 0x80;
+
+/// How long a chip answers nothing after a soft reset, µs: the FXOS8700CQ's
+/// 1 ms (data sheet rev. 8, `CTRL_REG2` `rst`, as Zephyr's `fxos8700` driver
+/// quotes it), taken for both chips.
+pub const RESET_US: u64 = 1_000;
+
+/// Depth of the FXOS8700CQ's FIFO, samples.
+const FIFO_DEPTH: usize = 32;
 
 /// A virtual MMA8653FC or FXOS8700CQ.
 #[derive(Clone, Debug)]
@@ -73,6 +106,12 @@ pub struct VirtualNxp {
     garbage: bool,
     rng: u32,
     latched: u32,
+    /// Until this time the chip is resetting and acknowledges nothing.
+    resetting_until_us: u64,
+    /// The FXOS8700CQ's FIFO: output bytes of each sample, oldest first.
+    fifo: [[u8; 6]; FIFO_DEPTH],
+    fifo_len: usize,
+    fifo_overflow: bool,
 }
 
 impl VirtualNxp {
@@ -91,6 +130,10 @@ impl VirtualNxp {
             garbage: false,
             rng: 0x2545_f491,
             latched: 0,
+            resetting_until_us: 0,
+            fifo: [[0; 6]; FIFO_DEPTH],
+            fifo_len: 0,
+            fifo_overflow: false,
         }
     }
 
@@ -158,6 +201,48 @@ impl VirtualNxp {
         self.regs = [0; REGISTERS];
         self.pointer = 0;
         self.msb_read = 0;
+        self.flush_fifo();
+    }
+
+    /// Whether a soft reset is still in progress (nothing is acknowledged).
+    pub const fn resetting(&self) -> bool {
+        self.now_us < self.resetting_until_us
+    }
+
+    /// Whether the FIFO is on (FXOS8700CQ, `F_MODE` non-zero).
+    pub const fn fifo_on(&self) -> bool {
+        self.regs[nxp::F_SETUP as usize] & nxp::F_MODE != 0
+    }
+
+    /// Samples waiting in the FIFO.
+    pub const fn fifo_len(&self) -> usize {
+        self.fifo_len
+    }
+
+    fn flush_fifo(&mut self) {
+        self.fifo_len = 0;
+        self.fifo_overflow = false;
+    }
+
+    /// The sample just latched into the FIFO, by `F_MODE`.
+    fn push_fifo(&mut self) {
+        let mut sample = [0u8; 6];
+        sample.copy_from_slice(&self.regs[1..7]);
+        if self.fifo_len == FIFO_DEPTH {
+            self.fifo_overflow = true;
+            // Fill mode (0b10) stops at full; the others drop the oldest.
+            if self.regs[nxp::F_SETUP as usize] & nxp::F_MODE == 0x80 {
+                return;
+            }
+            self.fifo.copy_within(1.., 0);
+            self.fifo_len -= 1;
+        }
+        self.fifo[self.fifo_len] = sample;
+        self.fifo_len += 1;
+    }
+
+    fn f_status(&self) -> u8 {
+        (u8::from(self.fifo_overflow) << 7) | self.fifo_len as u8
     }
 
     /// Sets the tilt (board frame, milli-g) the next samples take.
@@ -182,6 +267,13 @@ impl VirtualNxp {
         self.next_due_us += (missed + 1) * period;
         if !self.frozen {
             self.latch();
+            // The FIFO keeps every sample, not only the last (the tilt is
+            // the same for all of them within one call).
+            if self.fifo_on() {
+                for _ in 0..missed.min(FIFO_DEPTH as u64) {
+                    self.push_fifo();
+                }
+            }
         }
     }
 
@@ -230,18 +322,26 @@ impl VirtualNxp {
         *status = 0x0F | if unread { nxp::STATUS_ZYXOW | 0x70 } else { 0 };
         self.msb_read = 0;
         self.latched = self.latched.wrapping_add(1);
+        if self.fifo_on() {
+            self.push_fifo();
+        }
     }
 
-    /// An I²C write: sub-address, then data from there on.
-    pub fn i2c_write(&mut self, bytes: &[u8]) {
+    /// An I²C write: sub-address, then data from there on. `false` when a
+    /// data byte was not acknowledged (the FXOS8700CQ's `RST`): the bytes
+    /// after it are not taken.
+    pub fn i2c_write(&mut self, bytes: &[u8]) -> bool {
         let Some((&sub, data)) = bytes.split_first() else {
-            return;
+            return true;
         };
         self.pointer = sub & 0x7F;
         for &byte in data {
-            self.write(self.pointer, byte);
+            if !self.write(self.pointer, byte) {
+                return false;
+            }
             self.pointer = (self.pointer + 1) & 0x7F;
         }
+        true
     }
 
     /// An I²C read from the register pointer on.
@@ -252,7 +352,8 @@ impl VirtualNxp {
         }
     }
 
-    fn write(&mut self, register: u8, value: u8) {
+    /// Writes one register; `false` when the byte is not acknowledged.
+    fn write(&mut self, register: u8, value: u8) -> bool {
         let active = self.active();
         match register {
             nxp::CTRL_REG1 => {
@@ -265,24 +366,47 @@ impl VirtualNxp {
                     self.regs[nxp::CTRL_REG1 as usize] = value;
                     if value & nxp::CTRL1_ACTIVE != 0 {
                         self.next_due_us = self.now_us + self.period_us();
+                        self.flush_fifo();
                     }
                 }
             }
-            nxp::CTRL_REG2 if value & nxp::CTRL2_RST != 0 => self.power_on_reset(),
-            nxp::CTRL_REG2 | nxp::XYZ_DATA_CFG if !active => {
+            nxp::CTRL_REG2 if value & nxp::CTRL2_RST != 0 => {
+                self.power_on_reset();
+                self.resetting_until_us = self.now_us + RESET_US;
+                return self.chip != Accelerometer::Fxos8700cq;
+            }
+            nxp::CTRL_REG2 | nxp::XYZ_DATA_CFG | CTRL_REG4 | CTRL_REG5 if !active => {
                 self.regs[usize::from(register)] = value;
             }
-            nxp::M_CTRL_REG1 if !active && self.chip == Accelerometer::Fxos8700cq => {
+            nxp::M_CTRL_REG1 | nxp::F_SETUP
+                if !active && self.chip == Accelerometer::Fxos8700cq =>
+            {
                 self.regs[usize::from(register)] = value;
+                if register == nxp::F_SETUP && value & nxp::F_MODE == 0 {
+                    self.flush_fifo();
+                }
             }
             // Read-only, reserved, or written while active: ignored.
             _ => {}
         }
+        true
     }
 
     fn read(&mut self, register: u8) -> u8 {
         match register {
             nxp::WHO_AM_I => self.who_am_i(),
+            nxp::STATUS if self.fifo_on() => self.f_status(),
+            1..=6 if self.fifo_on() => {
+                let value = self.fifo[0][usize::from(register - 1)];
+                if register == 6 && self.fifo_len > 0 {
+                    self.fifo.copy_within(1.., 0);
+                    self.fifo_len -= 1;
+                }
+                if self.fifo_len == 0 {
+                    self.fifo[0] = [0; 6];
+                }
+                value
+            }
             1..=6 => {
                 let value = self.regs[usize::from(register)];
                 if register % 2 == 1 {
@@ -331,7 +455,7 @@ impl VirtualChip {
     /// Whether a transfer to `address` is acknowledged.
     pub fn acknowledges(&self, address: u8) -> bool {
         match self {
-            VirtualChip::Nxp(chip) => address == chip.address(),
+            VirtualChip::Nxp(chip) => address == chip.address() && !chip.resetting(),
             VirtualChip::Lsm303agr(chip) => chip.acknowledges(address),
         }
     }
@@ -368,10 +492,14 @@ impl VirtualChip {
         }
     }
 
-    fn write(&mut self, address: u8, bytes: &[u8]) {
+    /// `false` when a data byte was not acknowledged.
+    fn write(&mut self, address: u8, bytes: &[u8]) -> bool {
         match self {
             VirtualChip::Nxp(chip) => chip.i2c_write(bytes),
-            VirtualChip::Lsm303agr(chip) => chip.i2c_write(address, bytes),
+            VirtualChip::Lsm303agr(chip) => {
+                chip.i2c_write(address, bytes);
+                true
+            }
         }
     }
 
@@ -408,6 +536,9 @@ pub struct VirtualTwi<'a, C: Fn() -> u64> {
     clears: u32,
     /// Bit per 7-bit address a transfer was started to.
     addressed: u128,
+    /// Time spent in [`Pause::pause_us`], µs: added to `now_us`, as the
+    /// firmware's clock runs on while it waits.
+    paused_us: u64,
 }
 
 impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
@@ -422,6 +553,7 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
             transfers: 0,
             clears: 0,
             addressed: 0,
+            paused_us: 0,
         }
     }
 
@@ -472,7 +604,7 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
         self.chip.feed(
             [i32::from(tilt.x), i32::from(tilt.y), i32::from(tilt.z)],
             fault,
-            (self.now_us)(),
+            (self.now_us)() + self.paused_us,
         );
         if fault == InjectedFault::StuckBus {
             self.stuck = true;
@@ -503,7 +635,11 @@ impl<C: Fn() -> u64> I2c for VirtualTwi<'_, C> {
         }
         for operation in operations.iter_mut() {
             match operation {
-                Operation::Write(bytes) => self.chip.write(address, bytes),
+                Operation::Write(bytes) => {
+                    if !self.chip.write(address, bytes) {
+                        return Err(TwiError::DataNack);
+                    }
+                }
                 Operation::Read(buffer) => self.chip.read(address, buffer),
             }
         }
@@ -518,5 +654,11 @@ impl<C: Fn() -> u64> BusClear for VirtualTwi<'_, C> {
         if self.control.fault() != InjectedFault::StuckBus {
             self.stuck = false;
         }
+    }
+}
+
+impl<C: Fn() -> u64> Pause for VirtualTwi<'_, C> {
+    fn pause_us(&mut self, us: u32) {
+        self.paused_us += u64::from(us);
     }
 }
