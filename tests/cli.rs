@@ -664,6 +664,73 @@ fn generate_options_are_checked() {
     }
 }
 
+/// `cargo play`'s binary: its argument errors come before it needs a terminal.
+fn play(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_play"))
+        .args(args)
+        .output()
+        .expect("run play")
+}
+
+/// A seed that is not a `u32` (negative, not a number, 23 digits) is refused
+/// by both tools with the range, as every ranged option is.
+#[test]
+fn a_bad_seed_names_the_seed_range() {
+    let too_long = "1".repeat(23);
+    for seed in ["-1", "abc", too_long.as_str(), "4294967296", "1.5", ""] {
+        for (tool, o) in [
+            ("sim", sim(&["--generate", seed, "--autopilot"])),
+            ("play", play(&["--generate", seed])),
+        ] {
+            let err = stderr(&o);
+            assert_eq!(
+                o.status.code(),
+                Some(2),
+                "{tool} --generate {seed:?}: {err}"
+            );
+            assert!(
+                err.contains("0..=4294967295") && err.contains("--generate"),
+                "{tool} --generate {seed:?}: {err}"
+            );
+            for old in ["unexpected argument", "invalid digit", "number too large"] {
+                assert!(!err.contains(old), "{tool} --generate {seed:?}: {err}");
+            }
+        }
+    }
+    // The ends of the range are seeds.
+    for seed in ["0", "4294967295"] {
+        let o = sim(&["--generate", seed, "--size", "3", "--print-level"]);
+        assert!(o.status.success(), "--generate {seed}: {}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(text.starts_with(&format!("name: maze-{seed}-")), "{text}");
+    }
+}
+
+/// `--print-level` prints a generated maze: without `--generate` it says so
+/// (and asks for nothing else), with a `--level` instead it is refused, not
+/// a silent success.
+#[test]
+fn print_level_needs_generate() {
+    for args in [
+        &["--print-level"][..],
+        &["--level", "corner", "--print-level"],
+        &["--print-level", "--autopilot"],
+    ] {
+        let o = sim(args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(o.stdout.is_empty(), "{args:?}: printed something");
+        assert!(
+            err.contains("--print-level needs --generate SEED"),
+            "{args:?}: {err}"
+        );
+        assert!(
+            !err.contains("--level <"),
+            "{args:?} asks for --level: {err}"
+        );
+    }
+}
+
 /// A level whose fourth line has a byte that is not UTF-8 (0xFF) at column 3.
 const NOT_UTF8_LEVEL: &[u8] = b"name: latin\ntime_limit_s: 5\n---\n#S\xffG#\n#####\n";
 

@@ -198,8 +198,8 @@ fn accelerometer_probes() {
         chips,
         [
             Accelerometer::Mma8653fc,
-            Accelerometer::Fxos8700cq,
-            Accelerometer::Lsm303agr
+            Accelerometer::Lsm303agr,
+            Accelerometer::Fxos8700cq
         ]
     );
     // QEMU's TWI stub answers 0x5A to the first read whatever the address:

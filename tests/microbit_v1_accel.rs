@@ -16,13 +16,17 @@ use std::cell::Cell;
 use embassy_futures::block_on;
 use embedded_hal_async::i2c::I2c;
 
-use marble_rolling::board::microbit::INPUT_PERIOD_MS;
-use marble_rolling::board::microbit_v1::accel::{nxp, Accelerometer, NxpChip};
+use marble_rolling::board::microbit::{INPUT_PERIOD_MS, SUPERVISOR};
+use marble_rolling::board::microbit_v1::accel::{identify, nxp, Accelerometer, NxpChip, PROBES};
 use marble_rolling::board::microbit_v1::nxp_driver::{probe, read};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Polled, Probed};
-use marble_rolling::board::microbit_v1::twi::{Recovering, TwiError};
-use marble_rolling::board::microbit_v1::virtual_nxp::{VirtualNxp, VirtualTwi};
-use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
+use marble_rolling::board::microbit_v1::twi::{Pause, Recovering, TwiError};
+use marble_rolling::board::microbit_v1::virtual_nxp::{
+    VirtualChip, VirtualNxp, VirtualTwi, RESET_US,
+};
+use marble_rolling::board::qemu::virtual_lsm303agr::{
+    ChipControl, InjectedFault, VirtualLsm303agr, MICROBIT_V2,
+};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Player;
 use marble_rolling::input::event::Tilt;
@@ -93,7 +97,7 @@ impl<'a> Stack<'a> {
     }
 
     fn chip_state(&mut self) -> &VirtualNxp {
-        self.bus().bus().chip()
+        self.bus().bus().nxp().expect("an NXP chip on the bus")
     }
 }
 
@@ -559,5 +563,275 @@ fn mma8653_and_fxos8700_found_when_they_answer_after_a_silent_boot() {
             "{chip:?}: {:?}",
             sensor.tilt()
         );
+    }
+}
+
+/// A v1.5 with an LSM303AGR: its magnetometer answers at 0x1E, the
+/// FXOS8700CQ's address, where register 0x0D (the NXP `WHO_AM_I`) is
+/// reserved and reads a byte no datasheet gives. For every value that byte
+/// may take, the FXOS8700CQ's identity 0xC7 included, the firmware's probe
+/// (the DAL's order: MMA8653FC, LSM303AGR, FXOS8700CQ) finds the LSM303AGR
+/// and never addresses 0x1E.
+#[test]
+fn lsm303agr_v1_5_found_whatever_its_magnetometer_answers_at_0x1e() {
+    let control = ChipControl::new();
+    let fxos_probe = PROBES
+        .iter()
+        .find(|probe| probe.chip == Accelerometer::Fxos8700cq)
+        .expect("an FXOS8700CQ probe");
+    let mut mistaken = 0;
+    for reserved in 0..=u8::MAX {
+        let mut chip = VirtualLsm303agr::placed(MICROBIT_V2);
+        chip.set_reserved_mag_read(reserved);
+        // What an FXOS8700CQ probe would read on this board: 0x1E answers.
+        let mut lone = VirtualTwi::new(chip.clone(), &control, || 0);
+        let mut id = [0u8];
+        block_on(lone.write_read(fxos_probe.address, &[fxos_probe.register], &mut id))
+            .expect("the magnetometer acknowledges 0x1E");
+        assert_eq!(id[0], reserved);
+        if identify(fxos_probe, Some(id[0])).is_some() {
+            mistaken += 1;
+        }
+        let mut bus = Recovering::new(VirtualTwi::new(chip, &control, || 0));
+        assert_eq!(
+            block_on(probe(&mut bus)),
+            Some(Accelerometer::Lsm303agr),
+            "reserved register reads {reserved:#04x}"
+        );
+        assert!(
+            !bus.bus().addressed(0x1E),
+            "{reserved:#04x}: the probe read the magnetometer"
+        );
+        assert!(bus.bus().addressed(0x1D) && bus.bus().addressed(0x19));
+    }
+    assert_eq!(
+        mistaken, 1,
+        "an FXOS8700CQ probe first would take this board for an FXOS8700CQ when 0x0D reads 0xC7"
+    );
+}
+
+/// The poll loop's bring-up on each board: the chip found is the chip
+/// fitted, and the probes stop at it (an MMA8653FC board sees no transfer
+/// to 0x19 or 0x1E; an FXOS8700CQ board's probe went through 0x19 first).
+#[test]
+fn every_v1_board_is_found_by_the_probe_order_of_the_dal() {
+    for chip in [
+        Accelerometer::Mma8653fc,
+        Accelerometer::Lsm303agr,
+        Accelerometer::Fxos8700cq,
+    ] {
+        let control = ChipControl::new();
+        let virtual_chip = VirtualChip::new(chip);
+        assert_eq!(virtual_chip.kind(), chip);
+        let mut sensor = PollLoop::new(VirtualTwi::new(virtual_chip, &control, || 0));
+        assert_eq!(block_on(sensor.bring_up()), Some(Probed::Found(chip)));
+        assert_eq!(sensor.found(), Some(chip));
+        let Some(bus) = sensor.bus() else {
+            // The LSM303AGR's driver owns the bus (feature `lsm303agr`).
+            continue;
+        };
+        let twi = bus.bus();
+        let expected: &[u8] = match chip {
+            Accelerometer::Mma8653fc => &[0x1D],
+            Accelerometer::Lsm303agr => &[0x1D, 0x19],
+            Accelerometer::Fxos8700cq => &[0x1D, 0x19, 0x1E],
+        };
+        for address in [0x1D, 0x19, 0x1E] {
+            assert_eq!(
+                twi.addressed(address),
+                expected.contains(&address),
+                "{chip:?}: address {address:#04x}"
+            );
+        }
+    }
+}
+
+/// What an earlier firmware left in the chip, written in standby and then
+/// set running at 200 Hz for half a second: `writes` (register, value).
+/// Returns the chip as the next firmware finds it: a reflash resets the
+/// nRF, not the accelerometer.
+fn left_by_an_earlier_firmware(
+    chip: Accelerometer,
+    writes: &[(u8, u8)],
+    control: &ChipControl,
+    clock: &Cell<u64>,
+) -> VirtualNxp {
+    let address = VirtualNxp::new(chip).address();
+    let mut twi = VirtualTwi::new(VirtualNxp::new(chip), control, || clock.get());
+    block_on(twi.write(address, &[nxp::CTRL_REG1, 0])).unwrap();
+    for &(register, value) in writes {
+        block_on(twi.write(address, &[register, value])).unwrap();
+    }
+    block_on(twi.write(
+        address,
+        &[nxp::CTRL_REG1, nxp::CTRL1_DR_200HZ | nxp::CTRL1_ACTIVE],
+    ))
+    .unwrap();
+    let mut id = [0u8];
+    for _ in 0..50 {
+        clock.set(clock.get() + PERIOD_US);
+        block_on(twi.write_read(address, &[nxp::WHO_AM_I], &mut id)).unwrap();
+    }
+    twi.nxp().expect("an NXP chip").clone()
+}
+
+/// The configuration writes of the firmware before it reset the chip first
+/// (standby, ±2 g, high resolution, FXOS8700CQ accelerometer only, 200 Hz
+/// active): the comparison the reset is measured against.
+const WITHOUT_RESET: [(u8, u8); 5] = [
+    (nxp::CTRL_REG1, 0),
+    (nxp::XYZ_DATA_CFG, 0),
+    (nxp::CTRL_REG2, nxp::CTRL2_MODS_HIGH_RESOLUTION),
+    (nxp::M_CTRL_REG1, 0),
+    (nxp::CTRL_REG1, nxp::CTRL1_DR_200HZ | nxp::CTRL1_ACTIVE),
+];
+
+/// The longest run of polls without a sample, and the last tilt read
+/// (chip frame), over `polls` of the firmware's read on `bus`.
+fn poll_reads(
+    bus: &mut Recovering<VirtualTwi<'_, impl Fn() -> u64>>,
+    chip: &NxpChip,
+    clock: &Cell<u64>,
+    polls: usize,
+) -> (u16, Option<AccelMg>) {
+    let (mut run, mut longest, mut last) = (0, 0, None);
+    for _ in 0..polls {
+        clock.set(clock.get() + PERIOD_US);
+        match block_on(read(bus, chip)) {
+            Read::Sample(sample) => {
+                run = 0;
+                last = Some(sample);
+            }
+            _ => {
+                run += 1;
+                longest = longest.max(run);
+            }
+        }
+    }
+    (longest, last)
+}
+
+/// An FXOS8700CQ left in FIFO mode by an earlier firmware (circular, so the
+/// FIFO fills and register 0x00 reads `F_STATUS`): configured without a
+/// reset, the data-ready bit the firmware reads is a bit of the FIFO's
+/// sample count, and the polls go without a sample long enough for the
+/// supervisor to call the sensor down (`NoData`); the firmware's own
+/// bring-up (soft reset, wait, configure) leaves the FIFO off and plays
+/// from the first second on, the tilt read right.
+#[test]
+fn fxos8700_left_in_fifo_mode_is_reset_by_the_bring_up() {
+    let chip = Accelerometer::Fxos8700cq;
+    let nxp_chip = chip.nxp().expect("NXP");
+    let control = ChipControl::new();
+    control.set_tilt(Tilt {
+        x: -500,
+        y: 866,
+        z: 0,
+    });
+    let clock = Cell::new(0);
+    let left = left_by_an_earlier_firmware(chip, &[(nxp::F_SETUP, 0x40)], &control, &clock);
+    assert!(left.fifo_on() && left.fifo_len() == 32, "the FIFO is full");
+
+    // Configured as before, without the reset.
+    let mut old = Recovering::new(VirtualTwi::new(left.clone(), &control, || clock.get()));
+    for (register, value) in WITHOUT_RESET {
+        block_on(old.write(nxp_chip.address, &[register, value])).unwrap();
+    }
+    let (no_sample, _) = poll_reads(&mut old, nxp_chip, &clock, 100);
+    assert!(
+        old.bus().nxp().expect("NXP").fifo_on(),
+        "without a reset the FIFO stays on"
+    );
+    assert!(
+        no_sample >= SUPERVISOR.not_ready_before_fault,
+        "without a reset: at most {no_sample} polls in a row without a sample"
+    );
+
+    // The firmware's bring-up on the same chip.
+    let mut sensor = PollLoop::new(VirtualTwi::new(left, &control, || clock.get()));
+    assert_eq!(block_on(sensor.bring_up()), Some(Probed::Found(chip)));
+    let mut transitions = Vec::new();
+    for _ in 0..100 {
+        clock.set(clock.get() + PERIOD_US);
+        transitions.extend(block_on(sensor.poll()).transition);
+    }
+    assert!(transitions.is_empty(), "{transitions:?}");
+    assert_eq!(sensor.faults(), 0);
+    assert!(
+        close(sensor.tilt(), [-500, 866, 0], lsb_mg(chip)),
+        "{:?}",
+        sensor.tilt()
+    );
+    let bus = sensor.bus().expect("NXP");
+    let state = bus.bus().nxp().expect("NXP");
+    assert!(!state.fifo_on(), "the reset turned the FIFO off");
+    assert_eq!(state.register(nxp::F_SETUP), 0);
+    let (no_sample, _) = poll_reads(bus, nxp_chip, &clock, 100);
+    assert!(no_sample < SUPERVISOR.not_ready_before_fault, "{no_sample}");
+}
+
+/// An MMA8653FC that ran a DAL program before (data-ready routed to INT1:
+/// `CTRL_REG4` = `CTRL_REG5` = 1, registers this firmware never writes)
+/// keeps them across a reflash; the bring-up's soft reset clears them, the
+/// configuration without it does not.
+#[test]
+fn mma8653_registers_an_earlier_firmware_set_are_reset_by_the_bring_up() {
+    let chip = Accelerometer::Mma8653fc;
+    let (ctrl_reg4, ctrl_reg5) = (0x2D, 0x2E);
+    let control = ChipControl::new();
+    let clock = Cell::new(0);
+    let left = left_by_an_earlier_firmware(
+        chip,
+        &[(ctrl_reg4, 0x01), (ctrl_reg5, 0x01)],
+        &control,
+        &clock,
+    );
+    assert_eq!((left.register(ctrl_reg4), left.register(ctrl_reg5)), (1, 1));
+
+    let mut old = VirtualTwi::new(left.clone(), &control, || clock.get());
+    for (register, value) in WITHOUT_RESET {
+        block_on(old.write(0x1D, &[register, value])).unwrap();
+    }
+    let state = old.nxp().expect("NXP");
+    assert_eq!(
+        (state.register(ctrl_reg4), state.register(ctrl_reg5)),
+        (1, 1)
+    );
+
+    let mut sensor = PollLoop::new(VirtualTwi::new(left, &control, || clock.get()));
+    assert_eq!(block_on(sensor.bring_up()), Some(Probed::Found(chip)));
+    let state = sensor.bus().expect("NXP").bus().nxp().expect("NXP");
+    assert_eq!(
+        (state.register(ctrl_reg4), state.register(ctrl_reg5)),
+        (0, 0)
+    );
+    assert!(state.active() && state.period_us() == 5_000);
+}
+
+/// After `RST` a chip answers nothing for its reset time: configuring it at
+/// once fails, after the firmware's pause it works. The FXOS8700CQ does not
+/// acknowledge the reset byte itself; the MMA8653FC does.
+#[test]
+fn mma8653_and_fxos8700_answer_again_only_after_the_reset_wait() {
+    for chip in [Accelerometer::Mma8653fc, Accelerometer::Fxos8700cq] {
+        let control = ChipControl::new();
+        let mut twi = VirtualTwi::new(VirtualNxp::new(chip), &control, || 0);
+        let address = VirtualNxp::new(chip).address();
+        let reset = block_on(twi.write(address, &[nxp::CTRL_REG2, nxp::CTRL2_RST]));
+        let expected = match chip {
+            Accelerometer::Fxos8700cq => Err(TwiError::DataNack),
+            _ => Ok(()),
+        };
+        assert_eq!(reset, expected, "{chip:?}");
+        let early = block_on(twi.write(address, &[nxp::XYZ_DATA_CFG, 0]));
+        assert_eq!(
+            early,
+            Err(TwiError::AddressNack),
+            "{chip:?} while resetting"
+        );
+        twi.pause_us(nxp::RESET_WAIT_US);
+        assert!(u64::from(nxp::RESET_WAIT_US) >= RESET_US);
+        let after = block_on(twi.write(address, &[nxp::XYZ_DATA_CFG, 0]));
+        assert_eq!(after, Ok(()), "{chip:?} after the wait");
     }
 }

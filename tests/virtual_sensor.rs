@@ -14,7 +14,7 @@ use lsm303agr::interface::I2cInterface;
 use lsm303agr::mode::MagOneShot;
 use lsm303agr::{AccelMode, AccelOutputDataRate, AccelScale, Lsm303agr};
 
-use marble_rolling::board::microbit::BusClear;
+use marble_rolling::board::microbit::{BusClear, ACCEL_BOOT_MS, LSM303AGR_READY_US};
 use marble_rolling::board::qemu::virtual_i2c::{Ram, RamRange, TwimError, VirtualTwim};
 use marble_rolling::board::qemu::virtual_lsm303agr::{
     reg, AccelMode as ChipMode, ChipControl, InjectedFault, Placement, VirtualLsm303agr,
@@ -151,6 +151,33 @@ fn identity_and_init() {
         block_on(bus.write_read(0x42, &[0x0F], &mut byte)),
         Err(TwimError::AddressNack)
     );
+}
+
+/// The v2's first `WHO_AM_I` comes [`ACCEL_BOOT_MS`] after power-up: a chip
+/// that boots for CODAL's 6.4 ms ([`LSM303AGR_READY_US`]) answers it, and
+/// the driver's identity check passes; a probe at the datasheet's 5 ms
+/// would not be acknowledged.
+#[test]
+fn the_v2s_first_probe_comes_after_the_lsm303agr_is_ready() {
+    let anchor = 0u8;
+    let control = ChipControl::new();
+    let clock = Cell::new(0);
+    let mut copy = [0u8; 8];
+    let mut bus = twim(&control, &mut copy, &clock, stack_ram(&anchor));
+    bus.chip_mut().set_ready_at_us(LSM303AGR_READY_US);
+    let mut byte = [0u8];
+    clock.set(5_000);
+    assert_eq!(
+        block_on(bus.write_read(ACCEL_ADDRESS, &[reg::WHO_AM_I_A], &mut byte)),
+        Err(TwimError::AddressNack),
+        "still booting at 5 ms"
+    );
+    clock.set(ACCEL_BOOT_MS * 1000);
+    let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
+    let id = block_on(sensor.accelerometer_id())
+        .map_err(comm)
+        .expect("the first probe is answered");
+    assert!(id.is_correct(), "WHO_AM_I_A = {:#x}", id.raw());
 }
 
 #[test]

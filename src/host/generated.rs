@@ -14,8 +14,12 @@ use crate::game::level::LevelView;
 /// The options that choose a generated maze.
 #[derive(clap::Args, Debug, Clone)]
 pub struct GenerateArgs {
-    /// Play a generated maze: the same seed always gives the same maze.
-    #[arg(long, value_name = "SEED", conflicts_with = "level")]
+    /// Play a generated maze: the same seed always gives the same maze
+    /// (0..=4294967295).
+    // Negative numbers are let through as values so that `--generate -1` is
+    // refused by the parser, which names the range, not taken for an option.
+    #[arg(long, value_name = "SEED", conflicts_with = "level",
+          allow_negative_numbers = true, value_parser = parse_seed)]
     pub generate: Option<u32>,
     /// Cells along a side of the generated maze [default: 6].
     // No `default_value_t`: clap does not check `requires` of an argument that
@@ -34,6 +38,12 @@ pub struct GenerateArgs {
     #[arg(long, value_name = "D", requires = "generate",
           value_parser = clap::value_parser!(u8).range(0..=i64::from(MAX_DIFFICULTY)))]
     pub difficulty: Option<u8>,
+}
+
+/// A seed: any `u32`, written in decimal.
+fn parse_seed(s: &str) -> Result<u32, String> {
+    s.parse::<u32>()
+        .map_err(|_| format!("{} is not in 0..={}", super::excerpt(s), u32::MAX))
 }
 
 /// `--size` when not given.

@@ -66,7 +66,8 @@ const GIF_HOLD_S: f64 = 1.5;
 )]
 pub struct Args {
     /// Level: a built-in name (first-roll, corner, ...) or a level file.
-    #[arg(long, value_name = "FILE|NAME", required_unless_present_any = ["check", "list", "generate"])]
+    #[arg(long, value_name = "FILE|NAME",
+          required_unless_present_any = ["check", "list", "generate", "print_level"])]
     pub level: Option<String>,
     /// Tilt readings: CSV `t_s,ax_mg,ay_mg,az_mg` (board frame, flat = 0,1000,0;
     /// ax < 0 rolls towards +x'), each held until the next. Default: flat board.
@@ -118,7 +119,10 @@ pub struct Args {
     #[command(flatten)]
     pub maze: super::generated::GenerateArgs,
     /// Print the generated maze's level text (for `--check` and `--level`) and stop.
-    #[arg(long, requires = "generate")]
+    // Checked in `run`, not with clap's `requires`: clap would also ask for
+    // `--level` (required unless `--generate`), which `--generate` refuses,
+    // and lets `--level NAME --print-level` through as a success.
+    #[arg(long, conflicts_with_all = ["check", "list"])]
     pub print_level: bool,
 }
 
@@ -379,25 +383,28 @@ pub fn main() -> i32 {
 
 /// Runs the CLI with parsed arguments; returns the exit status.
 pub fn run(args: &Args) -> i32 {
-    if let Some(path) = &args.check {
-        return check(path);
-    }
-    if args.list {
-        list();
-        return 0;
-    }
     if args.print_level {
         return match args.maze.level() {
             Ok(Some((text, _))) => {
                 print!("{text}");
                 0
             }
-            Ok(None) => 0,
+            Ok(None) => {
+                eprintln!("sim: error: --print-level needs --generate SEED");
+                2
+            }
             Err(msg) => {
                 eprintln!("sim: error: {msg}");
                 2
             }
         };
+    }
+    if let Some(path) = &args.check {
+        return check(path);
+    }
+    if args.list {
+        list();
+        return 0;
     }
     match simulate(args) {
         Ok(report) => {

@@ -31,7 +31,7 @@ use heapless::Deque;
 use marble_rolling::app::TiltInput;
 use marble_rolling::board::microbit::{self as v2, Task};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Probed};
-use marble_rolling::board::microbit_v1::twi::{BusClear, TwiError};
+use marble_rolling::board::microbit_v1::twi::{BusClear, Pause, TwiError};
 use marble_rolling::input::event::InputEvent;
 use marble_rolling::input::lsm303;
 use nrf_pac as pac;
@@ -255,6 +255,14 @@ impl embedded_hal_async::i2c::I2c for AsyncTwi {
 impl BusClear for AsyncTwi {
     fn clear_bus(&mut self) {
         self.0.clear_bus();
+    }
+}
+
+impl Pause for AsyncTwi {
+    /// Busy-waits, like every transfer of this blocking driver: the wait
+    /// after an NXP chip's soft reset (1 ms) holds up the input task only.
+    fn pause_us(&mut self, us: u32) {
+        Twi::pause(u64::from(us));
     }
 }
 

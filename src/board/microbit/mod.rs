@@ -110,11 +110,20 @@ pub const INPUT_PERIOD_MS: u64 = 10;
 /// (see [`SUPERVISOR`] for the polling they are tuned with).
 pub use crate::input::accel_timing::{ACCEL_ODR_HZ, ACCEL_SETTLE_MS};
 
-/// The LSM303AGR's boot time after power-up, ms: its datasheet's 5 ms, before
-/// which it does not answer. The input task waits until this long after the
-/// firmware's start (a power-on reset starts both together) before its first
-/// `WHO_AM_I`, which would otherwise be a fault the supervisor has to recover.
-pub const ACCEL_BOOT_MS: u64 = 5;
+/// How long the LSM303AGR needs after power-up before it answers, µs: the
+/// figure CODAL gives ("the LSM needs at least 6.4ms from power-up",
+/// codal-microbit-v2 `MicroBitCompass::autoDetect`, after
+/// microbit-foundation/codal-microbit issue 33), more than the datasheet's
+/// 5 ms boot.
+pub const LSM303AGR_READY_US: u64 = 6_400;
+
+/// When the input task sends its first `WHO_AM_I`, ms after the firmware's
+/// start (a power-on reset starts both together): CODAL's `target_wait(10)`
+/// before its probe, with margin over [`LSM303AGR_READY_US`]; sooner, the
+/// first probe is a fault the supervisor has to recover.
+pub const ACCEL_BOOT_MS: u64 = 10;
+
+const _: () = assert!(ACCEL_BOOT_MS * 1000 > LSM303AGR_READY_US);
 
 /// Watchdog period in ticks of its 32 768 Hz clock: 1 s. The watchdog task
 /// must pet within it, which it does only while every task in [`Task::ALL`]

@@ -56,13 +56,17 @@ pub struct Probe {
     pub id: u8,
 }
 
-/// The probes in the order the firmware tries them. Addresses and IDs from
-/// the chips' datasheets, as the DAL uses them (its 8-bit addresses 0x3A,
-/// 0x3C, 0x32). The three addresses differ, so on a board only the fitted
-/// chip answers and the order does not matter there; the MMA8653FC comes
-/// first for QEMU's `microbit` machine, whose TWI stub answers every read
-/// with a fixed sequence beginning 0x5A (the MMA8653FC's identity) whatever
-/// the address: the first probe's read gets that 0x5A.
+/// The probes in the order the firmware tries them: the DAL's
+/// (`MicroBitAccelerometer::autoDetect` in microbit-dal: MMA8653, then
+/// LSM303, then FXOS8700). Addresses and IDs from the chips' datasheets, as
+/// the DAL uses them (its 8-bit addresses 0x3A, 0x32, 0x3C). The order
+/// matters on a v1.5 with an LSM303AGR: its magnetometer sits at 0x1E, the
+/// FXOS8700CQ's address, where register 0x0D is reserved (LSM303AGR
+/// datasheet, table 21) and reads a byte nobody documents; probing the
+/// LSM303AGR's accelerometer first finds it before anything reads there.
+/// The MMA8653FC stays first for QEMU's `microbit` machine, whose TWI stub
+/// answers every read with a fixed sequence beginning 0x5A (the MMA8653FC's
+/// identity) whatever the address: the first probe's read gets that 0x5A.
 pub const PROBES: [Probe; 3] = [
     Probe {
         chip: Accelerometer::Mma8653fc,
@@ -71,16 +75,16 @@ pub const PROBES: [Probe; 3] = [
         id: MMA8653FC.who_am_i,
     },
     Probe {
-        chip: Accelerometer::Fxos8700cq,
-        address: FXOS8700CQ.address,
-        register: nxp::WHO_AM_I,
-        id: FXOS8700CQ.who_am_i,
-    },
-    Probe {
         chip: Accelerometer::Lsm303agr,
         address: 0x19,
         register: 0x0F,
         id: 0x33,
+    },
+    Probe {
+        chip: Accelerometer::Fxos8700cq,
+        address: FXOS8700CQ.address,
+        register: nxp::WHO_AM_I,
+        id: FXOS8700CQ.who_am_i,
     },
 ];
 
@@ -148,6 +152,13 @@ pub mod nxp {
     pub const STATUS: u8 = 0x00;
     /// X output, most significant byte (then X LSB, Y MSB, …, Z LSB).
     pub const OUT_X_MSB: u8 = 0x01;
+    /// FXOS8700CQ only: FIFO setup (`F_MODE`, bits 7:6; 0 is FIFO off,
+    /// the power-on state). With the FIFO on, register 0x00 is `F_STATUS`
+    /// (overflow, watermark, sample count) instead of `DR_STATUS`, and the
+    /// output registers read the FIFO's oldest sample.
+    pub const F_SETUP: u8 = 0x09;
+    /// `F_SETUP`: the FIFO mode field.
+    pub const F_MODE: u8 = 0xC0;
     /// Identity.
     pub const WHO_AM_I: u8 = 0x0D;
     /// Full-scale range.
@@ -171,8 +182,19 @@ pub mod nxp {
     pub const CTRL1_DR: u8 = 0x38;
     /// `CTRL_REG1`: 200 Hz (DR = 0b010; accelerometer-only on the FXOS).
     pub const CTRL1_DR_200HZ: u8 = 0x10;
-    /// `CTRL_REG2`: software reset.
+    /// `CTRL_REG2`: software reset: every register back to its power-on
+    /// value, whatever an earlier firmware left (a reflash resets the nRF,
+    /// not the chip).
     pub const CTRL2_RST: u8 = 0x40;
+    /// How long the firmware leaves the chip alone after setting
+    /// [`CTRL2_RST`], µs: 1 ms, the FXOS8700CQ's figure (data sheet rev. 8,
+    /// `CTRL_REG2` `rst`, as Zephyr's `fxos8700` driver quotes it: "the
+    /// sensor requires us to wait 1 ms after a reset before attempting
+    /// further communications"). The MMA8653FC's data sheet (rev. 2) gives
+    /// no figure; Linux's `mma8452` driver, which resets the MMA865x family
+    /// the same way, sees `RST` clear within ten polls 100–200 µs apart, so
+    /// 1 ms covers it too.
+    pub const RESET_WAIT_US: u32 = 1_000;
     /// `CTRL_REG2`: high-resolution oversampling (MODS = 0b10).
     pub const CTRL2_MODS_HIGH_RESOLUTION: u8 = 0x02;
     /// `XYZ_DATA_CFG`: full-scale field; 0 is ±2 g.
@@ -245,10 +267,13 @@ impl NxpChip {
         ))
     }
 
-    /// The register writes that configure the chip, in order: standby
-    /// first (the data sheets allow configuration only in standby), ±2 g,
-    /// high-resolution oversampling, (FXOS8700CQ) accelerometer only, then
-    /// 200 Hz and active.
+    /// The register writes that configure the chip after its soft reset
+    /// ([`crate::board::microbit_v1::nxp_driver::configure`]), in order:
+    /// standby first (the data sheets allow configuration only in standby;
+    /// the reset leaves the chip there, a re-initialisation without one
+    /// would not), ±2 g, high-resolution oversampling, (FXOS8700CQ)
+    /// accelerometer only, then 200 Hz and active. Registers not written
+    /// here keep the power-on values the reset gave them.
     pub const fn configuration(&self) -> &'static [(u8, u8)] {
         const MMA: [(u8, u8); 4] = [
             (nxp::CTRL_REG1, 0),

@@ -7,13 +7,13 @@
 //! embedded-hal 0.2 traits, while every board's input stack is async over
 //! embedded-hal 1 (the one API the host tests drive, `input::lsm303` too),
 //! and its typestate `Standby`/`Active` modes move the driver between types
-//! at each re-initialisation. What the firmware needs of either chip is four
-//! or five register writes and one seven-byte burst read.
+//! at each re-initialisation. What the firmware needs of either chip is a
+//! soft reset, four or five register writes and one seven-byte burst read.
 
 use embedded_hal_async::i2c::I2c;
 
 use super::accel::{identify, nxp, Accelerometer, NxpChip, PROBES};
-use super::twi::TwiError;
+use super::twi::{Pause, TwiError};
 use crate::input::sensor::{AccelMg, Fault, Read};
 
 /// Probes for each accelerometer a v1 may carry ([`PROBES`], in order): the
@@ -33,12 +33,26 @@ pub async fn probe<B: I2c<Error = TwiError>>(bus: &mut B) -> Option<Acceleromete
     None
 }
 
-/// (Re)configures `chip` ([`NxpChip::configuration`]): ±2 g, high
-/// resolution, 200 Hz, active. Its identity is the probe's business: a
-/// re-initialisation after a chip reset only has to write the registers
-/// again. The first sample follows one sample period later (the
-/// supervisor's not-ready tolerance covers it).
-pub async fn configure<B: I2c<Error = TwiError>>(bus: &mut B, chip: &NxpChip) -> Result<(), Fault> {
+/// (Re)configures `chip`: a soft reset (`CTRL_REG2` `RST`), the wait
+/// after it ([`nxp::RESET_WAIT_US`]), then [`NxpChip::configuration`]: ±2 g,
+/// high resolution, 200 Hz, active. The reset comes first because the chip
+/// keeps its registers across a reflash or a watchdog reset of the nRF: a
+/// register this driver never writes (the FXOS8700CQ's FIFO mode, which
+/// turns register 0x00 into `F_STATUS`) would otherwise stay as an earlier
+/// firmware left it. The reset write's own outcome is not checked: the
+/// FXOS8700CQ resets at once and does not acknowledge the byte that asked
+/// for it (as Linux's `mma8452` and Zephyr's `fxos8700` drivers note); a
+/// chip that is not there fails the writes that follow. Its identity is
+/// the probe's business. The first sample follows one sample period after
+/// the last write (the supervisor's not-ready tolerance covers it).
+pub async fn configure<B: I2c<Error = TwiError> + Pause>(
+    bus: &mut B,
+    chip: &NxpChip,
+) -> Result<(), Fault> {
+    let _ = bus
+        .write(chip.address, &[nxp::CTRL_REG2, nxp::CTRL2_RST])
+        .await;
+    bus.pause_us(nxp::RESET_WAIT_US);
     for &(register, value) in chip.configuration() {
         bus.write(chip.address, &[register, value])
             .await

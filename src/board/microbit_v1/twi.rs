@@ -62,6 +62,15 @@ pub trait BusClear {
     fn clear_bus(&mut self);
 }
 
+/// A bus whose owner can keep it idle for a while: the wait an NXP chip
+/// needs after its soft reset before it answers again
+/// ([`crate::board::microbit_v1::nxp_driver::configure`]). The firmware
+/// busy-waits (its TWI driver is blocking); the virtual bus moves its clock.
+pub trait Pause {
+    /// Holds the bus idle for `us` µs.
+    fn pause_us(&mut self, us: u32);
+}
+
 /// A bus that is cleared before its first transfer and after every failed
 /// one (see the module doc).
 #[derive(Debug)]
@@ -116,5 +125,11 @@ impl<B: I2c + BusClear> I2c for Recovering<B> {
             self.clear();
         }
         result
+    }
+}
+
+impl<B: Pause> Pause for Recovering<B> {
+    fn pause_us(&mut self, us: u32) {
+        self.bus.pause_us(us);
     }
 }

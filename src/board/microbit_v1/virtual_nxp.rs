@@ -1,4 +1,5 @@
-//! Virtual MMA8653FC and FXOS8700CQ on a virtual v1 TWI: the v1's sensor
+//! Virtual MMA8653FC and FXOS8700CQ, and the QEMU board's virtual LSM303AGR
+//! as a v1.5 carries it ([`VirtualChip`]), on a virtual v1 TWI: the v1's sensor
 //! stack (probe, [`super::nxp_driver`], [`Recovering`](super::twi::Recovering),
 //! the supervision) runs against them on the host, with the fidelity rules of
 //! the QEMU board's virtual LSM303AGR
@@ -14,9 +15,27 @@
 //!   8-bit fast read are not modelled: the driver uses neither).
 //! * Standby and active: `CTRL_REG1`'s `ACTIVE` bit. In active mode the
 //!   configuration registers (`XYZ_DATA_CFG`, `CTRL_REG2`'s oversampling
-//!   bits, `M_CTRL_REG1`, the rest of `CTRL_REG1`) ignore writes, as the data
+//!   bits, `M_CTRL_REG1`, `F_SETUP`, the interrupt registers `CTRL_REG4` and
+//!   `CTRL_REG5` (stored, without effect), the rest of `CTRL_REG1`) ignore
+//!   writes, as the data
 //!   sheets require them written in standby. `CTRL_REG2`'s `RST` resets the
-//!   chip at any time.
+//!   chip at any time: every register back to power-on, then nothing is
+//!   acknowledged for [`RESET_US`]; the FXOS8700CQ does not acknowledge the
+//!   byte that set `RST` either (Linux's `mma8452` driver and Zephyr's
+//!   `fxos8700` driver both note it; the model gives the MMA8653FC the
+//!   acknowledge and the same reset time, for want of a figure of its own).
+//! * Kept across a "reflash": the chip is powered by the board, not reset
+//!   by the nRF, so a new firmware finds every register as the last one
+//!   left it (a test carries the chip's state from one [`VirtualTwi`] to the
+//!   next with [`VirtualTwi::chip`]).
+//! * FXOS8700CQ FIFO (`F_SETUP`, written in standby; FXOS8700CQ data sheet
+//!   rev. 8, `F_SETUP` and `F_STATUS`): with `F_MODE` non-zero every new
+//!   sample goes into a 32-sample FIFO (circular and trigger modes drop the
+//!   oldest when full, fill mode drops the new one; both set `F_OVF`),
+//!   register 0x00 reads `F_STATUS` (`F_OVF` bit 7, the sample count in
+//!   bits 5:0; the watermark flag is not modelled), and the output
+//!   registers read the oldest sample, which a read through `OUT_Z_LSB`
+//!   takes out. Going active flushes it.
 //! * Data rate from `CTRL_REG1`'s `DR` (800 Hz to 1.56 Hz), the first sample
 //!   one period after going active; a new sample sets `ZYXDR` (and `ZYXOW`
 //!   if the previous one was unread); reading the three MSBs clears them.
@@ -39,8 +58,10 @@
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 
 use super::accel::{nxp, Accelerometer};
-use super::twi::{BusClear, TwiError};
-use crate::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
+use super::twi::{BusClear, Pause, TwiError};
+use crate::board::qemu::virtual_lsm303agr::{
+    ChipControl, InjectedFault, SampleSource, VirtualLsm303agr, MICROBIT_V2,
+};
 
 /// The NXP chips' placement on the v1 (both sit on the back of the board,
 /// the same way round): for chip axis X, Y, Z, the board axis it points
@@ -52,8 +73,23 @@ use crate::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
 /// Z).
 pub const MOUNTING: [(usize, i32); 3] = [(0, 1), (2, 1), (1, -1)];
 
+/// `CTRL_REG4` (interrupt enables) and `CTRL_REG5` (interrupt routing):
+/// stored, without effect (the firmware polls); the DAL sets both to route
+/// data-ready to INT1, so a board that ran a DAL program before has them
+/// non-zero.
+const CTRL_REG4: u8 = 0x2D;
+const CTRL_REG5: u8 = 0x2E;
+
 /// Registers modelled (0x00..0x80).
 const REGISTERS: usize = 0x80;
+
+/// How long a chip answers nothing after a soft reset, µs: the FXOS8700CQ's
+/// 1 ms (data sheet rev. 8, `CTRL_REG2` `rst`, as Zephyr's `fxos8700` driver
+/// quotes it), taken for both chips.
+pub const RESET_US: u64 = 1_000;
+
+/// Depth of the FXOS8700CQ's FIFO, samples.
+const FIFO_DEPTH: usize = 32;
 
 /// A virtual MMA8653FC or FXOS8700CQ.
 #[derive(Clone, Debug)]
@@ -70,6 +106,12 @@ pub struct VirtualNxp {
     garbage: bool,
     rng: u32,
     latched: u32,
+    /// Until this time the chip is resetting and acknowledges nothing.
+    resetting_until_us: u64,
+    /// The FXOS8700CQ's FIFO: output bytes of each sample, oldest first.
+    fifo: [[u8; 6]; FIFO_DEPTH],
+    fifo_len: usize,
+    fifo_overflow: bool,
 }
 
 impl VirtualNxp {
@@ -88,6 +130,10 @@ impl VirtualNxp {
             garbage: false,
             rng: 0x2545_f491,
             latched: 0,
+            resetting_until_us: 0,
+            fifo: [[0; 6]; FIFO_DEPTH],
+            fifo_len: 0,
+            fifo_overflow: false,
         }
     }
 
@@ -155,6 +201,48 @@ impl VirtualNxp {
         self.regs = [0; REGISTERS];
         self.pointer = 0;
         self.msb_read = 0;
+        self.flush_fifo();
+    }
+
+    /// Whether a soft reset is still in progress (nothing is acknowledged).
+    pub const fn resetting(&self) -> bool {
+        self.now_us < self.resetting_until_us
+    }
+
+    /// Whether the FIFO is on (FXOS8700CQ, `F_MODE` non-zero).
+    pub const fn fifo_on(&self) -> bool {
+        self.regs[nxp::F_SETUP as usize] & nxp::F_MODE != 0
+    }
+
+    /// Samples waiting in the FIFO.
+    pub const fn fifo_len(&self) -> usize {
+        self.fifo_len
+    }
+
+    fn flush_fifo(&mut self) {
+        self.fifo_len = 0;
+        self.fifo_overflow = false;
+    }
+
+    /// The sample just latched into the FIFO, by `F_MODE`.
+    fn push_fifo(&mut self) {
+        let mut sample = [0u8; 6];
+        sample.copy_from_slice(&self.regs[1..7]);
+        if self.fifo_len == FIFO_DEPTH {
+            self.fifo_overflow = true;
+            // Fill mode (0b10) stops at full; the others drop the oldest.
+            if self.regs[nxp::F_SETUP as usize] & nxp::F_MODE == 0x80 {
+                return;
+            }
+            self.fifo.copy_within(1.., 0);
+            self.fifo_len -= 1;
+        }
+        self.fifo[self.fifo_len] = sample;
+        self.fifo_len += 1;
+    }
+
+    fn f_status(&self) -> u8 {
+        (u8::from(self.fifo_overflow) << 7) | self.fifo_len as u8
     }
 
     /// Sets the tilt (board frame, milli-g) the next samples take.
@@ -179,6 +267,13 @@ impl VirtualNxp {
         self.next_due_us += (missed + 1) * period;
         if !self.frozen {
             self.latch();
+            // The FIFO keeps every sample, not only the last (the tilt is
+            // the same for all of them within one call).
+            if self.fifo_on() {
+                for _ in 0..missed.min(FIFO_DEPTH as u64) {
+                    self.push_fifo();
+                }
+            }
         }
     }
 
@@ -227,18 +322,26 @@ impl VirtualNxp {
         *status = 0x0F | if unread { nxp::STATUS_ZYXOW | 0x70 } else { 0 };
         self.msb_read = 0;
         self.latched = self.latched.wrapping_add(1);
+        if self.fifo_on() {
+            self.push_fifo();
+        }
     }
 
-    /// An I²C write: sub-address, then data from there on.
-    pub fn i2c_write(&mut self, bytes: &[u8]) {
+    /// An I²C write: sub-address, then data from there on. `false` when a
+    /// data byte was not acknowledged (the FXOS8700CQ's `RST`): the bytes
+    /// after it are not taken.
+    pub fn i2c_write(&mut self, bytes: &[u8]) -> bool {
         let Some((&sub, data)) = bytes.split_first() else {
-            return;
+            return true;
         };
         self.pointer = sub & 0x7F;
         for &byte in data {
-            self.write(self.pointer, byte);
+            if !self.write(self.pointer, byte) {
+                return false;
+            }
             self.pointer = (self.pointer + 1) & 0x7F;
         }
+        true
     }
 
     /// An I²C read from the register pointer on.
@@ -249,7 +352,8 @@ impl VirtualNxp {
         }
     }
 
-    fn write(&mut self, register: u8, value: u8) {
+    /// Writes one register; `false` when the byte is not acknowledged.
+    fn write(&mut self, register: u8, value: u8) -> bool {
         let active = self.active();
         match register {
             nxp::CTRL_REG1 => {
@@ -262,24 +366,47 @@ impl VirtualNxp {
                     self.regs[nxp::CTRL_REG1 as usize] = value;
                     if value & nxp::CTRL1_ACTIVE != 0 {
                         self.next_due_us = self.now_us + self.period_us();
+                        self.flush_fifo();
                     }
                 }
             }
-            nxp::CTRL_REG2 if value & nxp::CTRL2_RST != 0 => self.power_on_reset(),
-            nxp::CTRL_REG2 | nxp::XYZ_DATA_CFG if !active => {
+            nxp::CTRL_REG2 if value & nxp::CTRL2_RST != 0 => {
+                self.power_on_reset();
+                self.resetting_until_us = self.now_us + RESET_US;
+                return self.chip != Accelerometer::Fxos8700cq;
+            }
+            nxp::CTRL_REG2 | nxp::XYZ_DATA_CFG | CTRL_REG4 | CTRL_REG5 if !active => {
                 self.regs[usize::from(register)] = value;
             }
-            nxp::M_CTRL_REG1 if !active && self.chip == Accelerometer::Fxos8700cq => {
+            nxp::M_CTRL_REG1 | nxp::F_SETUP
+                if !active && self.chip == Accelerometer::Fxos8700cq =>
+            {
                 self.regs[usize::from(register)] = value;
+                if register == nxp::F_SETUP && value & nxp::F_MODE == 0 {
+                    self.flush_fifo();
+                }
             }
             // Read-only, reserved, or written while active: ignored.
             _ => {}
         }
+        true
     }
 
     fn read(&mut self, register: u8) -> u8 {
         match register {
             nxp::WHO_AM_I => self.who_am_i(),
+            nxp::STATUS if self.fifo_on() => self.f_status(),
+            1..=6 if self.fifo_on() => {
+                let value = self.fifo[0][usize::from(register - 1)];
+                if register == 6 && self.fifo_len > 0 {
+                    self.fifo.copy_within(1.., 0);
+                    self.fifo_len -= 1;
+                }
+                if self.fifo_len == 0 {
+                    self.fifo[0] = [0; 6];
+                }
+                value
+            }
             1..=6 => {
                 let value = self.regs[usize::from(register)];
                 if register % 2 == 1 {
@@ -295,36 +422,152 @@ impl VirtualNxp {
     }
 }
 
-/// The v1's TWI with one virtual NXP chip on it, faults from `control`, time
-/// from `now_us` (µs): what the v1's blocking driver would return, as the
-/// async trait the sensor stack takes (every transfer completes at once).
+/// The accelerometer a virtual v1 board carries.
+#[derive(Clone, Debug)]
+pub enum VirtualChip {
+    /// An MMA8653FC (v1.3, v1.3B) or an FXOS8700CQ (v1.5).
+    Nxp(VirtualNxp),
+    /// The LSM303AGR of a v1.5: accelerometer at 0x19, magnetometer at
+    /// 0x1E, the FXOS8700CQ's address; mounted as on the v2 (the DAL's and
+    /// CODAL's LSM303 tables agree, [`super::accel::LSM303AGR_AXIS_MAP`]).
+    Lsm303agr(VirtualLsm303agr),
+}
+
+impl VirtualChip {
+    /// `chip` at power-on, as a v1 board carries it.
+    pub const fn new(chip: Accelerometer) -> Self {
+        match chip {
+            Accelerometer::Lsm303agr => {
+                VirtualChip::Lsm303agr(VirtualLsm303agr::placed(MICROBIT_V2))
+            }
+            nxp => VirtualChip::Nxp(VirtualNxp::new(nxp)),
+        }
+    }
+
+    /// Which chip it is.
+    pub const fn kind(&self) -> Accelerometer {
+        match self {
+            VirtualChip::Nxp(chip) => chip.chip,
+            VirtualChip::Lsm303agr(_) => Accelerometer::Lsm303agr,
+        }
+    }
+
+    /// Whether a transfer to `address` is acknowledged.
+    pub fn acknowledges(&self, address: u8) -> bool {
+        match self {
+            VirtualChip::Nxp(chip) => address == chip.address() && !chip.resetting(),
+            VirtualChip::Lsm303agr(chip) => chip.acknowledges(address),
+        }
+    }
+
+    fn power_on_reset(&mut self) {
+        match self {
+            VirtualChip::Nxp(chip) => chip.power_on_reset(),
+            VirtualChip::Lsm303agr(chip) => chip.power_on_reset(),
+        }
+    }
+
+    fn feed(&mut self, tilt_mg: [i32; 3], fault: InjectedFault, now_us: u64) {
+        let (frozen, garbage) = (
+            fault == InjectedFault::FrozenData,
+            fault == InjectedFault::Garbage,
+        );
+        match self {
+            VirtualChip::Nxp(chip) => {
+                chip.set_tilt_mg(tilt_mg);
+                chip.set_faults(frozen, garbage);
+                chip.advance_to(now_us);
+            }
+            VirtualChip::Lsm303agr(chip) => {
+                chip.set_tilt_mg(tilt_mg);
+                chip.set_source(if frozen {
+                    SampleSource::Frozen
+                } else if garbage {
+                    SampleSource::Garbage
+                } else {
+                    SampleSource::Tilt
+                });
+                chip.advance_to(now_us);
+            }
+        }
+    }
+
+    /// `false` when a data byte was not acknowledged.
+    fn write(&mut self, address: u8, bytes: &[u8]) -> bool {
+        match self {
+            VirtualChip::Nxp(chip) => chip.i2c_write(bytes),
+            VirtualChip::Lsm303agr(chip) => {
+                chip.i2c_write(address, bytes);
+                true
+            }
+        }
+    }
+
+    fn read(&mut self, address: u8, buffer: &mut [u8]) {
+        match self {
+            VirtualChip::Nxp(chip) => chip.i2c_read(buffer),
+            VirtualChip::Lsm303agr(chip) => chip.i2c_read(address, buffer),
+        }
+    }
+}
+
+impl From<VirtualNxp> for VirtualChip {
+    fn from(chip: VirtualNxp) -> Self {
+        VirtualChip::Nxp(chip)
+    }
+}
+
+impl From<VirtualLsm303agr> for VirtualChip {
+    fn from(chip: VirtualLsm303agr) -> Self {
+        VirtualChip::Lsm303agr(chip)
+    }
+}
+
+/// The v1's TWI with one virtual accelerometer on it, faults from `control`,
+/// time from `now_us` (µs): what the v1's blocking driver would return, as
+/// the async trait the sensor stack takes (every transfer completes at once).
 pub struct VirtualTwi<'a, C: Fn() -> u64> {
-    chip: VirtualNxp,
+    chip: VirtualChip,
     control: &'a ChipControl,
     now_us: C,
     stuck: bool,
     resets_seen: u32,
     transfers: u32,
     clears: u32,
+    /// Bit per 7-bit address a transfer was started to.
+    addressed: u128,
+    /// Time spent in [`Pause::pause_us`], µs: added to `now_us`, as the
+    /// firmware's clock runs on while it waits.
+    paused_us: u64,
 }
 
 impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
     /// `chip` on the bus.
-    pub fn new(chip: VirtualNxp, control: &'a ChipControl, now_us: C) -> Self {
+    pub fn new(chip: impl Into<VirtualChip>, control: &'a ChipControl, now_us: C) -> Self {
         Self {
-            chip,
+            chip: chip.into(),
             control,
             now_us,
             stuck: false,
             resets_seen: control.reset_requests(),
             transfers: 0,
             clears: 0,
+            addressed: 0,
+            paused_us: 0,
         }
     }
 
     /// The chip (inspection).
-    pub fn chip(&self) -> &VirtualNxp {
+    pub fn chip(&self) -> &VirtualChip {
         &self.chip
+    }
+
+    /// The chip, if it is an NXP one (inspection).
+    pub fn nxp(&self) -> Option<&VirtualNxp> {
+        match &self.chip {
+            VirtualChip::Nxp(chip) => Some(chip),
+            VirtualChip::Lsm303agr(_) => None,
+        }
     }
 
     /// Whether the bus is held stuck.
@@ -342,8 +585,15 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
         self.clears
     }
 
-    fn apply(&mut self) -> Result<(), TwiError> {
+    /// Whether any transfer was started to `address` (7-bit), answered or
+    /// not.
+    pub const fn addressed(&self, address: u8) -> bool {
+        address < 128 && self.addressed & (1 << address) != 0
+    }
+
+    fn apply(&mut self, address: u8) -> Result<(), TwiError> {
         self.transfers = self.transfers.wrapping_add(1);
+        self.addressed |= 1u128 << (address & 0x7F);
         let fault = self.control.fault();
         let requests = self.control.reset_requests();
         if requests != self.resets_seen {
@@ -351,13 +601,11 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
             self.chip.power_on_reset();
         }
         let tilt = self.control.tilt();
-        self.chip
-            .set_tilt_mg([i32::from(tilt.x), i32::from(tilt.y), i32::from(tilt.z)]);
-        self.chip.set_faults(
-            fault == InjectedFault::FrozenData,
-            fault == InjectedFault::Garbage,
+        self.chip.feed(
+            [i32::from(tilt.x), i32::from(tilt.y), i32::from(tilt.z)],
+            fault,
+            (self.now_us)() + self.paused_us,
         );
-        self.chip.advance_to((self.now_us)());
         if fault == InjectedFault::StuckBus {
             self.stuck = true;
         }
@@ -381,14 +629,18 @@ impl<C: Fn() -> u64> I2c for VirtualTwi<'_, C> {
         address: u8,
         operations: &mut [Operation<'_>],
     ) -> Result<(), TwiError> {
-        self.apply()?;
-        if address != self.chip.address() {
+        self.apply(address)?;
+        if !self.chip.acknowledges(address) {
             return Err(TwiError::AddressNack);
         }
         for operation in operations.iter_mut() {
             match operation {
-                Operation::Write(bytes) => self.chip.i2c_write(bytes),
-                Operation::Read(buffer) => self.chip.i2c_read(buffer),
+                Operation::Write(bytes) => {
+                    if !self.chip.write(address, bytes) {
+                        return Err(TwiError::DataNack);
+                    }
+                }
+                Operation::Read(buffer) => self.chip.read(address, buffer),
             }
         }
         Ok(())
@@ -402,5 +654,11 @@ impl<C: Fn() -> u64> BusClear for VirtualTwi<'_, C> {
         if self.control.fault() != InjectedFault::StuckBus {
             self.stuck = false;
         }
+    }
+}
+
+impl<C: Fn() -> u64> Pause for VirtualTwi<'_, C> {
+    fn pause_us(&mut self, us: u32) {
+        self.paused_us += u64::from(us);
     }
 }

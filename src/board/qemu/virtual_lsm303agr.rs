@@ -44,7 +44,14 @@
 //!   brings them back (the injected chip reset).
 //! * Magnetometer (I²C address [`MAG_ADDRESS`]): only enough for the driver's
 //!   `init()` (it writes `CFG_REG_C_M`): `WHO_AM_I_M` (0x40), the
-//!   configuration registers stored; its outputs read 0.
+//!   configuration registers stored; its outputs read 0. The addresses below
+//!   0x40, which the datasheet's register map (table 21) leaves reserved,
+//!   read a byte the test chooses ([`VirtualLsm303agr::set_reserved_mag_read`],
+//!   0 by default): what a real chip answers there is not documented.
+//!
+//! * Boot after power-up: none by default; a test may have the chip answer
+//!   nothing until a time of its choosing
+//!   ([`VirtualLsm303agr::set_ready_at_us`]).
 //!
 //! Not modelled: the temperature sensor (reads 0), the FIFO, interrupts and
 //! click detection, self-test, the axis-enable bits (every axis converts),
@@ -118,6 +125,11 @@ pub struct VirtualLsm303agr {
     rng: u32,
     /// Samples latched since power-on (diagnostics).
     latched: u32,
+    /// What the magnetometer's reserved addresses below 0x40 read.
+    reserved_mag_read: u8,
+    /// Until this time on its clock the chip is still booting and
+    /// acknowledges nothing.
+    ready_at_us: u64,
 }
 
 impl VirtualLsm303agr {
@@ -150,6 +162,8 @@ impl VirtualLsm303agr {
             source: SampleSource::Tilt,
             rng: 0x2545_f491,
             latched: 0,
+            reserved_mag_read: 0,
+            ready_at_us: 0,
         };
         chip.accel[reg::CTRL_REG1_A as usize] = CTRL_REG1_A_RESET;
         chip.mag[(reg::CFG_REG_A_M - MAG_FIRST) as usize] = CFG_REG_A_M_RESET;
@@ -178,6 +192,12 @@ impl VirtualLsm303agr {
     /// Sets where the next samples come from.
     pub fn set_source(&mut self, source: SampleSource) {
         self.source = source;
+    }
+
+    /// Sets what a read of a reserved magnetometer address below 0x40
+    /// returns (the datasheet does not say; kept across a chip reset).
+    pub fn set_reserved_mag_read(&mut self, value: u8) {
+        self.reserved_mag_read = value;
     }
 
     /// Samples latched since power-on.
@@ -233,6 +253,7 @@ impl VirtualLsm303agr {
             },
             MAG_ADDRESS => match register {
                 reg::WHO_AM_I_M => WHO_AM_I_M_VALUE,
+                r if r < MAG_FIRST => self.reserved_mag_read,
                 r => self.mag_slot(r).map_or(0, |i| self.mag[i]),
             },
             _ => 0,
@@ -244,9 +265,15 @@ impl VirtualLsm303agr {
         (i < MAG_COUNT).then_some(i)
     }
 
+    /// Makes the chip boot until `at_us` on its clock (power-up at 0): until
+    /// then it acknowledges no transfer. 0 by default (ready at once).
+    pub fn set_ready_at_us(&mut self, at_us: u64) {
+        self.ready_at_us = at_us;
+    }
+
     /// Whether a transfer to `address` is acknowledged.
     pub fn acknowledges(&self, address: u8) -> bool {
-        address == ACCEL_ADDRESS || address == MAG_ADDRESS
+        self.now_us >= self.ready_at_us && (address == ACCEL_ADDRESS || address == MAG_ADDRESS)
     }
 
     /// Runs the sampling clock up to `now_us` (earlier times are ignored):
