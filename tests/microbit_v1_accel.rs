@@ -675,17 +675,6 @@ fn left_by_an_earlier_firmware(
     twi.nxp().expect("an NXP chip").clone()
 }
 
-/// The configuration writes of the firmware before it reset the chip first
-/// (standby, ±2 g, high resolution, FXOS8700CQ accelerometer only, 200 Hz
-/// active): the comparison the reset is measured against.
-const WITHOUT_RESET: [(u8, u8); 5] = [
-    (nxp::CTRL_REG1, 0),
-    (nxp::XYZ_DATA_CFG, 0),
-    (nxp::CTRL_REG2, nxp::CTRL2_MODS_HIGH_RESOLUTION),
-    (nxp::M_CTRL_REG1, 0),
-    (nxp::CTRL_REG1, nxp::CTRL1_DR_200HZ | nxp::CTRL1_ACTIVE),
-];
-
 /// The longest run of polls without a sample, and the last tilt read
 /// (chip frame), over `polls` of the firmware's read on `bus`.
 fn poll_reads(
@@ -732,9 +721,9 @@ fn fxos8700_left_in_fifo_mode_is_reset_by_the_bring_up() {
     let left = left_by_an_earlier_firmware(chip, &[(nxp::F_SETUP, 0x40)], &control, &clock);
     assert!(left.fifo_on() && left.fifo_len() == 32, "the FIFO is full");
 
-    // Configured as before, without the reset.
+    // The configuration's writes alone, without the reset before them.
     let mut old = Recovering::new(VirtualTwi::new(left.clone(), &control, || clock.get()));
-    for (register, value) in WITHOUT_RESET {
+    for &(register, value) in nxp_chip.configuration() {
         block_on(old.write(nxp_chip.address, &[register, value])).unwrap();
     }
     let (no_sample, _) = poll_reads(&mut old, nxp_chip, &clock, 100);
@@ -789,8 +778,9 @@ fn mma8653_registers_an_earlier_firmware_set_are_reset_by_the_bring_up() {
     assert_eq!((left.register(ctrl_reg4), left.register(ctrl_reg5)), (1, 1));
 
     let mut old = VirtualTwi::new(left.clone(), &control, || clock.get());
-    for (register, value) in WITHOUT_RESET {
-        block_on(old.write(0x1D, &[register, value])).unwrap();
+    let nxp_chip = chip.nxp().expect("NXP");
+    for &(register, value) in nxp_chip.configuration() {
+        block_on(old.write(nxp_chip.address, &[register, value])).unwrap();
     }
     let state = old.nxp().expect("NXP");
     assert_eq!(

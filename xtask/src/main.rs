@@ -17,6 +17,7 @@ mod properties;
 mod runner;
 mod setup;
 mod size;
+mod stack_bound;
 mod study;
 mod symbols;
 mod trace;

@@ -303,7 +303,7 @@ fn log_probe(probed: Option<Probed>) {
     match probed {
         Some(Probed::Found(chip)) => defmt::info!("accel={=str}", chip.tag()),
         Some(Probed::NoneAnswered) => {
-            defmt::warn!("accelerometer: none of MMA8653FC, FXOS8700CQ, LSM303AGR answered")
+            defmt::warn!("accelerometer: none of MMA8653FC, LSM303AGR, FXOS8700CQ answered")
         }
         None => {}
     }
