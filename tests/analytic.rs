@@ -362,6 +362,11 @@ fn sleeping_is_exact<S: Scalar>(st: Stepping) {
         let mut a: World<'_, S, 4> = World::new(p, g.view(), &starts).unwrap();
         let mut b: World<'_, S, 4> = World::new(p, g.view(), &starts).unwrap();
         b.set_sleeping(false);
+        // Skipping changes a step's work, so the flight budget would cut the two
+        // at different places (a marble pressed on another flies pair slices,
+        // more than the budget): neither has one here.
+        a.set_flight_budget(u32::MAX);
+        b.set_flight_budget(u32::MAX);
         let tilts = [
             [0, -1000, 0],
             [400, -1000, 300],

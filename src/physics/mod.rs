@@ -58,7 +58,7 @@ pub use scalar::{MicroF32, Scalar};
 pub use vec::Vec3;
 pub use world::{
     Impacts, Marble, Params, PhysicsSpec, SetupError, StepObserver, StepStats, Stepping, World,
-    IMPACTS_KEPT, MAX_EVENTS,
+    FLIGHT_BUDGET, IMPACTS_KEPT, MAX_EVENTS,
 };
 
 /// The firmware's default scalar (see [`scalar`] for why).

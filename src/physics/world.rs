@@ -35,7 +35,7 @@ mod pairs;
 mod spec;
 mod stats;
 
-pub use events::{StepObserver, MAX_EVENTS};
+pub use events::{StepObserver, FLIGHT_BUDGET, MAX_EVENTS};
 pub use marble::Marble;
 pub use spec::{Params, PhysicsSpec, SetupError, Stepping};
 pub use stats::{Impacts, StepStats, IMPACTS_KEPT};
@@ -71,6 +71,10 @@ pub struct World<'a, S: Scalar, const M: usize> {
     /// Per marble, the last candidate range found free of solid tiles (the tiles
     /// never change, so it stays free): the next step usually has the same one.
     clear: [TileRange; M],
+    /// Flights a step may take in all ([`events::FLIGHT_BUDGET`] unless set).
+    flight_budget: u32,
+    /// Flights the step under way may still take.
+    flights_left: u32,
     /// What the steps did so far.
     pub stats: StepStats,
     /// The bounces since [`World::take_impacts`].
@@ -163,6 +167,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 ]
             },
             clear: [TileRange::EMPTY; M],
+            flight_budget: events::FLIGHT_BUDGET,
+            flights_left: 0,
             stats: StepStats::default(),
             impacts: Impacts::default(),
         };

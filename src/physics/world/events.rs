@@ -44,7 +44,13 @@
 //! at each end, so the slice is bounded by the turn and not by the sink — about
 //! 8 a frame where plain slices took 32.
 //!
-//! **Bounded work.** A marble gets at most [`MAX_EVENTS`] events per step. Bounces
+//! **Bounded work.** A step spends at most [`FLIGHT_BUDGET`] units of work, all
+//! marbles together (a flight is one, a pair's time of impact one, a pair slice
+//! three); past it the rest of the step is carried over to the next
+//! (`events/budget.rs`), so a marble landing on another or four marbles shaken in
+//! a box cost a bounded frame. No built-in level gets there. Within the budget a
+//! marble gets at most [`MAX_EVENTS`] events per step (reachable only with a
+//! larger budget, set by [`World::set_flight_budget`]). Bounces
 //! between two walls with `e < 1` lose speed geometrically and end in a contact
 //! below the restitution threshold (`e = 0.9` from 1.5 m/s: 41 bounces), so
 //! physics with `e < 1` does not get near it. With `e = 1` the count is the cross
@@ -68,8 +74,11 @@ use super::super::geometry::broadphase::TileRange;
 use super::super::geometry::narrowphase::{offset, owned, shadowed, Contact, Feature};
 use super::super::geometry::sweep::{reach, swept};
 use super::super::geometry::tiles::{Aabb, TileIndex};
+pub use budget::FLIGHT_BUDGET;
+
 use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
 
+mod budget;
 mod pivot;
 mod search;
 mod together;
@@ -296,6 +305,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// One event step (see the module doc).
     pub(super) fn step_events<O: StepObserver<S>>(&mut self, obs: &mut O) {
         self.stats.steps = self.stats.steps.wrapping_add(1);
+        self.flights_left = self.flight_budget;
         let fx = self.params.spec.effects;
         let together = fx.marbles && self.marbles.len() > 1;
         match (fx.holes, together) {
@@ -329,16 +339,27 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     }
 
     /// Every marble on its own (one marble, or marbles that do not interact).
+    ///
+    /// The step's flight budget is shared: each marble may take what is left of
+    /// it over the marbles still to fly, so that one marble's hard step cannot
+    /// leave the next one none.
     fn fly_each<const SPACE: bool, O: StepObserver<S>>(&mut self, obs: &mut O) {
+        let mut to_fly = self.marbles.iter().filter(|m| !m.out && !m.asleep).count() as u32;
+        let mut left = self.flight_budget;
         for n in 0..self.marbles.len() {
             let mut m = self.marbles[n];
             if m.out || m.asleep {
                 continue;
             }
             self.count_runs::<SPACE>(&m);
+            let share = (left / to_fly.max(1)).max(1);
+            self.flights_left = share;
             let mut f = Flight::start();
             self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
-            self.finish::<SPACE>(n, &mut m);
+            left = left.saturating_sub(share - self.flights_left);
+            to_fly = to_fly.saturating_sub(1);
+            let may_sleep = f.t >= S::ONE || self.cut(&f);
+            self.finish::<SPACE>(n, &mut m, may_sleep);
         }
     }
 
@@ -355,6 +376,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     ) {
         let mut flights = 0u32;
         while f.t < S::ONE {
+            if self.out_of_flights() {
+                return;
+            }
             flights += 1;
             if flights > MAX_FLIGHTS {
                 self.stats.event_limits = self.stats.event_limits.wrapping_add(1);
@@ -365,20 +389,24 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
     }
 
-    /// The end of a marble's step: out of play, asleep (as the fixed step decides).
-    fn finish<const SPACE: bool>(&mut self, n: usize, m: &mut Marble<S>) {
+    /// The end of a marble's step: out of play, asleep (as the fixed step decides,
+    /// if it `may_sleep`: see `events/budget.rs`).
+    fn finish<const SPACE: bool>(&mut self, n: usize, m: &mut Marble<S>, may_sleep: bool) {
         if !SPACE {
             m.supported = true;
         }
         self.check_out::<SPACE>(m);
-        m.asleep = self.sleeping && *m == self.marbles[n] && !self.params.spec.effects.board_motion;
+        m.asleep = self.sleeping
+            && may_sleep
+            && *m == self.marbles[n]
+            && !self.params.spec.effects.board_motion;
         self.marbles[n] = *m;
     }
 
     /// The marble's next flight and the event that ends it (steps from `f.t`):
     /// the flight's acceleration, a slice begun if one was asked for, the search.
     fn next<const SPACE: bool>(&mut self, m: &mut Marble<S>, f: &mut Flight<S>) -> (S, Event<S>) {
-        self.stats.flights = self.stats.flights.wrapping_add(1);
+        self.spend(1, 1);
         self.prepare::<SPACE>(m, f);
         if f.events >= 2 * MAX_EVENTS && f.slice.is_none() {
             // Past every bound: blind slices to the end of the step.

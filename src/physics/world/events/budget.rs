@@ -1,0 +1,86 @@
+//! The step's flight budget: a hard cap on a frame's work.
+//!
+//! The events of a step are as many as the physics asks for, and some scenes ask
+//! for many: a marble pressed on another flies plain pair slices, 32 or more a
+//! step; four marbles shaken in a box re-check every pair at every flight. A step
+//! may spend [`FLIGHT_BUDGET`] units of work, counted in flights: every marble's
+//! search for its next event is one, a pair's time of impact one, a pair slice
+//! three (both marbles flown, their contact passes, the pair's push). Once they
+//! are spent, the rest of the step is **carried over**: every marble still under
+//! way stays where its last flight left it, with that flight's velocity, and goes
+//! on from there in the next step, as if the clock had paused for it. The check
+//! is made before each round of the step, and one round spends at most a search
+//! per marble, a time of impact per pair and a pair slice, so a step spends at
+//! most `FLIGHT_BUDGET − 1 + M + M(M − 1)/2 + 3` units (28 with four marbles),
+//! whatever the scene; the scene that asks for more plays slower than real time
+//! while it does.
+//!
+//! What the cut keeps:
+//! - **No penetration**: the marbles are left in a state the event stepper
+//!   reached, between events; nothing is flown blind.
+//! - **No energy gained**: the state is kept as it is.
+//! - **Determinism**: the budget counts work, the same on every target.
+//! - **Sleep only when earned**: a marble whose partial step, of positive length,
+//!   left it exactly as it was (or wedged at rest against another marble, see
+//!   `together.rs`) is at rest; one that has not flown at all this step stays
+//!   awake.
+//!
+//! Two fallbacks that fly the rest were measured and not kept: fixed pieces of an
+//! eighth of the step, blind, each with the contact passes, sink a marble under a
+//! 4 g pull up to `h·(1/8)²` before the passes push it out (the tight-corridor
+//! hard case fails); and without the wedged rest a landed pair never sleeps (its
+//! state at a cut never repeats). `docs/performance.md` has the figures.
+//!
+//! `StepStats::budget_cuts` counts the marble-steps it cut, `StepStats::work` the
+//! units spent; no built-in level reaches the budget (at most 17 units in a frame,
+//! `two-floors`: `tests/budget.rs`), the stress scenes of a landing on a marble and
+//! of four marbles shaken do.
+
+use super::*;
+
+/// Units of work (flights) a step may spend, all marbles together, unless
+/// [`World::set_flight_budget`] sets another budget (see the module doc). Every
+/// built-in level stays under it (at most 17 in a frame, on `two-floors`).
+pub const FLIGHT_BUDGET: u32 = 18;
+
+/// A pair's time of impact, in flights of the budget.
+pub(super) const PAIR_TEST: u32 = 1;
+
+/// A pair slice (both marbles flown, their passes and the pair's push), in
+/// flights of the budget.
+pub(super) const PAIR_SLICE: u32 = 3;
+
+impl<S: Scalar, const M: usize> World<'_, S, M> {
+    /// Sets the units of work (flights) a step may spend, all marbles together (at
+    /// least 1; [`FLIGHT_BUDGET`] by default).
+    pub fn set_flight_budget(&mut self, flights: u32) {
+        self.flight_budget = flights.max(1);
+    }
+
+    /// The units of work a step may spend (see [`World::set_flight_budget`]).
+    pub fn flight_budget(&self) -> u32 {
+        self.flight_budget
+    }
+
+    /// Whether the step's budget is spent.
+    #[inline]
+    pub(super) fn out_of_flights(&self) -> bool {
+        self.flights_left == 0
+    }
+
+    /// Counts `flights` flights worth `units` of the step's budget.
+    #[inline]
+    pub(super) fn spend(&mut self, flights: u32, units: u32) {
+        self.stats.flights = self.stats.flights.wrapping_add(flights);
+        self.stats.work = self.stats.work.wrapping_add(units);
+        self.flights_left = self.flights_left.saturating_sub(units);
+    }
+
+    /// A marble's step cut at `f.t`: counted; whether it may still fall asleep
+    /// (it flew a positive part of the step).
+    #[inline]
+    pub(super) fn cut(&mut self, f: &Flight<S>) -> bool {
+        self.stats.budget_cuts = self.stats.budget_cuts.wrapping_add(1);
+        f.t > S::ZERO
+    }
+}

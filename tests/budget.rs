@@ -1,0 +1,202 @@
+//! The step's flight budget (`physics::world::FLIGHT_BUDGET`) and its fallback
+//! (`src/physics/world/events/budget.rs`): a step's work is capped, and the rest
+//! of a step that reaches the cap is carried over, which neither sinks a marble
+//! into a tile or another marble, nor adds energy, nor depends on the target.
+mod common;
+
+use common::*;
+use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::player::Player;
+use marble_rolling::game::rules::Phase;
+use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::game::stress::{StressScene, STRESS};
+use marble_rolling::physics::{Effects, Fx, PhysicsSpec, Scalar, Vec3, FLIGHT_BUDGET};
+
+/// 5 µm in pitch (10 mm: `PhysicsSpec::DEFAULT`'s long tile).
+const FIVE_UM: f64 = 0.005 / 10.0;
+
+fn energy<S: Scalar>(v: Vec3<S>) -> f64 {
+    let v = v.to_f64();
+    0.5 * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+}
+
+/// Four marbles shot across a closed box at `e = 1` on a level board, with a
+/// budget of eight units (four searches and four pairs' times of impact): most
+/// steps are cut. For
+/// two seconds no marble is ever inside a tile or another marble by more than
+/// 5 µm, at any flight's start, middle or end, the marbles' energy never grows
+/// (rounding aside), and they keep moving (a cut slows the scene; it does not
+/// freeze it).
+fn small_budget<S: Scalar>() {
+    let g = closed_box(3);
+    let p = params::<S>(PhysicsSpec {
+        restitution_milli: 1000,
+        ..spec_in(
+            Stepping::Events,
+            Effects {
+                marbles: true,
+                ..Effects::NONE
+            },
+        )
+    });
+    let starts = [
+        cell_centre(&p, 1, 1),
+        cell_centre(&p, 5, 1),
+        cell_centre(&p, 1, 5),
+        cell_centre(&p, 5, 5),
+    ];
+    let mut w = world(p, &g, &starts);
+    w.set_flight_budget(8);
+    assert_eq!(w.flight_budget(), 8);
+    let shots = [(40.0, 13.0), (-31.0, 22.0), (17.0, -45.0), (-8.0, -3.0)];
+    for (m, (x, z)) in w.marbles_mut().iter_mut().zip(shots) {
+        m.vel = Vec3::new(S::from_f64(x), S::ZERO, S::from_f64(z));
+    }
+    let r = p.radius.to_f64();
+    let floor = r * (1.0 - loose::<S>()) - FIVE_UM;
+    let mut travelled = 0.0;
+    for n in 0..256 {
+        let e0: f64 = w.marbles().iter().map(|m| energy(m.vel)).sum();
+        let before: Vec<[f64; 3]> = w.marbles().iter().map(|m| m.pos.to_f64()).collect();
+        let c = step_checked(&mut w, 0);
+        assert!(c >= floor, "{} step {n}: marble 0 clearance {c}", S::NAME);
+        let ms = w.marbles();
+        for a in 0..4 {
+            assert!(!ms[a].out, "{} step {n}: marble {a} left the box", S::NAME);
+            let c = min_clearance(&w, a);
+            assert!(c >= floor, "{} step {n}: marble {a} clearance {c}", S::NAME);
+            let (pa, qa) = (ms[a].pos.to_f64(), before[a]);
+            travelled += ((pa[0] - qa[0]).powi(2) + (pa[2] - qa[2]).powi(2)).sqrt();
+            for (b, other) in ms.iter().enumerate().skip(a + 1) {
+                let pb = other.pos.to_f64();
+                let d =
+                    ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2) + (pa[2] - pb[2]).powi(2))
+                        .sqrt();
+                assert!(
+                    d >= 2.0 * r * (1.0 - loose::<S>()) - FIVE_UM,
+                    "{} step {n}: marbles {a} and {b} {} pitch into each other",
+                    S::NAME,
+                    2.0 * r - d
+                );
+            }
+        }
+        let e1: f64 = ms.iter().map(|m| energy(m.vel)).sum();
+        // Rounding only: a bounce off a slanted pair normal rounds each
+        // component to the format (I16F16's 2^-16 pitch/s is 10^-4 of the energy
+        // here, with the same pair code and no budget).
+        let slack = match S::NAME {
+            "f32-micromath" => 1e-2,
+            "i16f16" => 1e-3,
+            _ => 1e-5,
+        };
+        assert!(
+            e1 <= e0 * (1.0 + slack) + 1e-9,
+            "{} step {n}: energy {e0} → {e1}",
+            S::NAME
+        );
+    }
+    assert!(
+        w.stats.budget_cuts > 100,
+        "{}: the budget cut only {} marble-steps",
+        S::NAME,
+        w.stats.budget_cuts
+    );
+    assert!(
+        w.stats.collisions > 10,
+        "{}: {} bounces",
+        S::NAME,
+        w.stats.collisions
+    );
+    // Four marbles at 8–48 pitch/s for 2 s: slowed by the cuts, they still
+    // travel far, not a few steps' worth.
+    println!(
+        "{}: {travelled} pitch, {} cuts, {} bounces",
+        S::NAME,
+        w.stats.budget_cuts,
+        w.stats.collisions
+    );
+    assert!(
+        travelled > 20.0,
+        "{}: the marbles travelled {travelled} pitch",
+        S::NAME
+    );
+}
+for_each_backend!(a_small_budget_keeps_every_rule, small_budget);
+
+fn scene(name: &str) -> StressScene {
+    *STRESS
+        .iter()
+        .find(|s| s.level.info.name == name)
+        .unwrap_or_else(|| panic!("no stress scene {name}"))
+}
+
+/// A scene as the boards play it.
+fn play(s: &StressScene) -> (Vec<u32>, u32, u64, bool) {
+    // Each frame's units of work, the cuts, the final hash, and whether every
+    // marble ended at rest, reporting zero velocity.
+    let mut session =
+        Session::<Fx>::new(s.level, Player::<19, 9, true, true>::CONFIG, SYNTHETIC_TILT)
+            .expect("scene sets up");
+    let mut work = Vec::new();
+    for frame in 0..s.frames {
+        let before = session.game_mut().world_mut().stats.work;
+        session.frame((s.tilt)(frame));
+        work.push(session.game_mut().world_mut().stats.work - before);
+    }
+    let w = session.game_mut().world_mut();
+    let cuts = w.stats.budget_cuts;
+    let asleep = w.marbles().iter().all(|m| m.asleep && m.vel == Vec3::ZERO);
+    (work, cuts, session.state_hash(), asleep)
+}
+
+/// A marble landing on another reaches the budget (it is what the budget is
+/// for: plain pair slices, dozens a step), and with it no frame spends more
+/// than the budget and the last round's work (a search per marble, a time of
+/// impact per pair, a pair slice); the pair, wedged between the rim of the hole
+/// and the marble below, still comes to rest and reports zero velocity; and the
+/// same scene gives the same frames and hash twice.
+#[test]
+fn a_landing_on_a_marble_is_cut_to_the_budget() {
+    let s = scene("drop-onto-marble");
+    let (work, cuts, hash, asleep) = play(&s);
+    assert!(cuts > 0, "the landing never reached the budget");
+    let worst = work.iter().copied().max().unwrap_or(0);
+    let m = s.level.info.starts().len() as u32;
+    assert!(
+        worst < FLIGHT_BUDGET + m + m * (m - 1) / 2 + 3,
+        "{worst} units of work in a frame (budget {FLIGHT_BUDGET})"
+    );
+    assert!(
+        asleep,
+        "the pair never came to rest, or reports a velocity at rest"
+    );
+    let (again, _, hash_again, _) = play(&s);
+    assert_eq!(
+        (work, hash),
+        (again, hash_again),
+        "the budget is not deterministic"
+    );
+}
+
+/// No built-in level reaches the budget when the autopilot plays it: the
+/// fallback is for scenes built to reach it, not for play.
+#[test]
+fn no_built_in_level_reaches_the_budget() {
+    for (index, level) in LEVELS.iter().enumerate() {
+        let mut player = Player::<19, 9, true, true>::new(&LEVELS, index, SYNTHETIC_TILT, true)
+            .expect("level sets up");
+        for _ in 0..1024 {
+            let reading = player.reading([0, 1000, 0]);
+            if player.session_mut().frame_in::<true>(reading) != Phase::Playing {
+                break;
+            }
+        }
+        let cuts = player
+            .session_mut()
+            .game_mut()
+            .world_mut()
+            .stats
+            .budget_cuts;
+        assert_eq!(cuts, 0, "{} reached the budget", level.info.name);
+    }
+}
