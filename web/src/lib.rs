@@ -60,7 +60,7 @@ use core::fmt::Write;
 
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::generate::{generate, MAX_TEXT_BYTES};
-use marble_rolling::game::ghost::{replay, Ghost, GhostWriter, Readings};
+use marble_rolling::game::ghost::{race_frame, replay, Ghost, GhostWriter, Readings};
 use marble_rolling::game::level::{
     parse, text as level_text, Cell, Level, LevelError, LevelErrorKind, LevelView, MAX_MARBLES,
 };
@@ -70,7 +70,7 @@ use marble_rolling::game::player::{Player, FRAME_HZ};
 use marble_rolling::game::rules::{Game, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::input::event::Tilt;
-use marble_rolling::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
+use marble_rolling::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_STOREYS, MAX_TILES_XZ};
 use marble_rolling::physics::world::World;
 use marble_rolling::physics::{Fx, TileIndex};
 use marble_rolling::render;
@@ -147,9 +147,16 @@ impl AnyPlayer {
 /// Occupancy words of the largest level the format allows: the editor's level
 /// is parsed into a grid of this size (as the host tools' run-time levels are).
 const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
-/// Bytes of level text the editor can hand over: a 127 × 127 grid with its
-/// line ends is 16 256, the header a few hundred more.
-const TEXT_CAPACITY: usize = 32 * 1024;
+/// Bytes of level text the editor can hand over: the largest grid the format
+/// takes (127 × 127 tiles on every storey, CRLF line ends, the `===` between
+/// storeys) and 4 KiB of header. Any longer text is no level: the page then
+/// hands over the lines that fit ([`TEXT_CUT`]).
+const TEXT_CAPACITY: usize = MAX_STOREYS * (MAX_TILES_XZ * (MAX_TILES_XZ + 2) + 5) + 4 * 1024;
+/// Set in the length given to [`check_level`] or [`play_level`] when the text
+/// was longer than [`TEXT_CAPACITY`]: the buffer holds its first lines, whose
+/// first error (a grid over 127 tiles says so on its first rows) is the one
+/// to show rather than the length alone.
+const TEXT_CUT: u32 = 1 << 31;
 /// Bytes of an answer (a name, an error message).
 const OUT_CAPACITY: usize = 1024;
 /// The editor's level, then the built-in ones (`next level` goes on there).
@@ -406,7 +413,7 @@ impl App {
         let session = self.player.session();
         self.recorder.observe(session);
         if let Some(ghost) = &mut self.ghost {
-            ghost.follow(session.game().frames());
+            ghost.follow(session.game());
         }
     }
 
@@ -519,12 +526,17 @@ struct GhostRun {
     /// Its time on the level clock, frames (measured by the replay that
     /// checked it).
     clock: u32,
+    /// Its frames before its clock started: it plays them at once and waits
+    /// there for the player's first tilt ([`race_frame`]).
+    idle: u32,
 }
 
 impl GhostRun {
-    /// Plays the ghost as far as frame `frames` of the live attempt (from its
-    /// start again if the live game started over), or to its end.
-    fn follow(&mut self, frames: u32) {
+    /// Plays the ghost as far as it goes beside the live attempt `live`
+    /// ([`race_frame`]: from the player's first tilt), from its start again if
+    /// the live game started over, or to its end.
+    fn follow(&mut self, live: &Game<'static, Fx>) {
+        let frames = race_frame(self.idle, live);
         if frames < self.session.game().frames() {
             // A restart keeps the calibration, the ghost's.
             self.session.restart();
@@ -674,7 +686,7 @@ unsafe fn install_custom(
 
 /// Why text from the page is not even a level to parse.
 enum TextError {
-    /// More than [`TEXT_CAPACITY`] bytes.
+    /// More than [`TEXT_CAPACITY`] bytes, and no error in the lines that fit.
     TooLong,
     /// The parser's error, or bytes that are not UTF-8 (the page's
     /// `TextEncoder` always sends UTF-8; a bug there is still only a message,
@@ -685,7 +697,11 @@ enum TextError {
 impl core::fmt::Display for TextError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            TextError::TooLong => write!(f, "1:1: longer than {TEXT_CAPACITY} bytes"),
+            TextError::TooLong => write!(
+                f,
+                "1:1: longer than {TEXT_CAPACITY} bytes, more than a level of \
+                 {MAX_TILES_XZ} × {MAX_TILES_XZ} tiles on {MAX_STOREYS} storeys takes"
+            ),
             // `line:column: message`, as `cargo sim -- --check` prints it after the file name.
             TextError::Level(error) => write!(f, "{error}"),
         }
@@ -705,9 +721,37 @@ fn text(len: u32) -> Result<&'static str, TextError> {
 
 /// The text as a valid level's source, or why it is not one.
 fn checked(len: u32) -> Result<&'static str, TextError> {
+    if len & TEXT_CUT != 0 {
+        return Err(cut_error(len & !TEXT_CUT));
+    }
     let source = text(len)?;
     parse::<MAX_WORDS>(source).map_err(TextError::Level)?;
     Ok(source)
+}
+
+/// Why a text longer than [`TEXT_CAPACITY`] is no level, from its first `len`
+/// bytes (whole lines): the parser's first error in them, unless it is one
+/// that more lines could have undone (no start or goal yet, a storey cut
+/// short), else its length.
+fn cut_error(len: u32) -> TextError {
+    let error = match text(len) {
+        Ok(prefix) => match parse::<MAX_WORDS>(prefix) {
+            Ok(_) => return TextError::TooLong,
+            Err(error) => error,
+        },
+        Err(TextError::Level(error)) => error,
+        Err(TextError::TooLong) => return TextError::TooLong,
+    };
+    match error.kind {
+        LevelErrorKind::MissingSeparator
+        | LevelErrorKind::EmptyGrid
+        | LevelErrorKind::StartCount
+        | LevelErrorKind::GoalCount
+        | LevelErrorKind::StoreyRows
+        | LevelErrorKind::EmptyStorey
+        | LevelErrorKind::NotUtf8 { .. } => TextError::TooLong,
+        _ => TextError::Level(error),
+    }
 }
 
 /// Writes the error (`line:column: message`) as the answer; its length.
@@ -876,6 +920,12 @@ pub extern "C" fn text_capacity() -> u32 {
     TEXT_CAPACITY as u32
 }
 
+/// The bit that marks a length as the first lines of a longer text ([`TEXT_CUT`]).
+#[no_mangle]
+pub extern "C" fn text_cut() -> u32 {
+    TEXT_CUT
+}
+
 /// Where answers are (see the module doc).
 #[no_mangle]
 pub extern "C" fn out_ptr() -> *const u8 {
@@ -883,7 +933,8 @@ pub extern "C" fn out_ptr() -> *const u8 {
 }
 
 /// Parses the `len` bytes of level text: 0 if it is a valid level, else the
-/// length of its `line:column: message` in the answer buffer.
+/// length of its `line:column: message` in the answer buffer. With
+/// [`TEXT_CUT`] set, they are the first lines of a text too long to hold.
 #[no_mangle]
 pub extern "C" fn check_level(len: u32) -> u32 {
     match checked(len) {
@@ -1371,8 +1422,9 @@ pub extern "C" fn load_ghost(len: u32) -> u32 {
             ghost,
             readings: ghost.readings(),
             clock: check.game().clock_frames(),
+            idle: check.game().frames() - check.game().clock_frames(),
         };
-        run.follow(app.player.game().frames());
+        run.follow(app.player.game());
         app.ghost = Some(run);
         0
     })
@@ -1391,14 +1443,26 @@ pub extern "C" fn ghost_active() -> u32 {
 }
 
 /// The ghost's recorded run: `what` 0 its frames, 1 its time on the level
-/// clock (frames); 0 without a ghost.
+/// clock (frames), 2 its frames before its clock started; 0 without a ghost.
 #[no_mangle]
 pub extern "C" fn ghost_record(what: u32) -> u32 {
     with_app(0, |app| {
         app.ghost.as_ref().map_or(0, |g| match what {
             0 => g.ghost.frames,
-            _ => g.clock,
+            1 => g.clock,
+            _ => g.idle,
         })
+    })
+}
+
+/// Frames on the ghost's level clock so far in this attempt (the player's,
+/// once the ghost races: both start at a first tilt).
+#[no_mangle]
+pub extern "C" fn ghost_clock_frames() -> u32 {
+    with_app(0, |app| {
+        app.ghost
+            .as_ref()
+            .map_or(0, |g| g.session.game().clock_frames())
     })
 }
 
@@ -1530,8 +1594,58 @@ mod tests {
                 let len = check_level(TEXT_CAPACITY as u32 + 1) as usize;
                 String::from_utf8(OUT.0.borrow().bytes[..len].to_vec()).unwrap()
             },
-            format!("1:1: longer than {TEXT_CAPACITY} bytes")
+            format!(
+                "1:1: longer than {TEXT_CAPACITY} bytes, more than a level of 127 × 127 tiles \
+                 on 4 storeys takes"
+            )
         );
+    }
+
+    /// A text too long for the buffer: the parser's first error in the lines
+    /// that fit (a grid wider than 127 tiles), else the length and why; the
+    /// largest level the format takes fits.
+    #[test]
+    fn a_text_too_long_names_its_first_error_or_the_largest_level() {
+        let _alone = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+        let cut = |text: &str| {
+            let fits = &text[..TEXT_CAPACITY];
+            let fits = &fits[..fits.rfind('\n').map_or(0, |n| n + 1)];
+            // SAFETY: one test at a time (SERIAL).
+            let buf: &mut [u8; TEXT_CAPACITY] = unsafe { &mut *TEXT.0.get() };
+            buf[..fits.len()].copy_from_slice(fits.as_bytes());
+            let len = check_level(fits.len() as u32 | TEXT_CUT) as usize;
+            String::from_utf8(OUT.0.borrow().bytes[..len].to_vec()).unwrap()
+        };
+        let grid = |nx: usize, nz: usize| {
+            let mut rows = vec![".".repeat(nx - 2); nz - 2];
+            rows[0].replace_range(0..1, "S");
+            rows[nz - 3].replace_range(nx - 3..nx - 2, "G");
+            let wall = "#".repeat(nx);
+            let mut text = format!("{wall}\n");
+            for row in rows {
+                text += &format!("#{row}#\n");
+            }
+            text + &wall + "\n"
+        };
+        let wide = format!("name: wide\n---\n{}", grid(401, 201));
+        assert!(wide.len() > TEXT_CAPACITY, "{} bytes", wide.len());
+        assert_eq!(cut(&wide), "3:1: grid larger than 127 tiles");
+        // No error in the lines that fit (the header has not even ended): the length, and why.
+        let padded = format!(
+            "name: padded\n{}---\n{}",
+            "\n".repeat(TEXT_CAPACITY),
+            grid(5, 5)
+        );
+        assert_eq!(
+            cut(&padded),
+            format!("1:1: longer than {TEXT_CAPACITY} bytes, more than a level of 127 × 127 tiles on 4 storeys takes")
+        );
+        let storey = grid(127, 127);
+        let largest =
+            format!("name: largest\n---\n{storey}===\n{storey}===\n{storey}===\n{storey}")
+                .replace('\n', "\r\n");
+        assert!(largest.len() <= TEXT_CAPACITY, "{} bytes", largest.len());
+        assert_eq!(checked_message(largest.as_bytes()), "");
     }
 
     /// The page's round trip, natively (with overflow checks): a generated
@@ -1568,13 +1682,34 @@ mod tests {
             load_ghost(bytes.len() as u32)
         };
         assert_eq!(load(&ghost), 0);
-        ticks(frames + 10, 0);
+        // Two seconds of looking at the maze: the ghost waits at its start
+        // (its own looking played, its clock at 0) for the player's first tilt.
+        let idle = ghost_record(2);
+        ticks(2 * FRAME_HZ, 0);
+        assert_eq!((phase(), clock_frames()), (0, 0));
+        assert_eq!(
+            (ghost_phase(), ghost_frames(), ghost_clock_frames()),
+            (0, idle, 0)
+        );
+        // Then a nudge starts the player's clock (the board levelled again at
+        // once: the marble soon stops, the clock runs on): the ghost races
+        // from there, clock for clock, to the record's end, frames and hash.
+        set_tilt(300, 0);
+        ticks(16, 1);
+        set_tilt(0, 0);
+        assert!(clock_frames() > 0);
+        for _ in 0..frames {
+            ticks(1, 1);
+            assert_eq!(phase(), 0);
+            if ghost_phase() != 0 {
+                break;
+            }
+            assert_eq!(ghost_clock_frames(), clock_frames());
+        }
         assert_eq!(
             (ghost_phase(), ghost_frames(), ghost_state_hash()),
             (1, frames, hash)
         );
-        // The player never tilted: its attempt still waits for the first roll.
-        assert_eq!((phase(), clock_frames()), (0, 0));
         let mut other = ghost.clone();
         let last = other.len() - 1;
         other[last] ^= 1;
