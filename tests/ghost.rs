@@ -359,13 +359,30 @@ fn ghost_file_keeps_the_best_run() {
     let frames = session.game().frames();
     let bytes = load(&dir, level, config, SYNTHETIC_TILT).expect("a valid ghost");
     assert_eq!(Ghost::parse(&bytes).unwrap().frames, frames);
-    // Replayed beside a new attempt: where the first run's marble was.
+    // Replayed beside a new attempt: where the first run's marble was, from
+    // the new attempt's first tilt (`race_frame`): it waits for one.
     let mut run = GhostRun::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
     assert_eq!(run.frames(), frames);
-    let start = run.at(0).unwrap();
-    let end = run.at(frames).unwrap();
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let start = run.at(fresh.game()).unwrap();
+    for _ in 0..256 {
+        fresh.frame(Tilt::FLAT.reading_mg());
+    }
+    assert_eq!(fresh.game().clock_frames(), 0);
+    assert_eq!(
+        run.at(fresh.game()),
+        Some(start),
+        "waits for the first tilt"
+    );
+    let end = run.at(session.game()).unwrap();
     assert_ne!(start, end);
-    assert_eq!(run.at(0), Some(start), "back to the start after a restart");
+    assert_eq!(
+        run.at(Session::<Fx>::new(level, config, SYNTHETIC_TILT)
+            .unwrap()
+            .game()),
+        Some(start),
+        "back to the start after a restart"
+    );
     // A slower win does not replace it.
     let mut slow = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(frames - 1));
     let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();

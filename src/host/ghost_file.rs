@@ -14,9 +14,9 @@ use std::string::{String, ToString};
 use std::vec;
 use std::vec::Vec;
 
-use crate::game::ghost::{replay, Ghost, GhostWriter, HEADER_BYTES};
+use crate::game::ghost::{race_frame, replay, Ghost, GhostWriter, HEADER_BYTES};
 use crate::game::level::LevelView;
-use crate::game::rules::{GameConfig, Phase};
+use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::Session;
 use crate::input::tilt::TiltConfig;
 use crate::physics::Fx;
@@ -140,6 +140,8 @@ impl GhostKeeper {
 pub struct GhostRun {
     session: Session<'static, Fx>,
     readings: Vec<[i32; 3]>,
+    /// Its frames before its clock started (see [`race_frame`]).
+    idle: u32,
 }
 
 impl GhostRun {
@@ -154,7 +156,18 @@ impl GhostRun {
         let readings = ghost.readings().collect::<Result<Vec<_>, _>>().ok()?;
         let mut session = Session::<Fx>::new(level, config, tilt).ok()?;
         session.tilt_mut().set_calibration(ghost.calibration);
-        Some(GhostRun { session, readings })
+        let mut check = session.clone();
+        for &r in &readings {
+            if check.frame(r) != Phase::Playing {
+                break;
+            }
+        }
+        let idle = check.game().frames() - check.game().clock_frames();
+        Some(GhostRun {
+            session,
+            readings,
+            idle,
+        })
     }
 
     /// Frames of the ghost's run.
@@ -162,10 +175,12 @@ impl GhostRun {
         self.readings.len() as u32
     }
 
-    /// Plays the ghost up to frame `frames` (from the start again if the live
-    /// game restarted), and returns its first marble's tile `(i, k)` and storey
-    /// while it is still in the maze.
-    pub fn at(&mut self, frames: u32) -> Option<(i32, i32, i32)> {
+    /// Plays the ghost as far as it goes beside the live attempt `live`
+    /// ([`race_frame`]: from the player's first tilt; from the start again if
+    /// the live game restarted), and returns its first marble's tile `(i, k)`
+    /// and storey while it is still in the maze.
+    pub fn at(&mut self, live: &Game<'_, Fx>) -> Option<(i32, i32, i32)> {
+        let frames = race_frame(self.idle, live);
         if frames < self.session.game().frames() {
             self.session.restart();
         }

@@ -393,8 +393,7 @@ impl Game {
             .iter()
             .find(|m| !m.out)
             .map(|m| layout.storey_of(m.pos.y));
-        let frames = game.frames();
-        if let Some((i, k, s)) = self.ghost.as_mut().and_then(|g| g.at(frames)) {
+        if let Some((i, k, s)) = self.ghost.as_mut().and_then(|g| g.at(game)) {
             let (x, y) = (i - vx, k - vz);
             if Some(s) == storey && (0..w as i32).contains(&x) && (0..h as i32).contains(&y) {
                 let p = &mut px[y as usize * w + x as usize];
