@@ -191,11 +191,15 @@ static OUT: Single<RefCell<Out>> = Single(RefCell::new(Out {
 }));
 /// The editor's level (see [`Custom`]).
 static CUSTOM: Single<UnsafeCell<Custom>> = Single(UnsafeCell::new(Custom {
-    text: [0; TEXT_CAPACITY],
     len: 0,
     level: None,
     list: None,
 }));
+/// The text of the editor's level, under [`Custom`]'s rule. A static of its
+/// own: all zeros, it takes no bytes of the module, where inside `Custom`
+/// (whose `None`s are not zeros) it would be data, byte for byte.
+static CUSTOM_TEXT: Single<UnsafeCell<[u8; TEXT_CAPACITY]>> =
+    Single(UnsafeCell::new([0; TEXT_CAPACITY]));
 /// The game, set up by [`init`].
 static APP: Single<RefCell<Option<App>>> = Single(RefCell::new(None));
 /// Where the page writes a stored ghost for [`load_ghost`].
@@ -211,15 +215,14 @@ static RECORD: Single<UnsafeCell<[u8; GHOST_CAPACITY]>> =
 
 /// The level the editor started, kept where the player can borrow it for as
 /// long as it plays it: the player takes `'static` levels (the firmware's are
-/// in flash). Its text is copied here from [`TEXT`], so that editing does not
-/// change the level in play (its name borrows the text).
+/// in flash). Its text is copied from [`TEXT`] into [`CUSTOM_TEXT`], so that
+/// editing does not change the level in play (its name borrows the text).
 ///
 /// It is rewritten only by [`install_custom`], and only after the player that
 /// borrowed the previous one has been replaced by one on a built-in level:
 /// no reference into it is alive while it changes.
 struct Custom {
-    text: [u8; TEXT_CAPACITY],
-    /// Bytes of `text` in use.
+    /// Bytes of [`CUSTOM_TEXT`] in use.
     len: usize,
     level: Option<Level<'static, MAX_WORDS>>,
     list: Option<[LevelView<'static>; CUSTOM_LIST]>,
@@ -641,13 +644,13 @@ fn with_app<R>(default: R, f: impl FnOnce(&mut App) -> R) -> R {
     }
 }
 
-/// Puts `text` in [`CUSTOM`] and returns the list it heads: with the built-in
-/// levels after it, or `alone`.
+/// Puts `text` in [`CUSTOM_TEXT`], its level in [`CUSTOM`], and returns the
+/// list it heads: with the built-in levels after it, or `alone`.
 ///
 /// # Safety
 ///
-/// No reference into [`CUSTOM`] may be alive: the player must be on a built-in
-/// level (see [`Custom`]).
+/// No reference into [`CUSTOM`] or [`CUSTOM_TEXT`] may be alive: the player
+/// must be on a built-in level (see [`Custom`]).
 unsafe fn install_custom(
     text: &str,
     alone: bool,
@@ -655,12 +658,9 @@ unsafe fn install_custom(
     // SAFETY: the caller guarantees nothing borrows CUSTOM; from here on the
     // level and list borrow it for as long as the next player plays them, and
     // the next install replaces that player first.
-    let Custom {
-        text: stored,
-        len,
-        level,
-        list,
-    }: &'static mut Custom = unsafe { &mut *CUSTOM.0.get() };
+    let Custom { len, level, list }: &'static mut Custom = unsafe { &mut *CUSTOM.0.get() };
+    // SAFETY: as CUSTOM: the level just dropped was the only borrower.
+    let stored: &'static mut [u8; TEXT_CAPACITY] = unsafe { &mut *CUSTOM_TEXT.0.get() };
     *level = None;
     *list = None;
     *len = 0;
@@ -1312,7 +1312,7 @@ pub extern "C" fn play_generated(seed: u32, size: u32, storeys: u32, difficulty:
 #[no_mangle]
 pub extern "C" fn source_text_ptr() -> *const u8 {
     // SAFETY: only the address is taken; the page reads it between calls.
-    unsafe { (*CUSTOM.0.get()).text.as_ptr() }
+    unsafe { (*CUSTOM_TEXT.0.get()).as_ptr() }
 }
 
 /// Bytes at [`source_text_ptr`].
@@ -1638,7 +1638,10 @@ mod tests {
         );
         assert_eq!(
             cut(&padded),
-            format!("1:1: longer than {TEXT_CAPACITY} bytes, more than a level of 127 × 127 tiles on 4 storeys takes")
+            format!(
+                "1:1: longer than {TEXT_CAPACITY} bytes, more than a level of 127 × 127 tiles \
+                 on 4 storeys takes"
+            )
         );
         let storey = grid(127, 127);
         let largest =
