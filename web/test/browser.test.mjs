@@ -5,20 +5,25 @@
 // `cargo xtask web --port 0` itself.
 //
 // It checks: the page loads gzipped, with event stepping, and the wasm game
-// runs; arrow keys, WASD, the mouse joystick and the phone's orientation roll
+// runs; one line says what the goal is and the goal is drawn in its green;
+// arrow keys, WASD, the mouse joystick and the phone's orientation roll
 // the marble the right way; the clock waits for the first roll; a won level's
-// best time lands in localStorage and its message names the level, as a fall's
-// and a time-up's do; a key, the mouse or a finger held through a win does not
+// best time lands in localStorage and in the panel at once, and its message
+// names the level, as a fall's and a time-up's do (an untouched one says so);
+// a key, the mouse or a finger held through a win does not
 // tilt the next level; on both steppings the autopilot ends every built-in
 // level with the state hash `cargo sim -- --level NAME --autopilot --json
 // --stepping STEPPING` prints (computed here, at test time), the tile drawn
 // under every marble in every frame of those runs is never a wall (the storey
 // check), and each win's ghost replays beside the next attempt to its hash; a
 // broken level pasted in the editor shows the parser's line:column message,
-// the same as `cargo sim -- --check`; a generated maze has `cargo sim --
+// the same as `cargo sim -- --check` (a bad tile, a negative time limit, grids
+// of 200 and 400 tiles a side); a generated maze has `cargo sim --
 // --generate SEED --print-level`'s text and the autopilot wins it with cargo
-// sim's hash, the URL's seed plays it, "New maze" puts a new seed in the URL,
-// and its ghost is drawn dimmer and replays to the record's hash; it writes
+// sim's hash, the URL's seed plays it, "New maze", `n` and "Next level" put a
+// new seed in the URL, `?storeys=9` without a seed is refused with why, and its
+// ghost is drawn dimmer and replays to the record's hash; a ghost waits for
+// the player's first tilt and races on the player's clock; it writes
 // screenshots (two-floors after the drop, a ghost, a phone's viewport) and
 // measures the per-frame cost with performance.now(), with a ghost too.
 
