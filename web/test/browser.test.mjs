@@ -43,7 +43,7 @@ const DROP_SHOT = join(dirname(SCREENSHOT), 'two-floors-drop.png');
 const PHONE_SHOT = join(dirname(SCREENSHOT), 'phone.png');
 // The steppings the page can run, the default first.
 const STEPPINGS = ['events', 'fixed'];
-// Tile kinds in the page's draw list (web/src/lib.rs, tile_kind).
+// Tile kinds in the page's draw list (web/src/page_state.rs, tile_kind).
 const KIND_NAMES = ['floor', 'wall', 'hole', 'goal', 'start', 'outside'];
 // Chromium as the machine's closed network needs it: no background
 // connections (they are refused, many at a time), no GPU, no sandbox (root).
