@@ -465,7 +465,7 @@ async function main() {
         window.marbleTest.steps(60 * 128, true);
         return { finished: window.marbleTest.finished(), message: window.marbleTest.status() };
       });
-      const expected = "timed: time's up, not tilted in 1 s (the clock starts at the first tilt), again";
+      const expected = "timed: time's up, the marble did not roll in 1 s (the clock starts when it does), again";
       check(untouched.finished.phase === 'timeout' && untouched.finished.clock === 0
         && untouched.finished.frames === 128 && untouched.message === expected,
       `time up on a level nobody tilted says so: "${untouched.message}"`, JSON.stringify(untouched));

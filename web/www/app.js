@@ -317,10 +317,10 @@ function finished() {
   } else if (phase === 2) {
     status(`${name}: fell into a hole after ${time}, again`);
   } else if (clock === 0) {
-    // Untouched for its whole limit: the clock (which starts at the first
-    // tilt) never ran, so it is the wait that is worth saying.
+    // The marble never rolled (nobody tilted, or not enough to roll it): the
+    // clock, which starts when it does, never ran, so the wait is what to say.
     const waited = `${(w.finished_frames() / hz).toFixed(0)} s`;
-    status(`${name}: time's up, not tilted in ${waited} (the clock starts at the first tilt), again`);
+    status(`${name}: time's up, the marble did not roll in ${waited} (the clock starts when it does), again`);
   } else {
     status(`${name}: time's up after ${time}, again`);
   }
