@@ -157,11 +157,7 @@ impl GhostRun {
         let mut session = Session::<Fx>::new(level, config, tilt).ok()?;
         session.tilt_mut().set_calibration(ghost.calibration);
         let mut check = session.clone();
-        for &r in &readings {
-            if check.frame(r) != Phase::Playing {
-                break;
-            }
-        }
+        replay(&mut check, &ghost).ok()?;
         let idle = check.game().frames() - check.game().clock_frames();
         Some(GhostRun {
             session,
