@@ -383,14 +383,39 @@ fn ghost_file_keeps_the_best_run() {
         Some(start),
         "back to the start after a restart"
     );
-    // A slower win does not replace it.
-    let mut slow = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(frames - 1));
+    let clock = session.game().clock_frames();
+    assert_eq!(run.clock(), clock);
+    // A slower win on the clock does not replace it.
+    let mut slow = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(clock - 1));
     let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let mut ap = Autopilot::new(&level);
     while session.game().phase() == Phase::Playing {
         session.autopilot_frame(&mut ap);
         assert_eq!(slow.observe(&session), Ok(None));
     }
+    // A faster one on the clock does, though it looked at the maze for 300
+    // frames first and took more frames in all.
+    let mut faster = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(clock + 1));
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut ap = Autopilot::new(&level);
+    let mut kept = None;
+    while session.game().phase() == Phase::Playing {
+        if session.game().frames() < 300 {
+            session.frame(Tilt::FLAT.reading_mg());
+        } else {
+            session.autopilot_frame(&mut ap);
+        }
+        kept = kept.or(faster.observe(&session).unwrap());
+    }
+    assert!(session.game().frames() > frames + 299);
+    assert_eq!(session.game().clock_frames(), clock);
+    assert_eq!(kept, Some(path.clone()));
+    let bytes = load(&dir, level, config, SYNTHETIC_TILT).expect("the faster ghost");
+    let run = GhostRun::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
+    assert_eq!(
+        (run.frames(), run.clock()),
+        (session.game().frames(), clock)
+    );
     // The same file for another level's grid: stale, ignored.
     std::fs::copy(&path, path_for(&dir, LEVELS[0].info.name)).unwrap();
     assert_eq!(load(&dir, LEVELS[0], config, SYNTHETIC_TILT), None);

@@ -64,14 +64,15 @@ pub struct GhostKeeper {
     readings: Vec<[i32; 3]>,
     /// The readings are the attempt's from its first frame (none missed).
     whole: bool,
-    /// Frames of the stored ghost's win.
+    /// Frames on the level clock of the stored ghost's win (a run is as fast
+    /// as its clock says: looking at the maze first costs nothing).
     best: Option<u32>,
     saved: bool,
 }
 
 impl GhostKeeper {
     /// A keeper for `level` (played with `tilt`), whose stored ghost (if any)
-    /// took `best` frames.
+    /// took `best` frames on the level clock.
     pub fn new(dir: &Path, level: &'static str, tilt: TiltConfig, best: Option<u32>) -> Self {
         GhostKeeper {
             dir: dir.to_path_buf(),
@@ -108,7 +109,8 @@ impl GhostKeeper {
             self.whole = false;
         }
         let won = game.phase() == Phase::Won && frames == self.readings.len();
-        if !won || !self.whole || self.saved || self.best.is_some_and(|b| b as usize <= frames) {
+        let clock = game.clock_frames();
+        if !won || !self.whole || self.saved || self.best.is_some_and(|b| b <= clock) {
             return Ok(None);
         }
         self.saved = true;
@@ -130,7 +132,7 @@ impl GhostKeeper {
         fs::create_dir_all(&self.dir)
             .and_then(|()| fs::write(&path, bytes))
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        self.best = Some(frames as u32);
+        self.best = Some(clock);
         Ok(Some(path))
     }
 }
@@ -169,6 +171,11 @@ impl GhostRun {
     /// Frames of the ghost's run.
     pub fn frames(&self) -> u32 {
         self.readings.len() as u32
+    }
+
+    /// Frames of the ghost's run on the level clock: its time.
+    pub fn clock(&self) -> u32 {
+        self.frames() - self.idle
     }
 
     /// Plays the ghost as far as it goes beside the live attempt `live`

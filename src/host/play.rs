@@ -279,7 +279,7 @@ impl Game {
             self.ghost = stored
                 .as_deref()
                 .and_then(|b| GhostRun::new(b, level, config, tilt));
-            let best = self.ghost.as_ref().map(GhostRun::frames);
+            let best = self.ghost.as_ref().map(GhostRun::clock);
             self.keeper = GhostKeeper::new(&self.ghosts, level.info.name, tilt, best);
             self.ghost_level = Some(index);
             self.ghost_note = match best {
