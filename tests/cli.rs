@@ -872,6 +872,25 @@ fn out_of_range_names_the_range() {
     assert_eq!(stderr(&o), format!("sim: error: {want}\n"));
 }
 
+/// A negative value is refused with the key's range, at the sign, by
+/// `--check` (the page's editor shows the same words after the line and column).
+#[test]
+fn a_negative_value_names_the_range() {
+    let p = scratch(
+        "negative.level",
+        "name: negative\ntime_limit_s: -1\n---\n#####\n#S.G#\n#####\n",
+    );
+    let o = sim(&["--check", s(&p)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "{}:2:15: value out of range: time_limit_s is 1 ..= 3600\n",
+            s(&p)
+        )
+    );
+}
+
 /// `effects: none` slides 7/5 as far as `effects: rolling` in the same time
 /// under the same tilt (a marble that rolls turns 2/7 of the pull into spin).
 /// With events: fixed steps cap the speed at r/4 per step (875 mm/s at 1024

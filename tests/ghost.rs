@@ -4,11 +4,14 @@
 
 use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::generate::generate;
-use marble_rolling::game::ghost::{replay, Ghost, GhostError, GhostWriter, HEADER_BYTES};
+use marble_rolling::game::ghost::{
+    race_frame, replay, Ghost, GhostError, GhostWriter, HEADER_BYTES,
+};
 use marble_rolling::game::level::{parse, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{GameConfig, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::input::event::Tilt;
 use marble_rolling::input::sensor::Calibration;
 use proptest::prelude::*;
 
@@ -78,6 +81,93 @@ fn ghost_replays_a_generated_maze() {
     let text = generate(9, 6, 3, 5).unwrap().to_string();
     let level = parse::<512>(&text).unwrap();
     ghost_replays(level.view(), GameConfig::EVENTS);
+}
+
+/// The ghost races from the player's first tilt (`race_frame`), not from the
+/// level's start: the kept run looked at the maze for 300 frames before the
+/// autopilot took over, the live attempt for 40. Until the live clock starts
+/// the ghost waits at its start (its own looking played), its clock at 0;
+/// from then on both clocks agree and the ghost's marble is where the live
+/// one is at every frame (the same autopilot after the same still board), up
+/// to the same win.
+#[test]
+fn ghost_races_from_the_first_tilt() {
+    let level = LEVELS[1];
+    let config = GameConfig::EVENTS;
+    let flat = Tilt::FLAT.reading_mg();
+    // A player who looks at the maze for `looking` frames, then lets the autopilot play.
+    let player = |looking: u32| {
+        let mut autopilot = Autopilot::new(&level);
+        move |session: &Session<'_, Fx>| {
+            if session.game().frames() < looking {
+                flat
+            } else {
+                autopilot.reading_mg(session.game())
+            }
+        }
+    };
+    let mut check = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut kept = Vec::new();
+    let mut keeper = player(300);
+    while check.game().phase() == Phase::Playing {
+        let r = keeper(&check);
+        kept.push(r);
+        check.frame(r);
+    }
+    assert_eq!(check.game().phase(), Phase::Won);
+    let idle = check.game().frames() - check.game().clock_frames();
+    assert!(
+        idle >= 300,
+        "{idle} frames before the kept run's clock started"
+    );
+    let bytes = encode(&kept, check.state_hash());
+    let ghost = Ghost::parse(&bytes).unwrap();
+    let mut ghost_session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let start = ghost_session.game().world().marbles()[0].pos;
+    let mut ghost_readings = ghost.readings();
+    let mut live = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut you = player(40);
+    let mut waited = 0;
+    while live.game().phase() == Phase::Playing {
+        let r = you(&live);
+        live.frame(r);
+        let target = race_frame(idle, live.game());
+        while ghost_session.game().frames() < target {
+            ghost_session.frame(ghost_readings.next().unwrap().unwrap());
+        }
+        let (g, l) = (ghost_session.game(), live.game());
+        assert_eq!(
+            g.clock_frames(),
+            l.clock_frames(),
+            "live frame {}",
+            l.frames()
+        );
+        if l.clock_frames() == 0 {
+            waited += 1;
+            assert_eq!(g.frames(), idle);
+            // Its last idle frames may creep (slower than the clock's
+            // threshold), never roll: within a thousandth of a pitch.
+            let pos = g.world().marbles()[0].pos;
+            let off = [pos.x - start.x, pos.y - start.y, pos.z - start.z];
+            assert!(
+                off.iter().all(|d| d.abs().to_num::<f64>() < 1e-3),
+                "live frame {}: the ghost is {off:?} from its start",
+                l.frames()
+            );
+        } else {
+            assert_eq!(
+                g.world().marbles()[0].pos,
+                l.world().marbles()[0].pos,
+                "live frame {}",
+                l.frames()
+            );
+        }
+    }
+    assert!(waited >= 40, "the ghost waited {waited} frames");
+    assert_eq!(live.game().phase(), Phase::Won);
+    assert_eq!(ghost_session.game().phase(), Phase::Won);
+    assert_eq!(ghost_session.game().frames(), kept.len() as u32);
+    assert_eq!(ghost_session.state_hash(), ghost.state_hash);
 }
 
 #[test]
@@ -269,21 +359,63 @@ fn ghost_file_keeps_the_best_run() {
     let frames = session.game().frames();
     let bytes = load(&dir, level, config, SYNTHETIC_TILT).expect("a valid ghost");
     assert_eq!(Ghost::parse(&bytes).unwrap().frames, frames);
-    // Replayed beside a new attempt: where the first run's marble was.
+    // Replayed beside a new attempt: where the first run's marble was, from
+    // the new attempt's first tilt (`race_frame`): it waits for one.
     let mut run = GhostRun::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
     assert_eq!(run.frames(), frames);
-    let start = run.at(0).unwrap();
-    let end = run.at(frames).unwrap();
+    let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let start = run.at(fresh.game()).unwrap();
+    for _ in 0..256 {
+        fresh.frame(Tilt::FLAT.reading_mg());
+    }
+    assert_eq!(fresh.game().clock_frames(), 0);
+    assert_eq!(
+        run.at(fresh.game()),
+        Some(start),
+        "waits for the first tilt"
+    );
+    let end = run.at(session.game()).unwrap();
     assert_ne!(start, end);
-    assert_eq!(run.at(0), Some(start), "back to the start after a restart");
-    // A slower win does not replace it.
-    let mut slow = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(frames - 1));
+    assert_eq!(
+        run.at(Session::<Fx>::new(level, config, SYNTHETIC_TILT)
+            .unwrap()
+            .game()),
+        Some(start),
+        "back to the start after a restart"
+    );
+    let clock = session.game().clock_frames();
+    assert_eq!(run.clock(), clock);
+    // A slower win on the clock does not replace it.
+    let mut slow = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(clock - 1));
     let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let mut ap = Autopilot::new(&level);
     while session.game().phase() == Phase::Playing {
         session.autopilot_frame(&mut ap);
         assert_eq!(slow.observe(&session), Ok(None));
     }
+    // A faster one on the clock does, though it looked at the maze for 300
+    // frames first and took more frames in all.
+    let mut faster = GhostKeeper::new(&dir, name, SYNTHETIC_TILT, Some(clock + 1));
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
+    let mut ap = Autopilot::new(&level);
+    let mut kept = None;
+    while session.game().phase() == Phase::Playing {
+        if session.game().frames() < 300 {
+            session.frame(Tilt::FLAT.reading_mg());
+        } else {
+            session.autopilot_frame(&mut ap);
+        }
+        kept = kept.or(faster.observe(&session).unwrap());
+    }
+    assert!(session.game().frames() > frames + 299);
+    assert_eq!(session.game().clock_frames(), clock);
+    assert_eq!(kept, Some(path.clone()));
+    let bytes = load(&dir, level, config, SYNTHETIC_TILT).expect("the faster ghost");
+    let run = GhostRun::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
+    assert_eq!(
+        (run.frames(), run.clock()),
+        (session.game().frames(), clock)
+    );
     // The same file for another level's grid: stale, ignored.
     std::fs::copy(&path, path_for(&dir, LEVELS[0].info.name)).unwrap();
     assert_eq!(load(&dir, LEVELS[0], config, SYNTHETIC_TILT), None);

@@ -693,6 +693,43 @@ fn out_of_range_names_the_range() {
     );
 }
 
+/// A minus sign makes a number below every key's range: the message gives
+/// the range at the sign (`time_limit_s: -1` once said "not a number"). A sign
+/// with no number after it is still not a number; `-0` is 0.
+#[test]
+fn a_negative_value_is_out_of_range_with_the_range() {
+    for key in NumberKey::ALL {
+        let name = key.name();
+        let header = format!("{name}: -1\n");
+        let e = error_at(&with_header(&header));
+        let column = name.len() as u32 + 3;
+        assert_eq!(
+            (e.line, e.column, e.kind),
+            (1, column, LevelErrorKind::OutOfRange { key }),
+            "{header}"
+        );
+        assert_eq!(
+            e.to_string(),
+            format!("1:{column}: value out of range: {}", key.range_text())
+        );
+    }
+    assert_eq!(
+        error_at(&with_header("time_limit_s: -1\n")).to_string(),
+        "1:15: value out of range: time_limit_s is 1 ..= 3600"
+    );
+    for value in ["-", "--1", "-abc", "- 1", "1-"] {
+        let e = error_at(&with_header(&format!("time_limit_s: {value}\n")));
+        assert_eq!(
+            (e.line, e.column, e.kind),
+            (1, 15, LevelErrorKind::BadNumber),
+            "{value}"
+        );
+    }
+    let source = with_header("restitution: -0\n");
+    let zero = parse::<W>(&source).expect("-0 is 0");
+    assert_eq!(zero.info.spec.restitution_milli, 0);
+}
+
 #[test]
 fn bytes_that_are_not_utf8_are_an_error_at_their_line_and_column() {
     let ok = "name: x\n---\n#####\n#S.G#\n#####\n";

@@ -37,6 +37,16 @@
 //! * **Run lengths**: keys and the autopilot hold a tilt for many frames (a held
 //!   key repeats the same reading), and a run of any length costs a varint.
 //!
+//! # Racing from the first tilt
+//!
+//! A ghost races the player on the level clock (`rules`), which starts at the
+//! first tilt that rolls a marble: the ghost's own frames before its clock
+//! started (its looking at the maze) are played at once and it waits there,
+//! at its start, until the player's clock starts; then one ghost frame per
+//! frame on the player's clock ([`race_frame`]). A ghost that followed the
+//! frames since the level loaded would be at the goal before a player who
+//! looked for two seconds had touched anything.
+//!
 //! The autopilot's runs of the built-in levels take 188 to 279 bytes per second
 //! of run (header included), against 768 for three `i16` a frame; with a
 //! sensor's noise (±4 mg on every axis, every frame) `corner` takes 489 (`cargo test --features tools
@@ -45,7 +55,7 @@
 use crate::input::sensor::Calibration;
 use crate::physics::Scalar;
 
-use super::rules::Phase;
+use super::rules::{Game, Phase};
 use super::session::Session;
 
 /// Bytes before the tokens.
@@ -355,4 +365,13 @@ pub fn replay<S: Scalar>(
         phase = session.frame(r?);
     }
     Ok((phase, session.state_hash() == ghost.state_hash))
+}
+
+/// How many frames of a ghost's run to have played beside `live`, an attempt
+/// at the same level (see the module doc): its `idle` frames, those before its
+/// own clock started ([`Game::frames`] − [`Game::clock_frames`] at the end of
+/// its replay), then as many as `live` has on its clock. Fewer than the ghost
+/// has played means that `live` started over: replay from the start.
+pub fn race_frame<S: Scalar>(idle: u32, live: &Game<'_, S>) -> u32 {
+    idle.saturating_add(live.clock_frames())
 }

@@ -14,9 +14,9 @@ use std::string::{String, ToString};
 use std::vec;
 use std::vec::Vec;
 
-use crate::game::ghost::{replay, Ghost, GhostWriter, HEADER_BYTES};
+use crate::game::ghost::{race_frame, replay, Ghost, GhostWriter, HEADER_BYTES};
 use crate::game::level::LevelView;
-use crate::game::rules::{GameConfig, Phase};
+use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::Session;
 use crate::input::tilt::TiltConfig;
 use crate::physics::Fx;
@@ -64,14 +64,15 @@ pub struct GhostKeeper {
     readings: Vec<[i32; 3]>,
     /// The readings are the attempt's from its first frame (none missed).
     whole: bool,
-    /// Frames of the stored ghost's win.
+    /// Frames on the level clock of the stored ghost's win (a run is as fast
+    /// as its clock says: looking at the maze first costs nothing).
     best: Option<u32>,
     saved: bool,
 }
 
 impl GhostKeeper {
     /// A keeper for `level` (played with `tilt`), whose stored ghost (if any)
-    /// took `best` frames.
+    /// took `best` frames on the level clock.
     pub fn new(dir: &Path, level: &'static str, tilt: TiltConfig, best: Option<u32>) -> Self {
         GhostKeeper {
             dir: dir.to_path_buf(),
@@ -108,7 +109,8 @@ impl GhostKeeper {
             self.whole = false;
         }
         let won = game.phase() == Phase::Won && frames == self.readings.len();
-        if !won || !self.whole || self.saved || self.best.is_some_and(|b| b as usize <= frames) {
+        let clock = game.clock_frames();
+        if !won || !self.whole || self.saved || self.best.is_some_and(|b| b <= clock) {
             return Ok(None);
         }
         self.saved = true;
@@ -130,7 +132,7 @@ impl GhostKeeper {
         fs::create_dir_all(&self.dir)
             .and_then(|()| fs::write(&path, bytes))
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        self.best = Some(frames as u32);
+        self.best = Some(clock);
         Ok(Some(path))
     }
 }
@@ -140,6 +142,8 @@ impl GhostKeeper {
 pub struct GhostRun {
     session: Session<'static, Fx>,
     readings: Vec<[i32; 3]>,
+    /// Its frames before its clock started (see [`race_frame`]).
+    idle: u32,
 }
 
 impl GhostRun {
@@ -154,7 +158,14 @@ impl GhostRun {
         let readings = ghost.readings().collect::<Result<Vec<_>, _>>().ok()?;
         let mut session = Session::<Fx>::new(level, config, tilt).ok()?;
         session.tilt_mut().set_calibration(ghost.calibration);
-        Some(GhostRun { session, readings })
+        let mut check = session.clone();
+        replay(&mut check, &ghost).ok()?;
+        let idle = check.game().frames() - check.game().clock_frames();
+        Some(GhostRun {
+            session,
+            readings,
+            idle,
+        })
     }
 
     /// Frames of the ghost's run.
@@ -162,10 +173,17 @@ impl GhostRun {
         self.readings.len() as u32
     }
 
-    /// Plays the ghost up to frame `frames` (from the start again if the live
-    /// game restarted), and returns its first marble's tile `(i, k)` and storey
-    /// while it is still in the maze.
-    pub fn at(&mut self, frames: u32) -> Option<(i32, i32, i32)> {
+    /// Frames of the ghost's run on the level clock: its time.
+    pub fn clock(&self) -> u32 {
+        self.frames() - self.idle
+    }
+
+    /// Plays the ghost as far as it goes beside the live attempt `live`
+    /// ([`race_frame`]: from the player's first tilt; from the start again if
+    /// the live game restarted), and returns its first marble's tile `(i, k)`
+    /// and storey while it is still in the maze.
+    pub fn at(&mut self, live: &Game<'_, Fx>) -> Option<(i32, i32, i32)> {
+        let frames = race_frame(self.idle, live);
         if frames < self.session.game().frames() {
             self.session.restart();
         }

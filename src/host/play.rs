@@ -279,7 +279,7 @@ impl Game {
             self.ghost = stored
                 .as_deref()
                 .and_then(|b| GhostRun::new(b, level, config, tilt));
-            let best = self.ghost.as_ref().map(GhostRun::frames);
+            let best = self.ghost.as_ref().map(GhostRun::clock);
             self.keeper = GhostKeeper::new(&self.ghosts, level.info.name, tilt, best);
             self.ghost_level = Some(index);
             self.ghost_note = match best {
@@ -393,8 +393,7 @@ impl Game {
             .iter()
             .find(|m| !m.out)
             .map(|m| layout.storey_of(m.pos.y));
-        let frames = game.frames();
-        if let Some((i, k, s)) = self.ghost.as_mut().and_then(|g| g.at(frames)) {
+        if let Some((i, k, s)) = self.ghost.as_mut().and_then(|g| g.at(game)) {
             let (x, y) = (i - vx, k - vz);
             if Some(s) == storey && (0..w as i32).contains(&x) && (0..h as i32).contains(&y) {
                 let p = &mut px[y as usize * w + x as usize];

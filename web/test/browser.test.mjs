@@ -5,20 +5,25 @@
 // `cargo xtask web --port 0` itself.
 //
 // It checks: the page loads gzipped, with event stepping, and the wasm game
-// runs; arrow keys, WASD, the mouse joystick and the phone's orientation roll
+// runs; one line says what the goal is and the goal is drawn in its green;
+// arrow keys, WASD, the mouse joystick and the phone's orientation roll
 // the marble the right way; the clock waits for the first roll; a won level's
-// best time lands in localStorage and its message names the level, as a fall's
-// and a time-up's do; a key, the mouse or a finger held through a win does not
+// best time lands in localStorage and in the panel at once, and its message
+// names the level, as a fall's and a time-up's do (an untouched one says so);
+// a key, the mouse or a finger held through a win does not
 // tilt the next level; on both steppings the autopilot ends every built-in
 // level with the state hash `cargo sim -- --level NAME --autopilot --json
 // --stepping STEPPING` prints (computed here, at test time), the tile drawn
 // under every marble in every frame of those runs is never a wall (the storey
 // check), and each win's ghost replays beside the next attempt to its hash; a
 // broken level pasted in the editor shows the parser's line:column message,
-// the same as `cargo sim -- --check`; a generated maze has `cargo sim --
+// the same as `cargo sim -- --check` (a bad tile, a negative time limit, grids
+// of 200 and 400 tiles a side); a generated maze has `cargo sim --
 // --generate SEED --print-level`'s text and the autopilot wins it with cargo
-// sim's hash, the URL's seed plays it, "New maze" puts a new seed in the URL,
-// and its ghost is drawn dimmer and replays to the record's hash; it writes
+// sim's hash, the URL's seed plays it, "New maze", `n` and "Next level" put a
+// new seed in the URL, `?storeys=9` without a seed is refused with why, and its
+// ghost is drawn dimmer and replays to the record's hash; a ghost waits for
+// the player's first tilt and races on the player's clock; it writes
 // screenshots (two-floors after the drop, a ghost, a phone's viewport) and
 // measures the per-frame cost with performance.now(), with a ghost too.
 
@@ -38,7 +43,7 @@ const DROP_SHOT = join(dirname(SCREENSHOT), 'two-floors-drop.png');
 const PHONE_SHOT = join(dirname(SCREENSHOT), 'phone.png');
 // The steppings the page can run, the default first.
 const STEPPINGS = ['events', 'fixed'];
-// Tile kinds in the page's draw list (web/src/lib.rs, tile_kind).
+// Tile kinds in the page's draw list (web/src/page_state.rs, tile_kind).
 const KIND_NAMES = ['floor', 'wall', 'hole', 'goal', 'start', 'outside'];
 // Chromium as the machine's closed network needs it: no background
 // connections (they are refused, many at a time), no GPU, no sandbox (root).
@@ -112,6 +117,23 @@ const BROKEN = `name: broken
 #SxG#
 #####
 `;
+
+// A time limit below its range: the message gives the range, not "not a number".
+const NEGATIVE = `name: negative
+time_limit_s: -1
+---
+#####
+#S.G#
+#####
+`;
+// An open room `n` tiles a side, over the format's 127: 200 fits the page's
+// text buffer, 400 does not (the page hands over the lines that fit).
+function room(n) {
+  const wall = '#'.repeat(n);
+  const inner = (k) => `#${k === 1 ? 'S' : '.'}${'.'.repeat(n - 5)}${k === n - 2 ? 'G' : '.'}#`;
+  const rows = Array.from({ length: n - 2 }, (_, k) => inner(k + 1));
+  return `name: room-${n}\n---\n${wall}\n${rows.join('\n')}\n${wall}\n`;
+}
 
 let passed = 0;
 let failed = 0;
@@ -205,6 +227,25 @@ async function main() {
       `the wasm is served gzipped: ${served?.encoded} bytes for ${served?.decoded}`, JSON.stringify(served));
     console.log(`wasm: ${served?.decoded} bytes, ${served?.encoded} bytes gzipped as served`);
     check(await page.isHidden('#editor'), 'the editor waits behind its button');
+    // One line says what the goal is, in the first screen, and the goal tile
+    // is drawn in the green it names (its swatch is that colour).
+    {
+      const goal = page.locator('#goal');
+      const text = (await goal.textContent()).replace(/\s+/g, ' ').trim();
+      const box = await goal.boundingBox();
+      const seen = await page.evaluate(() => {
+        window.marbleTest.draw();
+        const swatch = getComputedStyle(document.querySelector('#goal .swatch')).backgroundColor;
+        return { pixel: window.marbleTest.tilePixel(3), swatch, height: window.innerHeight };
+      });
+      const { pixel } = seen;
+      check(/green square/.test(text) && /holes/.test(text) && await goal.isVisible()
+        && box.y + box.height <= seen.height
+        && pixel && pixel.g > pixel.r + 60 && pixel.g > pixel.b + 60
+        && seen.swatch === `rgb(${pixel.r}, ${pixel.g}, ${pixel.b})`,
+      `one line in the first screen says what the goal is: "${text}"; the goal tile is drawn in that green, ${seen.swatch}`,
+      JSON.stringify({ box, ...seen }));
+    }
     const isolated = await page.evaluate(() => window.crossOriginIsolated);
     check(isolated, 'the page is cross-origin isolated (5 µs performance.now())');
 
@@ -318,6 +359,12 @@ async function main() {
     const message = await page.evaluate(() => window.marbleTest.status());
     check(message === `first-roll: won in ${(won.clock / 128).toFixed(2)} s, a new best! · ghost saved`,
       `the win message names its level and time: "${message}"`);
+    // The new best is on the panel at once, beside the level it is for.
+    const panel = await page.evaluate(() => ({
+      best: document.querySelector('#hud-best').textContent, level: document.querySelector('#hud-level').textContent,
+    }));
+    check(panel.best === `${(won.clock / 128).toFixed(2)} s` && panel.level.startsWith('first-roll'),
+      `a new best shows in Best at once: ${panel.level}, best ${panel.best}`, JSON.stringify(panel));
 
     // The key still held through the win does not tilt the next level: its
     // first frames are flat and its clock does not start.
@@ -409,6 +456,19 @@ async function main() {
         check(finished.phase === (words.startsWith('fell') ? 'fell' : 'timeout') && finished.clock > 0 && message === expected,
           `a loss message names its level and time: "${message}"`, `expected "${expected}", ${JSON.stringify(finished)}`);
       }
+      // Left untouched for its whole limit: the clock never ran, the message
+      // says so rather than "after 0.00 s".
+      await page.fill('#source', TIMED);
+      await page.click('#play-source');
+      await page.evaluate(() => document.activeElement.blur());
+      const untouched = await page.evaluate(() => {
+        window.marbleTest.steps(60 * 128, true);
+        return { finished: window.marbleTest.finished(), message: window.marbleTest.status() };
+      });
+      const expected = "timed: time's up, the marble did not roll in 1 s (the clock starts when it does), again";
+      check(untouched.finished.phase === 'timeout' && untouched.finished.clock === 0
+        && untouched.finished.frames === 128 && untouched.message === expected,
+      `time up on a level nobody tilted says so: "${untouched.message}"`, JSON.stringify(untouched));
     }
 
     // 3. On both steppings, the autopilot on every built-in level ends with
@@ -473,7 +533,7 @@ async function main() {
           window.marbleTest.setAutopilot(false);
           return { loaded, end: window.marbleState().ghost, stored: window.marbleTest.storedGhost() };
         }, i);
-        const replayed = ghost.loaded && ghost.loaded.frames === 0 && ghost.end
+        const replayed = ghost.loaded && ghost.loaded.frames === ghost.loaded.record.idle && ghost.loaded.clock === 0 && ghost.end
           && ghost.end.phase === 'won' && ghost.end.hash === web.hash && ghost.end.record.hash === web.hash
           && ghost.end.frames === web.frames && ghost.stored?.by === 'autopilot';
         if (!replayed) ghostMisses.push(`${names[i]}: ${JSON.stringify({ ...ghost, stored: ghost.stored && { ...ghost.stored, ghost: `${ghost.stored.ghost.length} chars` } })}`);
@@ -562,6 +622,26 @@ async function main() {
     check(/^4:3: /.test(shown) && shown === hostMessage && live === shown,
       `a broken level shows the parser's message: "${shown}"`, `host: "${hostMessage}", live: "${live}"`);
     check(still === playing, 'the broken level leaves the game playing', `${playing} → ${still}`);
+    // More errors in the editor, each as `cargo sim -- --check` words it.
+    for (const [source, expected] of [
+      [NEGATIVE, '2:15: value out of range: time_limit_s is 1 ..= 3600'],
+      [room(200), '3:1: grid larger than 127 tiles'],
+      [room(400), '3:1: grid larger than 127 tiles'],
+    ]) {
+      const scratchDir = mkdtempSync(join(tmpdir(), 'marble-web-level-'));
+      const levelFile = join(scratchDir, 'editor.level');
+      writeFileSync(levelFile, source);
+      const run = cargo(['sim', '--', '--check', levelFile], { allowFailure: true });
+      rmSync(scratchDir, { recursive: true, force: true });
+      const line = `${run.stdout}\n${run.stderr}`.split('\n').find((l) => l.startsWith(`${levelFile}:`));
+      const hostSays = (line ?? '').slice(levelFile.length + 1);
+      await page.fill('#source', source);
+      const pageSays = await page.textContent('#source-error');
+      const name = /^name: (\S+)/.exec(source)[1];
+      check(pageSays === expected && hostSays === expected,
+        `the editor refuses ${name} (${source.length} characters) as cargo sim -- --check does: "${pageSays}"`,
+        `host: "${hostSays}", expected "${expected}"`);
+    }
 
     // 5. Generated mazes: the page's generator gives `cargo sim -- --generate`'s
     // text for the same seed, and the autopilot wins it with cargo sim's hash.
@@ -624,7 +704,12 @@ async function main() {
       check(next.generated && next.maze.seed === maze.seed && next.frames <= 1 && next.ghost
         && next.ghost.record.hash === run.won.hash && next.ghost.record.frames === run.won.frames,
       'ghost: the next attempt at the maze loads it', JSON.stringify(next));
-      // A third of the way: the ghost has rolled off, the player's marble waits.
+      // The player nudges the board (a tap of →) and the ghost sets off with
+      // the clock; a third of the way on, it has rolled off from the player's marble.
+      await page.evaluate(() => document.activeElement.blur());
+      await page.keyboard.down('ArrowRight');
+      await page.evaluate(() => window.marbleTest.steps(8));
+      await page.keyboard.up('ArrowRight');
       const seen = await page.evaluate((n) => {
         window.marbleTest.steps(n);
         window.marbleTest.draw();
@@ -638,14 +723,21 @@ async function main() {
       JSON.stringify({ ghosts: seen.list.ghosts, marbles: seen.list.marbles, contrast: seen.contrast }));
       await page.locator('#board').screenshot({ path: join(dirname(SCREENSHOT), 'ghost.png') });
       console.log(`screenshot: ${join(dirname(SCREENSHOT), 'ghost.png')}`);
+      // On to the ghost's end, its clock the player's in every frame.
       const end = await page.evaluate((n) => {
-        window.marbleTest.steps(n);
-        return window.marbleState();
+        const apart = [];
+        for (let f = 0; f < n && window.marbleState().ghost.phase === 'playing'; f++) {
+          window.marbleTest.steps(1);
+          const state = window.marbleState();
+          if (state.phase === 'playing' && state.ghost.phase === 'playing' && state.ghost.clock !== state.clock
+            && apart.length < 3) apart.push({ clock: state.clock, ghost: state.ghost.clock });
+        }
+        return { ...window.marbleState(), apart };
       }, run.won.frames);
       check(end.ghost && end.ghost.phase === 'won' && end.ghost.frames === run.won.frames
-        && end.ghost.hash === run.won.hash && end.phase === 'playing' && end.clock === 0,
-      `ghost: the replay of maze ${maze.seed} ends won after ${end.ghost?.frames} frames on the record's state hash ${end.ghost?.hash}, the player's attempt untouched`,
-      JSON.stringify({ ghost: end.ghost, phase: end.phase, clock: end.clock, won: run.won }));
+        && end.ghost.hash === run.won.hash && end.ghost.clock === run.won.clock && end.apart.length === 0,
+      `ghost: the replay of maze ${maze.seed} races on the player's clock and ends won after ${end.ghost?.frames} frames on the record's state hash ${end.ghost?.hash}`,
+      JSON.stringify({ ghost: end.ghost, phase: end.phase, clock: end.clock, apart: end.apart, won: run.won }));
       // A broken ghost in storage is dropped, never a fault.
       const broken = await page.evaluate(() => {
         const key = window.marbleTest.ghostKey();
@@ -656,6 +748,62 @@ async function main() {
         return { ghost: window.marbleState().ghost, kept: localStorage.getItem(key) };
       });
       check(broken.ghost === null && broken.kept === null, 'ghost: a broken stored ghost is dropped from storage', JSON.stringify(broken));
+    }
+
+    // The ghost races from the first tilt, as the clock does. Corner after
+    // the autopilot's win, picked in the list as a player would, then two
+    // seconds of looking: the ghost waits at the start beside the player's
+    // marble while the panel says "tilt to start"; the first tilt sets it off,
+    // on the player's clock.
+    {
+      await clearGhosts(page);
+      const corner = names.indexOf('corner');
+      const won = await page.evaluate((i) => {
+        window.marbleTest.select(i);
+        window.marbleTest.setAutopilot(true);
+        window.marbleTest.steps(4000 * 128, true);
+        window.marbleTest.setAutopilot(false);
+        const finished = window.marbleTest.finished();
+        // The win's pause, then the page moves on.
+        window.marbleTest.steps(128 + 1);
+        return { finished, message: window.marbleTest.status(), next: window.marbleState().name };
+      }, corner);
+      await page.selectOption('#level', String(corner));
+      const looked = await page.evaluate(() => {
+        window.marbleTest.steps(2 * 128);
+        window.marbleTest.draw();
+        return {
+          state: window.marbleState(), list: window.marbleTest.placements(),
+          hud: document.querySelector('#hud-time').textContent,
+        };
+      });
+      const { state, list } = looked;
+      const [g, m] = [list.ghosts[0], list.marbles[0]];
+      check(won.finished.phase === 'won' && / · ghost saved$/.test(won.message) && won.next !== 'corner'
+        && state.name === 'corner' && state.clock === 0 && /^tilt to start/.test(looked.hud)
+        && state.ghost && state.ghost.phase === 'playing' && state.ghost.clock === 0
+        && state.ghost.frames === state.ghost.record.idle && g && m && Math.hypot(g.x - m.x, g.z - m.z) < 0.01,
+      `ghost: two seconds after corner is picked, untouched, the ghost waits at the start (${state.ghost?.frames} frames of its own looking played), the panel says "${looked.hud}"`,
+      JSON.stringify({ won, hud: looked.hud, ghost: state.ghost, clock: state.clock, g, m }));
+      await page.evaluate(() => document.activeElement.blur());
+      await page.keyboard.down('ArrowRight');
+      const raced = await page.evaluate(() => {
+        const apart = [];
+        let started = null;
+        for (let f = 0; f < 96; f++) {
+          window.marbleTest.steps(1);
+          const state = window.marbleState();
+          if (state.clock > 0 && started === null) started = { frames: state.frames, ghost: state.ghost.frames };
+          if (state.ghost.clock !== state.clock && apart.length < 3) apart.push({ clock: state.clock, ghost: state.ghost.clock });
+        }
+        const list = window.marbleTest.placements();
+        return { state: window.marbleState(), started, apart, g: list.ghosts[0] };
+      });
+      await page.keyboard.up('ArrowRight');
+      check(raced.started && raced.apart.length === 0 && raced.state.clock > 0 && raced.g
+        && Math.hypot(raced.g.x - g.x, raced.g.z - g.z) > 2,
+      `ghost: the first tilt (frame ${raced.started?.frames} of the attempt) sets it off, its clock the player's in every frame (${raced.state.clock} frames on)`,
+      JSON.stringify(raced));
     }
 
     // The seed in the URL plays that maze; the new-maze button picks another
@@ -692,6 +840,21 @@ async function main() {
         && params.get('seed') === String(fresh.state.maze.seed) && params.get('storeys') === '3'
         && fresh.state.name === `maze-${fresh.state.maze.seed}-6x6x3-d2`,
       `generated: "New maze" plays a new seed and puts it in the URL: ${fresh.search}`, JSON.stringify(fresh));
+      // Next level (`n`, or the button) on a generated maze: a new maze like
+      // it (a maze plays alone, so moving on had replayed the same one).
+      for (const how of ['the key n', 'the Next level button']) {
+        const before = await tab.evaluate(() => ({ seed: window.marbleState().maze.seed, text: window.marbleTest.sourceText() }));
+        if (how === 'the key n') await tab.keyboard.press('n');
+        else await tab.click('#next');
+        const after = await tab.evaluate(() => ({
+          state: window.marbleState(), text: window.marbleTest.sourceText(), search: window.location.search,
+        }));
+        const query = new URLSearchParams(after.search);
+        check(after.state.generated && after.state.maze.seed !== before.seed && after.text !== before.text
+          && after.state.frames === 0 && query.get('seed') === String(after.state.maze.seed) && query.get('storeys') === '3',
+        `generated: ${how} on maze ${before.seed} plays a new maze, ${after.state.name} (${after.search})`,
+        JSON.stringify({ before: before.seed, after: { ...after, text: after.text.length } }));
+      }
       const again = await tab.evaluate(() => window.history.length);
       await tab.selectOption('#level', '2');
       const builtin = await tab.evaluate(() => ({ name: window.marbleState().name, search: window.location.search, history: window.history.length }));
@@ -704,6 +867,13 @@ async function main() {
       const refused = await bad.evaluate(() => ({ status: window.marbleTest.status(), name: window.marbleState().name }));
       check(/^seed=banana in the URL is not a whole number/.test(refused.status) && refused.name === 'first-roll',
         `generated: a malformed seed in the URL is refused with why: "${refused.status}"`);
+      // A maze's argument without a seed is no maze: said, not ignored.
+      await bad.goto(`${url}?storeys=9`);
+      await bad.waitForSelector('body[data-ready="true"]', { timeout: 20000 });
+      const seedless = await bad.evaluate(() => ({ status: window.marbleTest.status(), name: window.marbleState().name }));
+      check(seedless.status === 'storeys=9 in the URL needs a seed (?seed=N&storeys=9): playing the first level'
+        && seedless.name === 'first-roll',
+      `generated: ?storeys=9 without a seed is refused with why: "${seedless.status}"`, JSON.stringify(seedless));
       await bad.close();
       await tab.close();
     }

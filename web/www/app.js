@@ -66,13 +66,18 @@ function answer(len) {
   return decoder.decode(new Uint8Array(w.memory.buffer, w.out_ptr(), len));
 }
 
-// Puts `text` in the module's text buffer; returns the byte count to pass on
-// (one over the capacity when it does not fit: the module then says so).
+// Puts `text` in the module's text buffer; returns the byte count to pass on.
+// A text longer than the buffer (no level is) hands over the whole lines that
+// fit, marked as cut: the module then shows the first error in them (a grid
+// over the size limit says so on its first rows), else the length.
 function putText(text) {
   const cap = w.text_capacity();
   const dst = new Uint8Array(w.memory.buffer, w.text_ptr(), cap);
   const { read, written } = encoder.encodeInto(text, dst);
-  return read < text.length ? cap + 1 : written;
+  if (read === text.length) return written;
+  const fits = text.slice(0, read);
+  const lines = encoder.encodeInto(fits.slice(0, fits.lastIndexOf('\n') + 1), dst);
+  return lines.written | w.text_cut();
 }
 
 function hex(u64) {
@@ -287,7 +292,8 @@ function loop(now) {
 
 function finished() {
   const phase = w.finished_phase();
-  const seconds = w.finished_clock() / hz;
+  const clock = w.finished_clock();
+  const seconds = clock / hz;
   // Named: the page moves on to the next level while the message stays.
   const name = levelName();
   const time = `${seconds.toFixed(2)} s`;
@@ -299,6 +305,8 @@ function finished() {
       const best = Number(localStorage.getItem(key));
       if (!best || seconds < best) {
         localStorage.setItem(key, seconds.toFixed(3));
+        // Shown at once: the level stays on show for the win's pause.
+        $('hud-best').textContent = `${seconds.toFixed(2)} s`;
         status(`${name}: won in ${time}, a new best!${ghost}`);
       } else {
         status(`${name}: won in ${time} (best ${best.toFixed(2)} s)${ghost}`);
@@ -308,6 +316,11 @@ function finished() {
     }
   } else if (phase === 2) {
     status(`${name}: fell into a hole after ${time}, again`);
+  } else if (clock === 0) {
+    // The marble never rolled (nobody tilted, or not enough to roll it): the
+    // clock, which starts when it does, never ran, so the wait is what to say.
+    const waited = `${(w.finished_frames() / hz).toFixed(0)} s`;
+    status(`${name}: time's up, the marble did not roll in ${waited} (the clock starts when it does), again`);
   } else {
     status(`${name}: time's up after ${time}, again`);
   }
@@ -458,11 +471,20 @@ function updateUrl() {
   if (url.href !== window.location.href) history.replaceState(null, '', url);
 }
 
+// The maze's arguments a URL may give besides its seed.
+const MAZE_PARAMS = ['size', 'storeys', 'difficulty'];
+
 // The maze a URL asks for: `seed` (0 ..= 4294967295) and the other arguments
-// as whole numbers; none if there is no seed; an error message if malformed.
+// as whole numbers; none if the URL names none; an error message if
+// malformed, or if it gives them without a seed (no maze to play).
 function mazeFromUrl() {
   const params = new URLSearchParams(window.location.search);
-  if (!params.has('seed')) return null;
+  if (!params.has('seed')) {
+    const given = MAZE_PARAMS.filter((name) => params.has(name));
+    if (!given.length) return null;
+    const args = given.map((name) => `${name}=${params.get(name)}`).join('&');
+    return { error: `${args} in the URL needs a seed (?seed=N&${args}): playing the first level` };
+  }
   const whole = (name, max) => {
     if (!params.has(name)) return undefined;
     const text = params.get(name);
@@ -598,7 +620,13 @@ function restart() {
   status('');
 }
 
+// The next built-in level; on a generated maze (which plays alone, and again
+// after a win) a new maze like it.
 function nextLevel() {
+  if (w.level_is_generated()) {
+    newMaze();
+    return;
+  }
   w.next_level();
   newAttempt();
   status('');
@@ -941,8 +969,11 @@ function testHooks() {
       : null,
     ghost: w.ghost_active()
       ? {
-        frames: w.ghost_frames(), phase: PHASES[w.ghost_phase()], hash: hex(w.ghost_state_hash()),
-        record: { frames: w.ghost_record(0), clock: w.ghost_record(1), hash: hex(w.ghost_record_hash()) },
+        frames: w.ghost_frames(), clock: w.ghost_clock_frames(), phase: PHASES[w.ghost_phase()],
+        hash: hex(w.ghost_state_hash()),
+        record: {
+          frames: w.ghost_record(0), clock: w.ghost_record(1), idle: w.ghost_record(2), hash: hex(w.ghost_record_hash()),
+        },
       }
       : null,
     phase: PHASES[w.phase()],
@@ -1020,6 +1051,22 @@ function testHooks() {
         return Math.abs(a[0] - b[0]) + Math.abs(a[1] - b[1]) + Math.abs(a[2] - b[2]);
       };
       return { ghost: at(list.ghosts[0]), live: at(list.marbles[0]) };
+    },
+    // The colour drawn at the centre of the first tile of `kind` (as
+    // tile_kind numbers them) on the first storey map on show, or null.
+    tilePixel(kind) {
+      const canvas = $('board');
+      const list = placements();
+      const { scale, x0, y0 } = view(canvas, list.shown.length);
+      const kinds = kindsOf(list.shown[0]);
+      const at = kinds.indexOf(kind);
+      if (at < 0) return null;
+      const [i, k] = [at % level.nx, Math.floor(at / level.nx)];
+      const centre = (n) => (level.edges[n] + level.edges[n + 1]) / 2;
+      const x = Math.round(x0 + centre(i) * scale);
+      const y = Math.round(y0 + centre(k) * scale);
+      const [r, g, b] = canvas.getContext('2d').getImageData(x, y, 1, 1).data;
+      return { r, g, b };
     },
     editor: toggleEditor,
     // Game frames played by `seconds` of animation frames at `refreshHz`

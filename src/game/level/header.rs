@@ -128,13 +128,18 @@ pub(super) const fn header(b: &[u8]) -> Result<Header<'_>, LevelError> {
                 let Some(key) = NumberKey::find(b, s, kend) else {
                     return err(line, b, i, s, LevelErrorKind::UnknownKey);
                 };
-                let Some(n) = decimal(b, v, t, key.decimals()) else {
+                // A minus sign makes a number below every key's range (none
+                // starts under 0), which the person must be told, not that it
+                // is no number at all; `-0` is 0.
+                let negative = v < t && b[v] == b'-';
+                let digits = if negative { v + 1 } else { v };
+                let Some(n) = decimal(b, digits, t, key.decimals()) else {
                     return err(line, b, i, v, LevelErrorKind::BadNumber);
                 };
                 let (lo, hi) = key.range();
                 // Past `decimal`'s bound the number is still a number: out of range.
                 let n = match n {
-                    Digits::Value(n) if n >= lo && n <= hi => n as u32,
+                    Digits::Value(n) if n >= lo && n <= hi && (n == 0 || !negative) => n as u32,
                     _ => return err(line, b, i, v, LevelErrorKind::OutOfRange { key }),
                 };
                 match key {
