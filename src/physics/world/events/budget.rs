@@ -11,7 +11,7 @@
 //! on from there in the next step, as if the clock had paused for it. The check
 //! is made before each round of the step, and one round spends at most a search
 //! per marble, a time of impact per pair and a pair slice, so a step spends at
-//! most `FLIGHT_BUDGET − 1 + M + M(M − 1)/2 + 3` units (28 with four marbles),
+//! most `FLIGHT_BUDGET − 1 + M + M(M − 1)/2 + 3` units (30 with four marbles),
 //! whatever the scene; the scene that asks for more plays slower than real time
 //! while it does.
 //!
