@@ -344,7 +344,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// it over the marbles still to fly, so that one marble's hard step cannot
     /// leave the next one none.
     fn fly_each<const SPACE: bool, O: StepObserver<S>>(&mut self, obs: &mut O) {
-        let mut to_fly = self.marbles.iter().filter(|m| !m.out && !m.asleep).count() as u32;
+        // One marble (the common case) takes it all, without a division (a
+        // library call on the Cortex-M0).
+        let mut to_fly = if self.marbles.len() == 1 {
+            1
+        } else {
+            self.marbles.iter().filter(|m| !m.out && !m.asleep).count() as u32
+        };
         let mut left = self.flight_budget;
         for n in 0..self.marbles.len() {
             let mut m = self.marbles[n];
@@ -352,7 +358,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 continue;
             }
             self.count_runs::<SPACE>(&m);
-            let share = (left / to_fly.max(1)).max(1);
+            let share = if to_fly <= 1 {
+                left
+            } else {
+                (left / to_fly).max(1)
+            };
             self.flights_left = share;
             let mut f = Flight::start();
             self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
