@@ -33,22 +33,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let mut no_sleep = [false; M];
         loop {
             if self.out_of_flights() {
-                // Every marble behind the last event is flown up to it (no event
-                // of its own comes before its plan, no pair's before the event),
-                // so that the marbles the next step starts from are where they
-                // were at one instant; only a pair a slice ahead is left ahead.
-                for n in 0..count {
-                    let mut m = self.marbles[n];
-                    if !live[n] || m.asleep || fl[n].t >= S::ONE {
-                        continue;
-                    }
-                    if fl[n].t < now {
-                        let s = now - fl[n].t;
-                        self.fly(n, &mut m, &mut fl[n], s, obs);
-                        self.marbles[n] = m;
-                    }
-                    no_sleep[n] = !self.cut(&fl[n]);
-                }
+                self.cut_together(&live, &mut fl, &mut no_sleep, now, obs);
                 break;
             }
             rounds += 1;
@@ -246,6 +231,35 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
     }
 
+    /// The step's budget is spent (`events/budget.rs`) at `now`, the last event:
+    /// every marble behind it is flown up to it (no event of its own comes before
+    /// its plan, no pair's before `now`), so that the marbles the next step starts
+    /// from are where they were at one instant (only a pair a slice ahead is left
+    /// ahead). Marks in `no_sleep` those that flew none of the step. Out of line:
+    /// the step's own frame stays as small as the v1's stack needs.
+    #[inline(never)]
+    fn cut_together<O: StepObserver<S>>(
+        &mut self,
+        live: &[bool; M],
+        fl: &mut [Flight<S>; M],
+        no_sleep: &mut [bool; M],
+        now: S,
+        obs: &mut O,
+    ) {
+        for n in 0..self.marbles.len() {
+            let mut m = self.marbles[n];
+            if !live[n] || m.asleep || fl[n].t >= S::ONE {
+                continue;
+            }
+            if fl[n].t < now {
+                let s = now - fl[n].t;
+                self.fly(n, &mut m, &mut fl[n], s, obs);
+                self.marbles[n] = m;
+            }
+            no_sleep[n] = !self.cut(&fl[n]);
+        }
+    }
+
     /// Whether marble `n`, now `m` and `before` at the step's start, is wedged at
     /// rest against another marble: it touches one, moved no more than the touching
     /// tolerance on any axis over the step, and is slower than the restitution
@@ -254,6 +268,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// trembles by a few hundredths of a micrometre, its velocity a few mm/s into
     /// its supports): the exact test, `m == before`, would never put it to sleep,
     /// and the pair would fly plain pair slices for as long as it lies there.
+    #[inline(never)]
     fn wedged(&self, n: usize, m: &Marble<S>, before: &Marble<S>) -> bool {
         let (p, tol) = (&self.params, self.tol());
         if max_abs(m.pos - before.pos) > tol || max_abs(m.vel.shr(T_LOG2)) > p.threshold {
