@@ -20,7 +20,7 @@ use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
 use marble_rolling::render::storey_tile;
 
 /// QEMU's player: the board's matrix, the autopilot, the event stepper.
-type QemuPlayer = Player<WIDTH, HEIGHT, true, true>;
+type QemuPlayer = Player<'static, WIDTH, HEIGHT, true, true>;
 
 /// The terminal: every byte written.
 #[derive(Default)]

@@ -65,9 +65,17 @@ pub const MAX_DIFFICULTY: u8 = 9;
 /// autopilot loses some three-marble runs on time. Up to 7 it wins every one.
 pub const MAX_SIZE_FOR_MARBLES: u8 = 7;
 /// The longest level text [`Maze`] writes (four storeys of the largest size).
-pub const MAX_TEXT_BYTES: usize = 128 + MAX_STOREYS * (TILES * (TILES + 1) + 4);
+pub const MAX_TEXT_BYTES: usize = text_bytes(MAX_SIZE, MAX_STOREYS as u8);
 
-const TILES: usize = 2 * MAX_SIZE as usize + 1;
+/// The longest level text of a maze of `size` cells a side on `storeys`
+/// storeys: a header of at most 128 bytes (the longest, every number at its
+/// largest and every effect on, is 97), then per storey its rows of `2 size +
+/// 1` tiles and a newline, and the `===` line.
+pub const fn text_bytes(size: u8, storeys: u8) -> usize {
+    let tiles = 2 * size as usize + 1;
+    128 + storeys as usize * (tiles * (tiles + 1) + 4)
+}
+
 const MAX_CELLS: usize = MAX_SIZE as usize * MAX_SIZE as usize;
 
 // Cell bits.
@@ -140,51 +148,75 @@ pub struct Maze {
 /// The maze of `size × size` cells on `storeys` storeys that `seed` gives, at
 /// `difficulty` (see the module documentation).
 pub fn generate(seed: u32, size: u8, storeys: u8, difficulty: u8) -> Result<Maze, GenerateError> {
-    if !(MIN_SIZE..=MAX_SIZE).contains(&size) {
-        return Err(GenerateError::Size(size));
-    }
-    let most = if STOREYS { MAX_STOREYS as u8 } else { 1 };
-    if !(1..=most).contains(&storeys) {
-        return Err(GenerateError::Storeys(storeys));
-    }
-    if difficulty > MAX_DIFFICULTY {
-        return Err(GenerateError::Difficulty(difficulty));
-    }
-    let mut rng = XorShiftRng::seed_from_u64(u64::from(seed));
-    let mut maze = Maze {
-        seed,
-        size,
-        storeys,
-        difficulty,
+    let mut maze = Maze::EMPTY;
+    maze.generate(seed, size, storeys, difficulty)?;
+    Ok(maze)
+}
+
+impl Maze {
+    /// No maze yet: what [`Maze::generate`] fills in.
+    pub const EMPTY: Maze = Maze {
+        seed: 0,
+        size: 0,
+        storeys: 0,
+        difficulty: 0,
         cells: [[0; MAX_CELLS]; MAX_STOREYS],
         path_cells: 0,
         turns: 0,
     };
-    let n = usize::from(size) * usize::from(size);
-    let mut depth = [0u8; MAX_CELLS];
-    let mut entry = below(&mut rng, n as u32) as usize;
-    for storey in (0..usize::from(storeys)).rev() {
-        maze.carve(storey, entry, &mut depth, &mut rng);
-        let exit = maze.pick_dead_end(storey, entry, &depth, &mut rng);
-        maze.mark_path(storey, exit, &depth);
-        let top = storey + 1 == usize::from(storeys);
-        if top {
-            maze.cells[storey][entry] |= START;
-            maze.add_marbles(storey, &mut rng);
+
+    /// [`generate`] in place: this maze becomes the one its arguments give (on
+    /// an error, no maze: [`Maze::EMPTY`]). A board makes its mazes this way,
+    /// so that the 912 bytes are on its stack once, not copied out of the
+    /// generator. Out of line, for the same reason.
+    #[inline(never)]
+    pub fn generate(
+        &mut self,
+        seed: u32,
+        size: u8,
+        storeys: u8,
+        difficulty: u8,
+    ) -> Result<(), GenerateError> {
+        *self = Maze::EMPTY;
+        if !(MIN_SIZE..=MAX_SIZE).contains(&size) {
+            return Err(GenerateError::Size(size));
         }
-        if storey == 0 {
-            maze.cells[storey][exit] |= GOAL;
-            maze.add_pits(&mut rng);
-        } else {
-            maze.cells[storey][exit] |= HOLE;
-            maze.path_cells += 1;
+        let most = if STOREYS { MAX_STOREYS as u8 } else { 1 };
+        if !(1..=most).contains(&storeys) {
+            return Err(GenerateError::Storeys(storeys));
         }
-        entry = exit;
+        if difficulty > MAX_DIFFICULTY {
+            return Err(GenerateError::Difficulty(difficulty));
+        }
+        (self.seed, self.size, self.storeys, self.difficulty) = (seed, size, storeys, difficulty);
+        let mut rng = XorShiftRng::seed_from_u64(u64::from(seed));
+        let n = usize::from(size) * usize::from(size);
+        let mut depth = [0u8; MAX_CELLS];
+        let mut entry = below(&mut rng, n as u32) as usize;
+        for storey in (0..usize::from(storeys)).rev() {
+            self.carve(storey, entry, &mut depth, &mut rng);
+            let exit = self.pick_dead_end(storey, entry, &depth, &mut rng);
+            self.mark_path(storey, exit, &depth);
+            let top = storey + 1 == usize::from(storeys);
+            if top {
+                self.cells[storey][entry] |= START;
+                self.add_marbles(storey, &mut rng);
+            }
+            if storey == 0 {
+                self.cells[storey][exit] |= GOAL;
+                self.add_pits(&mut rng);
+            } else {
+                self.cells[storey][exit] |= HOLE;
+                self.path_cells += 1;
+            }
+            entry = exit;
+        }
+        if !self.every_start_reaches_the_goal() {
+            *self = Maze::EMPTY;
+            return Err(GenerateError::Unwinnable);
+        }
+        Ok(())
     }
-    if !maze.every_start_reaches_the_goal() {
-        return Err(GenerateError::Unwinnable);
-    }
-    Ok(maze)
 }
 
 /// A number in `0 .. n` (`n ≥ 1`): the top of a 32 × 32-bit product (Lemire's

@@ -25,6 +25,7 @@ use super::level::MAX_MARBLES;
 use super::rules::{Game, GameConfig, Phase};
 use super::session::Session;
 use crate::input::event::{Command, Fault, InputEvent};
+use crate::input::sensor::Calibration;
 use crate::input::tilt::TiltConfig;
 use crate::matrix::Frame;
 use crate::physics::world::SetupError;
@@ -159,6 +160,25 @@ pub struct Tick<const W: usize, const H: usize> {
     pub sounds: Sounds,
 }
 
+/// What a player keeps from one level to the next ([`Player::carried`],
+/// [`Player::carry`]): the game task carries it into a new player when the
+/// next level is a generated maze, which no list holds.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Carried {
+    calibration: Calibration,
+    autopilot: bool,
+    sensor_down: Option<Fault>,
+    fault_shown: bool,
+    muted: bool,
+}
+
+impl Carried {
+    /// Whether the autopilot played: the next level's [`Player::new`] takes it.
+    pub const fn autopilot(&self) -> bool {
+        self.autopilot
+    }
+}
+
 /// One player's game on a `W`×`H` display (see the module doc).
 ///
 /// `PILOT` says whether the board has the autopilot at all
@@ -170,10 +190,21 @@ pub struct Tick<const W: usize, const H: usize> {
 /// the same reason: the event stepper costs 18 to 24 KiB of flash, which a board
 /// with a 64 KiB budget does not have, and the fixed step is then all it links.
 #[derive(Clone, Debug)]
-pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool> {
-    levels: &'static [LevelView<'static>],
+pub struct Player<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool> {
+    levels: &'a [LevelView<'a>],
     level: usize,
-    session: Session<'static, Fx>,
+    /// The number of `levels[0]` in the whole run (0 for the built-in list; a
+    /// generated maze, alone in its list, comes after them): what
+    /// [`Player::level_index`] and the status count from.
+    first: usize,
+    /// Moving on from the list's last level leaves the list
+    /// ([`Player::past_end`]) instead of starting it again: the endless run,
+    /// where the game task brings the next generated maze.
+    endless: bool,
+    /// The player has moved on past the list's last level (only when
+    /// `endless`).
+    past_end: bool,
+    session: Session<'a, Fx>,
     renderer: Renderer<W, H>,
     tilt: TiltConfig,
     autopilot: Option<Autopilot>,
@@ -189,8 +220,8 @@ pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENT
     new_record: bool,
 }
 
-impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
-    Player<W, H, PILOT, EVENTS>
+impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
+    Player<'a, W, H, PILOT, EVENTS>
 {
     /// The game's configuration on this player: [`GameConfig::stepped_by`]`(EVENTS)`.
     pub const CONFIG: GameConfig = GameConfig::stepped_by(EVENTS);
@@ -199,7 +230,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     /// empty) with the tilt path `tilt`; the autopilot plays if `autopilot`
     /// (and the board has it, `PILOT`).
     pub fn new(
-        levels: &'static [LevelView<'static>],
+        levels: &'a [LevelView<'a>],
         level: usize,
         tilt: TiltConfig,
         autopilot: bool,
@@ -208,13 +239,27 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         let Some(view) = levels.get(level) else {
             return Err(SetupError::MarbleCount);
         };
+        Self::on(levels, level, *view, tilt, autopilot)
+    }
+
+    /// Level `view`, number `level` of `levels` (or alone, with no list).
+    fn on(
+        levels: &'a [LevelView<'a>],
+        level: usize,
+        view: LevelView<'a>,
+        tilt: TiltConfig,
+        autopilot: bool,
+    ) -> Result<Self, SetupError> {
         Ok(Player {
             levels,
             level,
-            session: Session::new(*view, Self::CONFIG, tilt)?,
+            first: 0,
+            endless: false,
+            past_end: false,
+            session: Session::new(view, Self::CONFIG, tilt)?,
             renderer: Renderer::new(),
             tilt,
-            autopilot: (PILOT && autopilot).then(|| Autopilot::new(view)),
+            autopilot: (PILOT && autopilot).then(|| Autopilot::new(&view)),
             pause: None,
             sensor_down: None,
             fault_shown: false,
@@ -223,26 +268,51 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         })
     }
 
-    /// Index of the level in the level list.
+    /// A player on `level` alone, which no list holds (a generated maze): in
+    /// the endless run ([`Player::endless_from`]) moving on from it is
+    /// [`Player::past_end`], and otherwise it starts again.
+    pub fn alone(
+        level: LevelView<'a>,
+        tilt: TiltConfig,
+        autopilot: bool,
+    ) -> Result<Self, SetupError> {
+        Self::on(&[], 0, level, tilt, autopilot)
+    }
+
+    /// The level's number in the run, counted from 0: its index in the
+    /// level list, after the levels before the list ([`Player::numbered_from`]).
     pub fn level_index(&self) -> usize {
-        self.level
+        self.first.saturating_add(self.level)
     }
     /// The level's name.
-    pub fn level_name(&self) -> &'static str {
-        self.levels
-            .get(self.level)
-            .map_or("?", |level| level.info.name)
+    pub fn level_name(&self) -> &'a str {
+        self.session.game().level().info.name
+    }
+    /// Makes this player part of the endless run, its list counted from
+    /// level `first` of the run (0 for the built-in levels; a generated maze,
+    /// alone in its list, comes after them): what [`Player::level_index`] and
+    /// the status say, and moving on from the list's last level leaves the
+    /// list ([`Player::past_end`]) rather than starting it again.
+    pub fn endless_from(&mut self, first: usize) {
+        self.first = first;
+        self.endless = true;
+    }
+    /// The player has moved on past its list's last level (endless run only):
+    /// the next level is not in its list, and its caller brings it
+    /// ([`Player::carried`] says what to keep).
+    pub fn past_end(&self) -> bool {
+        self.past_end
     }
     /// The session.
-    pub fn session(&self) -> &Session<'static, Fx> {
+    pub fn session(&self) -> &Session<'a, Fx> {
         &self.session
     }
     /// The session, mutably (profiling, tools).
-    pub fn session_mut(&mut self) -> &mut Session<'static, Fx> {
+    pub fn session_mut(&mut self) -> &mut Session<'a, Fx> {
         &mut self.session
     }
     /// The game.
-    pub fn game(&self) -> &Game<'static, Fx> {
+    pub fn game(&self) -> &Game<'a, Fx> {
         self.session.game()
     }
     /// Whether the sound is off ([`Command::ToggleMute`]).
@@ -261,10 +331,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     /// Hands the board to the autopilot (planned afresh for the level), or
     /// takes it back. Without `PILOT` it stays off.
     pub fn set_autopilot(&mut self, on: bool) {
-        self.autopilot = match self.levels.get(self.level) {
-            Some(view) if PILOT && on => Some(Autopilot::new(view)),
-            _ => None,
-        };
+        self.autopilot = (PILOT && on).then(|| Autopilot::new(self.session.game().level()));
     }
 
     /// The reading for the next frame: the autopilot's when it plays, else
@@ -298,7 +365,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     pub fn status(&self) -> Status {
         let game = self.session.game();
         Status {
-            level: self.level.min(usize::from(u8::MAX)) as u8,
+            level: self.level_index().min(usize::from(u8::MAX)) as u8,
             phase: game.phase(),
             frames: game.clock_frames(),
             reading: self.session.reading(),
@@ -428,23 +495,61 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         }
     }
 
-    /// Moves on to the next level of the list (after the last: the first),
-    /// keeping the tilt calibration, the autopilot setting and a sensor
-    /// outage. A level that cannot be set up is skipped.
+    /// Moves on to the next level of the list (after the last: the first, or
+    /// in the endless run [`Player::past_end`]), keeping what
+    /// [`Player::carried`] says. A level that cannot be set up is skipped.
     pub fn next_level(&mut self) {
-        let calibration = self.session.tilt().calibration();
+        let carried = self.carried();
         for offset in 1..=self.levels.len() {
             let index = self.level + offset;
-            if let Ok(mut next) = Self::new(self.levels, index, self.tilt, self.autopilot()) {
-                next.session.tilt_mut().set_calibration(calibration);
-                next.sensor_down = self.sensor_down;
-                next.fault_shown = self.fault_shown;
+            if self.endless && index >= self.levels.len() {
+                break;
+            }
+            if let Ok(next) = Self::new(self.levels, index, self.tilt, carried.autopilot) {
+                // Field by field, not a struct update: on the micro:bit v1
+                // every copy of a player is 2 KB of stack.
+                let (first, endless) = (self.first, self.endless);
                 *self = next;
+                self.first = first;
+                self.endless = endless;
+                self.carry(carried);
                 #[cfg(feature = "defmt")]
-                defmt::info!("level {=usize}: {=str}", self.level + 1, self.level_name());
+                defmt::info!(
+                    "level {=usize}: {=str}",
+                    self.level_index() + 1,
+                    self.level_name()
+                );
                 return;
             }
         }
+        if self.endless {
+            self.past_end = true;
+        } else if self.levels.is_empty() {
+            // Alone, and not in the endless run: the same level again.
+            self.restart();
+        }
+    }
+
+    /// What moves on with the player to the next level.
+    pub fn carried(&self) -> Carried {
+        Carried {
+            calibration: self.session.tilt().calibration(),
+            autopilot: self.autopilot(),
+            sensor_down: self.sensor_down,
+            fault_shown: self.fault_shown,
+            muted: self.muted,
+        }
+    }
+
+    /// Takes on what the player had on the level before ([`Player::carried`]):
+    /// the tilt calibration, a sensor outage and the sound setting. Not the
+    /// autopilot: that is [`Player::new`]'s argument
+    /// ([`Carried::autopilot`]), so that it is planned once.
+    pub fn carry(&mut self, carried: Carried) {
+        self.session.tilt_mut().set_calibration(carried.calibration);
+        self.sensor_down = carried.sensor_down;
+        self.fault_shown = carried.fault_shown;
+        self.muted = carried.muted;
     }
 
     /// Takes the current filtered tilt as level (an implausible one is

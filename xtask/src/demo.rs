@@ -454,18 +454,49 @@ pub fn compare_levels(
     failed
 }
 
+/// The simulator's arguments that choose `level`: `--level NAME` for a
+/// built-in level, and for a generated maze, named after its arguments
+/// (`maze-SEED-NxNxS-dD`, as `game::generate` names it), the arguments
+/// themselves: `--generate SEED --size N --storeys S --difficulty D`.
+pub fn level_args(level: &str) -> Vec<String> {
+    match maze_args(level) {
+        Some([seed, size, storeys, difficulty]) => vec![
+            "--generate".into(),
+            seed.into(),
+            "--size".into(),
+            size.into(),
+            "--storeys".into(),
+            storeys.into(),
+            "--difficulty".into(),
+            difficulty.into(),
+        ],
+        None => vec!["--level".into(), level.into()],
+    }
+}
+
+/// `maze-SEED-NxNxS-dD` → `[SEED, N, S, D]` (each all digits, the two sizes
+/// equal); anything else is a level's name.
+fn maze_args(name: &str) -> Option<[&str; 4]> {
+    let rest = name.strip_prefix("maze-")?;
+    let (seed, rest) = rest.split_once('-')?;
+    let (shape, difficulty) = rest.split_once("-d")?;
+    let mut sides = shape.split('x');
+    let (Some(x), Some(z), Some(storeys), None) =
+        (sides.next(), sides.next(), sides.next(), sides.next())
+    else {
+        return None;
+    };
+    let number = |text: &str| !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit());
+    ([seed, x, storeys, difficulty].into_iter().all(number) && x == z)
+        .then_some([seed, x, storeys, difficulty])
+}
+
 /// The simulator's result for `level` with the firmware's stepper, or `None`
 /// when it printed no JSON.
 pub fn simulate(sim: &PathBuf, level: &str, stepping: &str) -> Option<Sim> {
     let out = Command::new(sim)
-        .args([
-            "--level",
-            level,
-            "--autopilot",
-            "--json",
-            "--stepping",
-            stepping,
-        ])
+        .args(level_args(level))
+        .args(["--autopilot", "--json", "--stepping", stepping])
         .current_dir(workspace::root())
         .stdin(Stdio::null())
         .stderr(Stdio::null())
@@ -522,6 +553,35 @@ INFO  cpu load: 123 busy instructions in 456 us of firmware time = 789 instructi
             outcome: outcome.into(),
             steps: steps.into(),
             hash: hash.into(),
+        }
+    }
+
+    #[test]
+    fn a_generated_maze_is_simulated_from_its_arguments() {
+        assert_eq!(
+            level_args("maze-11-4x4x2-d1"),
+            [
+                "--generate",
+                "11",
+                "--size",
+                "4",
+                "--storeys",
+                "2",
+                "--difficulty",
+                "1"
+            ]
+        );
+        assert_eq!(level_args("corner"), ["--level", "corner"]);
+        // Not a generated maze's name: a level of that name (a file, say).
+        for name in [
+            "maze-11-4x5x2-d1",
+            "maze-11-4x4-d1",
+            "maze-x-4x4x2-d1",
+            "maze-11-4x4x2-d",
+            "maze-11-4x4x2x1-d1",
+            "maze--4x4x2-d1",
+        ] {
+            assert_eq!(level_args(name), ["--level", name], "{name}");
         }
     }
 

@@ -408,6 +408,14 @@ impl LoadReport {
     }
 }
 
+/// The largest generated maze the endless run plays on the v1
+/// ([`crate::game::endless`]): the v1 has almost no RAM left (docs/boards.md),
+/// so small mazes only, 5 cells a side on up to two storeys.
+pub const MAZE_REACH: crate::game::endless::Reach = crate::game::endless::Reach {
+    size: 5,
+    storeys: 2,
+};
+
 #[cfg(test)]
 mod tests {
     use super::*;

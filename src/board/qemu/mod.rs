@@ -22,6 +22,7 @@ pub mod virtual_lsm303agr;
 #[cfg(feature = "app")]
 pub mod virtual_matrix;
 
+use crate::game::endless::Reach;
 use crate::input::sensor::{AxisMap, SupervisorConfig};
 use virtual_i2c::RamRange;
 
@@ -158,6 +159,16 @@ impl Options {
         options
     }
 }
+
+/// The largest generated maze the endless run plays here
+/// ([`crate::game::endless`]): the generator's whole range. The virtual
+/// matrix follows the marble and the storey maps show a window of a maze too
+/// wide for the terminal, and 128 KiB of RAM hold the slot (964 B of tiles)
+/// and the 4 112-byte text while it is parsed.
+pub const MAZE_REACH: Reach = Reach {
+    size: crate::game::generate::MAX_SIZE,
+    storeys: crate::game::endless::MOST_STOREYS,
+};
 
 #[cfg(test)]
 mod tests {
