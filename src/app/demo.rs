@@ -153,37 +153,37 @@ pub(super) async fn demo<
     );
     for number in 0..total {
         summary.levels = summary.levels.saturating_add(1);
-        // Built straight into the one local the demo's future keeps across
-        // its awaits: on the micro:bit v1 every other copy of a player is
-        // 2 KB of RAM.
-        let mut player = match match endless.stage(number) {
-            Stage::Builtin(index) => {
-                Player::<W, H, PILOT, EVENTS>::new(&LEVELS, index, SYNTHETIC_TILT, true)
-            }
-            Stage::Maze(args) => match mazes.make(args) {
-                Ok(maze) => Player::alone(maze, SYNTHETIC_TILT, true),
-                Err(e) => {
-                    setup_failed(number, total, DemoSetup::Maze(e));
-                    continue;
-                }
-            },
-        } {
-            Ok(player) => player,
+        let level = match endless.stage(number) {
+            Stage::Builtin(index) => LEVELS.get(index).copied().ok_or(None),
+            Stage::Maze(args) => mazes.make(args).map_err(Some),
+        };
+        let level = match level {
+            Ok(level) => level,
             Err(e) => {
-                setup_failed(number, total, DemoSetup::Level(e));
+                setup_failed(number, total, DemoSetup::Maze(e));
                 continue;
             }
         };
-        // The first level of its list (the first built-in level, or the
-        // maze alone).
-        let first = number - player.level_index();
-        player.endless_from(first);
+        // The call writes the player straight into `made`, a local the
+        // demo's future keeps across its awaits; everything after borrows it.
+        // Matching it into a local of its own would move it through a 2 KB
+        // temporary on the stack, under the deepest call (`Player::new`):
+        // more than the micro:bit v1 has.
+        let mut made = Player::<W, H, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true);
+        let player = match &mut made {
+            Ok(player) => player,
+            Err(e) => {
+                setup_failed(number, total, DemoSetup::Level(*e));
+                continue;
+            }
+        };
+        player.endless_at(number);
         if let Some(fault) = sensor {
             player.handle(InputEvent::SensorDown(fault));
         }
         let mut profile = Profile::default();
         let phase = loop {
-            if !demo_tick(links, ticker, &mut player).await {
+            if !demo_tick(links, ticker, player).await {
                 return GameExit::Quit;
             }
             if player.sensor_down().is_some() {
@@ -196,13 +196,13 @@ pub(super) async fn demo<
             }
             let phase = match meter {
                 None => player.frame(Tilt::FLAT.reading_mg()),
-                Some(meter) => profiled_frame(&mut player, meter, &mut profile),
+                Some(meter) => profiled_frame(player, meter, &mut profile),
             };
             links.status.set(player.status());
             if !links.frames.signaled() || phase != Phase::Playing {
                 links.frames.signal(match meter {
                     None => player.render(),
-                    Some(meter) => profiled_render(&mut player, meter, &mut profile),
+                    Some(meter) => profiled_render(player, meter, &mut profile),
                 });
             }
             if phase != Phase::Playing {
@@ -245,7 +245,7 @@ pub(super) async fn demo<
         // sent once (the display keeps showing it), not once a refresh.
         let mut sent = None;
         for left in (1..=WIN_PAUSE_FRAMES).rev() {
-            if !demo_tick(links, ticker, &mut player).await {
+            if !demo_tick(links, ticker, player).await {
                 return GameExit::Quit;
             }
             let flash = phase == Phase::Won && win_flash(left);
@@ -283,5 +283,7 @@ fn setup_failed(number: usize, total: usize, why: DemoSetup) {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 enum DemoSetup {
     Level(SetupError),
-    Maze(MazeError),
+    /// A maze that could not be made (`None`: a built-in level that is not
+    /// there).
+    Maze(Option<MazeError>),
 }

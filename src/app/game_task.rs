@@ -73,9 +73,8 @@ async fn play<
     seeds: Seeds,
     mazes: &mut MazeSlot<WORDS, TEXT>,
 ) -> GameExit {
-    // Without `sleep` the start is the literal 0: on the micro:bit v1 even a
-    // start level passed in as a constant measured 2 KB more stack (`cargo
-    // xtask check-microbit-v1`), over its RAM budget.
+    // Without `sleep` there is no level to resume: the run starts at the
+    // first.
     #[cfg(feature = "sleep")]
     let mut number = usize::from(level);
     #[cfg(not(feature = "sleep"))]
@@ -91,32 +90,33 @@ async fn play<
     let mut idle =
         crate::input::idle::Idle::new(crate::input::idle::IdleConfig::two_minutes(FRAME_HZ));
     loop {
-        // Built straight into the one local the game's future keeps across
-        // its awaits: on the micro:bit v1 every other copy of a player is
-        // 2 KB of RAM.
-        let autopilot = carried.is_some_and(|c: Carried| c.autopilot());
-        let mut player = match match endless.stage(number) {
-            Stage::Builtin(index) => {
-                Player::<W, H, PILOT, EVENTS>::new(&LEVELS, index, tilt, autopilot)
-            }
-            Stage::Maze(args) => match mazes.make(args) {
-                Ok(maze) => Player::alone(maze, tilt, autopilot),
-                Err(e) => {
-                    #[cfg(feature = "defmt")]
-                    defmt::error!("level {=usize}: {}: back to level 1", number + 1, e);
-                    let _ = e;
-                    number = 0;
-                    continue;
-                }
-            },
-        } {
-            Ok(player) => player,
-            Err(e) => return GameExit::SetupFailed(e),
+        let level = match endless.stage(number) {
+            Stage::Builtin(index) => LEVELS.get(index).copied().ok_or(None),
+            Stage::Maze(args) => mazes.make(args).map_err(Some),
         };
-        // The first level of its list (the first built-in level, or the
-        // maze alone).
-        let first = number - player.level_index();
-        player.endless_from(first);
+        let level = match level {
+            Ok(level) => level,
+            Err(e) => {
+                // A maze that cannot be made (a bug): the run starts again.
+                #[cfg(feature = "defmt")]
+                defmt::error!("level {=usize}: {}: back to level 1", number + 1, e);
+                let _ = e;
+                number = 0;
+                continue;
+            }
+        };
+        let autopilot = carried.is_some_and(|c: Carried| c.autopilot());
+        // The call writes the player straight into `made`, a local the
+        // game's future keeps across its awaits; everything after borrows it.
+        // Matching it into a local of its own would move it through a 2 KB
+        // temporary on the stack, under the deepest call (`Player::new`):
+        // more than the micro:bit v1 has.
+        let mut made = Player::<W, H, PILOT, EVENTS>::single(level, tilt, autopilot);
+        let player = match &mut made {
+            Ok(player) => player,
+            Err(e) => return GameExit::SetupFailed(*e),
+        };
+        player.endless_at(number);
         if let Some(carried) = carried {
             player.carry(carried);
         }
@@ -139,8 +139,8 @@ async fn play<
                     return GameExit::Quit;
                 }
             }
-            // Won or skipped past the list's end (here or in the last tick).
-            if player.past_end() {
+            // Won or skipped (here or in the last tick): the next level.
+            if player.wants_next() {
                 break;
             }
             // The autopilot playing is the toy in use.

@@ -160,6 +160,15 @@ pub struct Tick<const W: usize, const H: usize> {
     pub sounds: Sounds,
 }
 
+/// A player's place in the endless run ([`Player::endless_at`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct Endless {
+    /// The level's number in the run, counted from 0.
+    number: usize,
+    /// Done with it: won, or skipped.
+    done: bool,
+}
+
 /// What a player keeps from one level to the next ([`Player::carried`],
 /// [`Player::carry`]): the game task carries it into a new player when the
 /// next level is a generated maze, which no list holds.
@@ -193,20 +202,11 @@ impl Carried {
 pub struct Player<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool> {
     levels: &'a [LevelView<'a>],
     level: usize,
-    /// The number of `levels[0]` in the whole run (0 for the built-in list; a
-    /// generated maze, alone in its list, comes after them): what
-    /// [`Player::level_index`] and the status count from.
-    first: usize,
-    /// Moving on from the list's last level leaves the list
-    /// ([`Player::past_end`]) instead of starting it again: the endless run,
-    /// where the game task brings the next generated maze.
-    endless: bool,
-    /// The player has moved on past the list's last level (only when
-    /// `endless`).
-    past_end: bool,
+    /// In the endless run, the level's number in it (counted from 0), and
+    /// whether the player is done with it ([`Player::endless_at`]).
+    endless: Option<Endless>,
     session: Session<'a, Fx>,
     renderer: Renderer<W, H>,
-    tilt: TiltConfig,
     autopilot: Option<Autopilot>,
     /// The finished attempt on show, and frames left to show it.
     pause: Option<(Phase, u32)>,
@@ -253,12 +253,9 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         Ok(Player {
             levels,
             level,
-            first: 0,
-            endless: false,
-            past_end: false,
+            endless: None,
             session: Session::new(view, Self::CONFIG, tilt)?,
             renderer: Renderer::new(),
-            tilt,
             autopilot: (PILOT && autopilot).then(|| Autopilot::new(&view)),
             pause: None,
             sensor_down: None,
@@ -268,10 +265,9 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         })
     }
 
-    /// A player on `level` alone, which no list holds (a generated maze): in
-    /// the endless run ([`Player::endless_from`]) moving on from it is
-    /// [`Player::past_end`], and otherwise it starts again.
-    pub fn alone(
+    /// A player on `level`, which no list holds (a level of the endless run:
+    /// [`Player::endless_at`]; a level alone, which starts again when won).
+    pub fn single(
         level: LevelView<'a>,
         tilt: TiltConfig,
         autopilot: bool,
@@ -279,29 +275,31 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         Self::on(&[], 0, level, tilt, autopilot)
     }
 
-    /// The level's number in the run, counted from 0: its index in the
-    /// level list, after the levels before the list ([`Player::numbered_from`]).
+    /// The level's number: in the endless run its number in the run (counted
+    /// from 0), otherwise its index in the player's list.
     pub fn level_index(&self) -> usize {
-        self.first.saturating_add(self.level)
+        self.endless.map_or(self.level, |endless| endless.number)
     }
     /// The level's name.
     pub fn level_name(&self) -> &'a str {
         self.session.game().level().info.name
     }
-    /// Makes this player part of the endless run, its list counted from
-    /// level `first` of the run (0 for the built-in levels; a generated maze,
-    /// alone in its list, comes after them): what [`Player::level_index`] and
-    /// the status say, and moving on from the list's last level leaves the
-    /// list ([`Player::past_end`]) rather than starting it again.
-    pub fn endless_from(&mut self, first: usize) {
-        self.first = first;
-        self.endless = true;
+    /// Makes this player's level number `number` of the endless run
+    /// ([`crate::game::endless`]): what [`Player::level_index`] and the status
+    /// say; and moving on from it (a win, [`Command::NextLevel`]) is not the
+    /// player's: it only says it is done ([`Player::wants_next`]), and its
+    /// caller brings the next level, which no list holds.
+    pub fn endless_at(&mut self, number: usize) {
+        self.endless = Some(Endless {
+            number,
+            done: false,
+        });
     }
-    /// The player has moved on past its list's last level (endless run only):
-    /// the next level is not in its list, and its caller brings it
-    /// ([`Player::carried`] says what to keep).
-    pub fn past_end(&self) -> bool {
-        self.past_end
+    /// In the endless run, the player is done with its level (won, or
+    /// skipped): its caller brings the next one ([`Player::carried`] says what
+    /// to keep).
+    pub fn wants_next(&self) -> bool {
+        self.endless.is_some_and(|endless| endless.done)
     }
     /// The session.
     pub fn session(&self) -> &Session<'a, Fx> {
@@ -495,23 +493,29 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         }
     }
 
-    /// Moves on to the next level of the list (after the last: the first, or
-    /// in the endless run [`Player::past_end`]), keeping what
-    /// [`Player::carried`] says. A level that cannot be set up is skipped.
+    /// Moves on to the next level of the list (after the last: the first),
+    /// keeping what [`Player::carried`] says; a level that cannot be set up is
+    /// skipped, and a level without a list starts again. In the endless run
+    /// the player only says it is done ([`Player::wants_next`]).
     pub fn next_level(&mut self) {
+        if let Some(endless) = &mut self.endless {
+            endless.done = true;
+            return;
+        }
+        if self.levels.is_empty() {
+            self.restart();
+            return;
+        }
         let carried = self.carried();
         for offset in 1..=self.levels.len() {
             let index = self.level + offset;
-            if self.endless && index >= self.levels.len() {
-                break;
-            }
-            if let Ok(next) = Self::new(self.levels, index, self.tilt, carried.autopilot) {
-                // Field by field, not a struct update: on the micro:bit v1
-                // every copy of a player is 2 KB of stack.
-                let (first, endless) = (self.first, self.endless);
+            if let Ok(next) = Self::new(
+                self.levels,
+                index,
+                self.session.tilt_config(),
+                carried.autopilot,
+            ) {
                 *self = next;
-                self.first = first;
-                self.endless = endless;
                 self.carry(carried);
                 #[cfg(feature = "defmt")]
                 defmt::info!(
@@ -521,12 +525,6 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
                 );
                 return;
             }
-        }
-        if self.endless {
-            self.past_end = true;
-        } else if self.levels.is_empty() {
-            // Alone, and not in the endless run: the same level again.
-            self.restart();
         }
     }
 

@@ -359,20 +359,13 @@ fn profile(mazes: &mut Mazes) {
         seeds: Seeds::Count,
     };
     for number in 0..LEVELS.len() + DEMO_MAZES {
-        let maze;
-        let player = match endless.stage(number) {
-            Stage::Builtin(index) => {
-                Player::<WIDTH, HEIGHT, PILOT, EVENTS>::new(&LEVELS, index, SYNTHETIC_TILT, true)
-            }
-            Stage::Maze(args) => {
-                let Ok(view) = mazes.make(args) else {
-                    continue;
-                };
-                maze = [view];
-                Player::new(&maze, 0, SYNTHETIC_TILT, true)
-            }
+        let level = match endless.stage(number) {
+            Stage::Builtin(index) => LEVELS.get(index).copied(),
+            Stage::Maze(args) => mazes.make(args).ok(),
         };
-        let Ok(mut player) = player else {
+        let Some(Ok(mut player)) = level.map(|level| {
+            Player::<WIDTH, HEIGHT, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true)
+        }) else {
             continue;
         };
         let mut costs = Costs::default();
