@@ -374,3 +374,34 @@ fn wide_mazes_show_a_window_around_the_marble_within_100_columns() {
     let small = map_window(11, 5, 4, Some((9, 4)));
     assert_eq!((small.i0, small.k0, small.w, small.h), (0, 0, 11, 5));
 }
+
+#[test]
+fn a_generated_maze_is_named_as_one_in_the_status_line() {
+    let frame = Frame::filled(1);
+    let builtin = plain(&drawn(
+        &frame,
+        &Status {
+            level: 1,
+            ..Status::START
+        },
+    ));
+    assert!(
+        builtin.contains(&format!(
+            "level 2/{} {}:",
+            LEVELS.len(),
+            LEVELS[1].info.name
+        )),
+        "{builtin}"
+    );
+    // Level 11 of the endless run, the first maze after the built-in levels.
+    let maze = plain(&drawn(
+        &frame,
+        &Status {
+            level: LEVELS.len() as u8,
+            ..Status::START
+        },
+    ));
+    let line = format!("level {} (a generated maze): playing", LEVELS.len() + 1);
+    assert!(maze.contains(&line), "{maze}");
+    assert!(!maze.contains('?'), "{maze}");
+}

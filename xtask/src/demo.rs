@@ -1,13 +1,15 @@
 //! `cargo xtask check-demo`: the firmware must play exactly like the host
 //! simulator. The QEMU firmware's headless demo (the autopilot plays every
-//! built-in level) logs, per level,
+//! built-in level, then three generated mazes) logs, per level,
 //!
 //! ```text
 //! demo <n>/<total> level=<name> outcome=<won|fell|timeout> steps=<physics steps> state_hash=<16 hex>
 //! ```
 //!
-//! and `sim --level <name> --autopilot --json` must report the same outcome,
-//! step count and state hash; every level must be won. The demo's CPU load must
+//! and `sim --level <name> --autopilot --json` (for a generated maze, named
+//! `maze-SEED-NxNxS-dD`: `sim --generate SEED --size N --storeys S
+//! --difficulty D …`, [`level_args`]) must report the same outcome, step
+//! count and state hash; every level must be won. The demo's CPU load must
 //! stay within CPU_BUDGET_CENTIPERCENT (default 300: 3.00 % of a 64 MHz
 //! Cortex-M4). Under -icount that count is exact and the same on every machine,
 //! so the budget is a report with a limit, like the flash budget, not a timing
@@ -515,7 +517,7 @@ mod tests {
 34.4 INFO  profile first-roll: 73 frames, instructions per frame: physics 1722 (max 1934), autopilot 2261, render 1532
 38.7 INFO  profile all levels: 2981 frames, instructions per frame: physics 3926 (max 65765), autopilot 2741, render 1727
 38.8 INFO  profile long-fall: 384 frames, instructions per frame: physics 900 (max 30123), autopilot 0, render 0
-INFO  demo summary: 10/10 levels won
+INFO  demo summary: 13/13 levels won
 ";
         assert_eq!(
             parse_worst_frames(log),

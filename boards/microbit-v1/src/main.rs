@@ -7,7 +7,8 @@
 //!   ([`sensor`]); the log goes over RTT.
 //! * In QEMU (`cargo microbit-v1 -- --demo`): the semihosting command line
 //!   picks the mode (`marble_rolling::board::microbit_v1::Options`). With
-//!   `--demo` the autopilot plays every built-in level and the firmware logs
+//!   `--demo` the autopilot plays every built-in level and three generated
+//!   mazes and the firmware logs
 //!   per level `demo <n>/<total> level=<name> outcome=<..> steps=<..>
 //!   state_hash=<16 hex>` (as the mps2 board, so `cargo sim` can be compared
 //!   with it), every frame that stays on the LEDs for 80 ms or more with its

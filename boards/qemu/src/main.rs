@@ -2,9 +2,12 @@
 //!
 //! `cargo qemu` plays on the terminal (UART0); `cargo qemu -- --demo` (or any
 //! run without a terminal on stdin) runs the deterministic headless demo: the
-//! autopilot plays every built-in level, one log line per level (outcome,
-//! physics steps, `state_hash`, as `cargo sim -- --level <name> --autopilot
-//! --json` reports them; `cargo xtask check-demo` compares the two), then the
+//! autopilot plays every built-in level and the endless run's first three
+//! generated mazes, one log line per level (outcome, physics steps,
+//! `state_hash`, as `cargo sim -- --level <name> --autopilot --json` or
+//! `cargo sim -- --generate SEED --size N --storeys S --difficulty D
+//! --autopilot --json` reports them; `cargo xtask check-demo` compares the
+//! two), then the
 //! CPU load, the stack high-water mark, the instruction count of a game frame,
 //! and a summary. QEMU exits 0 when every level was won, 1 otherwise, 101 on
 //! a panic. The runner is `cargo qemu` (xtask); it tells the firmware its mode

@@ -231,8 +231,9 @@ pub fn rows_hex(picture: &Picture) -> [u32; SIZE] {
 /// (`cargo microbit-v1 -- --demo`); on a real board there is none (the
 /// defaults: play).
 ///
-/// * `--demo`: the autopilot plays every built-in level once, then the
-///   firmware exits through semihosting (0 only if every level was won).
+/// * `--demo`: the autopilot plays every built-in level once and the first
+///   three generated mazes of the endless run, then the firmware exits
+///   through semihosting (0 only if every level was won).
 /// * `--seconds=N`: play (no autopilot) for `N` seconds of firmware time,
 ///   then exit 0 — a headless run of the play mode, e.g. to see the sensor
 ///   supervision give up on QEMU's stub accelerometer.

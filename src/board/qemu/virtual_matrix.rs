@@ -193,14 +193,22 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
     }
     let tenths = status.frames * 10 / FRAME_HZ.max(1);
     let [x, _, z] = status.reading;
+    let number = usize::from(status.level) + 1;
+    // Past the built-in levels, the endless run's generated mazes: the status
+    // has no room for a maze's name.
+    let _ = match LEVELS.get(usize::from(status.level)) {
+        Some(level) => write!(
+            out,
+            "\r\n  level {}/{} {}",
+            number,
+            LEVELS.len(),
+            level.info.name
+        ),
+        None => write!(out, "\r\n  level {} (a generated maze)", number),
+    };
     let _ = write!(
         out,
-        "\r\n  level {}/{} {}: {} {}.{} s{}{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
-        usize::from(status.level) + 1,
-        LEVELS.len(),
-        LEVELS
-            .get(usize::from(status.level))
-            .map_or("?", |level| level.info.name),
+        ": {} {}.{} s{}{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
         status.phase.as_str(),
         tenths / 10,
         tenths % 10,
