@@ -405,3 +405,55 @@ fn the_next_level_keeps_the_sound_the_calibration_and_the_autopilot() {
     next.carry(carried);
     assert_eq!(next.carried(), carried);
 }
+
+/// The game task's run (`app::game_task`'s play loop, step for step, without
+/// its clock): from the last built-in level into the mazes, each level's
+/// player built for it alone and told its number, the settings carried from
+/// the player before.
+#[test]
+fn the_run_goes_on_from_the_last_built_in_level_into_mazes() {
+    let reach = microbit_v1::MAZE_REACH;
+    let endless = run(reach, Seeds::Count);
+    let mut mazes = MazeSlot::<
+        { microbit_v1::MAZE_REACH.words() },
+        { microbit_v1::MAZE_REACH.text_bytes() },
+    >::new(reach);
+    let mut number = LEVELS.len() - 1;
+    let mut carried = None;
+    let mut played = Vec::new();
+    for _ in 0..3 {
+        let level = endless.level(number, &mut mazes).expect("a level");
+        let autopilot =
+            carried.is_none_or(|c: marble_rolling::game::player::Carried| c.autopilot());
+        let mut made = FivePlayer::single(level, SYNTHETIC_TILT, autopilot);
+        let player = made.as_mut().expect("set up");
+        player.endless_at(number);
+        if let Some(carried) = carried {
+            player.carry(carried);
+        } else {
+            // Sound off on the first: the mazes must keep it off.
+            player.handle(InputEvent::Command(Command::ToggleMute));
+        }
+        assert_eq!(usize::from(player.status().level), number);
+        assert!(play_until_next(player, 20_000), "{}", player.level_name());
+        assert!(player.muted(), "{}", player.level_name());
+        played.push(player.level_name().to_string());
+        carried = Some(player.carried());
+        number = player.level_index() + 1;
+    }
+    assert_eq!(
+        played,
+        [
+            LEVELS[LEVELS.len() - 1].info.name,
+            "maze-11-4x4x1-d1",
+            "maze-12-4x4x2-d1"
+        ]
+    );
+    // A level past the built-in levels that the board does not keep is the
+    // maze's error, not a crash.
+    let far = Endless {
+        builtins: LEVELS.len() + 5,
+        ..endless
+    };
+    assert_eq!(far.level(LEVELS.len(), &mut mazes).err(), Some(None));
+}

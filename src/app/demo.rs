@@ -11,7 +11,7 @@ use embassy_time::Ticker;
 use super::links::Win;
 use super::links::{Links, Meter};
 use super::mode::{DemoSummary, GameExit};
-use crate::game::endless::{Endless, MazeError, MazeSlot, Seeds, Stage, DEMO_MAZES};
+use crate::game::endless::{Endless, MazeError, MazeSlot, Seeds, DEMO_MAZES};
 use crate::game::levels::LEVELS;
 use crate::game::player::{Player, WIN_PAUSE_FRAMES};
 use crate::game::rules::Phase;
@@ -153,11 +153,7 @@ pub(super) async fn demo<
     );
     for number in 0..total {
         summary.levels = summary.levels.saturating_add(1);
-        let level = match endless.stage(number) {
-            Stage::Builtin(index) => LEVELS.get(index).copied().ok_or(None),
-            Stage::Maze(args) => mazes.make(args).map_err(Some),
-        };
-        let level = match level {
+        let level = match endless.level(number, mazes) {
             Ok(level) => level,
             Err(e) => {
                 setup_failed(number, total, DemoSetup::Maze(e));

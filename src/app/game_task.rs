@@ -11,7 +11,7 @@ use super::links::Links;
 use super::links::Win;
 use super::mode::{GameExit, GameMode};
 use super::FRAME_HZ;
-use crate::game::endless::{Endless, MazeSlot, Seeds, Stage};
+use crate::game::endless::{Endless, MazeSlot, Seeds};
 use crate::game::levels::LEVELS;
 use crate::game::player::{Carried, Player};
 #[cfg(feature = "records")]
@@ -90,11 +90,7 @@ async fn play<
     let mut idle =
         crate::input::idle::Idle::new(crate::input::idle::IdleConfig::two_minutes(FRAME_HZ));
     loop {
-        let level = match endless.stage(number) {
-            Stage::Builtin(index) => LEVELS.get(index).copied().ok_or(None),
-            Stage::Maze(args) => mazes.make(args).map_err(Some),
-        };
-        let level = match level {
+        let level = match endless.level(number, mazes) {
             Ok(level) => level,
             Err(e) => {
                 // A maze that cannot be made (a bug): the run starts again.

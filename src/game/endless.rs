@@ -29,6 +29,7 @@ use core::fmt::{self, Write};
 
 use super::generate::{self, GenerateError, Maze, MAX_DIFFICULTY, MAX_SIZE, MIN_SIZE};
 use super::level::{parse, LevelError, LevelView};
+use super::levels::LEVELS;
 use crate::physics::geometry::grid::{words_for, TileGrid};
 
 /// Generated mazes the headless demos play after the built-in levels.
@@ -173,6 +174,21 @@ impl Endless {
             storeys,
             difficulty,
         })
+    }
+
+    /// Level `number` of the run ([`Endless::stage`]): a built-in level of
+    /// [`LEVELS`], or the maze made in `mazes` ([`MazeSlot::make`]). The error
+    /// is the maze's (`None`: a built-in level [`LEVELS`] does not have, when
+    /// `builtins` counts more).
+    pub fn level<'m, const WORDS: usize, const TEXT: usize>(
+        &self,
+        number: usize,
+        mazes: &'m mut MazeSlot<WORDS, TEXT>,
+    ) -> Result<LevelView<'m>, Option<MazeError>> {
+        match self.stage(number) {
+            Stage::Builtin(index) => LEVELS.get(index).copied().ok_or(None),
+            Stage::Maze(args) => mazes.make(args).map_err(Some),
+        }
     }
 }
 
