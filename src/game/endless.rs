@@ -299,7 +299,7 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
 fn write_maze<const TEXT: usize>(args: MazeArgs, text: &mut Text<TEXT>) -> Result<(), MazeError> {
     let mut maze = Maze::EMPTY;
     maze.generate(args.seed, args.size, args.storeys, args.difficulty)?;
-    write!(text, "{maze}").map_err(|_| MazeError::TextTooLong)
+    maze.write_text(text).map_err(|_| MazeError::TextTooLong)
 }
 
 /// A level text being written: `N` bytes, and an error rather than a cut when
