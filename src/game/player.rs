@@ -170,8 +170,9 @@ struct Endless {
 }
 
 /// What a player keeps from one level to the next ([`Player::carried`],
-/// [`Player::carry`]): the game task carries it into a new player when the
-/// next level is a generated maze, which no list holds.
+/// [`Player::carry`]): within its list the player keeps it itself; in the
+/// endless run, where each level gets a player of its own, the game task
+/// carries it into the next one.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Carried {
     calibration: Calibration,
