@@ -163,8 +163,8 @@ pub(super) async fn demo<
         // The call writes the player straight into `made`, a local the
         // demo's future keeps across its awaits; everything after borrows it.
         // Matching it into a local of its own would move it through a 2 KB
-        // temporary on the stack, under the deepest call (`Player::new`):
-        // more than the micro:bit v1 has.
+        // temporary on the stack, under the game's deepest call (the making
+        // of the player itself): more than the micro:bit v1 has.
         let mut made = Player::<W, H, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true);
         let player = match &mut made {
             Ok(player) => player,
