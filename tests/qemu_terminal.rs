@@ -11,7 +11,8 @@ use marble_rolling::app::Console;
 use marble_rolling::board::qemu::virtual_matrix::{
     draw, grey, map_window, shade, MapWindow, MAPS_COLUMNS, MAP_ROWS,
 };
-use marble_rolling::board::qemu::{HEIGHT, WIDTH};
+use marble_rolling::board::qemu::{self, HEIGHT, WIDTH};
+use marble_rolling::game::endless::{Endless, MazeSlot, Seeds};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::player::{MarbleSpot, Player, Status};
@@ -34,8 +35,13 @@ impl Console for Screen {
 
 /// `draw`'s bytes for `status` (a first draw: the screen cleared).
 fn drawn(frame: &Frame<WIDTH, HEIGHT>, status: &Status) -> Vec<u8> {
+    drawn_maze(frame, status, None)
+}
+
+/// [`drawn`] with `maze` on show.
+fn drawn_maze(frame: &Frame<WIDTH, HEIGHT>, status: &Status, maze: Option<&LevelView>) -> Vec<u8> {
     let mut screen = Screen::default();
-    draw(&mut screen, frame, status, true);
+    draw(&mut screen, frame, status, maze, true);
     screen.0
 }
 
@@ -376,7 +382,7 @@ fn wide_mazes_show_a_window_around_the_marble_within_100_columns() {
 }
 
 #[test]
-fn a_generated_maze_is_named_as_one_in_the_status_line() {
+fn a_generated_maze_is_named_and_its_storeys_drawn() {
     let frame = Frame::filled(1);
     let builtin = plain(&drawn(
         &frame,
@@ -393,15 +399,36 @@ fn a_generated_maze_is_named_as_one_in_the_status_line() {
         )),
         "{builtin}"
     );
-    // Level 11 of the endless run, the first maze after the built-in levels.
-    let maze = plain(&drawn(
-        &frame,
-        &Status {
-            level: LEVELS.len() as u8,
-            ..Status::START
-        },
-    ));
-    let line = format!("level {} (a generated maze): playing", LEVELS.len() + 1);
-    assert!(maze.contains(&line), "{maze}");
-    assert!(!maze.contains('?'), "{maze}");
+    // Level 12 of the endless run, the second maze: two storeys.
+    let endless = Endless {
+        builtins: LEVELS.len(),
+        reach: qemu::MAZE_REACH,
+        seeds: Seeds::Count,
+    };
+    let number = LEVELS.len() + 1;
+    let args = endless.maze(number).expect("a maze");
+    assert_eq!(args.storeys, 2);
+    let mut slot = MazeSlot::<{ qemu::MAZE_REACH.words() }, { qemu::MAZE_REACH.text_bytes() }>::new(
+        qemu::MAZE_REACH,
+    );
+    let maze = slot.make(args).expect("made");
+    let status = Status {
+        level: number as u8,
+        maze: Some(args),
+        ..Status::START
+    };
+    let screen = plain(&drawn_maze(&frame, &status, Some(&maze)));
+    assert!(
+        screen.contains("level 12 maze-12-4x4x2-d1: playing"),
+        "{screen}"
+    );
+    assert!(screen.contains("storey 1 (top)"), "{screen}");
+    assert!(screen.contains("storey 0"), "{screen}");
+    // Without the maze (it could not be made), the line still says what it is.
+    let bare = plain(&drawn(&frame, &status));
+    assert!(
+        bare.contains("level 12 (a generated maze): playing"),
+        "{bare}"
+    );
+    assert!(!bare.contains("storey 1 (top)"), "{bare}");
 }

@@ -11,9 +11,9 @@ use embassy_time::Ticker;
 use super::links::Win;
 use super::links::{Links, Meter};
 use super::mode::{DemoSummary, GameExit};
-use crate::game::endless::{Endless, MazeError, MazeSlot, Seeds, DEMO_MAZES};
+use crate::game::endless::{Endless, MazeArgs, MazeError, MazeSlot, Seeds, DEMO_MAZES};
 use crate::game::levels::LEVELS;
-use crate::game::player::{Player, WIN_PAUSE_FRAMES};
+use crate::game::player::{Player, Status, WIN_PAUSE_FRAMES};
 use crate::game::rules::Phase;
 use crate::game::session::SYNTHETIC_TILT;
 use crate::input::event::{Command, InputEvent, Tilt};
@@ -174,6 +174,7 @@ pub(super) async fn demo<
             }
         };
         player.endless_at(number);
+        let maze = endless.maze(number);
         if let Some(fault) = sensor {
             player.handle(InputEvent::SensorDown(fault));
         }
@@ -187,14 +188,14 @@ pub(super) async fn demo<
                 if let Some(frame) = player.tick(Tilt::FLAT.reading_mg(), true).frame {
                     links.frames.signal(frame);
                 }
-                links.status.set(player.status());
+                links.status.set(status_of(player, maze));
                 continue;
             }
             let phase = match meter {
                 None => player.frame(Tilt::FLAT.reading_mg()),
                 Some(meter) => profiled_frame(player, meter, &mut profile),
             };
-            links.status.set(player.status());
+            links.status.set(status_of(player, maze));
             if !links.frames.signaled() || phase != Phase::Playing {
                 links.frames.signal(match meter {
                     None => player.render(),
@@ -257,6 +258,24 @@ pub(super) async fn demo<
         sensor = player.sensor_down();
     }
     GameExit::DemoDone(summary)
+}
+
+/// `player`'s status, with the generated maze on show (`maze`, feature
+/// `storey-maps`).
+fn status_of<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    player: &Player<'_, W, H, PILOT, EVENTS>,
+    maze: Option<MazeArgs>,
+) -> Status {
+    #[cfg(feature = "storey-maps")]
+    return Status {
+        maze,
+        ..player.status()
+    };
+    #[cfg(not(feature = "storey-maps"))]
+    {
+        let _ = maze;
+        player.status()
+    }
 }
 
 /// Logs that level `number` (from 0) of the demo's `total` could not be set

@@ -200,6 +200,11 @@ async fn play<
             };
             #[cfg(not(feature = "records"))]
             let status = player.status();
+            #[cfg(feature = "storey-maps")]
+            let status = crate::game::player::Status {
+                maze: endless.maze(number),
+                ..status
+            };
             links.status.set(status);
             if let Some(frame) = tick.frame {
                 links.frames.signal(frame);

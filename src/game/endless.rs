@@ -28,7 +28,7 @@
 use core::fmt::{self, Write};
 
 use super::generate::{self, GenerateError, Maze, MAX_DIFFICULTY, MAX_SIZE, MIN_SIZE};
-use super::level::{parse, LevelError, LevelView};
+use super::level::{parse, LevelError, LevelInfo, LevelView};
 use super::levels::LEVELS;
 use crate::physics::geometry::grid::{words_for, TileGrid};
 
@@ -176,6 +176,14 @@ impl Endless {
         })
     }
 
+    /// The generated maze that level `number` of the run is, if it is one.
+    pub fn maze(&self, number: usize) -> Option<MazeArgs> {
+        match self.stage(number) {
+            Stage::Maze(args) => Some(args),
+            Stage::Builtin(_) => None,
+        }
+    }
+
     /// Level `number` of the run ([`Endless::stage`]): a built-in level of
     /// [`LEVELS`], or the maze made in `mazes` ([`MazeSlot::make`]). The error
     /// is the maze's (`None`: a built-in level [`LEVELS`] does not have, when
@@ -233,15 +241,17 @@ impl From<GenerateError> for MazeError {
 }
 
 /// Room for the generated maze being played, on a board that keeps mazes up to
-/// a [`Reach`]: `WORDS` words of tiles ([`Reach::words`]) and the maze's name,
-/// which the level made by [`MazeSlot::make`] borrows. Its header is the
-/// level's own (the view's); the level text, up to `TEXT` bytes
-/// ([`Reach::text_bytes`]), is on the stack only while it is parsed.
+/// a [`Reach`]: `WORDS` words of tiles ([`Reach::words`]), the header and the
+/// maze's name, which the level made by [`MazeSlot::make`] borrows. The level
+/// text, up to `TEXT` bytes ([`Reach::text_bytes`]), is on the stack only
+/// while it is parsed.
 #[derive(Clone, Debug)]
 pub struct MazeSlot<const WORDS: usize, const TEXT: usize> {
     reach: Reach,
     name: [u8; NAME_BYTES],
-    grid: Option<TileGrid<WORDS>>,
+    name_len: u8,
+    /// The header (its name a placeholder: the name is `name`) and the tiles.
+    level: Option<(LevelInfo<'static>, TileGrid<WORDS>)>,
 }
 
 impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
@@ -250,7 +260,8 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
         MazeSlot {
             reach,
             name: [0; NAME_BYTES],
-            grid: None,
+            name_len: 0,
+            level: None,
         }
     }
 
@@ -260,33 +271,36 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
     }
 
     /// Generates the maze of `args`, writes its level text and parses it: the
-    /// level, its tiles and name kept here (whatever the slot held before is
-    /// gone, also on an error). Out of line: the maze and its text take their
-    /// stack only here, not in the game loop that calls it.
+    /// level kept here (whatever the slot held before is gone, also on an
+    /// error). Out of line: the maze and its text take their stack only here,
+    /// not in the game loop that calls it.
     #[inline(never)]
     pub fn make(&mut self, args: MazeArgs) -> Result<LevelView<'_>, MazeError> {
-        self.grid = None;
+        self.level = None;
         if !self.reach.holds(args) {
             return Err(MazeError::BeyondReach(args));
         }
         let mut text = Text::<TEXT>::new();
         write_maze(args, &mut text)?;
         let level = parse::<WORDS>(text.as_str()).map_err(MazeError::Level)?;
-        let name = level.info.name;
+        let name = level.info.name.as_bytes();
         let kept = self
             .name
             .get_mut(..name.len())
             .ok_or(MazeError::NameTooLong)?;
-        kept.copy_from_slice(name.as_bytes());
-        let info = level.info.renamed("");
-        let grid = self.grid.insert(level.grid);
+        kept.copy_from_slice(name);
+        self.name_len = name.len() as u8;
+        self.level = Some((level.info.renamed(""), level.grid));
+        self.view().ok_or(MazeError::NameTooLong)
+    }
+
+    /// The maze [`MazeSlot::make`] made last, if it made one.
+    pub fn view(&self) -> Option<LevelView<'_>> {
+        let (info, grid) = self.level.as_ref()?;
         // The name was a `str`: its bytes are UTF-8.
-        let name = self
-            .name
-            .get(..name.len())
-            .and_then(|name| core::str::from_utf8(name).ok())
-            .ok_or(MazeError::NameTooLong)?;
-        Ok(LevelView {
+        let name = self.name.get(..usize::from(self.name_len))?;
+        let name = core::str::from_utf8(name).ok()?;
+        Some(LevelView {
             info: info.renamed(name),
             tiles: grid.view(),
         })

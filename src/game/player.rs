@@ -79,6 +79,12 @@ pub struct Status {
     /// them out every frame cost the QEMU demo 0.07 points of CPU load.
     #[cfg(feature = "storey-maps")]
     pub marbles: [Option<MarbleSpot>; MAX_MARBLES],
+    /// The generated maze on show, by its arguments (`None`: a level the
+    /// boards hold, a built-in one): QEMU's terminal makes it again to draw
+    /// its storeys (feature `storey-maps`; the game task fills it in, the
+    /// player does not know where its level came from).
+    #[cfg(feature = "storey-maps")]
+    pub maze: Option<crate::game::endless::MazeArgs>,
 }
 
 /// Where a marble is, for status displays: the tile holding its centre and
@@ -144,6 +150,8 @@ impl Status {
         best: None,
         #[cfg(feature = "storey-maps")]
         marbles: [None; MAX_MARBLES],
+        #[cfg(feature = "storey-maps")]
+        maze: None,
     };
 }
 
@@ -376,6 +384,8 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             best: None,
             #[cfg(feature = "storey-maps")]
             marbles: marble_spots(game),
+            #[cfg(feature = "storey-maps")]
+            maze: None,
         }
     }
 
