@@ -110,7 +110,16 @@ async fn play<
         let mut made = Player::<W, H, PILOT, EVENTS>::single(level, tilt, autopilot);
         let player = match &mut made {
             Ok(player) => player,
-            Err(e) => return GameExit::SetupFailed(*e),
+            // A built-in level that cannot be set up is the firmware's bug.
+            Err(e) if number < LEVELS.len() => return GameExit::SetupFailed(*e),
+            Err(e) => {
+                // A maze the physics refuses (a bug too): the run starts again.
+                #[cfg(feature = "defmt")]
+                defmt::error!("level {=usize}: {}: back to level 1", number + 1, e);
+                let _ = e;
+                number = 0;
+                continue;
+            }
         };
         player.endless_at(number);
         if let Some(carried) = carried {
