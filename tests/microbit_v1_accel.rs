@@ -225,7 +225,7 @@ const FRAME_HZ: u64 = 128;
 
 /// A game on "switchback" (no holes: nothing ends the attempt early), no
 /// autopilot, event stepping (the v1's).
-fn game() -> Player<5, 5, false, true> {
+fn game() -> Player<'static, 5, 5, false, true> {
     Player::new(&LEVELS, 2, TiltConfig::DEFAULT, false).expect("built-in level")
 }
 

@@ -11,7 +11,7 @@ use marble_rolling::input::keys::KeyTilt;
 use marble_rolling::input::sensor::Fault;
 use marble_rolling::render::screens::fault_frame;
 
-type FivePlayer = Player<5, 5, true, false>;
+type FivePlayer = Player<'static, 5, 5, true, false>;
 
 /// A reading that rolls the marble: 0.3 g towards +x.
 const TILTED: [i32; 3] = [-300, 954, 0];

@@ -11,7 +11,8 @@ use marble_rolling::app::Console;
 use marble_rolling::board::qemu::virtual_matrix::{
     draw, grey, map_window, shade, MapWindow, MAPS_COLUMNS, MAP_ROWS,
 };
-use marble_rolling::board::qemu::{HEIGHT, WIDTH};
+use marble_rolling::board::qemu::{self, HEIGHT, WIDTH};
+use marble_rolling::game::endless::{Endless, MazeSlot, Seeds};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::player::{MarbleSpot, Player, Status};
@@ -20,7 +21,7 @@ use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
 use marble_rolling::render::storey_tile;
 
 /// QEMU's player: the board's matrix, the autopilot, the event stepper.
-type QemuPlayer = Player<WIDTH, HEIGHT, true, true>;
+type QemuPlayer = Player<'static, WIDTH, HEIGHT, true, true>;
 
 /// The terminal: every byte written.
 #[derive(Default)]
@@ -34,8 +35,13 @@ impl Console for Screen {
 
 /// `draw`'s bytes for `status` (a first draw: the screen cleared).
 fn drawn(frame: &Frame<WIDTH, HEIGHT>, status: &Status) -> Vec<u8> {
+    drawn_maze(frame, status, None)
+}
+
+/// [`drawn`] with `maze` on show.
+fn drawn_maze(frame: &Frame<WIDTH, HEIGHT>, status: &Status, maze: Option<&LevelView>) -> Vec<u8> {
     let mut screen = Screen::default();
-    draw(&mut screen, frame, status, true);
+    draw(&mut screen, frame, status, maze, true);
     screen.0
 }
 
@@ -373,4 +379,56 @@ fn wide_mazes_show_a_window_around_the_marble_within_100_columns() {
     // A maze narrower than a map: whole, whatever the marble.
     let small = map_window(11, 5, 4, Some((9, 4)));
     assert_eq!((small.i0, small.k0, small.w, small.h), (0, 0, 11, 5));
+}
+
+#[test]
+fn a_generated_maze_is_named_and_its_storeys_drawn() {
+    let frame = Frame::filled(1);
+    let builtin = plain(&drawn(
+        &frame,
+        &Status {
+            level: 1,
+            ..Status::START
+        },
+    ));
+    assert!(
+        builtin.contains(&format!(
+            "level 2/{} {}:",
+            LEVELS.len(),
+            LEVELS[1].info.name
+        )),
+        "{builtin}"
+    );
+    // Level 12 of the endless run, the second maze: two storeys.
+    let endless = Endless {
+        builtins: LEVELS.len(),
+        reach: qemu::MAZE_REACH,
+        seeds: Seeds::Count,
+    };
+    let number = LEVELS.len() + 1;
+    let args = endless.maze(number).expect("a maze");
+    assert_eq!(args.storeys, 2);
+    let mut slot = MazeSlot::<{ qemu::MAZE_REACH.words() }, { qemu::MAZE_REACH.text_bytes() }>::new(
+        qemu::MAZE_REACH,
+    );
+    let maze = slot.make(args).expect("made");
+    let status = Status {
+        level: number as u8,
+        maze: Some(args),
+        ..Status::START
+    };
+    let screen = plain(&drawn_maze(&frame, &status, Some(&maze)));
+    assert!(
+        screen.contains("level 12 maze-12-4x4x2-d1: playing"),
+        "{screen}"
+    );
+    assert!(screen.contains("storey 1 (top)"), "{screen}");
+    assert!(screen.contains("storey 0"), "{screen}");
+    // Without the maze (it could not be made), the line still says what it is.
+    let bare = plain(&drawn(&frame, &status));
+    assert!(
+        bare.contains("level 12 (a generated maze): playing"),
+        "{bare}"
+    );
+    assert!(!bare.contains("storey 1 (top)"), "{bare}");
 }

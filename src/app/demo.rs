@@ -1,7 +1,9 @@
 //! The headless demo ([`GameMode::Demo`](super::GameMode::Demo)): the autopilot plays every built-in
-//! level once, exactly as `cargo sim -- --level <name> --autopilot` does, and
-//! each level's outcome, physics steps and `state_hash` are logged, with an
-//! instruction profile when the board has a [`Meter`].
+//! level once, exactly as `cargo sim -- --level <name> --autopilot` does, then
+//! the first [`DEMO_MAZES`] generated mazes of the endless run as `cargo sim --
+//! --generate …  --autopilot` does, and each level's outcome, physics steps
+//! and `state_hash` are logged, with an instruction profile when the board has
+//! a [`Meter`].
 
 use embassy_time::Ticker;
 
@@ -9,19 +11,21 @@ use embassy_time::Ticker;
 use super::links::Win;
 use super::links::{Links, Meter};
 use super::mode::{DemoSummary, GameExit};
+use crate::game::endless::{Endless, MazeArgs, MazeError, MazeSlot, Seeds, DEMO_MAZES};
 use crate::game::levels::LEVELS;
-use crate::game::player::{Player, WIN_PAUSE_FRAMES};
+use crate::game::player::{Player, Status, WIN_PAUSE_FRAMES};
 use crate::game::rules::Phase;
 use crate::game::session::SYNTHETIC_TILT;
 use crate::input::event::{Command, InputEvent, Tilt};
 use crate::matrix::Frame;
+use crate::physics::world::SetupError;
 use crate::render::screens::{win_flash, win_frame};
 
 /// [`Player::frame`]'s two calls, each counted (out of line: the demo's
 /// own path keeps its stack).
 #[inline(never)]
 fn profiled_frame<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
-    player: &mut Player<W, H, PILOT, EVENTS>,
+    player: &mut Player<'_, W, H, PILOT, EVENTS>,
     meter: Meter,
     profile: &mut Profile,
 ) -> Phase {
@@ -36,7 +40,7 @@ fn profiled_frame<const W: usize, const H: usize, const PILOT: bool, const EVENT
 /// [`Player::render`], counted.
 #[inline(never)]
 fn profiled_render<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
-    player: &mut Player<W, H, PILOT, EVENTS>,
+    player: &mut Player<'_, W, H, PILOT, EVENTS>,
     meter: Meter,
     profile: &mut Profile,
 ) -> Frame<W, H> {
@@ -92,7 +96,7 @@ impl Profile {
 async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
     links: &Links<W, H>,
     ticker: &mut Ticker,
-    player: &mut Player<W, H, PILOT, EVENTS>,
+    player: &mut Player<'_, W, H, PILOT, EVENTS>,
 ) -> bool {
     ticker.next().await;
     while let Ok(event) = links.events.try_receive() {
@@ -114,47 +118,69 @@ async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVEN
 /// [`SYNTHETIC_TILT`], the autopilot's reading taken from the game before
 /// each frame, stopping at the first phase that is not
 /// [`Phase::Playing`]), one frame per tick, paused while the sensor is down;
-/// then the outcome is shown for [`WIN_PAUSE_FRAMES`].
-pub(super) async fn demo<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+/// then the outcome is shown for [`WIN_PAUSE_FRAMES`]. After the built-in
+/// levels, the endless run's first [`DEMO_MAZES`] generated mazes
+/// ([`Seeds::Count`]), each made in `mazes` and played the same way, as
+/// `cargo sim -- --generate SEED --size N --storeys S --difficulty D
+/// --autopilot` plays it.
+pub(super) async fn demo<
+    const W: usize,
+    const H: usize,
+    const PILOT: bool,
+    const EVENTS: bool,
+    const WORDS: usize,
+    const TEXT: usize,
+>(
     links: &Links<W, H>,
     ticker: &mut Ticker,
     records: bool,
+    mazes: &mut MazeSlot<WORDS, TEXT>,
 ) -> GameExit {
     let meter = links.meter.get();
     let mut summary = DemoSummary::default();
     let mut sensor = None;
+    let endless = Endless {
+        builtins: LEVELS.len(),
+        reach: mazes.reach(),
+        seeds: Seeds::Count,
+    };
+    let total = LEVELS.len() + DEMO_MAZES;
     // The checkers replay the demo with `cargo sim -- --stepping <this>`.
     #[cfg(feature = "defmt")]
     defmt::info!(
         "demo stepping={=str}",
         if EVENTS { "events" } else { "fixed" }
     );
-    for (index, level) in LEVELS.iter().enumerate() {
-        // Named in the defmt log only.
-        let _ = level;
+    for number in 0..total {
         summary.levels = summary.levels.saturating_add(1);
-        let mut player =
-            match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, index, SYNTHETIC_TILT, true) {
-                Ok(player) => player,
-                Err(e) => {
-                    #[cfg(feature = "defmt")]
-                    defmt::error!(
-                        "demo {=usize}/{=usize} level={=str} outcome=setup-error ({})",
-                        index + 1,
-                        LEVELS.len(),
-                        level.info.name,
-                        e
-                    );
-                    let _ = e;
-                    continue;
-                }
-            };
+        let level = match endless.level(number, mazes) {
+            Ok(level) => level,
+            Err(e) => {
+                setup_failed(number, total, DemoSetup::Maze(e));
+                continue;
+            }
+        };
+        // The call writes the player straight into `made`, a local the
+        // demo's future keeps across its awaits; everything after borrows it.
+        // Matching it into a local of its own would move it through a 2 KB
+        // temporary on the stack, under the game's deepest call (the making
+        // of the player itself): more than the micro:bit v1 has.
+        let mut made = Player::<W, H, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true);
+        let player = match &mut made {
+            Ok(player) => player,
+            Err(e) => {
+                setup_failed(number, total, DemoSetup::Level(*e));
+                continue;
+            }
+        };
+        player.endless_at(number);
+        let maze = endless.maze(number);
         if let Some(fault) = sensor {
             player.handle(InputEvent::SensorDown(fault));
         }
         let mut profile = Profile::default();
         let phase = loop {
-            if !demo_tick(links, ticker, &mut player).await {
+            if !demo_tick(links, ticker, player).await {
                 return GameExit::Quit;
             }
             if player.sensor_down().is_some() {
@@ -162,18 +188,18 @@ pub(super) async fn demo<const W: usize, const H: usize, const PILOT: bool, cons
                 if let Some(frame) = player.tick(Tilt::FLAT.reading_mg(), true).frame {
                     links.frames.signal(frame);
                 }
-                links.status.set(player.status());
+                links.status.set(status_of(player, maze));
                 continue;
             }
             let phase = match meter {
                 None => player.frame(Tilt::FLAT.reading_mg()),
-                Some(meter) => profiled_frame(&mut player, meter, &mut profile),
+                Some(meter) => profiled_frame(player, meter, &mut profile),
             };
-            links.status.set(player.status());
+            links.status.set(status_of(player, maze));
             if !links.frames.signaled() || phase != Phase::Playing {
                 links.frames.signal(match meter {
                     None => player.render(),
-                    Some(meter) => profiled_render(&mut player, meter, &mut profile),
+                    Some(meter) => profiled_render(player, meter, &mut profile),
                 });
             }
             if phase != Phase::Playing {
@@ -185,12 +211,13 @@ pub(super) async fn demo<const W: usize, const H: usize, const PILOT: bool, cons
         summary.frames = summary.frames.saturating_add(u64::from(game.frames()));
         if phase == Phase::Won {
             summary.won = summary.won.saturating_add(1);
+            // Records are the built-in levels' only (see game_task).
             #[cfg(feature = "records")]
-            if records {
+            if records && number < LEVELS.len() {
                 links
                     .wins
                     .send(Win {
-                        level: index.min(usize::from(u8::MAX)) as u8,
+                        level: number.min(usize::from(u8::MAX)) as u8,
                         frames: game.clock_frames(),
                     })
                     .await;
@@ -200,8 +227,8 @@ pub(super) async fn demo<const W: usize, const H: usize, const PILOT: bool, cons
         #[cfg(feature = "defmt")]
         defmt::info!(
             "demo {=usize}/{=usize} level={=str} outcome={=str} steps={=u64} state_hash={=u64:016x}",
-            index + 1,
-            LEVELS.len(),
+            number + 1,
+            total,
             player.level_name(),
             phase.as_str(),
             game.steps(),
@@ -215,7 +242,7 @@ pub(super) async fn demo<const W: usize, const H: usize, const PILOT: bool, cons
         // sent once (the display keeps showing it), not once a refresh.
         let mut sent = None;
         for left in (1..=WIN_PAUSE_FRAMES).rev() {
-            if !demo_tick(links, ticker, &mut player).await {
+            if !demo_tick(links, ticker, player).await {
                 return GameExit::Quit;
             }
             let flash = phase == Phase::Won && win_flash(left);
@@ -231,4 +258,47 @@ pub(super) async fn demo<const W: usize, const H: usize, const PILOT: bool, cons
         sensor = player.sensor_down();
     }
     GameExit::DemoDone(summary)
+}
+
+/// `player`'s status, with the generated maze on show (`maze`, feature
+/// `storey-maps`).
+fn status_of<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    player: &Player<'_, W, H, PILOT, EVENTS>,
+    maze: Option<MazeArgs>,
+) -> Status {
+    #[cfg(feature = "storey-maps")]
+    return Status {
+        maze,
+        ..player.status()
+    };
+    #[cfg(not(feature = "storey-maps"))]
+    {
+        let _ = maze;
+        player.status()
+    }
+}
+
+/// Logs that level `number` (from 0) of the demo's `total` could not be set
+/// up, and why.
+fn setup_failed(number: usize, total: usize, why: DemoSetup) {
+    #[cfg(feature = "defmt")]
+    defmt::error!(
+        "demo {=usize}/{=usize} level={=usize} outcome=setup-error ({})",
+        number + 1,
+        total,
+        number + 1,
+        why
+    );
+    let _ = (number, total, why);
+}
+
+/// Why a demo level could not be set up (for the log).
+#[cfg_attr(not(feature = "defmt"), allow(dead_code))]
+#[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum DemoSetup {
+    Level(SetupError),
+    /// A maze that could not be made (`None`: a built-in level that is not
+    /// there).
+    Maze(Option<MazeError>),
 }

@@ -11,8 +11,9 @@ use super::links::Links;
 use super::links::Win;
 use super::mode::{GameExit, GameMode};
 use super::FRAME_HZ;
+use crate::game::endless::{Endless, MazeSlot, Seeds};
 use crate::game::levels::LEVELS;
-use crate::game::player::Player;
+use crate::game::player::{Carried, Player};
 #[cfg(feature = "records")]
 use crate::game::rules::Phase;
 use crate::input::tilt::TiltConfig;
@@ -21,121 +22,208 @@ use crate::input::tilt::TiltConfig;
 /// frame on [`Links::frames`] and the [`Links::status`] every tick. Returns
 /// on [`Command::Quit`](crate::input::event::Command::Quit) or at the end of the demo. `PILOT` says whether the
 /// board has the autopilot, `EVENTS` which physics stepper it links (see
-/// [`Player`]).
-pub async fn game_task<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+/// [`Player`]). The generated mazes after the built-in levels are made in
+/// `mazes`, whose size is the board's choice ([`Reach`](crate::game::endless::Reach)).
+pub async fn game_task<
+    const W: usize,
+    const H: usize,
+    const PILOT: bool,
+    const EVENTS: bool,
+    const WORDS: usize,
+    const TEXT: usize,
+>(
     links: &Links<W, H>,
     mode: GameMode,
+    mazes: &mut MazeSlot<WORDS, TEXT>,
 ) -> GameExit {
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
         #[cfg(not(feature = "sleep"))]
-        GameMode::Play { tilt } => play::<W, H, PILOT, EVENTS>(links, &mut ticker, tilt).await,
+        GameMode::Play { tilt, seeds } => {
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes).await
+        }
         #[cfg(feature = "sleep")]
-        GameMode::Play { tilt, level } => {
-            play::<W, H, PILOT, EVENTS>(links, &mut ticker, tilt, level).await
+        GameMode::Play { tilt, level, seeds } => {
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, level, seeds, mazes)
+                .await
         }
         GameMode::Demo { records } => {
-            demo::<W, H, PILOT, EVENTS>(links, &mut ticker, records).await
+            demo::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, records, mazes).await
         }
     }
 }
 
-/// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock.
-async fn play<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+/// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock, the
+/// built-in levels in order and then the endless run of generated mazes
+/// ([`Endless`]), each made in `mazes` when the one before is won or skipped.
+/// A maze that cannot be made (a bug) is logged and the run starts again
+/// at the first level.
+async fn play<
+    const W: usize,
+    const H: usize,
+    const PILOT: bool,
+    const EVENTS: bool,
+    const WORDS: usize,
+    const TEXT: usize,
+>(
     links: &Links<W, H>,
     ticker: &mut Ticker,
     tilt: TiltConfig,
     #[cfg(feature = "sleep")] level: u8,
+    seeds: Seeds,
+    mazes: &mut MazeSlot<WORDS, TEXT>,
 ) -> GameExit {
-    // Without `sleep` the start is the literal 0: on the micro:bit v1 even a
-    // start level passed in as a constant measured 2 KB more stack (`cargo
-    // xtask check-microbit-v1`), over its RAM budget.
+    // Without `sleep` there is no level to resume: the run starts at the
+    // first.
     #[cfg(feature = "sleep")]
-    let start = usize::from(level);
+    let mut number = usize::from(level);
     #[cfg(not(feature = "sleep"))]
-    let start = 0;
-    let mut player = match Player::<W, H, PILOT, EVENTS>::new(&LEVELS, start, tilt, false) {
-        Ok(player) => player,
-        Err(e) => return GameExit::SetupFailed(e),
+    let mut number = 0;
+    let endless = Endless {
+        builtins: LEVELS.len(),
+        reach: mazes.reach(),
+        seeds,
     };
-    #[cfg(feature = "defmt")]
-    defmt::info!("level {=usize}: {=str}", start + 1, player.level_name());
+    let mut carried = None;
     // Two minutes without a command and with the tilt still (feature `sleep`).
     #[cfg(feature = "sleep")]
     let mut idle =
         crate::input::idle::Idle::new(crate::input::idle::IdleConfig::two_minutes(FRAME_HZ));
     loop {
-        ticker.next().await;
-        while let Ok(event) = links.events.try_receive() {
-            #[cfg(feature = "defmt")]
-            defmt::info!("input {}", event);
-            #[cfg(feature = "sleep")]
-            if let crate::input::event::InputEvent::Command(_) = event {
-                idle.activity();
+        let level = match endless.level(number, mazes) {
+            Ok(level) => level,
+            Err(e) => {
+                // A maze that cannot be made (a bug): the run starts again.
+                #[cfg(feature = "defmt")]
+                defmt::error!("level {=usize}: {}: back to level 1", number + 1, e);
+                let _ = e;
+                number = 0;
+                continue;
             }
-            if !player.handle(event) {
-                return GameExit::Quit;
-            }
-        }
-        // The autopilot playing is the toy in use.
-        #[cfg(feature = "sleep")]
-        if idle.tick(links.tilt.get().reading_mg()) && !player.autopilot() {
-            #[cfg(feature = "defmt")]
-            defmt::info!(
-                "idle for two minutes: asleep on level {=usize}",
-                player.level_index() + 1
-            );
-            return GameExit::Asleep {
-                level: player.level_index().min(usize::from(u8::MAX)) as u8,
-            };
-        }
-        // Draw only once the display has taken the previous frame (it
-        // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
-        let draw = !links.frames.signaled();
-        let tick = player.tick(links.tilt.get().reading_mg(), draw);
-        if let Some(phase) = tick.finished {
-            #[cfg(feature = "defmt")]
-            defmt::info!(
-                "level {=usize} {=str}: {=str} after {=u64} steps",
-                player.level_index() + 1,
-                player.level_name(),
-                phase.as_str(),
-                player.game().steps()
-            );
-            #[cfg(feature = "records")]
-            if phase == Phase::Won && !player.autopilot() {
-                // The records task writes the flash while the win is on show,
-                // between levels; a full queue drops the win, never the game.
-                let _ = links.wins.try_send(Win {
-                    level: player.level_index().min(usize::from(u8::MAX)) as u8,
-                    frames: player.game().clock_frames(),
-                });
-            }
-            let _ = phase;
-        }
-        #[cfg(feature = "records")]
-        if links.new_record.try_take() == Some(player.level_index() as u8) {
-            player.announce_record();
-        }
-        #[cfg(feature = "records")]
-        let status = crate::game::player::Status {
-            best: links
-                .bests
-                .get()
-                .get(player.level_index())
-                .copied()
-                .flatten(),
-            ..player.status()
         };
-        #[cfg(not(feature = "records"))]
-        let status = player.status();
-        links.status.set(status);
-        if let Some(frame) = tick.frame {
-            links.frames.signal(frame);
+        let autopilot = carried.is_some_and(|c: Carried| c.autopilot());
+        // The call writes the player straight into `made`, a local the
+        // game's future keeps across its awaits; everything after borrows it.
+        // Matching it into a local of its own would move it through a 2 KB
+        // temporary on the stack, under the game's deepest call (the making
+        // of the player itself): more than the micro:bit v1 has.
+        let mut made = Player::<W, H, PILOT, EVENTS>::single(level, tilt, autopilot);
+        let player = match &mut made {
+            Ok(player) => player,
+            // A built-in level that cannot be set up is the firmware's bug.
+            Err(e) if number < LEVELS.len() => return GameExit::SetupFailed(*e),
+            Err(e) => {
+                // A maze the physics refuses (a bug too): the run starts again.
+                #[cfg(feature = "defmt")]
+                defmt::error!("level {=usize}: {}: back to level 1", number + 1, e);
+                let _ = e;
+                number = 0;
+                continue;
+            }
+        };
+        player.endless_at(number);
+        if let Some(carried) = carried {
+            player.carry(carried);
         }
-        #[cfg(feature = "sound")]
-        for sound in tick.sounds.iter() {
-            let _ = links.sounds.try_send(sound);
+        #[cfg(feature = "defmt")]
+        defmt::info!(
+            "level {=usize}: {=str}",
+            player.level_index() + 1,
+            player.level_name()
+        );
+        loop {
+            ticker.next().await;
+            while let Ok(event) = links.events.try_receive() {
+                #[cfg(feature = "defmt")]
+                defmt::info!("input {}", event);
+                #[cfg(feature = "sleep")]
+                if let crate::input::event::InputEvent::Command(_) = event {
+                    idle.activity();
+                }
+                if !player.handle(event) {
+                    return GameExit::Quit;
+                }
+            }
+            // Won or skipped (here or in the last tick): the next level.
+            if player.wants_next() {
+                break;
+            }
+            // The autopilot playing is the toy in use.
+            #[cfg(feature = "sleep")]
+            if idle.tick(links.tilt.get().reading_mg()) && !player.autopilot() {
+                #[cfg(feature = "defmt")]
+                defmt::info!(
+                    "idle for two minutes: asleep on level {=usize}",
+                    player.level_index() + 1
+                );
+                return GameExit::Asleep {
+                    level: player.level_index().min(usize::from(u8::MAX)) as u8,
+                };
+            }
+            // Draw only once the display has taken the previous frame (it
+            // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
+            let draw = !links.frames.signaled();
+            let tick = player.tick(links.tilt.get().reading_mg(), draw);
+            if let Some(phase) = tick.finished {
+                #[cfg(feature = "defmt")]
+                defmt::info!(
+                    "level {=usize} {=str}: {=str} after {=u64} steps",
+                    player.level_index() + 1,
+                    player.level_name(),
+                    phase.as_str(),
+                    player.game().steps()
+                );
+                // Records are the built-in levels' only: a generated maze is
+                // seldom played twice.
+                #[cfg(feature = "records")]
+                if let (Phase::Won, false, Ok(level)) = (
+                    phase,
+                    player.autopilot(),
+                    u8::try_from(player.level_index()),
+                ) {
+                    if usize::from(level) < LEVELS.len() {
+                        // The records task writes the flash while the win is
+                        // on show, between levels; a full queue drops the win,
+                        // never the game.
+                        let _ = links.wins.try_send(Win {
+                            level,
+                            frames: player.game().clock_frames(),
+                        });
+                    }
+                }
+                let _ = phase;
+            }
+            #[cfg(feature = "records")]
+            if links.new_record.try_take().map(usize::from) == Some(player.level_index()) {
+                player.announce_record();
+            }
+            #[cfg(feature = "records")]
+            let status = crate::game::player::Status {
+                best: links
+                    .bests
+                    .get()
+                    .get(player.level_index())
+                    .copied()
+                    .flatten(),
+                ..player.status()
+            };
+            #[cfg(not(feature = "records"))]
+            let status = player.status();
+            #[cfg(feature = "storey-maps")]
+            let status = crate::game::player::Status {
+                maze: endless.maze(number),
+                ..status
+            };
+            links.status.set(status);
+            if let Some(frame) = tick.frame {
+                links.frames.signal(frame);
+            }
+            #[cfg(feature = "sound")]
+            for sound in tick.sounds.iter() {
+                let _ = links.sounds.try_send(sound);
+            }
         }
+        carried = Some(player.carried());
+        number = player.level_index().saturating_add(1);
     }
 }

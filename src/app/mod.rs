@@ -18,9 +18,12 @@
 //! * [`game_task`] runs the game ([`Player`](crate::game::player::Player), the game layer's synchronous
 //!   loop step) at the game's frame rate [`FRAME_HZ`] on an embassy `Ticker`
 //!   (not `Timer::after`, which rounds up to the time driver's tick and
-//!   drifts). In [`GameMode::Demo`] the autopilot plays every built-in level
-//!   once, exactly as `cargo sim -- --level <name> --autopilot` does, and each
-//!   level's outcome, physics steps and `state_hash` are logged.
+//!   drifts). After the built-in levels it plays the endless run of generated
+//!   mazes ([`crate::game::endless`]), each made in the board's maze slot. In
+//!   [`GameMode::Demo`] the autopilot plays every built-in level once, exactly
+//!   as `cargo sim -- --level <name> --autopilot` does, then three generated
+//!   mazes as `cargo sim -- --generate … --autopilot` does, and each level's
+//!   outcome, physics steps and `state_hash` are logged.
 //! * [`MatrixOutput`]: how one BCM scan step of [`crate::matrix::Scanner`]
 //!   reaches LEDs (real pins, or QEMU's virtual matrix).
 //! * `SoundOutput` (feature `sound`): how a [`crate::sound::Sound`] is played (QEMU: a log line, the

@@ -1,6 +1,7 @@
 //! What the game task is asked to play ([`GameMode`]) and why it returned
 //! ([`GameExit`]), the demo's totals among the reasons.
 
+use crate::game::endless::Seeds;
 use crate::input::tilt::TiltConfig;
 use crate::physics::world::SetupError;
 
@@ -15,13 +16,19 @@ pub enum GameMode {
     Play {
         /// The tilt path's configuration.
         tilt: TiltConfig,
-        /// The level to start at (index in [`LEVELS`](crate::game::levels::LEVELS), wrapped): 0, or the
+        /// The level to start at (its number in the run: an index in
+        /// [`LEVELS`](crate::game::levels::LEVELS), or past them a generated maze): 0, or the
         /// one the toy fell asleep on. Feature `sleep` only (without it, 0).
         #[cfg(feature = "sleep")]
         level: u8,
+        /// Where the seeds of the mazes after the built-in levels come from
+        /// (see [`crate::game::endless`]).
+        seeds: Seeds,
     },
     /// The headless demo: the autopilot plays each built-in level once, in
-    /// order, then [`game_task`](super::game_task) returns.
+    /// order, then [`DEMO_MAZES`](crate::game::endless::DEMO_MAZES) generated
+    /// mazes ([`Seeds::Count`]: the same on every run), then
+    /// [`game_task`](super::game_task) returns.
     Demo {
         /// Offer the autopilot's wins to the records task (feature
         /// `records`) as if they were a player's: the records check, which
@@ -37,7 +44,7 @@ pub enum GameMode {
 pub enum GameExit {
     /// The player quit.
     Quit,
-    /// The demo played every level.
+    /// The demo played every level and its mazes.
     DemoDone(DemoSummary),
     /// No level could be set up (a bug in the built-in levels).
     SetupFailed(SetupError),
@@ -46,7 +53,8 @@ pub enum GameExit {
     /// `sleep` only.
     #[cfg(feature = "sleep")]
     Asleep {
-        /// The level on show (index in [`LEVELS`](crate::game::levels::LEVELS)).
+        /// The level on show (its number in the run, as
+        /// [`Player::level_index`](crate::game::player::Player::level_index); at most 255).
         level: u8,
     },
 }
@@ -56,7 +64,7 @@ pub enum GameExit {
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DemoSummary {
-    /// Levels played.
+    /// Levels played (generated mazes included).
     pub levels: u8,
     /// Levels won.
     pub won: u8,

@@ -65,9 +65,17 @@ pub const MAX_DIFFICULTY: u8 = 9;
 /// autopilot loses some three-marble runs on time. Up to 7 it wins every one.
 pub const MAX_SIZE_FOR_MARBLES: u8 = 7;
 /// The longest level text [`Maze`] writes (four storeys of the largest size).
-pub const MAX_TEXT_BYTES: usize = 128 + MAX_STOREYS * (TILES * (TILES + 1) + 4);
+pub const MAX_TEXT_BYTES: usize = text_bytes(MAX_SIZE, MAX_STOREYS as u8);
 
-const TILES: usize = 2 * MAX_SIZE as usize + 1;
+/// The longest level text of a maze of `size` cells a side on `storeys`
+/// storeys: a header of at most 128 bytes (the longest, every number at its
+/// largest and every effect on, is 97), then per storey its rows of `2 size +
+/// 1` tiles and a newline, and the `===` line.
+pub const fn text_bytes(size: u8, storeys: u8) -> usize {
+    let tiles = 2 * size as usize + 1;
+    128 + storeys as usize * (tiles * (tiles + 1) + 4)
+}
+
 const MAX_CELLS: usize = MAX_SIZE as usize * MAX_SIZE as usize;
 
 // Cell bits.
@@ -140,51 +148,75 @@ pub struct Maze {
 /// The maze of `size × size` cells on `storeys` storeys that `seed` gives, at
 /// `difficulty` (see the module documentation).
 pub fn generate(seed: u32, size: u8, storeys: u8, difficulty: u8) -> Result<Maze, GenerateError> {
-    if !(MIN_SIZE..=MAX_SIZE).contains(&size) {
-        return Err(GenerateError::Size(size));
-    }
-    let most = if STOREYS { MAX_STOREYS as u8 } else { 1 };
-    if !(1..=most).contains(&storeys) {
-        return Err(GenerateError::Storeys(storeys));
-    }
-    if difficulty > MAX_DIFFICULTY {
-        return Err(GenerateError::Difficulty(difficulty));
-    }
-    let mut rng = XorShiftRng::seed_from_u64(u64::from(seed));
-    let mut maze = Maze {
-        seed,
-        size,
-        storeys,
-        difficulty,
+    let mut maze = Maze::EMPTY;
+    maze.generate(seed, size, storeys, difficulty)?;
+    Ok(maze)
+}
+
+impl Maze {
+    /// No maze yet: what [`Maze::generate`] fills in.
+    pub const EMPTY: Maze = Maze {
+        seed: 0,
+        size: 0,
+        storeys: 0,
+        difficulty: 0,
         cells: [[0; MAX_CELLS]; MAX_STOREYS],
         path_cells: 0,
         turns: 0,
     };
-    let n = usize::from(size) * usize::from(size);
-    let mut depth = [0u8; MAX_CELLS];
-    let mut entry = below(&mut rng, n as u32) as usize;
-    for storey in (0..usize::from(storeys)).rev() {
-        maze.carve(storey, entry, &mut depth, &mut rng);
-        let exit = maze.pick_dead_end(storey, entry, &depth, &mut rng);
-        maze.mark_path(storey, exit, &depth);
-        let top = storey + 1 == usize::from(storeys);
-        if top {
-            maze.cells[storey][entry] |= START;
-            maze.add_marbles(storey, &mut rng);
+
+    /// [`generate`] in place: this maze becomes the one its arguments give (on
+    /// an error, no maze: [`Maze::EMPTY`]). A board makes its mazes this way,
+    /// so that the 912 bytes are on its stack once, not copied out of the
+    /// generator. Out of line, for the same reason.
+    #[inline(never)]
+    pub fn generate(
+        &mut self,
+        seed: u32,
+        size: u8,
+        storeys: u8,
+        difficulty: u8,
+    ) -> Result<(), GenerateError> {
+        *self = Maze::EMPTY;
+        if !(MIN_SIZE..=MAX_SIZE).contains(&size) {
+            return Err(GenerateError::Size(size));
         }
-        if storey == 0 {
-            maze.cells[storey][exit] |= GOAL;
-            maze.add_pits(&mut rng);
-        } else {
-            maze.cells[storey][exit] |= HOLE;
-            maze.path_cells += 1;
+        let most = if STOREYS { MAX_STOREYS as u8 } else { 1 };
+        if !(1..=most).contains(&storeys) {
+            return Err(GenerateError::Storeys(storeys));
         }
-        entry = exit;
+        if difficulty > MAX_DIFFICULTY {
+            return Err(GenerateError::Difficulty(difficulty));
+        }
+        (self.seed, self.size, self.storeys, self.difficulty) = (seed, size, storeys, difficulty);
+        let mut rng = XorShiftRng::seed_from_u64(u64::from(seed));
+        let n = usize::from(size) * usize::from(size);
+        let mut depth = [0u8; MAX_CELLS];
+        let mut entry = below(&mut rng, n as u32) as usize;
+        for storey in (0..usize::from(storeys)).rev() {
+            self.carve(storey, entry, &mut depth, &mut rng);
+            let exit = self.pick_dead_end(storey, entry, &depth, &mut rng);
+            self.mark_path(storey, exit, &depth);
+            let top = storey + 1 == usize::from(storeys);
+            if top {
+                self.cells[storey][entry] |= START;
+                self.add_marbles(storey, &mut rng);
+            }
+            if storey == 0 {
+                self.cells[storey][exit] |= GOAL;
+                self.add_pits(&mut rng);
+            } else {
+                self.cells[storey][exit] |= HOLE;
+                self.path_cells += 1;
+            }
+            entry = exit;
+        }
+        if !self.every_start_reaches_the_goal() {
+            *self = Maze::EMPTY;
+            return Err(GenerateError::Unwinnable);
+        }
+        Ok(())
     }
-    if !maze.every_start_reaches_the_goal() {
-        return Err(GenerateError::Unwinnable);
-    }
-    Ok(maze)
 }
 
 /// A number in `0 .. n` (`n ≥ 1`): the top of a 32 × 32-bit product (Lemire's
@@ -527,44 +559,87 @@ impl Maze {
     }
 }
 
-/// The level text (see [`crate::game::level`]): a header naming the maze by its
-/// arguments, then the storeys top to bottom.
+/// The level text (see [`crate::game::level`]): [`Maze::write_text`].
 impl fmt::Display for Maze {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "name: maze-{}-{}x{}x{}-d{}",
-            self.seed, self.size, self.size, self.storeys, self.difficulty
-        )?;
-        f.write_str("effects: rolling")?;
+        self.write_text(f)
+    }
+}
+
+impl Maze {
+    /// Writes the level text (see [`crate::game::level`]): a header naming the
+    /// maze by its arguments, then the storeys top to bottom. Strings and
+    /// digits only, no format machinery: a board writes its mazes with this,
+    /// and `core::fmt`'s number formatting is kilobytes of flash the micro:bit
+    /// v1 does not have to spare.
+    pub fn write_text<W: fmt::Write>(&self, w: &mut W) -> fmt::Result {
+        w.write_str("name: maze-")?;
+        decimal(w, self.seed)?;
+        w.write_char('-')?;
+        decimal(w, self.size.into())?;
+        w.write_char('x')?;
+        decimal(w, self.size.into())?;
+        w.write_char('x')?;
+        decimal(w, self.storeys.into())?;
+        w.write_str("-d")?;
+        decimal(w, self.difficulty.into())?;
+        w.write_str("\neffects: rolling")?;
         if self.difficulty >= 1 {
-            f.write_str(", friction")?;
+            w.write_str(", friction")?;
         }
         if self.board_motion() {
-            f.write_str(", board_motion")?;
+            w.write_str(", board_motion")?;
         }
-        writeln!(f)?;
-        writeln!(f, "time_limit_s: {}", self.time_limit_s())?;
-        writeln!(f, "---")?;
+        w.write_str("\ntime_limit_s: ")?;
+        decimal(w, self.time_limit_s().into())?;
+        w.write_str("\n---\n")?;
         let tiles = 2 * usize::from(self.size) + 1;
         for storey in (0..usize::from(self.storeys)).rev() {
             for k in 0..tiles {
                 for i in 0..tiles {
-                    write!(f, "{}", self.tile(storey, i, k))?;
+                    w.write_char(self.tile(storey, i, k))?;
                 }
-                writeln!(f)?;
+                w.write_char('\n')?;
             }
             if storey > 0 {
-                writeln!(f, "===")?;
+                w.write_str("===\n")?;
             }
         }
         Ok(())
     }
 }
 
+/// `n` in decimal, without leading zeros: from the largest power of ten not
+/// above it (no digit buffer to index, so no bounds check to panic).
+fn decimal<W: fmt::Write>(w: &mut W, n: u32) -> fmt::Result {
+    let mut power = 1u32;
+    // `power · 10 ≤ n` here, so it cannot overflow.
+    while n / power >= 10 {
+        power *= 10;
+    }
+    loop {
+        w.write_char(char::from(b'0' + (n / power % 10) as u8))?;
+        if power == 1 {
+            return Ok(());
+        }
+        power /= 10;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn decimals_are_written_as_format_writes_them() {
+        extern crate std;
+        use std::string::{String, ToString};
+        for n in [0, 1, 9, 10, 99, 100, 4_096, 1_000_000_000, u32::MAX] {
+            let mut s = String::new();
+            decimal(&mut s, n).unwrap();
+            assert_eq!(s, n.to_string());
+        }
+    }
 
     /// The check is not a formality: a maze whose way is cut fails it.
     #[test]

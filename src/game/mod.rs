@@ -7,6 +7,7 @@
 //! (docs/architecture.md) although it lives in this directory.
 
 pub mod autopilot;
+pub mod endless;
 pub mod generate;
 pub mod ghost;
 pub mod player;

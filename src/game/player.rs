@@ -25,6 +25,7 @@ use super::level::MAX_MARBLES;
 use super::rules::{Game, GameConfig, Phase};
 use super::session::Session;
 use crate::input::event::{Command, Fault, InputEvent};
+use crate::input::sensor::Calibration;
 use crate::input::tilt::TiltConfig;
 use crate::matrix::Frame;
 use crate::physics::world::SetupError;
@@ -78,6 +79,12 @@ pub struct Status {
     /// them out every frame cost the QEMU demo 0.07 points of CPU load.
     #[cfg(feature = "storey-maps")]
     pub marbles: [Option<MarbleSpot>; MAX_MARBLES],
+    /// The generated maze on show, by its arguments (`None`: a level the
+    /// boards hold, a built-in one): QEMU's terminal makes it again to draw
+    /// its storeys (feature `storey-maps`; the game task fills it in, the
+    /// player does not know where its level came from).
+    #[cfg(feature = "storey-maps")]
+    pub maze: Option<crate::game::endless::MazeArgs>,
 }
 
 /// Where a marble is, for status displays: the tile holding its centre and
@@ -143,6 +150,8 @@ impl Status {
         best: None,
         #[cfg(feature = "storey-maps")]
         marbles: [None; MAX_MARBLES],
+        #[cfg(feature = "storey-maps")]
+        maze: None,
     };
 }
 
@@ -159,6 +168,35 @@ pub struct Tick<const W: usize, const H: usize> {
     pub sounds: Sounds,
 }
 
+/// A player's place in the endless run ([`Player::endless_at`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct Endless {
+    /// The level's number in the run, counted from 0.
+    number: usize,
+    /// Done with it: won, or skipped.
+    done: bool,
+}
+
+/// What a player keeps from one level to the next ([`Player::carried`],
+/// [`Player::carry`]): within its list the player keeps it itself; in the
+/// endless run, where each level gets a player of its own, the game task
+/// carries it into the next one.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Carried {
+    calibration: Calibration,
+    autopilot: bool,
+    sensor_down: Option<Fault>,
+    fault_shown: bool,
+    muted: bool,
+}
+
+impl Carried {
+    /// Whether the autopilot played: the next level's [`Player::new`] takes it.
+    pub const fn autopilot(&self) -> bool {
+        self.autopilot
+    }
+}
+
 /// One player's game on a `W`×`H` display (see the module doc).
 ///
 /// `PILOT` says whether the board has the autopilot at all
@@ -170,12 +208,14 @@ pub struct Tick<const W: usize, const H: usize> {
 /// the same reason: the event stepper costs 18 to 24 KiB of flash, which a board
 /// with a 64 KiB budget does not have, and the fixed step is then all it links.
 #[derive(Clone, Debug)]
-pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool> {
-    levels: &'static [LevelView<'static>],
+pub struct Player<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool> {
+    levels: &'a [LevelView<'a>],
     level: usize,
-    session: Session<'static, Fx>,
+    /// In the endless run, the level's number in it (counted from 0), and
+    /// whether the player is done with it ([`Player::endless_at`]).
+    endless: Option<Endless>,
+    session: Session<'a, Fx>,
     renderer: Renderer<W, H>,
-    tilt: TiltConfig,
     autopilot: Option<Autopilot>,
     /// The finished attempt on show, and frames left to show it.
     pause: Option<(Phase, u32)>,
@@ -189,8 +229,8 @@ pub struct Player<const W: usize, const H: usize, const PILOT: bool, const EVENT
     new_record: bool,
 }
 
-impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
-    Player<W, H, PILOT, EVENTS>
+impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
+    Player<'a, W, H, PILOT, EVENTS>
 {
     /// The game's configuration on this player: [`GameConfig::stepped_by`]`(EVENTS)`.
     pub const CONFIG: GameConfig = GameConfig::stepped_by(EVENTS);
@@ -199,7 +239,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     /// empty) with the tilt path `tilt`; the autopilot plays if `autopilot`
     /// (and the board has it, `PILOT`).
     pub fn new(
-        levels: &'static [LevelView<'static>],
+        levels: &'a [LevelView<'a>],
         level: usize,
         tilt: TiltConfig,
         autopilot: bool,
@@ -208,13 +248,24 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         let Some(view) = levels.get(level) else {
             return Err(SetupError::MarbleCount);
         };
+        Self::on(levels, level, *view, tilt, autopilot)
+    }
+
+    /// Level `view`, number `level` of `levels` (or alone, with no list).
+    fn on(
+        levels: &'a [LevelView<'a>],
+        level: usize,
+        view: LevelView<'a>,
+        tilt: TiltConfig,
+        autopilot: bool,
+    ) -> Result<Self, SetupError> {
         Ok(Player {
             levels,
             level,
-            session: Session::new(*view, Self::CONFIG, tilt)?,
+            endless: None,
+            session: Session::new(view, Self::CONFIG, tilt)?,
             renderer: Renderer::new(),
-            tilt,
-            autopilot: (PILOT && autopilot).then(|| Autopilot::new(view)),
+            autopilot: (PILOT && autopilot).then(|| Autopilot::new(&view)),
             pause: None,
             sensor_down: None,
             fault_shown: false,
@@ -223,26 +274,52 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         })
     }
 
-    /// Index of the level in the level list.
+    /// A player on `level`, which no list holds (a level of the endless run:
+    /// [`Player::endless_at`]; a level alone, which starts again when won).
+    pub fn single(
+        level: LevelView<'a>,
+        tilt: TiltConfig,
+        autopilot: bool,
+    ) -> Result<Self, SetupError> {
+        Self::on(&[], 0, level, tilt, autopilot)
+    }
+
+    /// The level's number: in the endless run its number in the run (counted
+    /// from 0), otherwise its index in the player's list.
     pub fn level_index(&self) -> usize {
-        self.level
+        self.endless.map_or(self.level, |endless| endless.number)
     }
     /// The level's name.
-    pub fn level_name(&self) -> &'static str {
-        self.levels
-            .get(self.level)
-            .map_or("?", |level| level.info.name)
+    pub fn level_name(&self) -> &'a str {
+        self.session.game().level().info.name
+    }
+    /// Makes this player's level number `number` of the endless run
+    /// ([`crate::game::endless`]): what [`Player::level_index`] and the status
+    /// say; and moving on from it (a win, [`Command::NextLevel`]) is not the
+    /// player's: it only says it is done ([`Player::wants_next`]), and its
+    /// caller brings the next level, which no list holds.
+    pub fn endless_at(&mut self, number: usize) {
+        self.endless = Some(Endless {
+            number,
+            done: false,
+        });
+    }
+    /// In the endless run, the player is done with its level (won, or
+    /// skipped): its caller brings the next one ([`Player::carried`] says what
+    /// to keep).
+    pub fn wants_next(&self) -> bool {
+        self.endless.is_some_and(|endless| endless.done)
     }
     /// The session.
-    pub fn session(&self) -> &Session<'static, Fx> {
+    pub fn session(&self) -> &Session<'a, Fx> {
         &self.session
     }
     /// The session, mutably (profiling, tools).
-    pub fn session_mut(&mut self) -> &mut Session<'static, Fx> {
+    pub fn session_mut(&mut self) -> &mut Session<'a, Fx> {
         &mut self.session
     }
     /// The game.
-    pub fn game(&self) -> &Game<'static, Fx> {
+    pub fn game(&self) -> &Game<'a, Fx> {
         self.session.game()
     }
     /// Whether the sound is off ([`Command::ToggleMute`]).
@@ -261,10 +338,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     /// Hands the board to the autopilot (planned afresh for the level), or
     /// takes it back. Without `PILOT` it stays off.
     pub fn set_autopilot(&mut self, on: bool) {
-        self.autopilot = match self.levels.get(self.level) {
-            Some(view) if PILOT && on => Some(Autopilot::new(view)),
-            _ => None,
-        };
+        self.autopilot = (PILOT && on).then(|| Autopilot::new(self.session.game().level()));
     }
 
     /// The reading for the next frame: the autopilot's when it plays, else
@@ -298,7 +372,7 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     pub fn status(&self) -> Status {
         let game = self.session.game();
         Status {
-            level: self.level.min(usize::from(u8::MAX)) as u8,
+            level: self.level_index().min(usize::from(u8::MAX)) as u8,
             phase: game.phase(),
             frames: game.clock_frames(),
             reading: self.session.reading(),
@@ -310,6 +384,8 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
             best: None,
             #[cfg(feature = "storey-maps")]
             marbles: marble_spots(game),
+            #[cfg(feature = "storey-maps")]
+            maze: None,
         }
     }
 
@@ -429,22 +505,60 @@ impl<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     }
 
     /// Moves on to the next level of the list (after the last: the first),
-    /// keeping the tilt calibration, the autopilot setting and a sensor
-    /// outage. A level that cannot be set up is skipped.
+    /// keeping what [`Player::carried`] says; a level that cannot be set up is
+    /// skipped, and a level without a list starts again. In the endless run
+    /// the player only says it is done ([`Player::wants_next`]).
     pub fn next_level(&mut self) {
-        let calibration = self.session.tilt().calibration();
+        if let Some(endless) = &mut self.endless {
+            endless.done = true;
+            return;
+        }
+        if self.levels.is_empty() {
+            self.restart();
+            return;
+        }
+        let carried = self.carried();
         for offset in 1..=self.levels.len() {
             let index = self.level + offset;
-            if let Ok(mut next) = Self::new(self.levels, index, self.tilt, self.autopilot()) {
-                next.session.tilt_mut().set_calibration(calibration);
-                next.sensor_down = self.sensor_down;
-                next.fault_shown = self.fault_shown;
+            if let Ok(next) = Self::new(
+                self.levels,
+                index,
+                self.session.tilt_config(),
+                carried.autopilot,
+            ) {
                 *self = next;
+                self.carry(carried);
                 #[cfg(feature = "defmt")]
-                defmt::info!("level {=usize}: {=str}", self.level + 1, self.level_name());
+                defmt::info!(
+                    "level {=usize}: {=str}",
+                    self.level_index() + 1,
+                    self.level_name()
+                );
                 return;
             }
         }
+    }
+
+    /// What moves on with the player to the next level.
+    pub fn carried(&self) -> Carried {
+        Carried {
+            calibration: self.session.tilt().calibration(),
+            autopilot: self.autopilot(),
+            sensor_down: self.sensor_down,
+            fault_shown: self.fault_shown,
+            muted: self.muted,
+        }
+    }
+
+    /// Takes on what the player had on the level before ([`Player::carried`]):
+    /// the tilt calibration, a sensor outage and the sound setting. Not the
+    /// autopilot: that is [`Player::new`]'s argument
+    /// ([`Carried::autopilot`]), so that it is planned once.
+    pub fn carry(&mut self, carried: Carried) {
+        self.session.tilt_mut().set_calibration(carried.calibration);
+        self.sensor_down = carried.sensor_down;
+        self.fault_shown = carried.fault_shown;
+        self.muted = carried.muted;
     }
 
     /// Takes the current filtered tilt as level (an implausible one is

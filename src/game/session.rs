@@ -78,6 +78,11 @@ impl<'a, S: Scalar> Session<'a, S> {
     pub fn tilt_mut(&mut self) -> &mut TiltFilter {
         &mut self.tilt
     }
+    /// The tilt path's configuration (the calibration it started with, not
+    /// the one in force: [`TiltFilter::calibration`]).
+    pub fn tilt_config(&self) -> TiltConfig {
+        self.tilt_config
+    }
     /// Readings the tilt path rejected so far, and the last reason.
     pub fn tilt_errors(&self) -> (u32, Option<TiltError>) {
         (self.tilt_errors, self.last_tilt_error)

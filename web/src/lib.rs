@@ -85,7 +85,7 @@ use marble_rolling::physics::Fx;
 /// The micro:bit's player (its 5×5 matrix) with the autopilot (the page has
 /// a button for it, as the QEMU board has a key), stepped by events (`EVENTS`)
 /// or fixed steps: `cargo sim -- --stepping events|fixed` replays either.
-type WebPlayer<const EVENTS: bool> = Player<WIDTH, HEIGHT, true, EVENTS>;
+type WebPlayer<const EVENTS: bool> = Player<'static, WIDTH, HEIGHT, true, EVENTS>;
 
 /// The player on the stepper the page chose (see the module doc).
 pub(crate) enum AnyPlayer {

@@ -1,13 +1,15 @@
 //! `cargo xtask check-demo`: the firmware must play exactly like the host
 //! simulator. The QEMU firmware's headless demo (the autopilot plays every
-//! built-in level) logs, per level,
+//! built-in level, then three generated mazes) logs, per level,
 //!
 //! ```text
 //! demo <n>/<total> level=<name> outcome=<won|fell|timeout> steps=<physics steps> state_hash=<16 hex>
 //! ```
 //!
-//! and `sim --level <name> --autopilot --json` must report the same outcome,
-//! step count and state hash; every level must be won. The demo's CPU load must
+//! and `sim --level <name> --autopilot --json` (for a generated maze, named
+//! `maze-SEED-NxNxS-dD`: `sim --generate SEED --size N --storeys S
+//! --difficulty D …`, [`level_args`]) must report the same outcome, step
+//! count and state hash; every level must be won. The demo's CPU load must
 //! stay within CPU_BUDGET_CENTIPERCENT (default 300: 3.00 % of a 64 MHz
 //! Cortex-M4). Under -icount that count is exact and the same on every machine,
 //! so the budget is a report with a limit, like the flash budget, not a timing
@@ -454,18 +456,49 @@ pub fn compare_levels(
     failed
 }
 
+/// The simulator's arguments that choose `level`: `--level NAME` for a
+/// built-in level, and for a generated maze, named after its arguments
+/// (`maze-SEED-NxNxS-dD`, as `game::generate` names it), the arguments
+/// themselves: `--generate SEED --size N --storeys S --difficulty D`.
+pub fn level_args(level: &str) -> Vec<String> {
+    match maze_args(level) {
+        Some([seed, size, storeys, difficulty]) => vec![
+            "--generate".into(),
+            seed.into(),
+            "--size".into(),
+            size.into(),
+            "--storeys".into(),
+            storeys.into(),
+            "--difficulty".into(),
+            difficulty.into(),
+        ],
+        None => vec!["--level".into(), level.into()],
+    }
+}
+
+/// `maze-SEED-NxNxS-dD` → `[SEED, N, S, D]` (each all digits, the two sizes
+/// equal); anything else is a level's name.
+fn maze_args(name: &str) -> Option<[&str; 4]> {
+    let rest = name.strip_prefix("maze-")?;
+    let (seed, rest) = rest.split_once('-')?;
+    let (shape, difficulty) = rest.split_once("-d")?;
+    let mut sides = shape.split('x');
+    let (Some(x), Some(z), Some(storeys), None) =
+        (sides.next(), sides.next(), sides.next(), sides.next())
+    else {
+        return None;
+    };
+    let number = |text: &str| !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit());
+    ([seed, x, storeys, difficulty].into_iter().all(number) && x == z)
+        .then_some([seed, x, storeys, difficulty])
+}
+
 /// The simulator's result for `level` with the firmware's stepper, or `None`
 /// when it printed no JSON.
 pub fn simulate(sim: &PathBuf, level: &str, stepping: &str) -> Option<Sim> {
     let out = Command::new(sim)
-        .args([
-            "--level",
-            level,
-            "--autopilot",
-            "--json",
-            "--stepping",
-            stepping,
-        ])
+        .args(level_args(level))
+        .args(["--autopilot", "--json", "--stepping", stepping])
         .current_dir(workspace::root())
         .stdin(Stdio::null())
         .stderr(Stdio::null())
@@ -484,7 +517,7 @@ mod tests {
 34.4 INFO  profile first-roll: 73 frames, instructions per frame: physics 1722 (max 1934), autopilot 2261, render 1532
 38.7 INFO  profile all levels: 2981 frames, instructions per frame: physics 3926 (max 65765), autopilot 2741, render 1727
 38.8 INFO  profile long-fall: 384 frames, instructions per frame: physics 900 (max 30123), autopilot 0, render 0
-INFO  demo summary: 10/10 levels won
+INFO  demo summary: 13/13 levels won
 ";
         assert_eq!(
             parse_worst_frames(log),
@@ -522,6 +555,35 @@ INFO  cpu load: 123 busy instructions in 456 us of firmware time = 789 instructi
             outcome: outcome.into(),
             steps: steps.into(),
             hash: hash.into(),
+        }
+    }
+
+    #[test]
+    fn a_generated_maze_is_simulated_from_its_arguments() {
+        assert_eq!(
+            level_args("maze-11-4x4x2-d1"),
+            [
+                "--generate",
+                "11",
+                "--size",
+                "4",
+                "--storeys",
+                "2",
+                "--difficulty",
+                "1"
+            ]
+        );
+        assert_eq!(level_args("corner"), ["--level", "corner"]);
+        // Not a generated maze's name: a level of that name (a file, say).
+        for name in [
+            "maze-11-4x5x2-d1",
+            "maze-11-4x4-d1",
+            "maze-x-4x4x2-d1",
+            "maze-11-4x4x2-d",
+            "maze-11-4x4x2x1-d1",
+            "maze--4x4x2-d1",
+        ] {
+            assert_eq!(level_args(name), ["--level", name], "{name}");
         }
     }
 

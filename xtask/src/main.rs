@@ -53,7 +53,8 @@ enum Task {
     /// Play in QEMU mps2-an386 on the terminal; headless demo with --demo or
     /// without a terminal on stdin (exit status: the firmware's).
     Qemu {
-        /// The headless demo: the autopilot plays every level.
+        /// The headless demo: the autopilot plays every level and three
+        /// generated mazes.
         #[arg(long)]
         demo: bool,
         /// Firmware arguments (semihosting command line).

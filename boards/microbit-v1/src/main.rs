@@ -7,7 +7,8 @@
 //!   ([`sensor`]); the log goes over RTT.
 //! * In QEMU (`cargo microbit-v1 -- --demo`): the semihosting command line
 //!   picks the mode (`marble_rolling::board::microbit_v1::Options`). With
-//!   `--demo` the autopilot plays every built-in level and the firmware logs
+//!   `--demo` the autopilot plays every built-in level and three generated
+//!   mazes and the firmware logs
 //!   per level `demo <n>/<total> level=<name> outcome=<..> steps=<..>
 //!   state_hash=<16 hex>` (as the mps2 board, so `cargo sim` can be compared
 //!   with it), every frame that stays on the LEDs for 80 ms or more with its
@@ -56,8 +57,10 @@ use marble_board_runtime::heartbeat::poll_beating;
 use marble_rolling::app::{self, GameMode, Links, TiltInput};
 use marble_rolling::board::microbit::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::board::microbit_v1::{
-    LoadReport, Options, HEIGHT, RAM_BUDGET_BYTES, RAM_BYTES, WATCHDOG_TIMEOUT_TICKS, WIDTH,
+    LoadReport, Options, HEIGHT, MAZE_REACH, RAM_BUDGET_BYTES, RAM_BYTES, WATCHDOG_TIMEOUT_TICKS,
+    WIDTH,
 };
+use marble_rolling::game::endless::{MazeSlot, Seeds};
 use marble_rolling::input::tilt::TiltConfig;
 
 /// The links between the tasks.
@@ -74,6 +77,9 @@ const PILOT: bool = true;
 /// flash budget at 128 KiB of its 256 KiB it fits (`cargo xtask
 /// check-microbit-v1` and docs/microbit-revisions.md have the figures).
 const EVENTS: bool = marble_rolling::game::rules::DEFAULT_EVENTS;
+
+/// Room for the endless run's generated maze ([`MAZE_REACH`]).
+type Mazes = MazeSlot<{ MAZE_REACH.words() }, { MAZE_REACH.text_bytes() }>;
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
@@ -230,8 +236,11 @@ async fn game(options: Options) {
     let mode = if options.demo {
         GameMode::Demo { records: false }
     } else {
+        // No random source is used here: the mazes' seeds are the level
+        // count, as in the demo.
         GameMode::Play {
             tilt: TiltConfig::DEFAULT,
+            seeds: Seeds::Count,
         }
     };
     if options.demo {
@@ -262,7 +271,10 @@ async fn game(options: Options) {
         // stretch, so this run's LEDs and CPU load are not the demo's.
         LINKS.meter.set(Some(hw::cpu_meter::meter));
     }
-    let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode));
+    let mut mazes = Mazes::new(MAZE_REACH);
+    let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
+        &LINKS, mode, &mut mazes
+    ));
     // Being polled at the frame rate is the game's proof of life (its loop is
     // `app::game_task`'s).
     let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;

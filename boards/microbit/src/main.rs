@@ -47,6 +47,7 @@ use marble_rolling::records::Records;
 use marble_rolling::app::{self, Links};
 use marble_rolling::board::microbit::power_on::{self, PowerOn};
 use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, WatchdogGate};
+use marble_rolling::game::endless::{MazeSlot, Seeds};
 use marble_rolling::input::buttons::Buttons;
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::input::tilt::TiltConfig;
@@ -110,19 +111,25 @@ async fn input(mut input: hw::MicrobitInput) -> ! {
     app::input_task(&LINKS, &mut input).await
 }
 
+/// Room for the endless run's generated maze ([`board::MAZE_REACH`]).
+type Mazes = MazeSlot<{ board::MAZE_REACH.words() }, { board::MAZE_REACH.text_bytes() }>;
+
 /// The game; first the self-test when B was held at power-on
-/// (`board::power_on`), until A.
+/// (`board::power_on`), until A. The generated mazes after the built-in
+/// levels take their seeds from `seed`, drawn at power-up.
 #[embassy_executor::task]
-async fn game(self_test: bool, level: u8) {
+async fn game(self_test: bool, level: u8, seed: u32) {
     if self_test {
         let test = pin!(run_self_test());
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
     }
+    let mut mazes = Mazes::new(board::MAZE_REACH);
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         let mode = app::GameMode::Play {
             tilt: TiltConfig::DEFAULT,
             level,
+            seeds: Seeds::Drawn(seed),
         };
         // The game loop is app's; being polled (every frame tick, paused or
         // not) is its heartbeat.
@@ -131,7 +138,9 @@ async fn game(self_test: bool, level: u8) {
             { board::HEIGHT },
             PILOT,
             EVENTS,
-        >(&LINKS, mode));
+            _,
+            _,
+        >(&LINKS, mode, &mut mazes));
         let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters
@@ -310,8 +319,12 @@ async fn main(spawner: Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("input task already running"),
     }
+    // The seeds of this power-up's generated mazes, from the RNG's thermal
+    // noise (four bytes: well under a millisecond, before the game starts).
+    let seed = embassy_nrf::rng::Rng::new_blocking(p.RNG).blocking_next_u32();
+    defmt::info!("generated mazes: seeds from {=u32}", seed);
     // After a wake-up from System OFF: the level it fell asleep on.
-    match game(choice == PowerOn::SelfTest, hw::level_after_reset()) {
+    match game(choice == PowerOn::SelfTest, hw::level_after_reset(), seed) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
     }

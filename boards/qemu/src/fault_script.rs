@@ -56,7 +56,7 @@ const TILT_STEP_TICKS: u32 = T / 2;
 const TILTS: [(i32, i32); 4] = [(-250, 0), (250, 60), (-250, -60), (250, 0)];
 
 /// A game without the autopilot.
-type ScriptPlayer = Player<WIDTH, HEIGHT, false, { crate::EVENTS }>;
+type ScriptPlayer = Player<'static, WIDTH, HEIGHT, false, { crate::EVENTS }>;
 
 /// Firmware milliseconds of `ticks` game frames.
 fn ms(ticks: u32) -> u32 {

@@ -2,9 +2,12 @@
 //!
 //! `cargo qemu` plays on the terminal (UART0); `cargo qemu -- --demo` (or any
 //! run without a terminal on stdin) runs the deterministic headless demo: the
-//! autopilot plays every built-in level, one log line per level (outcome,
-//! physics steps, `state_hash`, as `cargo sim -- --level <name> --autopilot
-//! --json` reports them; `cargo xtask check-demo` compares the two), then the
+//! autopilot plays every built-in level and the endless run's first three
+//! generated mazes, one log line per level (outcome, physics steps,
+//! `state_hash`, as `cargo sim -- --level <name> --autopilot --json` or
+//! `cargo sim -- --generate SEED --size N --storeys S --difficulty D
+//! --autopilot --json` reports them; `cargo xtask check-demo` compares the
+//! two), then the
 //! CPU load, the stack high-water mark, the instruction count of a game frame,
 //! and a summary. QEMU exits 0 when every level was won, 1 otherwise, 101 on
 //! a panic. The runner is `cargo qemu` (xtask); it tells the firmware its mode
@@ -32,7 +35,8 @@ use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
-use marble_rolling::board::qemu::{Options, HEIGHT, QEMU_RAM, WIDTH};
+use marble_rolling::board::qemu::{Options, HEIGHT, MAZE_REACH, QEMU_RAM, WIDTH};
+use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
@@ -64,6 +68,9 @@ const PILOT: bool = true;
 /// The stepper every board plays (`GameConfig::DEFAULT`); `cargo sim` plays the
 /// same game.
 const EVENTS: bool = marble_rolling::game::rules::DEFAULT_EVENTS;
+
+/// Room for the endless run's generated maze ([`MAZE_REACH`]).
+type Mazes = MazeSlot<{ MAZE_REACH.words() }, { MAZE_REACH.text_bytes() }>;
 
 /// Headless runs log the perceived matrix (when it changed) every this many
 /// refreshes (5 s).
@@ -237,10 +244,13 @@ async fn sound() -> ! {
 
 #[embassy_executor::task]
 async fn game(options: Options) {
+    // No random source here: the mazes' seeds are the level count, as in the
+    // demo.
     let mode = if options.interactive {
         GameMode::Play {
             tilt: SYNTHETIC_TILT,
             level: 0,
+            seeds: Seeds::Count,
         }
     } else {
         GameMode::Demo {
@@ -262,8 +272,10 @@ async fn game(options: Options) {
             );
         }
     }
+    let mut mazes = Mazes::new(MAZE_REACH);
     let start = hw::cpu_meter::sample();
-    let mut exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
+    let mut exit =
+        app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
     // Idle for two minutes: QEMU has no power to save; it blanks the matrix,
     // waits for a key, and resumes at the start of the level (as the v2 does
     // from System OFF).
@@ -272,8 +284,9 @@ async fn game(options: Options) {
         let mode = GameMode::Play {
             tilt: SYNTHETIC_TILT,
             level,
+            seeds: Seeds::Count,
         };
-        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS>(&LINKS, mode).await;
+        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
     }
     let end = hw::cpu_meter::sample();
     if exit == GameExit::Quit {
@@ -312,7 +325,7 @@ async fn game(options: Options) {
         }
         None => defmt::warn!("cpu load: no time elapsed"),
     }
-    profile();
+    profile(&mut mazes);
     // The first configuration is not a re-init; a fault-free demo has no other
     // and no fault (a long frame that starves the input task would show here).
     let sensor = SensorTotals::from_configurations(REPORT.reinits(), REPORT.faults());
@@ -336,15 +349,26 @@ const PROFILE_FRAMES: u32 = 1024;
 
 /// Counts the instructions of the game's per-frame work (autopilot reading,
 /// `Session::frame` = 8 physics steps, rendering) frame by frame, replaying
-/// the start of every level, and logs the averages and maxima.
-fn profile() {
+/// the start of every level and of the demo's generated mazes (made again in
+/// `mazes`), and logs the averages and maxima.
+fn profile(mazes: &mut Mazes) {
     use hw::cpu_meter::count_instructions;
     let mut total = Costs::default();
     let mut picture = marble_rolling::matrix::Frame::<WIDTH, HEIGHT>::new();
-    for index in 0..LEVELS.len() {
-        let Ok(mut player) =
-            Player::<WIDTH, HEIGHT, PILOT, EVENTS>::new(&LEVELS, index, SYNTHETIC_TILT, true)
-        else {
+    // The demo's levels, as `app::demo` numbers them.
+    let endless = Endless {
+        builtins: LEVELS.len(),
+        reach: mazes.reach(),
+        seeds: Seeds::Count,
+    };
+    for number in 0..LEVELS.len() + DEMO_MAZES {
+        let level = match endless.stage(number) {
+            Stage::Builtin(index) => LEVELS.get(index).copied(),
+            Stage::Maze(args) => mazes.make(args).ok(),
+        };
+        let Some(Ok(mut player)) = level.map(|level| {
+            Player::<WIDTH, HEIGHT, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true)
+        }) else {
             continue;
         };
         let mut costs = Costs::default();

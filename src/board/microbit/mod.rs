@@ -187,6 +187,16 @@ pub const TWIM_COPY_BUFFER_BYTES: usize = 2;
 /// the erases rotate: see `marble_rolling::records` and the wear figure in docs/testing.md.
 pub const RECORDS: core::ops::Range<u32> = 0x7_C000..0x8_0000;
 
+/// The largest generated maze the endless run plays on the v2
+/// ([`crate::game::endless`]): 10 cells a side (21 tiles; the 5 × 5 view follows
+/// the marble) on up to four storeys. Its slot keeps 444 B of tiles in the game
+/// task's static RAM, and its text takes at most 1 992 B of stack while it is
+/// parsed, between two levels (`cargo xtask size-report` has the figures).
+pub const MAZE_REACH: crate::game::endless::Reach = crate::game::endless::Reach {
+    size: 10,
+    storeys: crate::game::endless::MOST_STOREYS,
+};
+
 /// What GPREGRET (the nRF52's general purpose retention register, kept in
 /// System OFF) holds while the toy sleeps: this tag in the high nibble, the
 /// level in the low one, so that a wake-up resumes at the start of that level

@@ -231,8 +231,9 @@ pub fn rows_hex(picture: &Picture) -> [u32; SIZE] {
 /// (`cargo microbit-v1 -- --demo`); on a real board there is none (the
 /// defaults: play).
 ///
-/// * `--demo`: the autopilot plays every built-in level once, then the
-///   firmware exits through semihosting (0 only if every level was won).
+/// * `--demo`: the autopilot plays every built-in level once and the first
+///   three generated mazes of the endless run, then the firmware exits
+///   through semihosting (0 only if every level was won).
 /// * `--seconds=N`: play (no autopilot) for `N` seconds of firmware time,
 ///   then exit 0 — a headless run of the play mode, e.g. to see the sensor
 ///   supervision give up on QEMU's stub accelerometer.
@@ -407,6 +408,19 @@ impl LoadReport {
         })
     }
 }
+
+/// The largest generated maze the endless run plays on the v1
+/// ([`crate::game::endless`]): 7 cells a side on up to four storeys, so that
+/// its demo plays the same mazes as QEMU's. Its slot keeps 228 B of tiles and
+/// 28 of name in the game task's static RAM, and its text (at most 1 104 B) is
+/// on the stack only while it is parsed, between two levels, far above the
+/// stack's deepest call (`cargo xtask check-microbit-v1` has the figures;
+/// docs/boards.md). Larger mazes would fit the RAM too, but the v1's physics
+/// is already over its frame goal on the larger built-in levels.
+pub const MAZE_REACH: crate::game::endless::Reach = crate::game::endless::Reach {
+    size: 7,
+    storeys: crate::game::endless::MOST_STOREYS,
+};
 
 #[cfg(test)]
 mod tests {

@@ -22,6 +22,7 @@ pub mod virtual_lsm303agr;
 #[cfg(feature = "app")]
 pub mod virtual_matrix;
 
+use crate::game::endless::Reach;
 use crate::input::sensor::{AxisMap, SupervisorConfig};
 use virtual_i2c::RamRange;
 
@@ -159,6 +160,12 @@ impl Options {
     }
 }
 
+/// The largest generated maze the endless run plays here
+/// ([`crate::game::endless`]): the micro:bit v2's, so that the v2's maze code
+/// runs on the same Cortex-M4 code in QEMU, where its stack is measured (there
+/// is no nRF52 emulator). The virtual matrix follows the marble and the storey
+/// maps show a window of a maze too wide for the terminal.
+pub const MAZE_REACH: Reach = crate::board::microbit::MAZE_REACH;
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -35,6 +35,9 @@ use core::fmt::Write as _;
 use embassy_time::{Duration, Ticker};
 
 use super::{HEIGHT, WIDTH};
+#[cfg(feature = "storey-maps")]
+use crate::game::endless::{MazeArgs, MazeSlot};
+use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
 use crate::game::player::Status;
 use crate::game::player::FRAME_HZ;
@@ -63,6 +66,31 @@ pub struct VirtualMatrix<C: Console> {
     log_every: u32,
     drawn: Option<(DisplayFrame, Status)>,
     last_logged: Option<DisplayFrame>,
+    /// The generated maze on show, made again from its arguments for its
+    /// storey maps (the game's own is the game task's).
+    #[cfg(feature = "storey-maps")]
+    maze: ShownMaze,
+}
+
+/// The generated maze on show, made again here from [`Status::maze`].
+#[cfg(feature = "storey-maps")]
+struct ShownMaze {
+    /// As the game's ([`super::MAZE_REACH`]).
+    slot: MazeSlot<{ super::MAZE_REACH.words() }, { super::MAZE_REACH.text_bytes() }>,
+    /// What `slot` holds.
+    made: Option<MazeArgs>,
+}
+
+#[cfg(feature = "storey-maps")]
+impl ShownMaze {
+    /// The maze of `args`, made only when it is not the one here: once per
+    /// level, not once per picture.
+    fn show(&mut self, args: MazeArgs) -> Option<LevelView<'_>> {
+        if self.made != Some(args) {
+            self.made = self.slot.make(args).is_ok().then_some(args);
+        }
+        self.slot.view()
+    }
 }
 
 impl<C: Console> VirtualMatrix<C> {
@@ -80,6 +108,11 @@ impl<C: Console> VirtualMatrix<C> {
             log_every,
             drawn: None,
             last_logged: None,
+            #[cfg(feature = "storey-maps")]
+            maze: ShownMaze {
+                slot: MazeSlot::new(super::MAZE_REACH),
+                made: None,
+            },
         }
     }
 
@@ -105,7 +138,11 @@ impl<C: Console> VirtualMatrix<C> {
             status.frames -= status.frames % (FRAME_HZ / 10).max(1);
             let first = self.drawn.is_none();
             if self.drawn != Some((frame, status)) {
-                draw(console, &frame, &status, first);
+                #[cfg(feature = "storey-maps")]
+                let maze = status.maze.and_then(|args| self.maze.show(args));
+                #[cfg(not(feature = "storey-maps"))]
+                let maze = None;
+                draw(console, &frame, &status, maze.as_ref(), first);
                 self.drawn = Some((frame, status));
             }
         }
@@ -175,8 +212,16 @@ pub fn shade(level: Brightness) -> &'static str {
 }
 
 /// Draws `frame` and a status line at the top left of the terminal; `clear`
-/// first clears the screen and hides the cursor.
-pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, clear: bool) {
+/// first clears the screen and hides the cursor. `maze` is the level on show
+/// when it is not a built-in one (a generated maze of the endless run), for its
+/// name and its storey maps.
+pub fn draw<C: Console>(
+    console: &mut C,
+    frame: &DisplayFrame,
+    status: &Status,
+    maze: Option<&LevelView<'_>>,
+    clear: bool,
+) {
     let mut out = Out(console);
     if clear {
         out.0.write(b"\x1b[2J\x1b[?25l");
@@ -193,14 +238,22 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
     }
     let tenths = status.frames * 10 / FRAME_HZ.max(1);
     let [x, _, z] = status.reading;
+    let number = usize::from(status.level) + 1;
+    // Past the built-in levels, the endless run's generated mazes.
+    let _ = match (LEVELS.get(usize::from(status.level)), maze) {
+        (Some(level), _) => write!(
+            out,
+            "\r\n  level {}/{} {}",
+            number,
+            LEVELS.len(),
+            level.info.name
+        ),
+        (None, Some(maze)) => write!(out, "\r\n  level {} {}", number, maze.info.name),
+        (None, None) => write!(out, "\r\n  level {} (a generated maze)", number),
+    };
     let _ = write!(
         out,
-        "\r\n  level {}/{} {}: {} {}.{} s{}{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
-        usize::from(status.level) + 1,
-        LEVELS.len(),
-        LEVELS
-            .get(usize::from(status.level))
-            .map_or("?", |level| level.info.name),
+        ": {} {}.{} s{}{}\x1b[K\r\n  tilt x {} z {} mg\x1b[K\r\n",
         status.phase.as_str(),
         tenths / 10,
         tenths % 10,
@@ -237,7 +290,7 @@ pub fn draw<C: Console>(console: &mut C, frame: &DisplayFrame, status: &Status, 
         "  arrows/WASD tilt, space level, c calibrate, r restart, n next level,\x1b[K\r\n  p autopilot, m sound, q quit\x1b[K\r\n"
     );
     #[cfg(feature = "storey-maps")]
-    if let Some(level) = LEVELS.get(usize::from(status.level)) {
+    if let Some(level) = LEVELS.get(usize::from(status.level)).or(maze) {
         if level.info.storeys > 1 {
             storey_maps::draw(&mut out, level, status);
         }

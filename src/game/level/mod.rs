@@ -132,6 +132,24 @@ pub struct LevelInfo<'a> {
 }
 
 impl LevelInfo<'_> {
+    /// The same header under `name`: a level kept after the text it was parsed
+    /// from is gone (a generated maze, whose text is written, parsed and
+    /// dropped) borrows its name from a buffer of its own.
+    pub const fn renamed<'n>(self, name: &'n str) -> LevelInfo<'n> {
+        LevelInfo {
+            name,
+            spec: self.spec,
+            time_limit_s: self.time_limit_s,
+            nx: self.nx,
+            nz: self.nz,
+            storeys: self.storeys,
+            starts: self.starts,
+            n_starts: self.n_starts,
+            goals: self.goals,
+            n_goals: self.n_goals,
+        }
+    }
+
     /// Start cells, in reading order (top storey first).
     pub fn starts(&self) -> &[Cell] {
         &self.starts[..self.n_starts as usize]
