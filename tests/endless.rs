@@ -6,7 +6,7 @@
 use marble_rolling::board::{microbit, microbit_v1, qemu};
 use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::endless::{
-    Endless, MazeArgs, MazeError, MazeSlot, Reach, Seeds, Stage, DEMO_MAZES, FIRST_SIZE,
+    Endless, MazeArgs, MazeError, MazeSlot, Reach, Seeds, Stage, StageError, DEMO_MAZES, FIRST_SIZE,
 };
 use marble_rolling::game::generate::{generate, text_bytes, MAX_DIFFICULTY, MAX_SIZE};
 use marble_rolling::game::level::{parse, LevelView};
@@ -28,6 +28,7 @@ const BOARDS: [(&str, Reach); 3] = [
 
 fn run(reach: Reach, seeds: Seeds) -> Endless {
     Endless {
+        from_region: 0,
         builtins: LEVELS.len(),
         reach,
         seeds,
@@ -38,6 +39,7 @@ fn maze(stage: Stage) -> MazeArgs {
     match stage {
         Stage::Maze(args) => args,
         Stage::Builtin(i) => panic!("built-in level {i} where a maze was expected"),
+        Stage::Region(i) => panic!("level {i} of the region where a maze was expected"),
     }
 }
 
@@ -429,7 +431,7 @@ fn the_run_goes_on_from_the_last_built_in_level_into_mazes() {
     let mut carried = None;
     let mut played = Vec::new();
     for _ in 0..3 {
-        let level = endless.level(number, &mut mazes).expect("a level");
+        let level = endless.level(number, &mut mazes, None).expect("a level");
         let autopilot =
             carried.is_none_or(|c: marble_rolling::game::player::Carried| c.autopilot());
         let mut made = FivePlayer::single(level, SYNTHETIC_TILT, autopilot);
@@ -462,5 +464,8 @@ fn the_run_goes_on_from_the_last_built_in_level_into_mazes() {
         builtins: LEVELS.len() + 5,
         ..endless
     };
-    assert_eq!(far.level(LEVELS.len(), &mut mazes).err(), Some(None));
+    assert_eq!(
+        far.level(LEVELS.len(), &mut mazes, None).err(),
+        Some(StageError::NoBuiltin(LEVELS.len()))
+    );
 }

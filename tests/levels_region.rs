@@ -2,10 +2,17 @@
 //! writes into flash and what a board reads back, or refuses with a reason.
 
 use marble_rolling::board::levels_region::{
-    crc32, level, read, write, LevelCheck, Region, RegionError, WriteError, HEADER, MAGIC,
+    at_boot, crc32, level, read, write, LevelCheck, Region, RegionError, WriteError, HEADER, MAGIC,
     MAX_LEVELS, SIZE, VERSION,
 };
-use marble_rolling::game::level::{parse, LevelErrorKind};
+use marble_rolling::board::microbit_v1;
+use marble_rolling::game::autopilot::Autopilot;
+use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, StageError};
+use marble_rolling::game::level::{parse, LevelErrorKind, LevelView};
+use marble_rolling::game::levels::LEVELS;
+use marble_rolling::game::rules::{GameConfig, Phase, DEFAULT_EVENTS};
+use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::physics::Fx;
 use proptest::prelude::*;
 
 const CORNER: &str = "name: my-corner
@@ -263,4 +270,189 @@ proptest! {
             }
         }
     }
+}
+
+// ---------------------------------------------------------------------------
+// The region on a board: read at boot (`at_boot`), its levels played first in
+// the run (`Endless::level`), as `app::game_task` and the demo take them.
+// ---------------------------------------------------------------------------
+
+/// The micro:bit v1's slot, the smallest board's: what a region level must fit.
+type V1Slot =
+    MazeSlot<{ microbit_v1::MAZE_REACH.words() }, { microbit_v1::MAZE_REACH.text_bytes() }>;
+
+/// The v1's run from the region bytes `flash`, and its first `n` levels as
+/// the game task takes them: each one's name, or why it is not played.
+fn v1_run(flash: &[u8], n: usize) -> (Endless, Vec<Result<String, StageError<'_>>>) {
+    let region = at_boot(flash);
+    let endless = Endless::new(region, microbit_v1::MAZE_REACH, Seeds::Count);
+    let mut slot = V1Slot::new(microbit_v1::MAZE_REACH);
+    let levels = (0..n)
+        .map(|number| {
+            endless
+                .level(number, &mut slot, region)
+                .map(|level| level.info.name.to_string())
+        })
+        .collect();
+    (endless, levels)
+}
+
+/// The built-in levels' names, as the run after the region has them.
+fn builtins(n: usize) -> Vec<Result<String, StageError<'static>>> {
+    LEVELS[..n]
+        .iter()
+        .map(|level| Ok(level.info.name.to_string()))
+        .collect()
+}
+
+/// The autopilot's run on `level`, as the demo and `cargo sim --autopilot`
+/// play it: the outcome, the steps and the state hash.
+fn autopilot_run(level: LevelView<'_>) -> (Phase, u64, u64) {
+    let config = GameConfig::stepped_by(DEFAULT_EVENTS);
+    let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).expect("sets up");
+    let mut pilot = Autopilot::new(&level);
+    let limit = u64::from(level.info.time_limit_s) * u64::from(config.frame_hz()) + 10;
+    for _ in 0..limit {
+        if session.autopilot_frame(&mut pilot) != Phase::Playing {
+            break;
+        }
+    }
+    (
+        session.game().phase(),
+        session.game().steps(),
+        session.state_hash(),
+    )
+}
+
+#[test]
+fn a_good_region_is_played_first_then_the_built_in_levels_and_the_same_mazes() {
+    let other = CORNER.replace("my-corner", "my-other-corner");
+    let (flash, _) = region(&[CORNER, &other]);
+    let (endless, levels) = v1_run(&flash, 4);
+    assert_eq!(endless.from_region, 2);
+    let mut expected = vec![
+        Ok("my-corner".to_string()),
+        Ok("my-other-corner".to_string()),
+    ];
+    expected.extend(builtins(2));
+    assert_eq!(levels, expected);
+    assert_eq!(endless.stage(1), Stage::Region(1));
+    assert_eq!(endless.stage(2), Stage::Builtin(0));
+    // The best times stay the built-in levels' own.
+    assert_eq!(endless.builtin(1), None);
+    assert_eq!(endless.builtin(2), Some(0));
+    // The mazes after them are the ones a board without a region plays.
+    let plain = Endless::new(None, microbit_v1::MAZE_REACH, Seeds::Count);
+    for k in 0..3 {
+        assert_eq!(
+            endless.maze(2 + LEVELS.len() + k),
+            plain.maze(LEVELS.len() + k)
+        );
+    }
+    // Parsed into the v1's slot, the level plays as the file does in `cargo
+    // sim -- --level my-corner.level --autopilot`: the same steps and hash.
+    let region = read(&flash).unwrap();
+    let mut slot = V1Slot::new(microbit_v1::MAZE_REACH);
+    let from_slot = autopilot_run(slot.load(region.bytes(0).unwrap()).expect("fits"));
+    let file = parse::<64>(CORNER).expect("parses");
+    let from_file = autopilot_run(file.view());
+    assert_eq!(from_slot.0, Phase::Won);
+    assert_eq!(from_slot, from_file);
+}
+
+#[test]
+fn an_erased_region_is_no_levels() {
+    let erased = [0xFFu8; SIZE];
+    assert_eq!(at_boot(&erased), None);
+    let (endless, levels) = v1_run(&erased, 2);
+    assert_eq!(endless.from_region, 0);
+    assert_eq!(levels, builtins(2));
+    // QEMU's `microbit` machine reads unloaded flash as zeros: refused too.
+    assert_eq!(at_boot(&[0u8; SIZE]), None);
+}
+
+#[test]
+fn a_region_with_a_bad_crc_is_ignored() {
+    let (mut flash, _) = region(&[CORNER]);
+    // One tile of the level changed after the CRC was made.
+    let at = HEADER + 2 + CORNER.find("#S").unwrap() + 2;
+    flash[at] = b'#';
+    assert!(matches!(read(&flash), Err(RegionError::Crc { .. })));
+    let (endless, levels) = v1_run(&flash, 2);
+    assert_eq!(endless.from_region, 0);
+    assert_eq!(levels, builtins(2));
+}
+
+#[test]
+fn a_truncated_region_is_ignored() {
+    let (flash, used) = region(&[CORNER, TWO_STOREYS]);
+    // The bytes end before the header's length: a region cut short.
+    for cut in [used - 1, HEADER + 3, HEADER, 5] {
+        assert_eq!(at_boot(&flash[..cut]), None, "cut at {cut}");
+        let (endless, levels) = v1_run(&flash[..cut], 2);
+        assert_eq!(endless.from_region, 0);
+        assert_eq!(levels, builtins(2), "cut at {cut}");
+    }
+}
+
+#[test]
+fn a_level_the_board_cannot_hold_or_parse_is_skipped_alone() {
+    // Wider than the v1's slot (one storey: two layers of side × side tiles).
+    let room = microbit_v1::MAZE_REACH.words();
+    let side = (1..).find(|s| 2 * s * s > 32 * room).unwrap();
+    let mut wide = String::from("name: too-wide\n---\n");
+    for k in 0..side {
+        let row: String = (0..side)
+            .map(|i| match (i, k) {
+                (1, 1) => 'S',
+                _ if (i, k) == (side - 2, side - 2) => 'G',
+                _ if i == 0 || k == 0 || i == side - 1 || k == side - 1 => '#',
+                _ => '.',
+            })
+            .collect();
+        wide.push_str(&row);
+        wide.push('\n');
+    }
+    assert!(
+        parse::<256>(&wide).is_ok(),
+        "a level the format allows, {side} tiles a side"
+    );
+    let bad = CORNER
+        .replace("my-corner", "typo")
+        .replace("#S......#", "#S..x...#");
+    let (flash, _) = region(&[&wide, &bad, CORNER]);
+    let (endless, levels) = v1_run(&flash, 4);
+    assert_eq!(endless.from_region, 3);
+    let Err(StageError::Skipped {
+        index: 0,
+        name: Some("too-wide"),
+        why: LevelCheck::TooLarge { needs, room: r },
+    }) = levels[0]
+    else {
+        panic!(
+            "the wide level is not skipped as too large: {:?}",
+            levels[0]
+        );
+    };
+    assert!(
+        needs > room && r == room,
+        "needs {needs} of {r}, the slot {room}"
+    );
+    // The same error `cargo sim -- --check` gives, at its line and column.
+    let expected = parse::<64>(&bad).unwrap_err();
+    assert_eq!(
+        levels[1],
+        Err(StageError::Skipped {
+            index: 1,
+            name: Some("typo"),
+            why: LevelCheck::Parse(expected)
+        })
+    );
+    assert_eq!(
+        levels[1].as_ref().unwrap_err().to_string(),
+        format!("level 2 of the levels region (typo) is skipped: {expected}")
+    );
+    // The next one plays, then the built-in levels.
+    assert_eq!(levels[2], Ok("my-corner".to_string()));
+    assert_eq!(levels[3], builtins(1)[0]);
 }

@@ -401,6 +401,7 @@ fn a_generated_maze_is_named_and_its_storeys_drawn() {
     );
     // Level 12 of the endless run, the second maze: two storeys.
     let endless = Endless {
+        from_region: 0,
         builtins: LEVELS.len(),
         reach: qemu::MAZE_REACH,
         seeds: Seeds::Count,

@@ -1,5 +1,6 @@
-//! The headless demo ([`GameMode::Demo`](super::GameMode::Demo)): the autopilot plays every built-in
-//! level once, exactly as `cargo sim -- --level <name> --autopilot` does, then
+//! The headless demo ([`GameMode::Demo`](super::GameMode::Demo)): the autopilot plays the levels
+//! of the board's levels region, as `cargo sim -- --level FILE --autopilot`
+//! plays the file, then every built-in level once, exactly as `cargo sim -- --level <name> --autopilot` does, then
 //! the first [`DEMO_MAZES`] generated mazes of the endless run as `cargo sim --
 //! --generate …  --autopilot` does, and each level's outcome, physics steps
 //! and `state_hash` are logged, with an instruction profile when the board has
@@ -11,7 +12,8 @@ use embassy_time::Ticker;
 use super::links::Win;
 use super::links::{Links, Meter};
 use super::mode::{DemoSummary, GameExit};
-use crate::game::endless::{Endless, MazeArgs, MazeError, MazeSlot, Seeds, DEMO_MAZES};
+use crate::board::levels_region::Region;
+use crate::game::endless::{Endless, MazeArgs, MazeSlot, Seeds, StageError, DEMO_MAZES};
 use crate::game::levels::LEVELS;
 use crate::game::player::{Player, Status, WIN_PAUSE_FRAMES};
 use crate::game::rules::Phase;
@@ -118,7 +120,9 @@ async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVEN
 /// [`SYNTHETIC_TILT`], the autopilot's reading taken from the game before
 /// each frame, stopping at the first phase that is not
 /// [`Phase::Playing`]), one frame per tick, paused while the sensor is down;
-/// then the outcome is shown for [`WIN_PAUSE_FRAMES`]. After the built-in
+/// then the outcome is shown for [`WIN_PAUSE_FRAMES`]. First the levels of
+/// `region`, each parsed into `mazes` (one that cannot be played is skipped,
+/// with a log line, and is not one of the demo's levels). After the built-in
 /// levels, the endless run's first [`DEMO_MAZES`] generated mazes
 /// ([`Seeds::Count`]), each made in `mazes` and played the same way, as
 /// `cargo sim -- --generate SEED --size N --storeys S --difficulty D
@@ -135,28 +139,48 @@ pub(super) async fn demo<
     ticker: &mut Ticker,
     records: bool,
     mazes: &mut MazeSlot<WORDS, TEXT>,
+    region: Option<Region<'_>>,
 ) -> GameExit {
     let meter = links.meter.get();
     let mut summary = DemoSummary::default();
     let mut sensor = None;
-    let endless = Endless {
-        builtins: LEVELS.len(),
-        reach: mazes.reach(),
-        seeds: Seeds::Count,
-    };
-    let total = LEVELS.len() + DEMO_MAZES;
+    let endless = Endless::new(region, mazes.reach(), Seeds::Count);
+    let run = endless.from_region + LEVELS.len() + DEMO_MAZES;
+    // The demo's levels are those it can play: the region's that do not
+    // parse or fit are left out of its count (each is logged when its turn
+    // comes), so that the demo's verdict is the played levels'.
+    let skipped = (0..endless.from_region)
+        .filter(|&number| {
+            matches!(
+                endless.level(number, mazes, region),
+                Err(StageError::Skipped { .. })
+            )
+        })
+        .count();
+    let total = run - skipped;
+    let mut shown = 0;
     // The checkers replay the demo with `cargo sim -- --stepping <this>`.
     #[cfg(feature = "defmt")]
     defmt::info!(
         "demo stepping={=str}",
         if EVENTS { "events" } else { "fixed" }
     );
-    for number in 0..total {
+    for number in 0..run {
+        let level = match endless.level(number, mazes, region) {
+            Err(e @ StageError::Skipped { .. }) => {
+                #[cfg(feature = "defmt")]
+                defmt::warn!("demo: {}", e);
+                let _ = e;
+                continue;
+            }
+            level => level,
+        };
         summary.levels = summary.levels.saturating_add(1);
-        let level = match endless.level(number, mazes) {
+        shown += 1;
+        let level = match level {
             Ok(level) => level,
             Err(e) => {
-                setup_failed(number, total, DemoSetup::Maze(e));
+                setup_failed(shown, total, DemoSetup::Stage(e));
                 continue;
             }
         };
@@ -169,7 +193,7 @@ pub(super) async fn demo<
         let player = match &mut made {
             Ok(player) => player,
             Err(e) => {
-                setup_failed(number, total, DemoSetup::Level(*e));
+                setup_failed(shown, total, DemoSetup::Level(*e));
                 continue;
             }
         };
@@ -213,11 +237,11 @@ pub(super) async fn demo<
             summary.won = summary.won.saturating_add(1);
             // Records are the built-in levels' only (see game_task).
             #[cfg(feature = "records")]
-            if records && number < LEVELS.len() {
+            if let (true, Some(level)) = (records, endless.builtin(number)) {
                 links
                     .wins
                     .send(Win {
-                        level: number.min(usize::from(u8::MAX)) as u8,
+                        level: level.min(usize::from(u8::MAX)) as u8,
                         frames: game.clock_frames(),
                     })
                     .await;
@@ -227,7 +251,7 @@ pub(super) async fn demo<
         #[cfg(feature = "defmt")]
         defmt::info!(
             "demo {=usize}/{=usize} level={=str} outcome={=str} steps={=u64} state_hash={=u64:016x}",
-            number + 1,
+            shown,
             total,
             player.level_name(),
             phase.as_str(),
@@ -278,27 +302,26 @@ fn status_of<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bo
     }
 }
 
-/// Logs that level `number` (from 0) of the demo's `total` could not be set
+/// Logs that level `shown` (from 1) of the demo's `total` could not be set
 /// up, and why.
-fn setup_failed(number: usize, total: usize, why: DemoSetup) {
+fn setup_failed(shown: usize, total: usize, why: DemoSetup) {
     #[cfg(feature = "defmt")]
     defmt::error!(
         "demo {=usize}/{=usize} level={=usize} outcome=setup-error ({})",
-        number + 1,
+        shown,
         total,
-        number + 1,
+        shown,
         why
     );
-    let _ = (number, total, why);
+    let _ = (shown, total, why);
 }
 
 /// Why a demo level could not be set up (for the log).
 #[cfg_attr(not(feature = "defmt"), allow(dead_code))]
 #[derive(Clone, Copy, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-enum DemoSetup {
+enum DemoSetup<'t> {
     Level(SetupError),
-    /// A maze that could not be made (`None`: a built-in level that is not
-    /// there).
-    Maze(Option<MazeError>),
+    /// A level that is not there, or a maze that could not be made (a bug).
+    Stage(StageError<'t>),
 }

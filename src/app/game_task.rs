@@ -11,8 +11,8 @@ use super::links::Links;
 use super::links::Win;
 use super::mode::{GameExit, GameMode};
 use super::FRAME_HZ;
-use crate::game::endless::{Endless, MazeSlot, Seeds};
-use crate::game::levels::LEVELS;
+use crate::board::levels_region::Region;
+use crate::game::endless::{Endless, MazeSlot, Seeds, StageError};
 use crate::game::player::{Carried, Player};
 #[cfg(feature = "records")]
 use crate::game::rules::Phase;
@@ -22,8 +22,11 @@ use crate::input::tilt::TiltConfig;
 /// frame on [`Links::frames`] and the [`Links::status`] every tick. Returns
 /// on [`Command::Quit`](crate::input::event::Command::Quit) or at the end of the demo. `PILOT` says whether the
 /// board has the autopilot, `EVENTS` which physics stepper it links (see
-/// [`Player`]). The generated mazes after the built-in levels are made in
-/// `mazes`, whose size is the board's choice ([`Reach`](crate::game::endless::Reach)).
+/// [`Player`]). The levels of `region`, the board's levels region
+/// ([`crate::board::levels_region::at_boot`]; `None`: the board has none, or
+/// it is erased or refused), come first, each parsed into `mazes` when its
+/// turn comes; the generated mazes after the built-in levels are made there
+/// too. Its size is the board's choice ([`Reach`](crate::game::endless::Reach)).
 pub async fn game_task<
     const W: usize,
     const H: usize,
@@ -35,29 +38,42 @@ pub async fn game_task<
     links: &Links<W, H>,
     mode: GameMode,
     mazes: &mut MazeSlot<WORDS, TEXT>,
+    region: Option<Region<'_>>,
 ) -> GameExit {
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
         #[cfg(not(feature = "sleep"))]
         GameMode::Play { tilt, seeds } => {
-            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes).await
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes, region)
+                .await
         }
         #[cfg(feature = "sleep")]
         GameMode::Play { tilt, level, seeds } => {
-            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, level, seeds, mazes)
-                .await
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(
+                links,
+                &mut ticker,
+                tilt,
+                level,
+                seeds,
+                mazes,
+                region,
+            )
+            .await
         }
         GameMode::Demo { records } => {
-            demo::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, records, mazes).await
+            demo::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, records, mazes, region)
+                .await
         }
     }
 }
 
 /// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock, the
-/// built-in levels in order and then the endless run of generated mazes
-/// ([`Endless`]), each made in `mazes` when the one before is won or skipped.
-/// A maze that cannot be made (a bug) is logged and the run starts again
-/// at the first level.
+/// levels of `region`, the built-in levels in order and then the endless run
+/// of generated mazes ([`Endless`]), each made in `mazes` when the one before
+/// is won or skipped. A level of the region that does not parse, does not fit
+/// `mazes` or that the physics refuses is logged and skipped; a maze that
+/// cannot be made (a bug) is logged and the run starts again at the first
+/// level.
 async fn play<
     const W: usize,
     const H: usize,
@@ -72,6 +88,7 @@ async fn play<
     #[cfg(feature = "sleep")] level: u8,
     seeds: Seeds,
     mazes: &mut MazeSlot<WORDS, TEXT>,
+    region: Option<Region<'_>>,
 ) -> GameExit {
     // Without `sleep` there is no level to resume: the run starts at the
     // first.
@@ -79,19 +96,23 @@ async fn play<
     let mut number = usize::from(level);
     #[cfg(not(feature = "sleep"))]
     let mut number = 0;
-    let endless = Endless {
-        builtins: LEVELS.len(),
-        reach: mazes.reach(),
-        seeds,
-    };
+    let endless = Endless::new(region, mazes.reach(), seeds);
     let mut carried = None;
     // Two minutes without a command and with the tilt still (feature `sleep`).
     #[cfg(feature = "sleep")]
     let mut idle =
         crate::input::idle::Idle::new(crate::input::idle::IdleConfig::two_minutes(FRAME_HZ));
     loop {
-        let level = match endless.level(number, mazes) {
+        let level = match endless.level(number, mazes, region) {
             Ok(level) => level,
+            Err(e @ StageError::Skipped { .. }) => {
+                // The player's level that cannot be played: the next one.
+                #[cfg(feature = "defmt")]
+                defmt::warn!("level {=usize}: {}", number + 1, e);
+                let _ = e;
+                number += 1;
+                continue;
+            }
             Err(e) => {
                 // A maze that cannot be made (a bug): the run starts again.
                 #[cfg(feature = "defmt")]
@@ -111,7 +132,19 @@ async fn play<
         let player = match &mut made {
             Ok(player) => player,
             // A built-in level that cannot be set up is the firmware's bug.
-            Err(e) if number < LEVELS.len() => return GameExit::SetupFailed(*e),
+            Err(e) if endless.builtin(number).is_some() => return GameExit::SetupFailed(*e),
+            // One of the region's that the physics refuses: the next one.
+            Err(e) if number < endless.from_region => {
+                #[cfg(feature = "defmt")]
+                defmt::warn!(
+                    "level {=usize} of the levels region is skipped: {}",
+                    number + 1,
+                    e
+                );
+                let _ = e;
+                number += 1;
+                continue;
+            }
             Err(e) => {
                 // A maze the physics refuses (a bug too): the run starts again.
                 #[cfg(feature = "defmt")]
@@ -122,6 +155,9 @@ async fn play<
             }
         };
         player.endless_at(number);
+        // The best times are kept by built-in level, whatever comes before.
+        #[cfg(feature = "records")]
+        let builtin = endless.builtin(number);
         if let Some(carried) = carried {
             player.carry(carried);
         }
@@ -174,36 +210,32 @@ async fn play<
                     player.game().steps()
                 );
                 // Records are the built-in levels' only: a generated maze is
-                // seldom played twice.
+                // seldom played twice, and the region's levels change with
+                // the .hex.
                 #[cfg(feature = "records")]
-                if let (Phase::Won, false, Ok(level)) = (
-                    phase,
-                    player.autopilot(),
-                    u8::try_from(player.level_index()),
-                ) {
-                    if usize::from(level) < LEVELS.len() {
-                        // The records task writes the flash while the win is
-                        // on show, between levels; a full queue drops the win,
-                        // never the game.
-                        let _ = links.wins.try_send(Win {
-                            level,
-                            frames: player.game().clock_frames(),
-                        });
-                    }
+                if let (Phase::Won, false, Some(Ok(level))) =
+                    (phase, player.autopilot(), builtin.map(u8::try_from))
+                {
+                    // The records task writes the flash while the win is on
+                    // show, between levels; a full queue drops the win, never
+                    // the game.
+                    let _ = links.wins.try_send(Win {
+                        level,
+                        frames: player.game().clock_frames(),
+                    });
                 }
                 let _ = phase;
             }
             #[cfg(feature = "records")]
-            if links.new_record.try_take().map(usize::from) == Some(player.level_index()) {
-                player.announce_record();
+            if let (Some(record), Some(level)) = (links.new_record.try_take(), builtin) {
+                if usize::from(record) == level {
+                    player.announce_record();
+                }
             }
             #[cfg(feature = "records")]
             let status = crate::game::player::Status {
-                best: links
-                    .bests
-                    .get()
-                    .get(player.level_index())
-                    .copied()
+                best: builtin
+                    .and_then(|index| links.bests.get().get(index).copied())
                     .flatten(),
                 ..player.status()
             };

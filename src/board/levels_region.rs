@@ -2,10 +2,11 @@
 //! address ([`V1`], [`V2`]), that holds up to [`MAX_LEVELS`] level texts for
 //! the firmware to play before the built-in ones. `cargo xtask hex --level
 //! FILE…` writes it into the .hex files ([`write()`]) and reads it back
-//! from them with [`read`] in its check. A board is to read it the same way,
-//! each level with [`level`], and play none of it, saying why, when anything
-//! is wrong (no firmware reads it yet: docs/boards.md says what is left): an
-//! erased region (no levels: a plain hex leaves it so), a foreign magic,
+//! from them with [`read`] in its check. Both micro:bits read it the same way
+//! at boot ([`at_boot`]), each level with [`level`] when its turn comes
+//! ([`crate::game::endless`]), and play none of the region, with one log line
+//! saying why, when anything is wrong with it (a level that is wrong alone is
+//! skipped alone): an erased region (no levels: a plain hex leaves it so), a foreign magic,
 //! another version, a length past the region, a CRC that does not match, an
 //! entry cut short, a level the parser refuses (the error `cargo sim --
 //! --check` gives, at its line and column) or one larger than the board can
@@ -65,6 +66,7 @@ const _: () = {
 
 /// Why a region is not played.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum RegionError {
     /// Erased flash (the magic reads `FF FF FF FF`): no levels were written.
     Erased,
@@ -102,6 +104,7 @@ pub enum RegionError {
 
 /// Why one level of a valid region is not played.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum LevelCheck {
     /// The parser's error, as `cargo sim -- --check` reports it.
     Parse(LevelError),
@@ -230,6 +233,34 @@ pub fn read(flash: &[u8]) -> Result<Region<'_>, RegionError> {
         });
     }
     Ok(Region { count, entries })
+}
+
+/// The region a board finds in its flash at boot (`flash`: the region's
+/// [`SIZE`] bytes at [`V1`] or [`V2`]): its levels, or `None`, with one log
+/// line either way (an erased region is no levels of the player's, the rest
+/// is a region refused). [`read`], so nothing here panics on any bytes.
+pub fn at_boot(flash: &[u8]) -> Option<Region<'_>> {
+    match read(flash) {
+        Ok(region) => {
+            #[cfg(feature = "defmt")]
+            defmt::info!(
+                "levels region: {=usize} level(s), played before the built-in ones",
+                region.len()
+            );
+            Some(region)
+        }
+        Err(RegionError::Erased) => {
+            #[cfg(feature = "defmt")]
+            defmt::info!("levels region: erased, no levels of yours");
+            None
+        }
+        Err(e) => {
+            #[cfg(feature = "defmt")]
+            defmt::warn!("levels region ignored: {}", e);
+            let _ = e;
+            None
+        }
+    }
 }
 
 /// Level text `bytes` parsed as `cargo sim -- --check` parses a file (bytes

@@ -1,9 +1,11 @@
-//! The endless run: after the built-in levels, generated mazes
-//! ([`crate::game::generate`]) of rising difficulty, for as long as the player
-//! plays.
+//! The endless run: first the levels of the board's levels region
+//! ([`crate::board::levels_region`], the player's own, if there are any), then
+//! the built-in levels, then generated mazes ([`crate::game::generate`]) of
+//! rising difficulty, for as long as the player plays.
 //!
 //! Which level is the `n`-th of a run is a pure function ([`Endless::stage`]):
-//! the built-in levels first, then maze `k = n − built-ins` with
+//! the region's levels first, then the built-in levels, then maze
+//! `k = n − region levels − built-ins` with
 //!
 //! * **storeys** going round `1 ..= reach.storeys` (a board that shows one storey
 //!   plays one),
@@ -12,10 +14,12 @@
 //! * **difficulty** `1 + k / 2` up to [`MAX_DIFFICULTY`] (friction from the first
 //!   maze, as the last built-in levels have; pits from the third; more marbles,
 //!   board motion and tighter time limits later: see the generator),
-//! * **seed** the level's number in the run (1-based) with [`Seeds::Count`], so a
-//!   board without a random source (QEMU, the micro:bit v1) and its demo play the
-//!   same mazes every time, or a number drawn once at power-up with
-//!   [`Seeds::Drawn`] (the micro:bit v2's RNG), so that each power-up differs.
+//! * **seed** the level's number in the run (1-based, the region's levels not
+//!   counted, so that the mazes are the same with or without them) with
+//!   [`Seeds::Count`], so a board without a random source (QEMU, the micro:bit
+//!   v1) and its demo play the same mazes every time, or a number drawn once at
+//!   power-up with [`Seeds::Drawn`] (the micro:bit v2's RNG), so that each
+//!   power-up differs.
 //!
 //! A board can keep only mazes up to some size and storeys in RAM: its
 //! [`Reach`]. The maze being played is kept in a [`MazeSlot`] sized for that
@@ -24,12 +28,18 @@
 //! the parsed tiles, the header and the name stay (the text is dropped). So a
 //! board's maze ends on the same `state_hash` as `cargo sim -- --generate SEED
 //! --size N --storeys S --difficulty D --autopilot` for the same stepping.
+//!
+//! A level of the region is parsed into the same slot ([`MazeSlot::load`]), as
+//! `cargo sim -- --check` parses a file; its name stays in the region's flash.
+//! One the board cannot hold, or that does not parse, is skipped
+//! ([`StageError::Skipped`] says which and why), never played in part.
 
 use core::fmt::{self, Write};
 
 use super::generate::{self, GenerateError, Maze, MAX_DIFFICULTY, MAX_SIZE, MIN_SIZE};
 use super::level::{parse, LevelError, LevelInfo, LevelView};
 use super::levels::LEVELS;
+use crate::board::levels_region::{self, LevelCheck, Region};
 use crate::physics::geometry::grid::{words_for, TileGrid};
 
 /// Generated mazes the headless demos play after the built-in levels.
@@ -131,6 +141,8 @@ pub struct MazeArgs {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Stage {
+    /// The level of this index (from 0) in the levels region.
+    Region(usize),
     /// The built-in level of this index.
     Builtin(usize),
     /// A generated maze.
@@ -141,6 +153,9 @@ pub enum Stage {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Endless {
+    /// Levels of the levels region before the built-in ones (0 without a
+    /// region: [`Region::len`]).
+    pub from_region: usize,
     /// Built-in levels before the first maze.
     pub builtins: usize,
     /// The largest maze the board keeps.
@@ -150,9 +165,27 @@ pub struct Endless {
 }
 
 impl Endless {
-    /// Level `number` of the run (counted from 0): a built-in level, or the
-    /// maze that comes after the `number − 1` levels before it.
+    /// A board's run: the levels of `region` (its levels region as
+    /// [`levels_region::at_boot`] found it; `None`: no levels of the
+    /// player's), the built-in levels, then mazes within `reach` with seeds
+    /// from `seeds`.
+    pub fn new(region: Option<Region<'_>>, reach: Reach, seeds: Seeds) -> Self {
+        Endless {
+            from_region: region.map_or(0, |region| region.len()),
+            builtins: LEVELS.len(),
+            reach,
+            seeds,
+        }
+    }
+
+    /// Level `number` of the run (counted from 0): a level of the region, a
+    /// built-in level, or the maze that comes after the `number − 1` levels
+    /// before it.
     pub fn stage(&self, number: usize) -> Stage {
+        // The region's levels come first and do not move the mazes' seeds.
+        let Some(number) = number.checked_sub(self.from_region) else {
+            return Stage::Region(number);
+        };
         let Some(k) = number.checked_sub(self.builtins) else {
             return Stage::Builtin(number);
         };
@@ -180,24 +213,110 @@ impl Endless {
     pub fn maze(&self, number: usize) -> Option<MazeArgs> {
         match self.stage(number) {
             Stage::Maze(args) => Some(args),
-            Stage::Builtin(_) => None,
+            Stage::Builtin(_) | Stage::Region(_) => None,
         }
     }
 
-    /// Level `number` of the run ([`Endless::stage`]): a built-in level of
-    /// [`LEVELS`], or the maze made in `mazes` ([`MazeSlot::make`]). The error
-    /// is the maze's (`None`: a built-in level [`LEVELS`] does not have, when
-    /// `builtins` counts more).
-    pub fn level<'m, const WORDS: usize, const TEXT: usize>(
+    /// The built-in level that level `number` of the run is, if it is one (its
+    /// index in [`LEVELS`]: the best times are kept by it).
+    pub fn builtin(&self, number: usize) -> Option<usize> {
+        match self.stage(number) {
+            Stage::Builtin(index) => Some(index),
+            Stage::Region(_) | Stage::Maze(_) => None,
+        }
+    }
+
+    /// Level `number` of the run ([`Endless::stage`]): a level of `region`
+    /// parsed into `mazes` ([`MazeSlot::load`]), a built-in level of
+    /// [`LEVELS`], or the maze made in `mazes` ([`MazeSlot::make`]).
+    pub fn level<'m, 'r: 'm, const WORDS: usize, const TEXT: usize>(
         &self,
         number: usize,
         mazes: &'m mut MazeSlot<WORDS, TEXT>,
-    ) -> Result<LevelView<'m>, Option<MazeError>> {
+        region: Option<Region<'r>>,
+    ) -> Result<LevelView<'m>, StageError<'r>> {
         match self.stage(number) {
-            Stage::Builtin(index) => LEVELS.get(index).copied().ok_or(None),
-            Stage::Maze(args) => mazes.make(args).map_err(Some),
+            Stage::Region(index) => {
+                let text = region
+                    .and_then(|region| region.bytes(index))
+                    .ok_or(StageError::NoRegionLevel(index))?;
+                mazes.load(text).map_err(|why| StageError::Skipped {
+                    index,
+                    name: name_of(text),
+                    why,
+                })
+            }
+            Stage::Builtin(index) => LEVELS
+                .get(index)
+                .copied()
+                .ok_or(StageError::NoBuiltin(index)),
+            Stage::Maze(args) => mazes.make(args).map_err(StageError::Maze),
         }
     }
+}
+
+/// Why [`Endless::level`] gives no level.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StageError<'t> {
+    /// Level `index` (from 0) of the levels region is not played: it does not
+    /// parse, or the board cannot hold it. Its caller skips it.
+    Skipped {
+        /// The level in the region.
+        index: usize,
+        /// Its name, if its header names it (for the log).
+        name: Option<&'t str>,
+        /// Why, as `cargo sim -- --check` says it (or too large for the board).
+        why: LevelCheck,
+    },
+    /// The region has no level `index` ([`Endless::from_region`] counts more,
+    /// or no region was given: a bug of the caller).
+    NoRegionLevel(usize),
+    /// [`LEVELS`] has no level `index` ([`Endless::builtins`] counts more).
+    NoBuiltin(usize),
+    /// The maze could not be made (a bug).
+    Maze(MazeError),
+}
+
+impl fmt::Display for StageError<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StageError::Skipped { index, name, why } => {
+                write!(f, "level {} of the levels region", index + 1)?;
+                if let Some(name) = name {
+                    write!(f, " ({name})")?;
+                }
+                match why {
+                    LevelCheck::Parse(e) => write!(f, " is skipped: {e}"),
+                    LevelCheck::TooLarge { needs, room } => write!(
+                        f,
+                        " is skipped: it needs {needs} occupancy words, this board holds {room}"
+                    ),
+                }
+            }
+            StageError::NoRegionLevel(index) => {
+                write!(f, "the levels region has no level {}", index + 1)
+            }
+            StageError::NoBuiltin(index) => write!(f, "there is no built-in level {}", index + 1),
+            StageError::Maze(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// The name a level text's header gives (`name: …` before `---`), for saying
+/// which level of the region is skipped when it does not parse. `None` when
+/// the header has none, or it is not UTF-8.
+pub fn name_of(text: &[u8]) -> Option<&str> {
+    for line in text.split(|&b| b == b'\n') {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        if line == b"---" {
+            break;
+        }
+        if let Some(value) = line.strip_prefix(b"name:") {
+            return core::str::from_utf8(value).ok().map(str::trim);
+        }
+    }
+    None
 }
 
 /// Why a [`MazeSlot`] holds no maze.
@@ -294,7 +413,27 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
         self.view().ok_or(MazeError::NameTooLong)
     }
 
-    /// The maze [`MazeSlot::make`] made last, if it made one.
+    /// Parses level text `text` (a level of the levels region) into the
+    /// slot, as `cargo sim -- --check` parses a file
+    /// ([`levels_region::level`]): whatever the slot held before is gone, also
+    /// on an error. The level's name is borrowed from `text` (the region's
+    /// flash), not kept here. Out of line like [`MazeSlot::make`]: the parsed
+    /// tiles pass through its stack only.
+    #[inline(never)]
+    pub fn load<'m, 't: 'm>(&'m mut self, text: &'t [u8]) -> Result<LevelView<'m>, LevelCheck> {
+        self.level = None;
+        self.name_len = 0;
+        let level = levels_region::level::<WORDS>(text)?;
+        let name = level.info.name;
+        let (info, grid) = self.level.insert((level.info.renamed(""), level.grid));
+        Ok(LevelView {
+            info: info.renamed(name),
+            tiles: grid.view(),
+        })
+    }
+
+    /// The maze [`MazeSlot::make`] made last, if it made one (a level
+    /// [`MazeSlot::load`] loaded, nameless: its name is in its text).
     pub fn view(&self) -> Option<LevelView<'_>> {
         let (info, grid) = self.level.as_ref()?;
         // The name was a `str`: its bytes are UTF-8.

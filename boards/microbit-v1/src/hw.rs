@@ -528,3 +528,19 @@ pub mod watchdog {
         pac::WDT.rr(0).write_value(pac::wdt::regs::Rr(RELOAD));
     }
 }
+
+// ---------------------------------------------------------------------------
+// The levels region
+// ---------------------------------------------------------------------------
+
+/// The levels region's bytes in flash
+/// ([`marble_rolling::board::levels_region::V1`]), as the .hex put them
+/// there: the caller reads them with `levels_region::at_boot`.
+pub fn levels_region() -> &'static [u8] {
+    use marble_rolling::board::levels_region::{SIZE, V1};
+    // SAFETY: the region is SIZE bytes of on-chip flash, memory-mapped at
+    // V1.start, always readable, aligned for bytes; memory.x keeps the
+    // linker out of it and this firmware never erases or writes it,
+    // so the bytes do not change while the slice lives.
+    unsafe { core::slice::from_raw_parts(V1.start as usize as *const u8, SIZE) }
+}

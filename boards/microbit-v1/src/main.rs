@@ -55,6 +55,7 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use marble_board_runtime::heartbeat::poll_beating;
 use marble_rolling::app::{self, GameMode, Links, TiltInput};
+use marble_rolling::board::levels_region;
 use marble_rolling::board::microbit::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::board::microbit_v1::{
     LoadReport, Options, HEIGHT, MAZE_REACH, RAM_BUDGET_BYTES, RAM_BYTES, WATCHDOG_TIMEOUT_TICKS,
@@ -272,8 +273,11 @@ async fn game(options: Options) {
         LINKS.meter.set(Some(hw::cpu_meter::meter));
     }
     let mut mazes = Mazes::new(MAZE_REACH);
+    // The player's levels (cargo xtask hex --level), played first; one log
+    // line says what the region holds or why it is ignored.
+    let region = levels_region::at_boot(hw::levels_region());
     let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
-        &LINKS, mode, &mut mazes
+        &LINKS, mode, &mut mazes, region
     ));
     // Being polled at the frame rate is the game's proof of life (its loop is
     // `app::game_task`'s).

@@ -706,3 +706,20 @@ async fn system_off(links: &'static Links<{ board::WIDTH }, { board::HEIGHT }>, 
         cortex_m::asm::wfe();
     }
 }
+
+// ---------------------------------------------------------------------------
+// The levels region
+// ---------------------------------------------------------------------------
+
+/// The levels region's bytes in flash
+/// ([`marble_rolling::board::levels_region::V2`]), as the .hex put them
+/// there: the caller reads them with `levels_region::at_boot`.
+pub fn levels_region() -> &'static [u8] {
+    use marble_rolling::board::levels_region::{SIZE, V2};
+    // SAFETY: the region is SIZE bytes of on-chip flash, memory-mapped at
+    // V2.start, always readable, aligned for bytes; memory.x keeps the
+    // linker out of it and this firmware never erases or writes it (the
+    // only flash it writes is the best times', board::RECORDS, pages apart),
+    // so the bytes do not change while the slice lives.
+    unsafe { core::slice::from_raw_parts(V2.start as usize as *const u8, SIZE) }
+}

@@ -45,6 +45,7 @@ use marble_board_runtime::heartbeat::poll_beating;
 use marble_rolling::records::Records;
 
 use marble_rolling::app::{self, Links};
+use marble_rolling::board::levels_region;
 use marble_rolling::board::microbit::power_on::{self, PowerOn};
 use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, WatchdogGate};
 use marble_rolling::game::endless::{MazeSlot, Seeds};
@@ -124,6 +125,9 @@ async fn game(self_test: bool, level: u8, seed: u32) {
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
     }
     let mut mazes = Mazes::new(board::MAZE_REACH);
+    // The player's levels (cargo xtask hex --level), played first; one log
+    // line says what the region holds or why it is ignored.
+    let region = levels_region::at_boot(hw::levels_region());
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         let mode = app::GameMode::Play {
@@ -140,7 +144,7 @@ async fn game(self_test: bool, level: u8, seed: u32) {
             EVENTS,
             _,
             _,
-        >(&LINKS, mode, &mut mazes));
+        >(&LINKS, mode, &mut mazes, region));
         let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters

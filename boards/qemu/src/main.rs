@@ -273,9 +273,11 @@ async fn game(options: Options) {
         }
     }
     let mut mazes = Mazes::new(MAZE_REACH);
+    // The mps2-an386 board has no levels region (no .hex carries it there):
+    // the run starts with the built-in levels.
     let start = hw::cpu_meter::sample();
     let mut exit =
-        app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
+        app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes, None).await;
     // Idle for two minutes: QEMU has no power to save; it blanks the matrix,
     // waits for a key, and resumes at the start of the level (as the v2 does
     // from System OFF).
@@ -286,7 +288,8 @@ async fn game(options: Options) {
             level,
             seeds: Seeds::Count,
         };
-        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
+        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes, None)
+            .await;
     }
     let end = hw::cpu_meter::sample();
     if exit == GameExit::Quit {
@@ -356,7 +359,9 @@ fn profile(mazes: &mut Mazes) {
     let mut total = Costs::default();
     let mut picture = marble_rolling::matrix::Frame::<WIDTH, HEIGHT>::new();
     // The demo's levels, as `app::demo` numbers them.
+    // No levels region on this board.
     let endless = Endless {
+        from_region: 0,
         builtins: LEVELS.len(),
         reach: mazes.reach(),
         seeds: Seeds::Count,
@@ -365,6 +370,7 @@ fn profile(mazes: &mut Mazes) {
         let level = match endless.stage(number) {
             Stage::Builtin(index) => LEVELS.get(index).copied(),
             Stage::Maze(args) => mazes.make(args).ok(),
+            Stage::Region(_) => None,
         };
         let Some(Ok(mut player)) = level.map(|level| {
             Player::<WIDTH, HEIGHT, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true)
