@@ -329,9 +329,9 @@ fn a_maze_beyond_the_slot_is_refused_not_cut() {
     assert!(slot.make(small).is_ok());
 }
 
-/// A slot keeps the tiles, the header and the name, not the level text
-/// (which is on the stack only while it is parsed): on the v1 the text would
-/// be 1 104 B more of static RAM.
+/// A slot keeps the tiles, the header, the name and where the levels region
+/// is, not the level text (which is on the stack only while it is parsed): on
+/// the v1 the text would be 1 104 B more of static RAM.
 #[test]
 fn a_slot_keeps_no_text() {
     type V1Slot =
@@ -339,9 +339,10 @@ fn a_slot_keeps_no_text() {
     let size = core::mem::size_of::<V1Slot>();
     let parts = 4 * microbit_v1::MAZE_REACH.words()
         + core::mem::size_of::<marble_rolling::game::level::LevelInfo<'static>>()
+        + core::mem::size_of::<Option<marble_rolling::board::levels_region::Region<'static>>>()
         + 28;
     println!(
-        "micro:bit v1 maze slot: {size} B on the host, of which {parts} B tiles, header and name"
+        "micro:bit v1 maze slot: {size} B on the host, of which {parts} B tiles, header, region and name"
     );
     assert!(size <= parts + 32, "{size} B for {parts} B of parts");
     assert!(microbit_v1::MAZE_REACH.text_bytes() > 32);
@@ -431,7 +432,7 @@ fn the_run_goes_on_from_the_last_built_in_level_into_mazes() {
     let mut carried = None;
     let mut played = Vec::new();
     for _ in 0..3 {
-        let level = endless.level(number, &mut mazes, None).expect("a level");
+        let level = endless.level(number, &mut mazes).expect("a level");
         let autopilot =
             carried.is_none_or(|c: marble_rolling::game::player::Carried| c.autopilot());
         let mut made = FivePlayer::single(level, SYNTHETIC_TILT, autopilot);
@@ -465,7 +466,7 @@ fn the_run_goes_on_from_the_last_built_in_level_into_mazes() {
         ..endless
     };
     assert_eq!(
-        far.level(LEVELS.len(), &mut mazes, None).err(),
+        far.level(LEVELS.len(), &mut mazes).err(),
         Some(StageError::NoBuiltin(LEVELS.len()))
     );
 }

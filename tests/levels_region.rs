@@ -281,16 +281,21 @@ proptest! {
 type V1Slot =
     MazeSlot<{ microbit_v1::MAZE_REACH.words() }, { microbit_v1::MAZE_REACH.text_bytes() }>;
 
+/// `flash` for the life of the test run, as the board's flash is.
+fn flash_of(bytes: &[u8]) -> &'static [u8] {
+    Box::leak(bytes.to_vec().into_boxed_slice())
+}
+
 /// The v1's run from the region bytes `flash`, and its first `n` levels as
 /// the game task takes them: each one's name, or why it is not played.
-fn v1_run(flash: &[u8], n: usize) -> (Endless, Vec<Result<String, StageError<'_>>>) {
-    let region = at_boot(flash);
-    let endless = Endless::new(region, microbit_v1::MAZE_REACH, Seeds::Count);
-    let mut slot = V1Slot::new(microbit_v1::MAZE_REACH);
+fn v1_run(flash: &[u8], n: usize) -> (Endless, Vec<Result<String, StageError<'static>>>) {
+    let region = at_boot(flash_of(flash));
+    let mut slot = V1Slot::new(microbit_v1::MAZE_REACH).with_region(region);
+    let endless = Endless::new(slot.region(), microbit_v1::MAZE_REACH, Seeds::Count);
     let levels = (0..n)
         .map(|number| {
             endless
-                .level(number, &mut slot, region)
+                .level(number, &mut slot)
                 .map(|level| level.info.name.to_string())
         })
         .collect();

@@ -12,7 +12,6 @@ use embassy_time::Ticker;
 use super::links::Win;
 use super::links::{Links, Meter};
 use super::mode::{DemoSummary, GameExit};
-use crate::board::levels_region::Region;
 use crate::game::endless::{Endless, MazeArgs, MazeSlot, Seeds, StageError, DEMO_MAZES};
 use crate::game::levels::LEVELS;
 use crate::game::player::{Player, Status, WIN_PAUSE_FRAMES};
@@ -121,7 +120,7 @@ async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVEN
 /// each frame, stopping at the first phase that is not
 /// [`Phase::Playing`]), one frame per tick, paused while the sensor is down;
 /// then the outcome is shown for [`WIN_PAUSE_FRAMES`]. First the levels of
-/// `region`, each parsed into `mazes` (one that cannot be played is skipped,
+/// the region `mazes` carries, each parsed into `mazes` (one that cannot be played is skipped,
 /// with a log line, and is not one of the demo's levels). After the built-in
 /// levels, the endless run's first [`DEMO_MAZES`] generated mazes
 /// ([`Seeds::Count`]), each made in `mazes` and played the same way, as
@@ -139,24 +138,16 @@ pub(super) async fn demo<
     ticker: &mut Ticker,
     records: bool,
     mazes: &mut MazeSlot<WORDS, TEXT>,
-    region: Option<Region<'_>>,
 ) -> GameExit {
     let meter = links.meter.get();
     let mut summary = DemoSummary::default();
     let mut sensor = None;
-    let endless = Endless::new(region, mazes.reach(), Seeds::Count);
+    let endless = Endless::new(mazes.region(), mazes.reach(), Seeds::Count);
     let run = endless.from_region + LEVELS.len() + DEMO_MAZES;
     // The demo's levels are those it can play: the region's that do not
     // parse or fit are left out of its count (each is logged when its turn
     // comes), so that the demo's verdict is the played levels'.
-    let skipped = (0..endless.from_region)
-        .filter(|&number| {
-            matches!(
-                endless.level(number, mazes, region),
-                Err(StageError::Skipped { .. })
-            )
-        })
-        .count();
+    let skipped = unplayable(&endless, mazes);
     let total = run - skipped;
     let mut shown = 0;
     // The checkers replay the demo with `cargo sim -- --stepping <this>`.
@@ -166,24 +157,20 @@ pub(super) async fn demo<
         if EVENTS { "events" } else { "fixed" }
     );
     for number in 0..run {
-        let level = match endless.level(number, mazes, region) {
-            Err(e @ StageError::Skipped { .. }) => {
-                #[cfg(feature = "defmt")]
-                defmt::warn!("demo: {}", e);
-                let _ = e;
+        let level = match endless.level(number, mazes) {
+            Ok(level) => level,
+            Err(e) => {
+                // A level of the region that is skipped is not one of the
+                // demo's; anything else is a level that failed.
+                if !not_played(e, shown + 1, total) {
+                    summary.levels = summary.levels.saturating_add(1);
+                    shown += 1;
+                }
                 continue;
             }
-            level => level,
         };
         summary.levels = summary.levels.saturating_add(1);
         shown += 1;
-        let level = match level {
-            Ok(level) => level,
-            Err(e) => {
-                setup_failed(shown, total, DemoSetup::Stage(e));
-                continue;
-            }
-        };
         // The call writes the player straight into `made`, a local the
         // demo's future keeps across its awaits; everything after borrows it.
         // Matching it into a local of its own would move it through a 2 KB
@@ -299,6 +286,40 @@ fn status_of<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bo
     {
         let _ = maze;
         player.status()
+    }
+}
+
+/// The levels of the slot's region that the demo skips ([`StageError::Skipped`]),
+/// each parsed into `mazes` once to know. Out of line, like everything the
+/// region adds to the demo: in the demo's own body it would grow the task's
+/// stack frame by kilobytes on the micro:bit v1.
+#[inline(never)]
+fn unplayable<const WORDS: usize, const TEXT: usize>(
+    endless: &Endless,
+    mazes: &mut MazeSlot<WORDS, TEXT>,
+) -> usize {
+    (0..endless.from_region)
+        .filter(|&number| {
+            matches!(
+                endless.level(number, mazes),
+                Err(StageError::Skipped { .. })
+            )
+        })
+        .count()
+}
+
+/// Logs why a level of the demo's run is not played: `true` for a level of
+/// the region that is skipped, `false` for the demo's level `shown` (from 1)
+/// of `total` that failed.
+#[inline(never)]
+fn not_played(e: StageError<'_>, shown: usize, total: usize) -> bool {
+    if let StageError::Skipped { .. } = e {
+        #[cfg(feature = "defmt")]
+        defmt::warn!("demo: {}", e);
+        true
+    } else {
+        setup_failed(shown, total, DemoSetup::Stage(e));
+        false
     }
 }
 

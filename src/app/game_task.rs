@@ -11,7 +11,6 @@ use super::links::Links;
 use super::links::Win;
 use super::mode::{GameExit, GameMode};
 use super::FRAME_HZ;
-use crate::board::levels_region::Region;
 use crate::game::endless::{Endless, MazeSlot, Seeds, StageError};
 use crate::game::player::{Carried, Player};
 #[cfg(feature = "records")]
@@ -22,11 +21,11 @@ use crate::input::tilt::TiltConfig;
 /// frame on [`Links::frames`] and the [`Links::status`] every tick. Returns
 /// on [`Command::Quit`](crate::input::event::Command::Quit) or at the end of the demo. `PILOT` says whether the
 /// board has the autopilot, `EVENTS` which physics stepper it links (see
-/// [`Player`]). The levels of `region`, the board's levels region
-/// ([`crate::board::levels_region::at_boot`]; `None`: the board has none, or
-/// it is erased or refused), come first, each parsed into `mazes` when its
-/// turn comes; the generated mazes after the built-in levels are made there
-/// too. Its size is the board's choice ([`Reach`](crate::game::endless::Reach)).
+/// [`Player`]). The levels of the board's levels region, which `mazes`
+/// carries ([`MazeSlot::with_region`]; none: the board has none, or it is
+/// erased or refused), come first, each parsed into `mazes` when its turn
+/// comes; the generated mazes after the built-in levels are made there too.
+/// Its size is the board's choice ([`Reach`](crate::game::endless::Reach)).
 pub async fn game_task<
     const W: usize,
     const H: usize,
@@ -38,37 +37,26 @@ pub async fn game_task<
     links: &Links<W, H>,
     mode: GameMode,
     mazes: &mut MazeSlot<WORDS, TEXT>,
-    region: Option<Region<'_>>,
 ) -> GameExit {
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
         #[cfg(not(feature = "sleep"))]
         GameMode::Play { tilt, seeds } => {
-            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes, region)
-                .await
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes).await
         }
         #[cfg(feature = "sleep")]
         GameMode::Play { tilt, level, seeds } => {
-            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(
-                links,
-                &mut ticker,
-                tilt,
-                level,
-                seeds,
-                mazes,
-                region,
-            )
-            .await
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, level, seeds, mazes)
+                .await
         }
         GameMode::Demo { records } => {
-            demo::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, records, mazes, region)
-                .await
+            demo::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, records, mazes).await
         }
     }
 }
 
 /// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock, the
-/// levels of `region`, the built-in levels in order and then the endless run
+/// levels of the region `mazes` carries, the built-in levels in order and then the endless run
 /// of generated mazes ([`Endless`]), each made in `mazes` when the one before
 /// is won or skipped. A level of the region that does not parse, does not fit
 /// `mazes` or that the physics refuses is logged and skipped; a maze that
@@ -88,7 +76,6 @@ async fn play<
     #[cfg(feature = "sleep")] level: u8,
     seeds: Seeds,
     mazes: &mut MazeSlot<WORDS, TEXT>,
-    region: Option<Region<'_>>,
 ) -> GameExit {
     // Without `sleep` there is no level to resume: the run starts at the
     // first.
@@ -96,14 +83,14 @@ async fn play<
     let mut number = usize::from(level);
     #[cfg(not(feature = "sleep"))]
     let mut number = 0;
-    let endless = Endless::new(region, mazes.reach(), seeds);
+    let endless = Endless::new(mazes.region(), mazes.reach(), seeds);
     let mut carried = None;
     // Two minutes without a command and with the tilt still (feature `sleep`).
     #[cfg(feature = "sleep")]
     let mut idle =
         crate::input::idle::Idle::new(crate::input::idle::IdleConfig::two_minutes(FRAME_HZ));
     loop {
-        let level = match endless.level(number, mazes, region) {
+        let level = match endless.level(number, mazes) {
             Ok(level) => level,
             Err(e @ StageError::Skipped { .. }) => {
                 // The player's level that cannot be played: the next one.
@@ -133,24 +120,24 @@ async fn play<
             Ok(player) => player,
             // A built-in level that cannot be set up is the firmware's bug.
             Err(e) if endless.builtin(number).is_some() => return GameExit::SetupFailed(*e),
-            // One of the region's that the physics refuses: the next one.
-            Err(e) if number < endless.from_region => {
+            Err(e) => {
+                // One of the region's that the physics refuses: the next
+                // level; a maze the physics refuses (a bug too): the run
+                // starts again.
+                let from_region = number < endless.from_region;
                 #[cfg(feature = "defmt")]
                 defmt::warn!(
-                    "level {=usize} of the levels region is skipped: {}",
+                    "level {=usize}: {}: {=str}",
                     number + 1,
-                    e
+                    e,
+                    if from_region {
+                        "skipped"
+                    } else {
+                        "back to level 1"
+                    }
                 );
                 let _ = e;
-                number += 1;
-                continue;
-            }
-            Err(e) => {
-                // A maze the physics refuses (a bug too): the run starts again.
-                #[cfg(feature = "defmt")]
-                defmt::error!("level {=usize}: {}: back to level 1", number + 1, e);
-                let _ = e;
-                number = 0;
+                number = if from_region { number + 1 } else { 0 };
                 continue;
             }
         };

@@ -226,18 +226,18 @@ impl Endless {
         }
     }
 
-    /// Level `number` of the run ([`Endless::stage`]): a level of `region`
-    /// parsed into `mazes` ([`MazeSlot::load`]), a built-in level of
+    /// Level `number` of the run ([`Endless::stage`]): a level of the
+    /// slot's region parsed into `mazes` ([`MazeSlot::load`]), a built-in level of
     /// [`LEVELS`], or the maze made in `mazes` ([`MazeSlot::make`]).
-    pub fn level<'m, 'r: 'm, const WORDS: usize, const TEXT: usize>(
+    pub fn level<'m, const WORDS: usize, const TEXT: usize>(
         &self,
         number: usize,
         mazes: &'m mut MazeSlot<WORDS, TEXT>,
-        region: Option<Region<'r>>,
-    ) -> Result<LevelView<'m>, StageError<'r>> {
+    ) -> Result<LevelView<'m>, StageError<'static>> {
         match self.stage(number) {
             Stage::Region(index) => {
-                let text = region
+                let text = mazes
+                    .region()
                     .and_then(|region| region.bytes(index))
                     .ok_or(StageError::NoRegionLevel(index))?;
                 mazes.load(text).map_err(|why| StageError::Skipped {
@@ -367,6 +367,9 @@ impl From<GenerateError> for MazeError {
 #[derive(Clone, Debug)]
 pub struct MazeSlot<const WORDS: usize, const TEXT: usize> {
     reach: Reach,
+    /// The board's levels region, whose levels are parsed here in turn
+    /// ([`MazeSlot::with_region`]).
+    region: Option<Region<'static>>,
     name: [u8; NAME_BYTES],
     name_len: u8,
     /// The header (its name a placeholder: the name is `name`) and the tiles.
@@ -378,6 +381,7 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
     pub const fn new(reach: Reach) -> Self {
         MazeSlot {
             reach,
+            region: None,
             name: [0; NAME_BYTES],
             name_len: 0,
             level: None,
@@ -387,6 +391,21 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
     /// The largest maze it keeps.
     pub const fn reach(&self) -> Reach {
         self.reach
+    }
+
+    /// The slot, with the levels of `region` to play first (the board's
+    /// levels region as [`levels_region::at_boot`] found it, in flash for the
+    /// firmware's lifetime). The region rides in the slot rather than as one
+    /// more argument of the game's tasks: on the micro:bit v1 that argument
+    /// made the compiler move the demo's 2 KiB future through the stack.
+    pub const fn with_region(mut self, region: Option<Region<'static>>) -> Self {
+        self.region = region;
+        self
+    }
+
+    /// The levels region the slot was given ([`MazeSlot::with_region`]).
+    pub const fn region(&self) -> Option<Region<'static>> {
+        self.region
     }
 
     /// Generates the maze of `args`, writes its level text and parses it: the

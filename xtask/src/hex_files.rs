@@ -22,7 +22,9 @@
 //! --check` does (`FILE:line:column: message`); `--check` then wants the
 //! region, read back by the firmware's own reader from each image the
 //! library split off, to hold the files' levels, and the rest of each image
-//! equal to the ELF's. The firmware does not play the region's levels yet.
+//! equal to the ELF's; and the V1's demo in QEMU to play the region's levels
+//! first (the firmware reads its region at boot), each won with the steps and
+//! `state_hash` of `cargo sim -- --level FILE --autopilot` ([`region_first`]).
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -358,7 +360,7 @@ fn check(
         }
     }
     if let (Some(v1_hex), Some(v1)) = (separated.get(&hex::BOARD_V1), built.first()) {
-        if let Err(problem) = demo_from_image(target, &v1.elf, v1_hex) {
+        if let Err(problem) = demo_from_image(target, &v1.elf, v1_hex, levels) {
             problems.push(problem);
         }
     }
@@ -523,8 +525,14 @@ pub fn first_difference(a: &[u8], b: &[u8]) -> Option<usize> {
 }
 
 /// Runs the V1 demo in QEMU from `image` (the .hex the library split off),
-/// decoding the log with `elf`; it must win every level.
-fn demo_from_image(target: &Path, elf: &Path, image: &Path) -> Result<(), String> {
+/// decoding the log with `elf`; it must win every level, and with `levels`
+/// in its region play them first, as the simulator plays their files.
+fn demo_from_image(
+    target: &Path,
+    elf: &Path,
+    image: &Path,
+    levels: Option<&[(String, Vec<u8>)]>,
+) -> Result<(), String> {
     let fail = |e: Failure| e.message;
     let limit = runner::timeout(600).map_err(fail)?;
     let tools = setup::m4_qemu().map_err(fail)?;
@@ -542,16 +550,91 @@ fn demo_from_image(target: &Path, elf: &Path, image: &Path) -> Result<(), String
         std::fs::read(&log_path).map_err(|e| format!("cannot read {}: {e}", log_path.display()))?;
     let text = demo::strip_colours(&String::from_utf8_lossy(&text));
     let _ = std::fs::write(&log_path, &text);
-    match demo_verdict(status, &text) {
-        Ok(won) => {
-            say!("V1 from the universal hex: {won}/{won} levels won in QEMU microbit");
-            Ok(())
-        }
-        Err(why) => Err(format!(
+    let won = demo_verdict(status, &text).map_err(|why| {
+        format!(
             "V1 from the universal hex in QEMU: {why} (log {})",
             log_path.display()
-        )),
+        )
+    })?;
+    say!("V1 from the universal hex: {won}/{won} levels won in QEMU microbit");
+    let Some(files) = levels else {
+        return Ok(());
+    };
+    let played = region_first(&text, files).map_err(|why| {
+        format!(
+            "V1 from the universal hex in QEMU: {why} (log {})",
+            log_path.display()
+        )
+    })?;
+    let stepping = demo::parse_stepping(&text).ok_or_else(|| {
+        format!(
+            "V1 from the universal hex: no `demo stepping=` line in {}",
+            log_path.display()
+        )
+    })?;
+    let sim = demo::build_sim().map_err(|e| e.message)?;
+    let mut mismatches = Vec::new();
+    for ((file, _), level) in files.iter().zip(&played) {
+        // The simulator runs in the workspace's root: the file by its full path.
+        let path = std::fs::canonicalize(file).unwrap_or_else(|_| PathBuf::from(file));
+        let host = demo::simulate(&sim, &path.to_string_lossy(), stepping);
+        match demo::verdict(level, host.as_ref()) {
+            demo::Verdict::Ok => say!(
+                "V1 from the universal hex plays the region's {} ({file}) before the built-in levels: \
+                 {} in {} steps, state_hash={} as cargo sim -- --level {file} --autopilot --stepping {stepping}",
+                level.name,
+                level.outcome,
+                level.steps,
+                level.hash
+            ),
+            verdict => mismatches.push(format!(
+                "{} ({file}): QEMU {} in {} steps, state_hash={}; cargo sim {:?}: {verdict:?}",
+                level.name, level.outcome, level.steps, level.hash, host
+            )),
+        }
     }
+    if mismatches.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "V1 from the universal hex: the region's levels do not play as in cargo sim: {} (log {})",
+            mismatches.join("; "),
+            log_path.display()
+        ))
+    }
+}
+
+/// The demo's first levels in `log`, which must be those of `files` (name,
+/// contents: the levels region's), in order, named as their headers name
+/// them: the firmware plays its region before the built-in levels.
+pub fn region_first(log: &str, files: &[(String, Vec<u8>)]) -> Result<Vec<demo::Level>, String> {
+    let (played, _) = demo::parse_levels(log);
+    let mut first = Vec::new();
+    for (index, (file, bytes)) in files.iter().enumerate() {
+        // Boxed: the largest level's grid is 16 KiB.
+        let parsed = Box::new(levels_region::level::<FORMAT_WORDS>(bytes));
+        let name = match &*parsed {
+            Ok(level) => level.info.name,
+            Err(e) => return Err(format!("{file}: not a level the region can hold: {e:?}")),
+        };
+        match played.get(index) {
+            Some(level) if level.name == name => first.push(level.clone()),
+            Some(level) => {
+                return Err(format!(
+                    "demo level {} is {}, not the region's {name} ({file})",
+                    index + 1,
+                    level.name
+                ))
+            }
+            None => {
+                return Err(format!(
+                    "the demo played {} levels, not the region's {name} ({file})",
+                    played.len()
+                ))
+            }
+        }
+    }
+    Ok(first)
 }
 
 /// The demo's verdict from its exit status and log: the number of levels,
@@ -664,6 +747,24 @@ mod tests {
         1.5 INFO  demo 1/2 level=first-roll outcome=won steps=73 state_hash=09e3a713b6b01b0e\n\
         4.4 INFO  demo 2/2 level=corner outcome=won steps=241 state_hash=88cb3b0d88d46483\n\
         4.5 INFO  demo summary: 2/2 levels won, 314 physics steps in 314 frames: PASS\n";
+
+    #[test]
+    fn the_regions_levels_come_first_in_the_demo() {
+        let region = files(&[("tests/levels/my-corner.level", CORNER)]);
+        let first = WON.replace("level=first-roll", "level=my-corner");
+        let played = region_first(&first, &region).unwrap();
+        assert_eq!(played.len(), 1);
+        assert_eq!(played[0].name, "my-corner");
+        assert_eq!(played[0].hash, "09e3a713b6b01b0e");
+        // The built-in levels first: the firmware did not play its region.
+        assert_eq!(
+            region_first(WON, &region).unwrap_err(),
+            "demo level 1 is first-roll, not the region's my-corner (tests/levels/my-corner.level)"
+        );
+        assert!(region_first("", &region)
+            .unwrap_err()
+            .starts_with("the demo played 0 levels"));
+    }
 
     #[test]
     fn the_demos_verdict() {

@@ -272,12 +272,13 @@ async fn game(options: Options) {
         // stretch, so this run's LEDs and CPU load are not the demo's.
         LINKS.meter.set(Some(hw::cpu_meter::meter));
     }
-    let mut mazes = Mazes::new(MAZE_REACH);
-    // The player's levels (cargo xtask hex --level), played first; one log
-    // line says what the region holds or why it is ignored.
+    // The player's levels (cargo xtask hex --level), played first, parsed
+    // into the maze slot in turn; one log line says what the region holds or
+    // why it is ignored.
     let region = levels_region::at_boot(hw::levels_region());
+    let mut mazes = Mazes::new(MAZE_REACH).with_region(region);
     let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
-        &LINKS, mode, &mut mazes, region
+        &LINKS, mode, &mut mazes
     ));
     // Being polled at the frame rate is the game's proof of life (its loop is
     // `app::game_task`'s).

@@ -124,10 +124,11 @@ async fn game(self_test: bool, level: u8, seed: u32) {
         let test = pin!(run_self_test());
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
     }
-    let mut mazes = Mazes::new(board::MAZE_REACH);
-    // The player's levels (cargo xtask hex --level), played first; one log
-    // line says what the region holds or why it is ignored.
+    // The player's levels (cargo xtask hex --level), played first, parsed
+    // into the maze slot in turn; one log line says what the region holds or
+    // why it is ignored.
     let region = levels_region::at_boot(hw::levels_region());
+    let mut mazes = Mazes::new(board::MAZE_REACH).with_region(region);
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         let mode = app::GameMode::Play {
@@ -144,7 +145,7 @@ async fn game(self_test: bool, level: u8, seed: u32) {
             EVENTS,
             _,
             _,
-        >(&LINKS, mode, &mut mazes, region));
+        >(&LINKS, mode, &mut mazes));
         let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters

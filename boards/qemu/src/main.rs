@@ -274,10 +274,10 @@ async fn game(options: Options) {
     }
     let mut mazes = Mazes::new(MAZE_REACH);
     // The mps2-an386 board has no levels region (no .hex carries it there):
-    // the run starts with the built-in levels.
+    // the slot has none, and the run starts with the built-in levels.
     let start = hw::cpu_meter::sample();
     let mut exit =
-        app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes, None).await;
+        app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
     // Idle for two minutes: QEMU has no power to save; it blanks the matrix,
     // waits for a key, and resumes at the start of the level (as the v2 does
     // from System OFF).
@@ -288,8 +288,7 @@ async fn game(options: Options) {
             level,
             seeds: Seeds::Count,
         };
-        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes, None)
-            .await;
+        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
     }
     let end = hw::cpu_meter::sample();
     if exit == GameExit::Quit {
