@@ -1,7 +1,8 @@
-//! The headless demo ([`GameMode::Demo`](super::GameMode::Demo)): the autopilot plays the levels
-//! of the board's levels region, as `cargo sim -- --level FILE --autopilot`
-//! plays the file, then every built-in level once, exactly as `cargo sim -- --level <name> --autopilot` does, then
-//! the first [`DEMO_MAZES`] generated mazes of the endless run as `cargo sim --
+//! The headless demo ([`GameMode::Demo`](super::GameMode::Demo)): the
+//! autopilot plays the levels of the board's levels region as `cargo sim --
+//! --level FILE --autopilot` plays their files, then every built-in level
+//! once, exactly as `cargo sim -- --level <name> --autopilot` does, then the
+//! first [`DEMO_MAZES`] generated mazes of the endless run as `cargo sim --
 //! --generate …  --autopilot` does, and each level's outcome, physics steps
 //! and `state_hash` are logged, with an instruction profile when the board has
 //! a [`Meter`].
@@ -120,8 +121,9 @@ async fn demo_tick<const W: usize, const H: usize, const PILOT: bool, const EVEN
 /// each frame, stopping at the first phase that is not
 /// [`Phase::Playing`]), one frame per tick, paused while the sensor is down;
 /// then the outcome is shown for [`WIN_PAUSE_FRAMES`]. First the levels of
-/// the region `mazes` carries, each parsed into `mazes` (one that cannot be played is skipped,
-/// with a log line, and is not one of the demo's levels). After the built-in
+/// the region `mazes` carries, each parsed into `mazes` (one that cannot be
+/// played is skipped, with a log line, and is not one of the demo's levels).
+/// After the built-in
 /// levels, the endless run's first [`DEMO_MAZES`] generated mazes
 /// ([`Seeds::Count`]), each made in `mazes` and played the same way, as
 /// `cargo sim -- --generate SEED --size N --storeys S --difficulty D
@@ -289,8 +291,8 @@ fn status_of<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bo
     }
 }
 
-/// The levels of the slot's region that the demo skips ([`StageError::Skipped`]),
-/// each parsed into `mazes` once to know. Out of line, like everything the
+/// The levels of the slot's region that the demo skips
+/// ([`StageError::Skipped`]), each parsed into `mazes` once to know. Out of line, like everything the
 /// region adds to the demo: in the demo's own body it would grow the task's
 /// stack frame by kilobytes on the micro:bit v1.
 #[inline(never)]

@@ -56,8 +56,8 @@ pub async fn game_task<
 }
 
 /// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock, the
-/// levels of the region `mazes` carries, the built-in levels in order and then the endless run
-/// of generated mazes ([`Endless`]), each made in `mazes` when the one before
+/// levels of the region `mazes` carries, the built-in levels in order and
+/// then the endless run of generated mazes ([`Endless`]), each made in `mazes` when the one before
 /// is won or skipped. A level of the region that does not parse, does not fit
 /// `mazes` or that the physics refuses is logged and skipped; a maze that
 /// cannot be made (a bug) is logged and the run starts again at the first
@@ -124,20 +124,20 @@ async fn play<
                 // One of the region's that the physics refuses: the next
                 // level; a maze the physics refuses (a bug too): the run
                 // starts again.
-                let from_region = number < endless.from_region;
-                #[cfg(feature = "defmt")]
-                defmt::warn!(
-                    "level {=usize}: {}: {=str}",
-                    number + 1,
-                    e,
-                    if from_region {
-                        "skipped"
-                    } else {
-                        "back to level 1"
-                    }
-                );
+                if number < endless.from_region {
+                    #[cfg(feature = "defmt")]
+                    defmt::warn!(
+                        "level {=usize} of the levels region is skipped: {}",
+                        number + 1,
+                        e
+                    );
+                    number += 1;
+                } else {
+                    #[cfg(feature = "defmt")]
+                    defmt::error!("level {=usize}: {}: back to level 1", number + 1, e);
+                    number = 0;
+                }
                 let _ = e;
-                number = if from_region { number + 1 } else { 0 };
                 continue;
             }
         };
