@@ -388,10 +388,38 @@ fn profile(mazes: &mut Mazes) {
             }
         }
         costs.log(player.level_name());
+        log_budget_cuts(player.level_name(), player.session_mut());
         picture = player.render();
         total.merge(&costs);
     }
     total.log("all levels");
+    // Three mazes at the top difficulty (two or three marbles, the board's
+    // motion), as the endless run reaches them: profiled, not played in the demo.
+    for seed in 1..=3 {
+        let args = marble_rolling::game::endless::MazeArgs {
+            seed,
+            size: 7,
+            storeys: 2,
+            difficulty: 9,
+        };
+        let Some(Ok(mut player)) = mazes.make(args).ok().map(|level| {
+            Player::<WIDTH, HEIGHT, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true)
+        }) else {
+            continue;
+        };
+        let mut costs = Costs::default();
+        while costs.frames < PROFILE_FRAMES {
+            let reading = player.reading([0, 1000, 0]);
+            let (phase, frame) =
+                count_instructions(|| player.session_mut().frame_in::<EVENTS>(reading));
+            costs.add(0, frame, 0);
+            if phase != Phase::Playing {
+                break;
+            }
+        }
+        costs.log(player.level_name());
+        log_budget_cuts(player.level_name(), player.session_mut());
+    }
     // The stress scenes (`game::stress`), scripted: the worst frames the levels
     // do not reach. Held to the same bound (`cargo xtask check-demo`).
     for scene in &marble_rolling::game::stress::STRESS {
@@ -411,6 +439,7 @@ fn profile(mazes: &mut Mazes) {
             costs.add(0, frame, 0);
         }
         costs.log(scene.level.info.name);
+        log_budget_cuts(scene.level.info.name, &mut session);
     }
     let substeps = 1u64 << Player::<WIDTH, HEIGHT, PILOT, EVENTS>::CONFIG.substeps_log2;
     defmt::info!(
@@ -436,6 +465,19 @@ fn profile(mazes: &mut Mazes) {
         "display: {=u64} instructions to load a frame, {=u64} to scan one refresh into the virtual matrix",
         load,
         scan
+    );
+}
+
+/// How often the step's flight budget cut a marble's step (`physics::world::
+/// FLIGHT_BUDGET`): `cargo xtask check-demo` wants none on a built-in level.
+fn log_budget_cuts(
+    what: &str,
+    session: &mut marble_rolling::game::session::Session<'_, marble_rolling::physics::Fx>,
+) {
+    defmt::info!(
+        "budget {=str}: {=u32} marble-steps cut",
+        what,
+        session.game_mut().world_mut().stats.budget_cuts
     );
 }
 

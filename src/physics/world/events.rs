@@ -387,6 +387,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let mut flights = 0u32;
         while f.t < S::ONE {
             if self.out_of_flights() {
+                // A slice under way gets its passes here, as at its end.
+                self.end_slice::<SPACE>(m, f);
                 return;
             }
             flights += 1;

@@ -17,7 +17,9 @@
 //!
 //! What the cut keeps:
 //! - **No penetration**: the marbles are left in a state the event stepper
-//!   reached, between events; nothing is flown blind.
+//!   reached, between events; nothing is flown blind. A marble cut inside a slice
+//!   gets the slice's contact passes there, as at the slice's end (a slice may
+//!   sink it `2^-12·r` into the tile it leaves to them).
 //! - **No energy gained**: the state is kept as it is.
 //! - **Determinism**: the budget counts work, the same on every target.
 //! - **Sleep only when earned**: a marble whose partial step, of positive length,

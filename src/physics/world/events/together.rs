@@ -33,7 +33,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let mut no_sleep = [false; M];
         loop {
             if self.out_of_flights() {
-                self.cut_together(&live, &mut fl, &mut no_sleep, now, obs);
+                self.cut_together::<SPACE, O>(&live, &mut fl, &mut no_sleep, now, obs);
                 break;
             }
             rounds += 1;
@@ -235,10 +235,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// every marble behind it is flown up to it (no event of its own comes before
     /// its plan, no pair's before `now`), so that the marbles the next step starts
     /// from are where they were at one instant (only a pair a slice ahead is left
-    /// ahead). Marks in `no_sleep` those that flew none of the step. Out of line:
-    /// the step's own frame stays as small as the v1's stack needs.
+    /// ahead). A marble in a slice gets the slice's contact passes there, as at
+    /// the slice's end: a slice may sink it up to `2^-12·r` into the tile it
+    /// leaves to them. Marks in `no_sleep` those that flew none of the step. Out
+    /// of line: the step's own frame stays as small as the v1's stack needs.
     #[inline(never)]
-    fn cut_together<O: StepObserver<S>>(
+    fn cut_together<const SPACE: bool, O: StepObserver<S>>(
         &mut self,
         live: &[bool; M],
         fl: &mut [Flight<S>; M],
@@ -254,8 +256,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             if fl[n].t < now {
                 let s = now - fl[n].t;
                 self.fly(n, &mut m, &mut fl[n], s, obs);
-                self.marbles[n] = m;
             }
+            self.end_slice::<SPACE>(&mut m, &mut fl[n]);
+            self.marbles[n] = m;
             no_sleep[n] = !self.cut(&fl[n]);
         }
     }
