@@ -414,15 +414,25 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         if let Some(skip) = f.want.take() {
             let around = core::mem::replace(&mut f.around, Around::Slice);
-            let pivot = around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, skip);
             let rail = f.rail.take();
+            // The edge's nearest point, once for the hold, the rail and the
+            // slice's length (neither moves the centre): a reciprocal square
+            // root each.
+            let asked =
+                skip != EVERY && (around != Around::Slice || (skip != LID && rail.is_some()));
+            let point = if asked {
+                self.pivot_point(m.pos, skip)
+            } else {
+                None
+            };
+            let pivot = around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, point);
             let rail = !pivot
                 && skip != EVERY
                 && skip != LID
-                && rail.is_some_and(|first| self.rail_hold(m, f, first, skip));
+                && rail.is_some_and(|first| self.rail_hold(m, f, first, skip, point));
             if pivot || around != Around::Rolling {
                 let len = if pivot || rail {
-                    self.pivot_len(m, f, skip)
+                    self.pivot_len(f, point)
                 } else {
                     self.slice_len(&f.seg).min(f.len)
                 };
@@ -450,7 +460,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             // A pivot slice goes on after an event inside it: the edge still holds
             // the marble, or the rest is a plain slice.
             let skip = sl.skip;
-            if !self.pivot_hold(m, f, skip) {
+            if !self.pivot_hold(m, f, self.pivot_point(m.pos, skip)) {
                 let to = f.after(self.slice_len(&f.seg).min(f.len));
                 if let Some(sl) = f.slice.as_mut() {
                     sl.pivot = false;
