@@ -196,6 +196,10 @@ struct Flight<S> {
     around: Around,
     /// The slice under way.
     slice: Option<Slice<S>>,
+    /// Where `seg` puts the marble at the last search's limit (steps from `t`):
+    /// a flight that ends there, as most do, takes it instead of the closed form
+    /// again (`set_seg` and `fly` forget it).
+    end: Option<(S, Vec3<S>)>,
 }
 
 impl<S: Scalar> Flight<S> {
@@ -214,7 +218,15 @@ impl<S: Scalar> Flight<S> {
             rail: None,
             around: Around::Slice,
             slice: None,
+            end: None,
         }
+    }
+
+    /// A new closed form from `t` on.
+    #[inline]
+    fn set_seg(&mut self, seg: Segment<S>) {
+        self.seg = seg;
+        self.end = None;
     }
 
     /// The step's time after `s` more steps (exactly 1 at the end).
@@ -561,7 +573,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 kick.set_axis(axis, (S::ZERO, S::ZERO));
             }
         }
-        f.seg = Segment::new(m.pos, m.vel, kick.dv, kick.dp, k);
+        f.set_seg(Segment::new(m.pos, m.vel, kick.dv, kick.dp, k));
         f.len = len;
     }
 
@@ -580,7 +592,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         let to = f.after(s);
         obs.flight(n, f.t, to, &f.seg);
-        m.pos = f.seg.pos_at(s);
+        m.pos = match f.end.take() {
+            Some((at, end)) if at == s => end,
+            _ => f.seg.pos_at(s),
+        };
         m.vel = cap_speed(f.seg.vel_at(s));
         f.t = to;
     }

@@ -102,7 +102,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // |v| ≤ 127 pitch/s (`cap_speed`), so |v·n| ≤ 127 by Cauchy–Schwarz.
         let v = seg.v - n.scale(seg.v.dot(n));
         let dv = seg.dv - n.scale(seg.dv.dot(n));
-        f.seg = Segment::new(m.pos, v, dv, seg.h - n.scale(hn), p.k);
+        f.set_seg(Segment::new(m.pos, v, dv, seg.h - n.scale(hn), p.k));
         true
     }
 
@@ -233,7 +233,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             o
         };
         m.vel = along(m.vel);
-        f.seg = Segment::new(m.pos, along(seg.v), along(seg.dv), along(seg.h), p.k);
+        f.set_seg(Segment::new(
+            m.pos,
+            along(seg.v),
+            along(seg.dv),
+            along(seg.h),
+            p.k,
+        ));
         true
     }
 }

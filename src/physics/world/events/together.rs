@@ -76,7 +76,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut m = self.marbles[n];
                 if m.asleep || fl[n].t >= S::ONE {
                     fl[n].t = if m.asleep { now } else { fl[n].t };
-                    fl[n].seg = Segment::still(m.pos);
+                    fl[n].set_seg(Segment::still(m.pos));
                     plan[n] = Some((S::ONE, Event::End));
                     continue;
                 }
