@@ -117,6 +117,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     let at = |n: usize| {
                         let g = &fl[n].seg;
                         let s = t0 - fl[n].t;
+                        if s == S::ZERO {
+                            // Where its flight starts: no closed form to evaluate.
+                            return (g.p, g.u, g.h);
+                        }
                         (g.pos_at(s), g.u_at(s), g.h)
                     };
                     let ((pa, ua, ha), (pb, ub, hb)) = (at(a), at(b));
