@@ -257,7 +257,10 @@ pub fn toi_box<S: Scalar>(seg: &Segment<S>, r: S, b: &Aabb<S>, len: S, tol: S) -
             }
         };
         let gap = dist - r;
-        let w = -seg.u_at(s).dot(n);
+        // At the start the velocity is the flight's own (no `2h·0` to add: three
+        // products fewer for every tile a search asks).
+        let u = if s == S::ZERO { seg.u } else { seg.u_at(s) };
+        let w = -u.dot(n);
         let beta = -seg.h.dot(n);
         let contact = || Toi::Hit {
             at: s,

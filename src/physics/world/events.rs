@@ -196,6 +196,10 @@ struct Flight<S> {
     around: Around,
     /// The slice under way.
     slice: Option<Slice<S>>,
+    /// Where `seg` puts the marble at the last search's limit (steps from `t`):
+    /// a flight that ends there, as most do, takes it instead of the closed form
+    /// again (`set_seg` and `fly` forget it).
+    end: Option<(S, Vec3<S>)>,
 }
 
 impl<S: Scalar> Flight<S> {
@@ -214,7 +218,15 @@ impl<S: Scalar> Flight<S> {
             rail: None,
             around: Around::Slice,
             slice: None,
+            end: None,
         }
+    }
+
+    /// A new closed form from `t` on.
+    #[inline]
+    fn set_seg(&mut self, seg: Segment<S>) {
+        self.seg = seg;
+        self.end = None;
     }
 
     /// The step's time after `s` more steps (exactly 1 at the end).
@@ -426,15 +438,25 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         if let Some(skip) = f.want.take() {
             let around = core::mem::replace(&mut f.around, Around::Slice);
-            let pivot = around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, skip);
             let rail = f.rail.take();
+            // The edge's nearest point, once for the hold, the rail and the
+            // slice's length (neither moves the centre): a reciprocal square
+            // root each.
+            let asked =
+                skip != EVERY && (around != Around::Slice || (skip != LID && rail.is_some()));
+            let point = if asked {
+                self.pivot_point(m.pos, skip)
+            } else {
+                None
+            };
+            let pivot = around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, point);
             let rail = !pivot
                 && skip != EVERY
                 && skip != LID
-                && rail.is_some_and(|first| self.rail_hold(m, f, first, skip));
+                && rail.is_some_and(|first| self.rail_hold(m, f, first, skip, point));
             if pivot || around != Around::Rolling {
                 let len = if pivot || rail {
-                    self.pivot_len(m, f, skip)
+                    self.pivot_len(f, point)
                 } else {
                     self.slice_len(&f.seg).min(f.len)
                 };
@@ -462,7 +484,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             // A pivot slice goes on after an event inside it: the edge still holds
             // the marble, or the rest is a plain slice.
             let skip = sl.skip;
-            if !self.pivot_hold(m, f, skip) {
+            if !self.pivot_hold(m, f, self.pivot_point(m.pos, skip)) {
                 let to = f.after(self.slice_len(&f.seg).min(f.len));
                 if let Some(sl) = f.slice.as_mut() {
                     sl.pivot = false;
@@ -563,7 +585,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 kick.set_axis(axis, (S::ZERO, S::ZERO));
             }
         }
-        f.seg = Segment::new(m.pos, m.vel, kick.dv, kick.dp, k);
+        f.set_seg(Segment::new(m.pos, m.vel, kick.dv, kick.dp, k));
         f.len = len;
     }
 
@@ -582,7 +604,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         let to = f.after(s);
         obs.flight(n, f.t, to, &f.seg);
-        m.pos = f.seg.pos_at(s);
+        m.pos = match f.end.take() {
+            Some((at, end)) if at == s => end,
+            _ => f.seg.pos_at(s),
+        };
         m.vel = cap_speed(f.seg.vel_at(s));
         f.t = to;
     }

@@ -36,15 +36,15 @@ use super::super::super::geometry::tiles::TileIndex;
 use super::{max_abs, Flight};
 use super::{Marble, Scalar, Vec3, World};
 
+/// What [`World::pivot_point`] finds: the edge's nearest point, the unit normal
+/// from it to the centre, the edge's axis (`None` at a corner).
+pub(super) type PivotPoint<S> = (Vec3<S>, Vec3<S>, Option<usize>);
+
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The point of tile `t` nearest the centre `pos` when it is on an edge or a
     /// corner (two or three axes outside the tile's box), the unit normal from it
     /// to the centre, and the edge's axis (`None` at a corner).
-    pub(super) fn pivot_point(
-        &self,
-        pos: Vec3<S>,
-        t: TileIndex,
-    ) -> Option<(Vec3<S>, Vec3<S>, Option<usize>)> {
+    pub(super) fn pivot_point(&self, pos: Vec3<S>, t: TileIndex) -> Option<PivotPoint<S>> {
         let b = self.params.layout.tile_box(t);
         let mut q = pos;
         let mut outside = 0;
@@ -72,11 +72,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         Some((q, d.scale(d2.rsqrt_fine()), along))
     }
 
-    /// Whether edge tile `t` holds the marble on the flight `f.seg` (the pull
-    /// presses it on harder than the turn needs); if so the flight's normal parts
-    /// (the pull's and the velocity's) are dropped.
-    pub(super) fn pivot_hold(&self, m: &Marble<S>, f: &mut Flight<S>, t: TileIndex) -> bool {
-        let Some((_, n, _)) = self.pivot_point(m.pos, t) else {
+    /// Whether the edge at `point` (its [`World::pivot_point`] from the marble's
+    /// centre) holds the marble on the flight `f.seg` (the pull presses it on
+    /// harder than the turn needs); if so the flight's normal parts (the pull's and
+    /// the velocity's) are dropped.
+    pub(super) fn pivot_hold(
+        &self,
+        m: &Marble<S>,
+        f: &mut Flight<S>,
+        point: Option<PivotPoint<S>>,
+    ) -> bool {
+        let Some((_, n, _)) = point else {
             return false;
         };
         let p = &self.params;
@@ -96,18 +102,18 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // |v| ≤ 127 pitch/s (`cap_speed`), so |v·n| ≤ 127 by Cauchy–Schwarz.
         let v = seg.v - n.scale(seg.v.dot(n));
         let dv = seg.dv - n.scale(seg.dv.dot(n));
-        f.seg = Segment::new(m.pos, v, dv, seg.h - n.scale(hn), p.k);
+        f.set_seg(Segment::new(m.pos, v, dv, seg.h - n.scale(hn), p.k));
         true
     }
 
     /// A pivot slice's length: `2^-j` of the flight's interval, at most 10 halvings,
-    /// turning the marble at most 1/8 rad about edge tile `t` (the travel across
-    /// the edge at most `r/8`) and moving it at most `r/4` in all.
-    pub(super) fn pivot_len(&self, m: &Marble<S>, f: &Flight<S>, t: TileIndex) -> S {
+    /// turning the marble at most 1/8 rad about the edge at `point` (the travel
+    /// across the edge at most `r/8`) and moving it at most `r/4` in all.
+    pub(super) fn pivot_len(&self, f: &Flight<S>, point: Option<PivotPoint<S>>) -> S {
         let r = self.params.radius;
         let seg = &f.seg;
         let (mut across_u, mut across_h) = (seg.u, seg.h);
-        if let Some((_, _, Some(a))) = self.pivot_point(m.pos, t) {
+        if let Some((_, _, Some(a))) = point {
             across_u.set_axis(a, S::ZERO);
             across_h.set_axis(a, S::ZERO);
         }
@@ -167,17 +173,19 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// resting contact: that motion is dropped, as a contact drops it). Moving
     /// along the edges keeps the centre its distance from both: nothing to put
     /// back at the slice's end.
+    ///
+    /// `point` is `second`'s [`World::pivot_point`] from the marble's centre.
     pub(super) fn rail_hold(
         &self,
         m: &mut Marble<S>,
         f: &mut Flight<S>,
         first: TileIndex,
         second: TileIndex,
+        point: Option<PivotPoint<S>>,
     ) -> bool {
-        let (Some((_, n1, Some(a1))), Some((_, n2, Some(a2)))) = (
-            self.pivot_point(m.pos, first),
-            self.pivot_point(m.pos, second),
-        ) else {
+        let (Some((_, n1, Some(a1))), Some((_, n2, Some(a2)))) =
+            (self.pivot_point(m.pos, first), point)
+        else {
             return false;
         };
         if a1 != a2 || first == second {
@@ -225,7 +233,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             o
         };
         m.vel = along(m.vel);
-        f.seg = Segment::new(m.pos, along(seg.v), along(seg.dv), along(seg.h), p.k);
+        f.set_seg(Segment::new(
+            m.pos,
+            along(seg.v),
+            along(seg.dv),
+            along(seg.h),
+            p.k,
+        ));
         true
     }
 }

@@ -11,13 +11,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     pub(super) fn search<const SPACE: bool>(
         &self,
         m: &Marble<S>,
-        f: &Flight<S>,
+        f: &mut Flight<S>,
         limit: S,
         skip: TileIndex,
         rest_out: bool,
     ) -> (S, Event<S>) {
         let p = &self.params;
         let (r, layout, tiles) = (p.radius, &p.layout, self.tiles);
+        let end = f.seg.pos_at(limit);
+        f.end = Some((limit, end));
         let seg = &f.seg;
         let tol = self.tol();
         let mut best = (limit, Event::End);
@@ -26,7 +28,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 best = (s, Event::Stop);
             }
         }
-        let path = swept(seg.p, seg.pos_at(limit), seg.h, limit);
+        let path = swept(seg.p, end, seg.h, limit);
         // Held faces: the tile behind the contact point must stay there.
         let mut bits = m.rest_mask;
         while bits != 0 {

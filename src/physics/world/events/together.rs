@@ -61,7 +61,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut m = self.marbles[n];
                 if m.asleep || fl[n].t >= S::ONE {
                     fl[n].t = if m.asleep { now } else { fl[n].t };
-                    fl[n].seg = Segment::still(m.pos);
+                    fl[n].set_seg(Segment::still(m.pos));
                     plan[n] = Some((S::ONE, Event::End));
                     continue;
                 }
@@ -102,6 +102,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     let at = |n: usize| {
                         let g = &fl[n].seg;
                         let s = t0 - fl[n].t;
+                        if s == S::ZERO {
+                            // Where its flight starts: no closed form to evaluate.
+                            return (g.p, g.u, g.h);
+                        }
                         (g.pos_at(s), g.u_at(s), g.h)
                     };
                     let ((pa, ua, ha), (pb, ub, hb)) = (at(a), at(b));
