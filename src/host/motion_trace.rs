@@ -153,12 +153,32 @@ pub(super) enum ReplayError {
     Diverged,
 }
 
+/// What a frame's replay starts from: the world as it was before the frame.
+pub(super) struct FrameStart<S> {
+    /// The marbles.
+    pub marbles: Vec<Marble<S>>,
+    /// The pull (milli-g).
+    pub pull: [i32; 3],
+    /// The step counters.
+    pub stats: crate::physics::StepStats,
+}
+
+impl<S: Scalar> FrameStart<S> {
+    /// The world `w` as the next frame starts from it.
+    pub(super) fn of<const M: usize>(w: &World<'_, S, M>) -> Self {
+        FrameStart {
+            marbles: w.marbles().to_vec(),
+            pull: w.gravity_mg(),
+            stats: w.stats,
+        }
+    }
+}
+
 /// Replays the frame just played step by step (see the module docs) and writes
 /// its rows; returns the rows written.
 pub(super) fn replay_frame<S: Scalar>(
     session: &Session<'_, S>,
-    before: &[Marble<S>],
-    stats: crate::physics::StepStats,
+    start: &FrameStart<S>,
     substeps: u32,
     dt: f64,
     log: &mut FlightLog<S>,
@@ -167,15 +187,17 @@ pub(super) fn replay_frame<S: Scalar>(
     let game = session.game();
     let after = game.world();
     let mut w = after.clone();
-    w.marbles_mut().copy_from_slice(before);
-    // The frame's new pull woke the marbles before its first step, which the
-    // copies from before it do not know. Waking them all is exact: a marble that
-    // stayed asleep through the frame is one whose step changes nothing, and
-    // stepping it falls asleep again with the same state.
-    for m in w.marbles_mut() {
-        m.asleep = false;
+    w.marbles_mut().copy_from_slice(&start.marbles);
+    // A new pull woke the marbles before the frame's first step, which the
+    // copies from before it do not know; an unchanged one left them as they were.
+    // Waking a marble the frame left asleep would not be exact: its flights
+    // would count against the step's flight budget and could move the cut.
+    if after.gravity_mg() != start.pull {
+        for m in w.marbles_mut() {
+            m.asleep = false;
+        }
     }
-    w.stats = stats;
+    w.stats = start.stats;
     let layout = after.params().layout;
     let c = |v: S| layout.to_mm(v);
     let samples = samples_per_step(&w);

@@ -42,7 +42,7 @@ use std::{eprintln, format, print, println};
 use clap::Parser;
 
 use super::gif_out::GifRecorder;
-use super::motion_trace::{replay_frame, trace_header, FlightLog, ReplayError};
+use super::motion_trace::{replay_frame, trace_header, FlightLog, FrameStart, ReplayError};
 use super::report::{states, Report};
 use super::tilt_trace::TiltTrace;
 use super::{excerpt, load_level, Backend, WithScalar};
@@ -210,21 +210,22 @@ impl WithScalar for Job<'_> {
                     .as_mut()
                     .map_or(super::tilt_trace::FLAT, |a| a.reading_mg(session.game())),
             };
-            let before = self.motion_out.is_some().then(|| {
-                let w = session.game().world();
-                (w.marbles().to_vec(), w.stats)
-            });
+            let before = self
+                .motion_out
+                .is_some()
+                .then(|| FrameStart::of(session.game().world()));
             session.frame(reading);
             frames += 1;
-            if let (Some((p, w)), Some((marbles, stats))) = (&mut self.motion_out, before) {
-                trace_rows += replay_frame(&session, &marbles, stats, substeps, dt, &mut log, w)
-                    .map_err(|e| match e {
+            if let (Some((p, w)), Some(start)) = (&mut self.motion_out, before) {
+                trace_rows += replay_frame(&session, &start, substeps, dt, &mut log, w).map_err(
+                    |e| match e {
                         ReplayError::Io(e) => write_err(p, e),
                         ReplayError::Diverged => {
                             "internal error: the per-step replay diverged from the frame"
                                 .to_string()
                         }
-                    })?;
+                    },
+                )?;
             }
             if let Some((p, gif, every)) = &mut self.gif {
                 if frames.is_multiple_of(*every as u64) || session.game().phase() != Phase::Playing
