@@ -1,5 +1,5 @@
 //! The endless run: first the levels of the board's levels region
-//! ([`crate::board::levels_region`], the player's own, if there are any), then
+//! ([`crate::game::levels_region`], the player's own, if there are any), then
 //! the built-in levels, then generated mazes ([`crate::game::generate`]) of
 //! rising difficulty, for as long as the player plays.
 //!
@@ -39,7 +39,7 @@ use core::fmt::{self, Write};
 use super::generate::{self, GenerateError, Maze, MAX_DIFFICULTY, MAX_SIZE, MIN_SIZE};
 use super::level::{parse, LevelError, LevelInfo, LevelView};
 use super::levels::LEVELS;
-use crate::board::levels_region::{self, LevelCheck, Region};
+use crate::game::levels_region::{self, LevelCheck, Region};
 use crate::physics::geometry::grid::{words_for, TileGrid};
 
 /// Generated mazes the headless demos play after the built-in levels.

@@ -13,6 +13,7 @@ pub mod ghost;
 pub mod player;
 pub mod level;
 pub mod levels;
+pub mod levels_region;
 pub mod rules;
 pub mod session;
 pub mod stress;
