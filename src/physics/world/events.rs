@@ -356,13 +356,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// it over the marbles still to fly, so that one marble's hard step cannot
     /// leave the next one none.
     fn fly_each<const SPACE: bool, O: StepObserver<S>>(&mut self, obs: &mut O) {
-        // One marble (the common case) takes it all, without a division (a
-        // library call on the Cortex-M0).
-        let mut to_fly = if self.marbles.len() == 1 {
-            1
-        } else {
-            self.marbles.iter().filter(|m| !m.out && !m.asleep).count() as u32
-        };
+        let mut to_fly = self.marbles.iter().filter(|m| !m.out && !m.asleep).count() as u32;
         let mut left = self.flight_budget;
         for n in 0..self.marbles.len() {
             let mut m = self.marbles[n];
@@ -370,6 +364,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 continue;
             }
             self.count_runs::<SPACE>(&m);
+            // The last marble to fly (the only one, most often) takes what is
+            // left without a division (a library call on the Cortex-M0).
             let share = if to_fly <= 1 {
                 left
             } else {

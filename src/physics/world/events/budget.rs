@@ -23,9 +23,9 @@
 //! - **No energy gained**: the state is kept as it is.
 //! - **Determinism**: the budget counts work, the same on every target.
 //! - **Sleep only when earned**: a marble whose partial step, of positive length,
-//!   left it exactly as it was (or wedged at rest against another marble, see
-//!   `together.rs`) is at rest; one that has not flown at all this step stays
-//!   awake.
+//!   left it exactly as it was is at rest; one that has not flown at all this
+//!   step stays awake. (A marble wedged at rest against another marble has its
+//!   velocity zeroed, `together.rs`, so that the exact test can find it still.)
 //!
 //! Two fallbacks that fly the rest were measured and not kept: fixed pieces of an
 //! eighth of the step, blind, each with the contact passes, sink a marble under a
