@@ -71,6 +71,10 @@ pub struct World<'a, S: Scalar, const M: usize> {
     /// Per marble, the last candidate range found free of solid tiles (the tiles
     /// never change, so it stays free): the next step usually has the same one.
     clear: [TileRange; M],
+    /// Per marble, event stepping's free region (`events/free.rs`).
+    free: [events::FreeRegion<S>; M],
+    /// Whether searches build free regions (tests turn it off to compare).
+    free_regions: bool,
     /// Flights a step may take in all ([`events::FLIGHT_BUDGET`] unless set).
     flight_budget: u32,
     /// Flights the step under way may still take.
@@ -167,6 +171,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 ]
             },
             clear: [TileRange::EMPTY; M],
+            free: [events::FreeRegion::EMPTY; M],
+            free_regions: true,
             flight_budget: events::FLIGHT_BUDGET,
             flights_left: 0,
             stats: StepStats::default(),
@@ -266,6 +272,13 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// The bounces since the last call (see [`Impacts`]), and a fresh count.
     pub fn take_impacts(&mut self) -> Impacts<S> {
         core::mem::take(&mut self.impacts)
+    }
+
+    /// Turns event stepping's free regions on (the default) or off. They are a
+    /// cache: the tests turn them off to check that they change nothing.
+    pub fn set_free_regions(&mut self, on: bool) {
+        self.free_regions = on;
+        self.free = [events::FreeRegion::EMPTY; M];
     }
 
     /// Turns skipping of resting marbles on (the default) or off. Off, every marble

@@ -75,10 +75,12 @@ use super::super::geometry::narrowphase::{offset, owned, shadowed, Contact, Feat
 use super::super::geometry::sweep::{reach, swept};
 use super::super::geometry::tiles::{Aabb, TileIndex};
 pub use budget::FLIGHT_BUDGET;
+pub(super) use free::FreeRegion;
 
 use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
 
 mod budget;
+mod free;
 mod pivot;
 mod search;
 mod together;
@@ -404,7 +406,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 self.stats.event_limits = self.stats.event_limits.wrapping_add(1);
                 return;
             }
-            let (s, ev) = self.next::<SPACE>(m, f);
+            let (s, ev) = self.next::<SPACE>(n, m, f);
             self.land::<SPACE, O>(n, m, f, s, ev, obs);
         }
     }
@@ -425,7 +427,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 
     /// The marble's next flight and the event that ends it (steps from `f.t`):
     /// the flight's acceleration, a slice begun if one was asked for, the search.
-    fn next<const SPACE: bool>(&mut self, m: &mut Marble<S>, f: &mut Flight<S>) -> (S, Event<S>) {
+    fn next<const SPACE: bool>(
+        &mut self,
+        n: usize,
+        m: &mut Marble<S>,
+        f: &mut Flight<S>,
+    ) -> (S, Event<S>) {
         self.spend(1, 1);
         self.prepare::<SPACE>(m, f);
         if f.events >= 2 * MAX_EVENTS && f.slice.is_none() {
@@ -494,7 +501,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let (s, ev) = if sl.skip == EVERY {
                     (limit, Event::End)
                 } else {
-                    self.search::<SPACE>(m, f, limit, sl.skip, !sl.pivot)
+                    self.search::<SPACE>(n, m, f, limit, sl.skip, !sl.pivot)
                 };
                 if ev == Event::End && f.after(s) == sl.to {
                     (s, Event::SliceEnd)
@@ -502,7 +509,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     (s, ev)
                 }
             }
-            None => self.search::<SPACE>(m, f, f.len, EVERY, false),
+            None => self.search::<SPACE>(n, m, f, f.len, EVERY, false),
         }
     }
 

@@ -38,6 +38,9 @@ pub struct StepStats {
     /// and each marble's slice of a pair slice): the unit of a step's work that
     /// [`events::FLIGHT_BUDGET`] bounds.
     pub flights: u32,
+    /// Events stepping: searches a marble's free region answered without
+    /// looking at a tile (`events/free.rs`).
+    pub free_served: u32,
     /// Events stepping: the flight budget's units spent (a flight 1, a pair's time
     /// of impact 1, a pair slice 3; see [`events::FLIGHT_BUDGET`]).
     pub work: u32,

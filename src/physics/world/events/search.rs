@@ -9,7 +9,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// `skip` out (a slice's; [`EVERY`] for none) and, if `rest_out`, every tile
     /// the marble rests against (a plain slice's: its passes take them).
     pub(super) fn search<const SPACE: bool>(
-        &self,
+        &mut self,
+        n: usize,
         m: &Marble<S>,
         f: &mut Flight<S>,
         limit: S,
@@ -29,6 +30,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
         }
         let path = swept(seg.p, end, seg.h, limit);
+        let reach_r = r + tol;
+        if self.free[n].serves(m, &path, reach_r, SPACE) {
+            self.stats.free_served = self.stats.free_served.wrapping_add(1);
+            return best;
+        }
         // Held faces: the tile behind the contact point must stay there.
         let mut bits = m.rest_mask;
         while bits != 0 {
@@ -64,8 +70,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             EVERY
         };
         // Tiles in reach (plain loops: iterator adapters cost more than the test).
-        let mut range = reach(layout, &path, r + tol, SPACE);
+        let mut range = reach(layout, &path, reach_r, SPACE);
         self.leave_out_held(m, &mut range);
+        let mut empty = true;
         let mut k = range.lo.k;
         while k <= range.hi.k {
             let mut j = range.lo.j;
@@ -73,10 +80,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut i = range.lo.i;
                 while i <= range.hi.i {
                     let t = TileIndex::new(i, j, k);
-                    if tiles.is_solid(t)
-                        && t != skip
-                        && !(slicing && self.still_skipped(seg, t, limit))
-                    {
+                    let solid = tiles.is_solid(t);
+                    empty &= !solid;
+                    if solid && t != skip && !(slicing && self.still_skipped(seg, t, limit)) {
                         let b = layout.tile_box(t);
                         // `leave_out_held` left exactly the tiles not behind a held face.
                         debug_assert!(!behind_held(m, &b));
@@ -115,7 +121,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             k += 1;
         }
         let lid_y = if SPACE { self.lid() } else { S::ZERO };
-        if SPACE && skip != LID && path.max.y + r + tol >= lid_y {
+        if SPACE && skip != LID && path.max.y + reach_r >= lid_y {
             let lid = Aabb {
                 min: Vec3::new(S::from_int(-127), lid_y, S::from_int(-127)),
                 max: Vec3::new(S::from_int(127), S::from_int(127), S::from_int(127)),
@@ -131,6 +137,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 }
             }
         }
+        if empty && self.free_regions && matches!(best.1, Event::End | Event::Stop) {
+            self.build_free(n, m, &path, SPACE);
+        }
         best
     }
 
@@ -141,8 +150,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// on the far side of the tile that starts there: exactly the tiles
     /// [`behind_held`] would refuse (eq. 6 and eq. 5 agree on every boundary),
     /// so the search need not ask it per tile (debug builds still check).
-    #[inline]
-    fn leave_out_held(&self, m: &Marble<S>, range: &mut TileRange) {
+    #[inline(never)]
+    pub(super) fn leave_out_held(&self, m: &Marble<S>, range: &mut TileRange) {
         let layout = &self.params.layout;
         let mut bits = m.rest_mask;
         while bits != 0 {

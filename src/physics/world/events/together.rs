@@ -65,7 +65,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     plan[n] = Some((S::ONE, Event::End));
                     continue;
                 }
-                let (s, ev) = self.next::<SPACE>(&mut m, &mut fl[n]);
+                let (s, ev) = self.next::<SPACE>(n, &mut m, &mut fl[n]);
                 self.marbles[n] = m;
                 plan[n] = Some((fl[n].after(s), ev));
             }
