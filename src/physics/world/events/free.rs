@@ -211,14 +211,13 @@ fn fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3]) -> bool {
     // Axis 3: the range itself, whose tiles must be empty.
     for axis in 0..4 {
         let mut s = *r;
-        if axis < 3 {
-            match behind[axis] {
-                Some(row) => {
-                    let (lo, hi) = bounds(&mut s, axis);
-                    (*lo, *hi) = (row, row);
-                }
-                None => continue,
+        match behind.get(axis) {
+            Some(Some(row)) => {
+                let (lo, hi) = bounds(&mut s, axis);
+                (*lo, *hi) = (*row, *row);
             }
+            Some(None) => continue,
+            None => {}
         }
         for k in s.lo.k..=s.hi.k {
             for j in s.lo.j..=s.hi.j {
