@@ -935,6 +935,64 @@ function setupEditor() {
   });
 }
 
+// --- Download for micro:bit ------------------------------------------------------
+
+// The universal hex `cargo xtask hex` built, as the server hands it out
+// (fetched at the first download): the module writes the level into it.
+let servedHex = null;
+
+// Says how the download went under its button: good news or what is wrong.
+function downloadSays(text, good) {
+  const out = $('download-status');
+  out.textContent = text;
+  out.className = good ? 'good' : 'bad';
+}
+
+// Writes the editor's level into the micro:bit's universal hex (the module
+// checks it for each board and writes the levels region) and saves the file.
+async function downloadHex() {
+  if (!servedHex) {
+    let response;
+    try {
+      response = await fetch('marble-rolling.hex');
+    } catch (e) {
+      downloadSays(`cannot download: the micro:bit .hex did not load (${e.message})`, false);
+      return;
+    }
+    if (!response.ok) {
+      downloadSays(`cannot download: this page is served without the micro:bit .hex (HTTP ${response.status}); `
+        + 'run `cargo xtask hex`, then reload the page', false);
+      return;
+    }
+    servedHex = new Uint8Array(await response.arrayBuffer());
+  }
+  if (servedHex.length > w.hex_capacity()) {
+    downloadSays(`cannot download: the served .hex is ${servedHex.length} B, the page takes up to ${w.hex_capacity()} B`, false);
+    return;
+  }
+  new Uint8Array(w.memory.buffer, w.hex_ptr(), servedHex.length).set(servedHex);
+  const n = w.download_hex(putText($('source').value), servedHex.length);
+  if (n < 0) {
+    downloadSays(`cannot download: ${answer(-n)}`, false);
+    return;
+  }
+  const bytes = new Uint8Array(w.memory.buffer, w.hex_out_ptr(), n).slice();
+  const noteLen = w.download_note();
+  const note = noteLen ? `; ${answer(noteLen)}` : '';
+  const name = answer(w.download_name()).replace(/[^A-Za-z0-9._-]+/g, '-').slice(0, 60) || 'level';
+  const file = `marble-rolling-${name}.hex`;
+  const url = URL.createObjectURL(new Blob([bytes], { type: 'application/octet-stream' }));
+  const link = document.createElement('a');
+  link.href = url;
+  link.download = file;
+  document.body.append(link);
+  link.click();
+  link.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 60000);
+  downloadSays(`${file} (${Math.round(n / 1024)} KiB): copy it onto the MICROBIT drive, `
+    + `the board plays this level first${note}`, !note);
+}
+
 // Shows the editor (or hides it again): behind a button, so a phone's first
 // screen is the maze and its panel.
 function toggleEditor(open) {
@@ -1164,6 +1222,7 @@ async function main() {
     $('stepping').blur();
   });
   $('editor-toggle').addEventListener('click', () => toggleEditor());
+  $('download-hex').addEventListener('click', downloadHex);
   $('restart').addEventListener('click', restart);
   $('next').addEventListener('click', nextLevel);
   $('autopilot').addEventListener('click', toggleAutopilot);
