@@ -12,12 +12,12 @@
 
 use core::cell::{Cell, UnsafeCell};
 
-use marble_rolling::board::levels_region::{self, LevelCheck, WriteError, SIZE, V1, V2};
+use marble_rolling::board::levels_region::{self, WriteError, SIZE, V1, V2};
 use marble_rolling::board::{microbit, microbit_v1};
 use marble_rolling::game::endless::Reach;
-use marble_rolling::game::level::LevelError;
+use marble_rolling::game::level::{parse, text as level_text, words_needed, LevelError};
 
-use crate::storage::{answer, text, TextError, TEXT, TEXT_CUT};
+use crate::storage::{answer, text, TextError, MAX_WORDS, TEXT, TEXT_CUT};
 use crate::universal_hex::{self, HexError, Patch, BOARD_V1, BOARD_V2};
 use crate::Single;
 
@@ -145,46 +145,32 @@ impl core::fmt::Display for DownloadError {
     }
 }
 
-/// Whether a board whose slot holds `WORDS` words can show `bytes`: the
-/// level's name if it can, `(needs, room)` in words if it is too large for
-/// it; the outer `Err` is the level's own error.
-fn fits<const WORDS: usize>(bytes: &[u8]) -> Result<Result<&str, (usize, usize)>, LevelError> {
-    match levels_region::level::<WORDS>(bytes) {
-        Ok(level) => Ok(Ok(level.info.name)),
-        Err(LevelCheck::TooLarge { needs, room }) => Ok(Err((needs, room))),
-        Err(LevelCheck::Parse(e)) => Err(e),
-    }
-}
-
 /// The universal hex `hex` with `level` in both boards' levels regions,
 /// written into `out`.
+///
+/// The level is parsed once, into the editor's grid (the parser the module
+/// links already: one more of a board's size is kilobytes of the module), and
+/// held against each board's slot by its words, the test
+/// `levels_region::level` makes for "too large" on the boards.
 pub(crate) fn download<'t>(
     level: &'t [u8],
     hex: &[u8],
     out: &mut [u8],
 ) -> Result<Downloaded<'t>, DownloadError> {
-    let v1 = fits::<V1_WORDS>(level).map_err(DownloadError::Level)?;
-    let v2 = fits::<V2_WORDS>(level).map_err(DownloadError::Level)?;
-    let (note, name) = match (v1, v2) {
-        (Ok(name), Ok(_)) => (None, name),
-        (Err((needs, room)), Ok(name)) => (
-            Some(Unshown {
-                board: 0,
-                needs,
-                room,
-            }),
-            name,
-        ),
-        (Ok(name), Err((needs, room))) => (
-            Some(Unshown {
-                board: 1,
-                needs,
-                room,
-            }),
-            name,
-        ),
-        (Err((needs, _)), Err(_)) => return Err(DownloadError::TooLarge { needs }),
-    };
+    let source = level_text(level).map_err(DownloadError::Level)?;
+    let name = parse::<MAX_WORDS>(source)
+        .map_err(DownloadError::Level)?
+        .info
+        .name;
+    let needs = words_needed(source);
+    if needs > V2_WORDS {
+        return Err(DownloadError::TooLarge { needs });
+    }
+    let note = (needs > V1_WORDS).then_some(Unshown {
+        board: 0,
+        needs,
+        room: V1_WORDS,
+    });
     let mut region = [0xFF; SIZE];
     let used = levels_region::write(&[level], &mut region).map_err(|e| match e {
         WriteError::TooBig { needs, .. } => DownloadError::Region { needs },
@@ -408,8 +394,8 @@ mod tests {
     #[test]
     fn errors_say_what_is_wrong() {
         assert_eq!(
-            run(&room(60)).unwrap_err(),
-            "too large for a micro:bit: the level needs 225 occupancy words of tiles; the \
+            run(&room(61)).unwrap_err(),
+            "too large for a micro:bit: the level needs 233 occupancy words of tiles; the \
              micro:bit v1 holds 57 (15 × 15 tiles on 4 storeys), the micro:bit v2 111 \
              (21 × 21 tiles on 4 storeys)"
         );

@@ -142,6 +142,14 @@ function room(n) {
   return `name: room-${n}\n---\n${wall}\n${rows.join('\n')}\n${wall}\n`;
 }
 
+// An open room `n` tiles a side (`n` odd), its start and goal on cells: a level.
+function openRoom(n) {
+  const wall = '#'.repeat(n);
+  const rows = Array.from({ length: n - 2 },
+    (_, i) => `#${i === 0 ? 'S' : '.'}${'.'.repeat(n - 4)}${i === n - 3 ? 'G' : '.'}#`);
+  return `name: open-${n}\n---\n${wall}\n${rows.join('\n')}\n${wall}\n`;
+}
+
 // The levels region of each micro:bit (src/board/levels_region.rs: V1, V2)
 // and its size, by the universal hex's block type.
 const REGIONS = new Map([[0x9900, 0x3f000], [0x9903, 0x7b000]]);
@@ -741,8 +749,19 @@ async function main() {
           `the download's ${board.toString(16)} image is the served one outside the region (${before.size} B)`,
           `${changed.length} bytes differ, the first at 0x${changed[0]?.toString(16)}`);
       }
+      // A level only the v2 can show: saved, with a warning that names the v1.
+      await page.fill('#source', openRoom(31));
+      const [wide] = await Promise.all([
+        page.waitForEvent('download', { timeout: 20000 }),
+        page.click('#download-hex'),
+      ]);
+      const warned = await page.textContent('#download-status');
+      check(wide.suggestedFilename() === 'marble-rolling-open-31.hex'
+        && /; a micro:bit v1 cannot show this level: it needs 61 occupancy words of tiles, the micro:bit v1 holds 57 /.test(warned)
+        && await page.getAttribute('#download-status', 'class') === 'warn',
+      `a level only the v2 can show is saved with a warning: "${warned}"`);
       for (const [source, expected] of [
-        [room(60), /^cannot download: too large for a micro:bit: the level needs 225 occupancy words of tiles; the micro:bit v1 holds 57 .*the micro:bit v2 111/],
+        [openRoom(61), /^cannot download: too large for a micro:bit: the level needs 233 occupancy words of tiles; the micro:bit v1 holds 57 .*the micro:bit v2 111/],
         [`name: ${'a'.repeat(4100)}\n---\n#####\n#S.G#\n#####\n`,
           /^cannot download: too long for the levels region: the level's text takes 4\d\d\d B there .*the region holds 4096 B$/],
       ]) {

@@ -941,11 +941,12 @@ function setupEditor() {
 // (fetched at the first download): the module writes the level into it.
 let servedHex = null;
 
-// Says how the download went under its button: good news or what is wrong.
-function downloadSays(text, good) {
+// Says how the download went under its button: `kind` is 'good', 'warn'
+// (saved, but a board cannot show the level) or 'bad' (not saved: why).
+function downloadSays(text, kind) {
   const out = $('download-status');
   out.textContent = text;
-  out.className = good ? 'good' : 'bad';
+  out.className = kind;
 }
 
 // Writes the editor's level into the micro:bit's universal hex (the module
@@ -956,24 +957,24 @@ async function downloadHex() {
     try {
       response = await fetch('marble-rolling.hex');
     } catch (e) {
-      downloadSays(`cannot download: the micro:bit .hex did not load (${e.message})`, false);
+      downloadSays(`cannot download: the micro:bit .hex did not load (${e.message})`, 'bad');
       return;
     }
     if (!response.ok) {
       downloadSays(`cannot download: this page is served without the micro:bit .hex (HTTP ${response.status}); `
-        + 'run `cargo xtask hex`, then reload the page', false);
+        + 'run `cargo xtask hex`, then reload the page', 'bad');
       return;
     }
     servedHex = new Uint8Array(await response.arrayBuffer());
   }
   if (servedHex.length > w.hex_capacity()) {
-    downloadSays(`cannot download: the served .hex is ${servedHex.length} B, the page takes up to ${w.hex_capacity()} B`, false);
+    downloadSays(`cannot download: the served .hex is ${servedHex.length} B, the page takes up to ${w.hex_capacity()} B`, 'bad');
     return;
   }
   new Uint8Array(w.memory.buffer, w.hex_ptr(), servedHex.length).set(servedHex);
   const n = w.download_hex(putText($('source').value), servedHex.length);
   if (n < 0) {
-    downloadSays(`cannot download: ${answer(-n)}`, false);
+    downloadSays(`cannot download: ${answer(-n)}`, 'bad');
     return;
   }
   const bytes = new Uint8Array(w.memory.buffer, w.hex_out_ptr(), n).slice();
@@ -990,7 +991,7 @@ async function downloadHex() {
   link.remove();
   setTimeout(() => URL.revokeObjectURL(url), 60000);
   downloadSays(`${file} (${Math.round(n / 1024)} KiB): copy it onto the MICROBIT drive, `
-    + `the board plays this level first${note}`, !note);
+    + `the board plays this level first${note}`, note ? 'warn' : 'good');
 }
 
 // Shows the editor (or hides it again): behind a button, so a phone's first
