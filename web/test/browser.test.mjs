@@ -21,7 +21,8 @@
 // of 200 and 400 tiles a side); "Download for micro:bit" saves the served
 // universal hex with the edited level in both boards' levels regions (the
 // Foundation's library reads it, the region decodes to the level's text, the
-// rest is as served) and refuses, saying why, a level too large for any
+// rest is as served; with MARBLE_WEB_SAME_AS=HEX,LEVEL, LEVEL's download is
+// HEX, `cargo xtask hex --level LEVEL`'s file) and refuses, saying why, a level too large for any
 // micro:bit and one too long for the region; a generated maze has `cargo sim --
 // --generate SEED --print-level`'s text and the autopilot wins it with cargo
 // sim's hash, the URL's seed plays it, "New maze", `n` and "Next level" put a
@@ -748,6 +749,23 @@ async function main() {
         check(before.size > 10000 && changed.length === 0,
           `the download's ${board.toString(16)} image is the served one outside the region (${before.size} B)`,
           `${changed.length} bytes differ, the first at 0x${changed[0]?.toString(16)}`);
+      }
+      // Given `cargo xtask hex --level FILE`'s universal hex for the served
+      // one (CI keeps it from its .hex step), FILE's download is that file,
+      // byte for byte.
+      const sameAs = process.env.MARBLE_WEB_SAME_AS;
+      if (sameAs) {
+        const [hexFile, levelFile] = sameAs.split(',');
+        await page.fill('#source', readFileSync(resolve(ROOT, levelFile), 'utf8'));
+        const [same] = await Promise.all([
+          page.waitForEvent('download', { timeout: 20000 }),
+          page.click('#download-hex'),
+        ]);
+        const ours = readFileSync(await same.path());
+        const theirs = readFileSync(resolve(ROOT, hexFile));
+        check(ours.equals(theirs),
+          `the download of ${levelFile} is ${hexFile} (cargo xtask hex --level), byte for byte (${ours.length} B)`,
+          `${ours.length} B against ${theirs.length} B`);
       }
       // A level only the v2 can show: saved, with a warning that names the v1.
       await page.fill('#source', openRoom(31));
