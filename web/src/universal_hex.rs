@@ -20,8 +20,9 @@
 //! Foundation's library reads the result in the browser test instead: an
 //! independent reader, not ours checking itself. The padding is the one
 //! `xtask/src/hex.rs` writes, so that the page's file for a level is the file
-//! `cargo xtask hex --level` writes for it. No allocator: the output goes to a
-//! buffer the caller gives.
+//! `cargo xtask hex --level` writes for it (the browser test compares the two
+//! in CI, byte for byte). No allocator: the output goes to a buffer the
+//! caller gives.
 
 use core::ops::Range;
 

@@ -400,6 +400,10 @@ mod tests {
         let www = Path::new("/w");
         assert_eq!(local_file(www, "/"), Some(PathBuf::from("/w/index.html")));
         assert_eq!(local_file(www, "/app.js"), Some(PathBuf::from("/w/app.js")));
+        assert_eq!(
+            local_file(www, "/js/core.js"),
+            Some(PathBuf::from("/w/js/core.js"))
+        );
         assert_eq!(local_file(www, "/../Cargo.toml"), None);
         assert_eq!(local_file(www, "/a/../../x"), None);
         assert_eq!(local_file(www, "/.git/config"), None);
