@@ -5,10 +5,10 @@
 //! page writes that hex into [`hex_ptr`]'s buffer and the level into the text
 //! buffer, calls [`download_hex`] and saves what [`hex_out_ptr`] holds.
 //!
-//! A level goes into both boards' regions when at least one board can show it:
-//! a micro:bit v1 skips one larger than its maze slot (it plays the built-in
-//! levels), which [`download_note`] tells the player; a level neither board can
-//! show, or one the region cannot hold, is an error naming why.
+//! A level goes into both boards' regions when the v2 can show it: a
+//! micro:bit v1 skips one larger than its maze slot (it plays the built-in
+//! levels), which [`download_note`] tells the player; a level neither board
+//! can show, or one the region cannot hold, is an error naming why.
 
 use core::cell::{Cell, UnsafeCell};
 
@@ -30,21 +30,23 @@ pub(crate) const HEX_CAPACITY: usize = 1 << 20;
 static HEX: Single<UnsafeCell<[u8; HEX_CAPACITY]>> = Single(UnsafeCell::new([0; HEX_CAPACITY]));
 static HEX_OUT: Single<UnsafeCell<[u8; HEX_CAPACITY]>> = Single(UnsafeCell::new([0; HEX_CAPACITY]));
 
-/// What the last successful [`download_hex`] has to tell: the board that
-/// cannot show the level, if one cannot.
+/// What the last successful [`download_hex`] has to tell: that the v1
+/// cannot show the level, if it cannot.
 static NOTE: Single<Cell<Option<Unshown>>> = Single(Cell::new(None));
 
-/// A board that cannot show the level: its index in `BOARDS`, the words the
-/// level needs and the words the board holds.
+/// The level is too large for the micro:bit v1 (the v2's slot is the larger:
+/// a level the v1 holds, the v2 holds too): the words it needs, the words the
+/// v1 holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Unshown {
-    board: usize,
     needs: usize,
     room: usize,
 }
 
-/// A download written: its length, the board that cannot show the level (if
-/// one cannot) and the level's name.
+const _: () = assert!(V2_WORDS >= V1_WORDS);
+
+/// A download written: its length, whether the v1 cannot show the level and
+/// the level's name.
 #[derive(Debug, PartialEq, Eq)]
 pub(crate) struct Downloaded<'t> {
     pub(crate) len: usize,
@@ -167,7 +169,6 @@ pub(crate) fn download<'t>(
         return Err(DownloadError::TooLarge { needs });
     }
     let note = (needs > V1_WORDS).then_some(Unshown {
-        board: 0,
         needs,
         room: V1_WORDS,
     });
@@ -271,13 +272,13 @@ pub extern "C" fn download_name() -> u32 {
     ))
 }
 
-/// The board that cannot show the level, in words.
+/// That the v1 cannot show the level, in words.
 struct Note(Unshown);
 
 impl core::fmt::Display for Note {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let Unshown { board, needs, room } = self.0;
-        let board = &BOARDS[board.min(1)];
+        let Unshown { needs, room } = self.0;
+        let [board, _] = &BOARDS;
         write!(
             f,
             "a {} cannot show this level: it needs {needs} occupancy words of tiles, \

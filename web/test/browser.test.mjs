@@ -22,7 +22,8 @@
 // universal hex with the edited level in both boards' levels regions (the
 // Foundation's library reads it, the region decodes to the level's text, the
 // rest is as served; with MARBLE_WEB_SAME_AS=HEX,LEVEL, LEVEL's download is
-// HEX, `cargo xtask hex --level LEVEL`'s file) and refuses, saying why, a level too large for any
+// HEX, `cargo xtask hex --level LEVEL`'s file), says what is wrong when the
+// page is served without the .hex or with a broken one, and refuses, saying why, a level too large for any
 // micro:bit and one too long for the region; a generated maze has `cargo sim --
 // --generate SEED --print-level`'s text and the autopilot wins it with cargo
 // sim's hash, the URL's seed plays it, "New maze", `n` and "Next level" put a
@@ -791,7 +792,29 @@ async function main() {
         const refused = await page.textContent('#download-status');
         check(expected.test(refused) && downloads.length === saved
           && await page.getAttribute('#download-status', 'class') === 'bad',
-        `Download for micro:bit refuses ${source.slice(0, 12)}…: "${refused}"`);
+        `Download for micro:bit refuses ${/^name: (\S{1,12})/.exec(source)[1]}: "${refused}"`);
+      }
+      // A page served without the .hex, or with a broken one: it says so.
+      const lines = served.split('\n');
+      lines[2] = lines[2].slice(0, -1) + (lines[2].endsWith('0') ? '1' : '0');
+      for (const [what, reply, expected] of [
+        ['without the .hex', { status: 404, body: '404 Not Found\n' },
+          /^cannot download: this page is served without the micro:bit \.hex \(HTTP 404\); run `cargo xtask hex`, then reload the page$/],
+        ['a .hex with a bad checksum on its line 3', { status: 200, body: lines.join('\n') },
+          /^cannot download: the served \.hex: line 3: wrong checksum$/],
+      ]) {
+        const other = await context.newPage();
+        await other.route('**/marble-rolling.hex', (route) => route.fulfill({ contentType: 'text/plain', ...reply }));
+        await other.goto(url);
+        await other.waitForSelector('body[data-ready="true"]', { timeout: 20000 });
+        await other.evaluate(() => { window.marbleTest.setRunning(false); window.marbleTest.editor(true); });
+        await other.fill('#source', SPLIT);
+        await other.click('#download-hex');
+        await other.waitForFunction(() => /^cannot/.test(document.querySelector('#download-status').textContent),
+          null, { timeout: 10000 });
+        const said = await other.textContent('#download-status');
+        check(expected.test(said), `served ${what}, Download for micro:bit says so: "${said}"`);
+        await other.close();
       }
     }
 

@@ -94,7 +94,7 @@ export async function downloadHex() {
   }
   new Uint8Array(w.memory.buffer, w.hex_ptr(), servedHex.length).set(servedHex);
   const n = w.download_hex(putText($('source').value), servedHex.length);
-  if (n < 0) {
+  if (n <= 0) {
     downloadSays(`cannot download: ${answer(-n)}`, 'bad');
     return;
   }
