@@ -9,6 +9,7 @@ mod error;
 mod firmware;
 mod game;
 mod hex;
+mod hex_check;
 mod hex_files;
 mod microbit_v1;
 mod process;
