@@ -11,7 +11,9 @@
 //!    grid (eq. 7). No root, no division. A tile behind a face the marble is held
 //!    on cannot be touched (the centre stays a radius in front of the face) and is
 //!    left out. In a maze nearly every frame finds nothing, and the frame is one
-//!    closed-form update — the same sums as one fixed step.
+//!    closed-form update — the same sums as one fixed step. A search that finds
+//!    nothing leaves the marble a *free region* (`events/free.rs`): later flights
+//!    whose swept box stays inside it skip the test.
 //! 2. Otherwise **the earliest event**: for every tile in reach, the time of
 //!    impact ([`toi`](crate::physics::dynamics::toi): exact for faces, converging separating planes for edges and
 //!    corners; the ghost-bump rule of eq. 8's narrowphase decides who owns a
