@@ -1,0 +1,767 @@
+//! The race protocol (`race`) between boards on a simulated channel: every
+//! packet a board sends reaches every other board, each copy lost, repeated
+//! or delayed on its own (so reordered), with garbage between. Whatever the
+//! channel does, both boards reach the same verdict and each replay of the
+//! opponent ends on the opponent's own state hash; a third board, a board
+//! restarted mid-race and random bytes are dropped and counted.
+//!
+//! `cargo test --test race -- --nocapture` prints the bytes per second of play.
+
+use std::num::NonZeroU32;
+
+use marble_rolling::game::autopilot::Autopilot;
+use marble_rolling::game::level::{parse, Level, LevelView};
+use marble_rolling::game::rules::Phase;
+use marble_rolling::game::session::Session;
+use marble_rolling::input::sensor::Calibration;
+use marble_rolling::race::packet::{self, Drop, End, MazeSpec, Writer, MAX_PACKET};
+use marble_rolling::race::replay::{decide, Run, Verdict};
+use marble_rolling::race::session::{COUNTDOWN_FRAMES, SILENCE_FRAMES};
+use marble_rolling::race::{maze, LinkStage, Race, RaceLink, Status};
+use proptest::prelude::*;
+
+type Fx = fixed::types::I8F24;
+const WORDS: usize = 512;
+const HZ: u64 = 128;
+
+const SPEC: MazeSpec = MazeSpec {
+    seed: 11,
+    size: 5,
+    storeys: 1,
+    difficulty: 1,
+};
+const SPEC_2: MazeSpec = MazeSpec {
+    seed: 4,
+    size: 4,
+    storeys: 2,
+    difficulty: 2,
+};
+
+/// A small deterministic generator (splitmix64): the channel's dice.
+struct Dice(u64);
+
+impl Dice {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn chance(&mut self, p: f64) -> bool {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64 <= p
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        if n == 0 {
+            0
+        } else {
+            self.next() % n
+        }
+    }
+}
+
+/// What the channel does to each copy of a packet.
+#[derive(Clone, Copy, Debug)]
+struct Weather {
+    loss: f64,
+    duplicate: f64,
+    /// Each copy arrives after 0 ..= this many frames.
+    max_delay: u64,
+    /// Chance per frame of a garbage packet (random bytes, or a real packet
+    /// with a flipped bit).
+    garbage: f64,
+}
+
+const CLEAR: Weather = Weather {
+    loss: 0.0,
+    duplicate: 0.0,
+    max_delay: 0,
+    garbage: 0.0,
+};
+
+/// A board: looking for an opponent, or racing; and the player at its tilt
+/// (flat for `looks` frames of its run, then the autopilot).
+enum Stage<'a> {
+    Linking(Box<RaceLink>),
+    Racing(Box<Race<'a, Fx>>),
+}
+
+struct Board<'a> {
+    stage: Stage<'a>,
+    looks: u32,
+    autopilot: Option<Autopilot>,
+}
+
+/// The generated mazes a board may be asked to race on, parsed once.
+struct Mazes {
+    levels: Vec<(MazeSpec, Level<'static, WORDS>)>,
+}
+
+impl Mazes {
+    fn new(specs: &[MazeSpec]) -> Mazes {
+        let levels = specs
+            .iter()
+            .map(|&s| {
+                let text: &'static str = Box::leak(maze(s).unwrap().to_string().into_boxed_str());
+                (s, parse::<WORDS>(text).unwrap())
+            })
+            .collect();
+        Mazes { levels }
+    }
+    fn view(&self, spec: MazeSpec) -> LevelView<'_> {
+        self.levels
+            .iter()
+            .find(|(s, _)| *s == spec)
+            .expect("a maze offered in the test")
+            .1
+            .view()
+    }
+}
+
+impl<'a> Board<'a> {
+    fn new(id: u32, offer: MazeSpec, looks: u32) -> Board<'a> {
+        Board {
+            stage: Stage::Linking(Box::new(RaceLink::new(
+                NonZeroU32::new(id).unwrap(),
+                offer,
+                Calibration::NONE,
+            ))),
+            looks,
+            autopilot: None,
+        }
+    }
+
+    fn race(&self) -> Option<&Race<'a, Fx>> {
+        match &self.stage {
+            Stage::Racing(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    fn link(&self) -> Option<&RaceLink> {
+        match &self.stage {
+            Stage::Linking(l) => Some(l),
+            Stage::Racing(r) => Some(r.link()),
+        }
+    }
+
+    fn receive(&mut self, bytes: &[u8]) {
+        let _ = match &mut self.stage {
+            Stage::Linking(l) => l.receive(bytes),
+            Stage::Racing(r) => r.receive(bytes),
+        };
+    }
+
+    fn frame(&mut self, mazes: &'a Mazes, out: &mut Vec<Vec<u8>>) {
+        let mut buf = [0u8; MAX_PACKET];
+        match &mut self.stage {
+            Stage::Linking(l) => {
+                l.tick();
+                if let Some(p) = l.transmit(&mut buf) {
+                    out.push(p.to_vec());
+                }
+                if let Some((_, spec)) = l.paired() {
+                    let level = mazes.view(spec);
+                    let link = (**l).clone();
+                    self.autopilot = Some(Autopilot::new(&level));
+                    self.stage = Stage::Racing(Box::new(Race::new(link, level).unwrap()));
+                }
+            }
+            Stage::Racing(r) => {
+                let (looks, autopilot) = (self.looks, &mut self.autopilot);
+                r.frame(|s: &Session<'_, Fx>| {
+                    if s.game().frames() < looks {
+                        [0, 1000, 0]
+                    } else {
+                        autopilot.as_mut().unwrap().reading_mg(s.game())
+                    }
+                });
+                if let Some(p) = r.transmit(&mut buf) {
+                    out.push(p.to_vec());
+                }
+            }
+        }
+    }
+}
+
+/// Boards on one channel.
+struct Channel<'a> {
+    boards: Vec<Board<'a>>,
+    /// (arrival frame, addressee, bytes)
+    flying: Vec<(u64, usize, Vec<u8>)>,
+    weather: Weather,
+    dice: Dice,
+    now: u64,
+    garbage_sent: u32,
+}
+
+impl<'a> Channel<'a> {
+    fn new(boards: Vec<Board<'a>>, weather: Weather, seed: u64) -> Channel<'a> {
+        Channel {
+            boards,
+            flying: Vec::new(),
+            weather,
+            dice: Dice(seed),
+            now: 0,
+            garbage_sent: 0,
+        }
+    }
+
+    fn frame(&mut self, mazes: &'a Mazes) {
+        self.now += 1;
+        let now = self.now;
+        let mut arrived = Vec::new();
+        self.flying.retain(|(at, to, bytes)| {
+            if *at <= now {
+                arrived.push((*to, bytes.clone()));
+                false
+            } else {
+                true
+            }
+        });
+        for (to, bytes) in arrived {
+            self.boards[to].receive(&bytes);
+        }
+        if self.dice.chance(self.weather.garbage) {
+            let to = self.dice.below(self.boards.len() as u64) as usize;
+            let bytes = self.garbage();
+            self.garbage_sent += 1;
+            self.boards[to].receive(&bytes);
+        }
+        for from in 0..self.boards.len() {
+            let mut out = Vec::new();
+            self.boards[from].frame(mazes, &mut out);
+            for bytes in out {
+                for to in (0..self.boards.len()).filter(|&t| t != from) {
+                    self.send(to, &bytes);
+                }
+            }
+        }
+    }
+
+    fn send(&mut self, to: usize, bytes: &[u8]) {
+        let w = self.weather;
+        if self.dice.chance(w.loss) {
+            return;
+        }
+        let copies = if self.dice.chance(w.duplicate) { 2 } else { 1 };
+        for _ in 0..copies {
+            let at = self.now + 1 + self.dice.below(w.max_delay + 1);
+            self.flying.push((at, to, bytes.to_vec()));
+        }
+    }
+
+    /// Random bytes of a random length, or a packet in flight with one bit flipped.
+    fn garbage(&mut self) -> Vec<u8> {
+        if !self.flying.is_empty() && self.dice.chance(0.5) {
+            let i = self.dice.below(self.flying.len() as u64) as usize;
+            let mut b = self.flying[i].2.clone();
+            let bit = self.dice.below(b.len() as u64 * 8) as usize;
+            b[bit / 8] ^= 1 << (bit % 8);
+            return b;
+        }
+        let n = self.dice.below(MAX_PACKET as u64 + 8) as usize;
+        (0..n).map(|_| self.dice.next() as u8).collect()
+    }
+
+    /// Runs until every racing board is done (its verdict reached and its
+    /// link complete) or `limit` frames.
+    fn run(&mut self, mazes: &'a Mazes, limit: u64, done: impl Fn(&Channel<'a>) -> bool) {
+        while self.now < limit && !done(self) {
+            self.frame(mazes);
+        }
+    }
+}
+
+fn describe(b: &Board<'_>) -> String {
+    match b.race() {
+        Some(r) => {
+            let (o, i) = (r.link().outbox(), r.link().inbox());
+            format!(
+                "{:?} own {:?} opp {:?} verified {:?} out {}/{} acked, {} blocks, end {:?} in have {} end {:?} {:?}",
+                r.status(),
+                r.own_run(),
+                r.opponent().run(),
+                r.opponent().verified(),
+                o.acked(),
+                o.frames(),
+                o.unacked_blocks(),
+                o.end_to_send(),
+                i.have(),
+                i.end(),
+                r.link().counters()
+            )
+        }
+        None => format!("{:?}", b.link().map(|l| l.handshake())),
+    }
+}
+
+fn settled(b: &Board<'_>) -> bool {
+    b.race().is_some_and(Race::finished)
+}
+
+/// What a finished race between boards `a` and `b` must show: mirrored
+/// verdicts, and each replay ending on the other's own run and state hash.
+fn check_agreement(c: &Channel<'_>, a: usize, b: usize) -> Verdict {
+    let (ra, rb) = (c.boards[a].race().unwrap(), c.boards[b].race().unwrap());
+    let (va, vb) = (ra.verdict().unwrap(), rb.verdict().unwrap());
+    assert_eq!(va, vb.mirrored(), "the boards disagree");
+    for (me, them) in [(ra, rb), (rb, ra)] {
+        let replay = me.opponent();
+        assert_eq!(replay.verified(), Some(true), "the replay missed the end");
+        assert_eq!(replay.run(), them.own_run());
+        assert_eq!(replay.session().state_hash(), them.own().state_hash());
+        assert_eq!(me.link().paired().unwrap().0, them.link().me());
+    }
+    va
+}
+
+/// Two boards on a clear channel race to a verdict; the first's run is the
+/// autopilot's from the first frame, which `cargo sim --generate --autopilot`
+/// plays too: the opponent's replay ends on the simulator's hash.
+#[test]
+fn two_boards_on_a_clear_channel_agree() {
+    let mazes = Mazes::new(&[SPEC]);
+    let boards = vec![Board::new(7, SPEC, 0), Board::new(9, SPEC, 40)];
+    let mut c = Channel::new(boards, CLEAR, 1);
+    c.run(&mazes, 40 * HZ, |c| c.boards.iter().all(settled));
+    let v = check_agreement(&c, 0, 1);
+    let (a, b) = (c.boards[0].race().unwrap(), c.boards[1].race().unwrap());
+    assert_eq!(a.own_run().phase, Phase::Won);
+    assert_eq!(v, Verdict::Won, "the board that did not wait won");
+    assert_eq!(a.status(), Status::Decided(Verdict::Won));
+    assert_eq!(b.status(), Status::Decided(Verdict::Lost));
+    for r in [a, b] {
+        assert_eq!(r.link().counters().dropped(), 0);
+    }
+    // Bytes per second of play: each board's packets, from its first hello
+    // to the end of the longer run (the countdown included).
+    let seconds = c.now as f64 / HZ as f64;
+    let play = a.own_run().frames.max(b.own_run().frames) as f64 / HZ as f64;
+    for (name, r) in [("a", a), ("b", b)] {
+        let k = r.link().counters();
+        println!(
+            "board {name}: {} packets, {} B in {seconds:.2} s ({play:.2} s of play): {:.0} B/s, {:.1} B a packet",
+            k.sent,
+            k.sent_bytes,
+            k.sent_bytes as f64 / seconds,
+            k.sent_bytes as f64 / k.sent as f64
+        );
+    }
+    let hash_a = a.own().state_hash();
+    assert_eq!(b.opponent().session().state_hash(), hash_a);
+    #[cfg(feature = "tools")]
+    {
+        use clap::Parser;
+        let args = marble_rolling::host::sim::Args::parse_from([
+            "sim",
+            "--generate",
+            &SPEC.seed.to_string(),
+            "--size",
+            &SPEC.size.to_string(),
+            "--storeys",
+            &SPEC.storeys.to_string(),
+            "--difficulty",
+            &SPEC.difficulty.to_string(),
+            "--autopilot",
+        ]);
+        let report = marble_rolling::host::sim::simulate(&args).unwrap();
+        assert_eq!(report.state_hash, hash_a, "cargo sim's hash");
+        assert_eq!(report.frames, a.own_run().frames);
+    }
+}
+
+/// Half the packets lost, one in five repeated, every copy delayed up to two
+/// seconds (so reordered), and garbage on the channel: still one verdict and
+/// exact replays, on several channels' dice and mazes with storeys.
+#[test]
+fn two_boards_agree_through_loss_reordering_duplication_delays_and_garbage() {
+    let mazes = Mazes::new(&[SPEC, SPEC_2]);
+    let weather = Weather {
+        loss: 0.5,
+        duplicate: 0.2,
+        max_delay: 2 * HZ,
+        garbage: 0.05,
+    };
+    let mut verdicts = Vec::new();
+    for seed in 0..6u64 {
+        let (offer_a, offer_b) = if seed % 2 == 0 {
+            (SPEC, SPEC_2)
+        } else {
+            (SPEC_2, SPEC)
+        };
+        let looks = [(0, 60), (60, 0), (30, 30)][seed as usize % 3];
+        let boards = vec![
+            Board::new(100 + seed as u32, offer_a, looks.0),
+            Board::new(200 + seed as u32, offer_b, looks.1),
+        ];
+        let mut c = Channel::new(boards, weather, seed);
+        c.run(&mazes, 120 * HZ, |c| c.boards.iter().all(settled));
+        assert!(
+            c.boards.iter().all(settled),
+            "seed {seed}: not settled after {} frames: {}",
+            c.now,
+            c.boards.iter().map(describe).collect::<Vec<_>>().join("\n")
+        );
+        let v = check_agreement(&c, 0, 1);
+        let a = c.boards[0].race().unwrap();
+        assert_eq!(
+            a.link().paired().unwrap().1,
+            offer_a,
+            "the lower id's offer"
+        );
+        let k: Vec<_> = c
+            .boards
+            .iter()
+            .map(|b| *b.link().unwrap().counters())
+            .collect();
+        let dropped: u32 = k
+            .iter()
+            .map(|k| k.crc + k.length + k.foreign + k.malformed)
+            .sum();
+        assert!(
+            dropped > 0 && c.garbage_sent > 0,
+            "seed {seed}: no garbage seen"
+        );
+        assert!(
+            k.iter().any(|k| k.replayed > 0),
+            "seed {seed}: no repeat seen"
+        );
+        println!(
+            "seed {seed}: {v:?} after {:.1} s of channel; board a {:?}",
+            c.now as f64 / HZ as f64,
+            k[0]
+        );
+        verdicts.push(v);
+    }
+    assert!(verdicts.contains(&Verdict::Won) && verdicts.contains(&Verdict::Lost));
+}
+
+/// A board restarted in the middle of a race is a new board: its opponent
+/// says it is alone after three seconds of silence, plays its run to its end
+/// and claims no verdict; the restarted board never joins the old race; once
+/// the survivor looks again, the two race anew and agree.
+#[test]
+fn a_board_restarted_mid_race_leaves_its_opponent_alone_then_races_again() {
+    let mazes = Mazes::new(&[SPEC]);
+    let weather = Weather {
+        loss: 0.2,
+        duplicate: 0.1,
+        max_delay: HZ / 4,
+        garbage: 0.0,
+    };
+    let boards = vec![Board::new(10, SPEC, 0), Board::new(20, SPEC, 0)];
+    let mut c = Channel::new(boards, weather, 3);
+    // Until both race, and one second more.
+    c.run(&mazes, 30 * HZ, |c| {
+        c.boards
+            .iter()
+            .all(|b| b.race().is_some_and(|r| r.own_run().frames > 128))
+    });
+    c.boards[1] = Board::new(5, SPEC, 0);
+    let restarted_at = c.now;
+    c.run(&mazes, restarted_at + 60 * HZ, |c| {
+        c.boards[0]
+            .race()
+            .is_some_and(|r| r.own_run().phase != Phase::Playing && r.link().silent())
+    });
+    let a = c.boards[0].race().unwrap();
+    assert!(a.link().silent(), "the survivor noticed the silence");
+    assert!(c.now - restarted_at >= u64::from(SILENCE_FRAMES));
+    assert_eq!(a.own_run().phase, Phase::Won, "it carried on alone");
+    assert_eq!(a.verdict(), None, "no verdict without the opponent's run");
+    assert_eq!(a.status(), Status::Waiting);
+    assert_eq!(a.link().paired().unwrap().0, 20);
+    assert!(
+        c.boards[1].race().is_none(),
+        "the restarted board never joined"
+    );
+    let restarted = c.boards[1].link().unwrap().counters();
+    assert!(
+        restarted.not_ours > 0,
+        "the restarted board heard the old race"
+    );
+    // The survivor looks again: a new race with the restarted board.
+    c.boards[0] = Board::new(30, SPEC, 50);
+    let again = c.now;
+    c.run(&mazes, again + 60 * HZ, |c| c.boards.iter().all(settled));
+    assert_eq!(check_agreement(&c, 0, 1), Verdict::Lost);
+}
+
+/// Three boards on one channel: two race, the third hears their packets and
+/// drops them; it never claims a verdict, and the two still agree.
+#[test]
+fn a_third_board_on_the_channel_changes_nothing() {
+    let mazes = Mazes::new(&[SPEC, SPEC_2]);
+    let weather = Weather {
+        loss: 0.3,
+        duplicate: 0.1,
+        max_delay: HZ / 2,
+        garbage: 0.01,
+    };
+    for seed in 0..3u64 {
+        let boards = vec![
+            Board::new(50, SPEC, 0),
+            Board::new(60, SPEC_2, 20),
+            Board::new(70, SPEC, 40),
+        ];
+        let mut c = Channel::new(boards, weather, 40 + seed);
+        c.run(&mazes, 90 * HZ, |c| {
+            c.boards.iter().filter(|b| settled(b)).count() == 2
+        });
+        let racing: Vec<usize> = (0..3).filter(|&i| c.boards[i].race().is_some()).collect();
+        assert_eq!(racing.len(), 2, "seed {seed}: exactly two boards race");
+        check_agreement(&c, racing[0], racing[1]);
+        let third = (0..3).find(|i| !racing.contains(i)).unwrap();
+        let l = c.boards[third].link().unwrap();
+        assert_ne!(l.stage(), LinkStage::Racing);
+        assert!(
+            l.counters().not_ours > 0,
+            "seed {seed}: the third board heard the race"
+        );
+    }
+}
+
+/// A repeated packet is taken once: the second copy is counted as replayed
+/// and changes nothing.
+#[test]
+fn a_repeated_packet_is_dropped_and_counted() {
+    let id = |n| NonZeroU32::new(n).unwrap();
+    let mut a = RaceLink::new(id(1), SPEC, Calibration::NONE);
+    let mut b = RaceLink::new(id(2), SPEC, Calibration::NONE);
+    let mut buf = [0u8; MAX_PACKET];
+    // b's hello makes a (the lower id) propose; its proposal pairs b.
+    let hello = loop {
+        b.tick();
+        if let Some(p) = b.transmit(&mut buf) {
+            break p.to_vec();
+        }
+    };
+    a.receive(&hello).unwrap();
+    a.tick();
+    let proposal = a.transmit(&mut buf).unwrap().to_vec();
+    b.receive(&proposal).unwrap();
+    assert_eq!(b.paired(), Some((1, SPEC)));
+    assert_eq!(b.receive(&proposal), Err(Drop::Replayed));
+    assert_eq!(b.counters().replayed, 1);
+    // A packet of b's race from a board not in it.
+    let mut w = Writer::race(&mut buf, 3, 2, 0, SPEC, Calibration::NONE, 0, false, None);
+    assert!(w.block(0, &[1, 2]));
+    let stranger = w.finish().to_vec();
+    assert_eq!(b.receive(&stranger), Err(Drop::NotOurs));
+    // The same packet from a, with another calibration: a contradiction.
+    let w = Writer::race(
+        &mut buf,
+        1,
+        2,
+        9,
+        SPEC,
+        Calibration {
+            offset_x: 3,
+            offset_z: 0,
+        },
+        0,
+        false,
+        None,
+    );
+    assert!(!w.is_empty());
+    let contradiction = w.finish().to_vec();
+    assert_eq!(b.receive(&contradiction), Err(Drop::Inconsistent));
+    assert_eq!(b.counters().dropped(), 3);
+}
+
+#[test]
+fn packets_round_trip_and_fail_their_checks() {
+    let mut buf = [0u8; MAX_PACKET];
+    let hello = Writer::hello(&mut buf, 77, 5, SPEC_2).finish().to_vec();
+    assert_eq!(hello.len(), packet::HELLO_BYTES);
+    let p = packet::parse(&hello).unwrap();
+    assert_eq!(
+        (p.from, p.to, p.seq, p.maze, p.race),
+        (77, 0, 5, SPEC_2, None)
+    );
+
+    let cal = Calibration {
+        offset_x: -120,
+        offset_z: 45,
+    };
+    let end = End {
+        frames: 1234,
+        hash: 0x0123_4567_89ab_cdef,
+    };
+    let mut w = Writer::race(&mut buf, 77, 78, 65535, SPEC, cal, 300, true, Some(end));
+    assert!(w.block(300, &[3, 4, 5]));
+    assert!(w.block(1 << 20, &[7; 40]));
+    assert!(!w.block(0, &[0; 41]), "a block longer than BLOCK_BYTES");
+    assert!(!w.block(0, &[]), "an empty block");
+    let race = w.finish().to_vec();
+    assert!(race.len() <= MAX_PACKET);
+    let p = packet::parse(&race).unwrap();
+    let body = p.race.unwrap();
+    assert_eq!((p.from, p.to, p.seq), (77, 78, 65535));
+    assert_eq!(
+        (body.calibration, body.ack, body.have_end, body.end),
+        (cal, 300, true, Some(end))
+    );
+    let blocks: Vec<_> = body.blocks().collect();
+    assert_eq!(blocks, [(300, &[3u8, 4, 5][..]), (1 << 20, &[7u8; 40][..])]);
+
+    // Every single bit flipped is caught.
+    for bit in 0..race.len() * 8 {
+        let mut b = race.clone();
+        b[bit / 8] ^= 1 << (bit % 8);
+        assert_eq!(packet::parse(&b), Err(Drop::Crc), "bit {bit}");
+    }
+    assert_eq!(packet::parse(&race[..10]), Err(Drop::Length));
+    assert_eq!(packet::parse(&[0u8; MAX_PACKET + 1]), Err(Drop::Length));
+    assert_eq!(packet::parse(&race[..race.len() - 1]), Err(Drop::Crc));
+    // Another version, another protocol, with their CRCs right.
+    let resealed = |mut b: Vec<u8>, at: usize, v: u8| {
+        b[at] = v;
+        let n = b.len() - 2;
+        let crc = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740).checksum(&b[..n]);
+        b[n..].copy_from_slice(&crc.to_le_bytes());
+        b
+    };
+    assert_eq!(
+        packet::parse(&resealed(hello.clone(), 2, 2)),
+        Err(Drop::Version)
+    );
+    assert_eq!(
+        packet::parse(&resealed(hello.clone(), 0, b'X')),
+        Err(Drop::Foreign)
+    );
+    assert_eq!(
+        packet::parse(&resealed(hello.clone(), 3, 9)),
+        Err(Drop::Foreign)
+    );
+    assert!(matches!(
+        packet::parse(&resealed(race.clone(), 21 + 4, 0x80)),
+        Err(Drop::Malformed { .. })
+    ));
+}
+
+/// A board's link fed random bytes, and random bodies behind a right header
+/// and CRC, in every stage: it drops them (or, for a sound packet, takes it)
+/// without a panic, and counts every one.
+fn link_in_stage(stage: u8) -> RaceLink {
+    let id = |n| NonZeroU32::new(n).unwrap();
+    let mut a = RaceLink::new(id(1), SPEC, Calibration::NONE);
+    if stage == 0 {
+        return a;
+    }
+    let mut b = RaceLink::new(id(2), SPEC, Calibration::NONE);
+    let mut buf = [0u8; MAX_PACKET];
+    let hello = Writer::hello(&mut buf, 2, 0, SPEC).finish().to_vec();
+    a.receive(&hello).unwrap();
+    a.tick();
+    let p = a.transmit(&mut buf).unwrap().to_vec();
+    b.receive(&p).unwrap();
+    for f in 0..COUNTDOWN_FRAMES + 200 {
+        b.tick();
+        if b.stage() == LinkStage::Racing {
+            b.push_own([f as i32 % 7, 1000, -(f as i32 % 5)]).unwrap();
+        }
+        if let Some(p) = b.transmit(&mut buf) {
+            a.receive(p).unwrap();
+        }
+        a.tick();
+    }
+    a
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn random_bytes_never_panic_and_are_counted(
+        stage in 0u8..2,
+        packets in prop::collection::vec(prop::collection::vec(any::<u8>(), 0..120), 1..20),
+    ) {
+        let mut link = link_in_stage(stage);
+        let before = *link.counters();
+        for p in &packets {
+            let _ = link.receive(p);
+        }
+        let after = link.counters();
+        prop_assert_eq!(after.received - before.received, packets.len() as u32);
+        prop_assert_eq!(
+            (after.accepted - before.accepted) + (after.dropped() - before.dropped()),
+            packets.len() as u32
+        );
+    }
+
+    #[test]
+    fn random_bodies_behind_a_sound_header_never_panic(
+        stage in 0u8..2,
+        from in prop::sample::select(vec![1u32, 2, 3]),
+        body in prop::collection::vec(any::<u8>(), 0..75),
+        seq in any::<u16>(),
+    ) {
+        let mut link = link_in_stage(stage);
+        let mut buf = [0u8; MAX_PACKET];
+        let w = Writer::race(&mut buf, from, 1, seq, SPEC, Calibration::NONE, 0, false, None);
+        let head = w.len();
+        let mut bytes = buf[..head].to_vec();
+        // The fixed fields of the body and then the random rest.
+        bytes.truncate(21);
+        bytes.extend_from_slice(&body);
+        bytes.truncate(MAX_PACKET - 2);
+        let crc = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740).checksum(&bytes);
+        bytes.extend_from_slice(&crc.to_le_bytes());
+        let _ = link.receive(&bytes);
+        let mut out = [0u8; MAX_PACKET];
+        for _ in 0..8 {
+            link.tick();
+            let _ = link.transmit(&mut out);
+        }
+        let k = link.counters();
+        prop_assert_eq!(k.accepted + k.dropped(), k.received);
+    }
+
+    /// The verdict from two runs as far as they are known is the whole runs'
+    /// verdict or none, and each side's is the other's mirrored.
+    #[test]
+    fn an_early_verdict_is_the_final_one(
+        fa in 1u32..2000, fb in 1u32..2000,
+        ea in 0u8..3, eb in 0u8..3,
+        sa in 0u32..2000, sb in 0u32..2000,
+    ) {
+        let phase = |e| [Phase::Won, Phase::Fell, Phase::TimeUp][e as usize];
+        let whole_a = Run { frames: fa, phase: phase(ea) };
+        let whole_b = Run { frames: fb, phase: phase(eb) };
+        let part = |whole: Run, seen: u32| if seen >= whole.frames {
+            whole
+        } else {
+            Run { frames: seen, phase: Phase::Playing }
+        };
+        let final_v = decide(whole_a, whole_b).unwrap();
+        let (pa, pb) = (part(whole_a, sa), part(whole_b, sb));
+        let early = decide(pa, pb);
+        prop_assert!(early.is_none() || early == Some(final_v));
+        prop_assert_eq!(decide(pb, pa), early.map(Verdict::mirrored));
+    }
+}
+
+/// The ghost's token writer, as the blocks use it: a frame that does not fit
+/// leaves the run of repeated readings before it to `finish`, which writes it.
+#[test]
+fn a_full_block_keeps_the_run_before_the_frame_that_did_not_fit() {
+    use marble_rolling::game::ghost::{Readings, TokenWriter};
+    let mut buf = [0u8; 4];
+    let before = [0, 1000, 0];
+    let mut w = TokenWriter::new(&mut buf, before);
+    w.push([1, 1000, 0]).unwrap(); // 2 bytes
+    w.push([1, 1000, 0]).unwrap(); // a run, written later
+    w.push([1, 1000, 0]).unwrap();
+    assert!(
+        w.push([900, -900, 900]).is_err(),
+        "3 changes of 2 bytes do not fit"
+    );
+    assert_eq!(w.frames(), 3);
+    let tokens = w.finish().unwrap();
+    let back: Vec<_> = Readings::from_tokens(tokens, before)
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(back, [[1, 1000, 0]; 3]);
+}
