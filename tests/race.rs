@@ -765,3 +765,77 @@ fn a_full_block_keeps_the_run_before_the_frame_that_did_not_fit() {
         .collect();
     assert_eq!(back, [[1, 1000, 0]; 3]);
 }
+
+/// `cargo play -- --race`'s sides over real UDP sockets on localhost, in one
+/// process: they pair, race the lower id's offer with the autopilot, and
+/// agree, each replay on the other's hash.
+#[cfg(feature = "tools")]
+#[test]
+fn two_sides_race_over_localhost_udp() {
+    use marble_rolling::host::race::UdpBoard;
+    use std::net::UdpSocket;
+    let (sa, sb) = (
+        UdpSocket::bind("127.0.0.1:0").unwrap(),
+        UdpSocket::bind("127.0.0.1:0").unwrap(),
+    );
+    let (aa, ab) = (sa.local_addr().unwrap(), sb.local_addr().unwrap());
+    let id = |n| NonZeroU32::new(n).unwrap();
+    let mut a = UdpBoard::new(sa, ab, id(3), SPEC).unwrap();
+    let mut b = UdpBoard::new(sb, aa, id(4), SPEC_2).unwrap();
+    let done = |u: &UdpBoard| u.race().is_some_and(Race::finished);
+    let pilot = |looks: u32| {
+        move |s: &Session<'static, Fx>, ap: &mut Option<Autopilot>| {
+            if s.game().frames() < looks {
+                [0, 1000, 0]
+            } else {
+                ap.as_mut().unwrap().reading_mg(s.game())
+            }
+        }
+    };
+    let mut frames = 0;
+    while !(done(&a) && done(&b)) && frames < 60 * HZ {
+        a.frame(pilot(0)).unwrap();
+        b.frame(pilot(30)).unwrap();
+        frames += 1;
+        // A real socket hands a datagram over within microseconds; a short
+        // pause now and then keeps the loop from outrunning it.
+        if frames % 64 == 0 {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+    }
+    let (ra, rb) = (a.race().unwrap(), b.race().unwrap());
+    assert!(
+        ra.finished() && rb.finished(),
+        "not finished in {frames} frames"
+    );
+    assert_eq!(ra.link().paired().unwrap().1, SPEC, "the lower id's offer");
+    assert_eq!(ra.verdict().unwrap(), rb.verdict().unwrap().mirrored());
+    assert_eq!(ra.verdict(), Some(Verdict::Won));
+    assert_eq!(rb.opponent().session().state_hash(), ra.own().state_hash());
+    assert_eq!(ra.opponent().session().state_hash(), rb.own().state_hash());
+    assert_eq!(ra.opponent().verified(), Some(true));
+    assert_eq!(rb.opponent().verified(), Some(true));
+}
+
+/// A channel's two ports: the first side takes one, the second the other,
+/// each sending to the other's; a third is refused with the ports named.
+#[cfg(feature = "tools")]
+#[test]
+fn a_channel_takes_two_sides_and_refuses_a_third() {
+    use marble_rolling::host::race::{channel_ports, channel_socket};
+    let channel = 1234;
+    let (p, q) = channel_ports(channel).unwrap();
+    let (s1, to1) = channel_socket(channel).unwrap();
+    let (s2, to2) = channel_socket(channel).unwrap();
+    assert_eq!(s1.local_addr().unwrap().port(), p);
+    assert_eq!(
+        (to1.port(), s2.local_addr().unwrap().port(), to2.port()),
+        (q, q, p)
+    );
+    let e = channel_socket(channel).err().unwrap();
+    assert!(
+        e.contains(&format!("ports {p} and {q} are both taken")),
+        "{e}"
+    );
+    assert!(channel_ports(u16::MAX).is_err());
+}

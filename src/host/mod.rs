@@ -13,6 +13,7 @@ pub mod generated;
 pub mod ghost_file;
 pub mod gif_out;
 pub mod play;
+pub mod race;
 pub mod motion_trace;
 pub mod report;
 pub mod sim;
