@@ -193,6 +193,9 @@ struct Channel<'a> {
     dice: Dice,
     now: u64,
     garbage_sent: u32,
+    /// Board 0's view while both runs go on: its frames ahead of its replay
+    /// of board 1 (how far the opponent's marble is drawn behind).
+    lags: Vec<i64>,
 }
 
 impl<'a> Channel<'a> {
@@ -204,6 +207,7 @@ impl<'a> Channel<'a> {
             dice: Dice(seed),
             now: 0,
             garbage_sent: 0,
+            lags: Vec::new(),
         }
     }
 
@@ -227,6 +231,17 @@ impl<'a> Channel<'a> {
             let bytes = self.garbage();
             self.garbage_sent += 1;
             self.boards[to].receive(&bytes);
+        }
+        if let (Some(a), Some(b)) = (
+            self.boards[0].race(),
+            self.boards.get(1).and_then(Board::race),
+        ) {
+            let (own, opp) = (a.own_run(), a.opponent().run());
+            if own.frames > 0 && own.phase == Phase::Playing && b.own_run().phase == Phase::Playing
+            {
+                self.lags
+                    .push(i64::from(own.frames) - i64::from(opp.frames));
+            }
         }
         for from in 0..self.boards.len() {
             let mut out = Vec::new();
@@ -271,6 +286,22 @@ impl<'a> Channel<'a> {
             self.frame(mazes);
         }
     }
+}
+
+fn lag_line(lags: &[i64]) -> String {
+    let mut l = lags.to_vec();
+    l.sort_unstable();
+    let at = |q: f64| {
+        l.get(((l.len() as f64 - 1.0) * q) as usize)
+            .copied()
+            .unwrap_or(0)
+    };
+    format!(
+        "opponent drawn behind by {:.2} s median, {:.2} s at the 95th percentile, {:.2} s at most",
+        at(0.5) as f64 / HZ as f64,
+        at(0.95) as f64 / HZ as f64,
+        at(1.0) as f64 / HZ as f64
+    )
 }
 
 fn describe(b: &Board<'_>) -> String {
@@ -348,6 +379,7 @@ fn two_boards_on_a_clear_channel_agree() {
             k.sent_bytes as f64 / k.sent as f64
         );
     }
+    println!("{}", lag_line(&c.lags));
     let hash_a = a.own().state_hash();
     assert_eq!(b.opponent().session().state_hash(), hash_a);
     #[cfg(feature = "tools")]
@@ -428,8 +460,9 @@ fn two_boards_agree_through_loss_reordering_duplication_delays_and_garbage() {
             "seed {seed}: no repeat seen"
         );
         println!(
-            "seed {seed}: {v:?} after {:.1} s of channel; board a {:?}",
+            "seed {seed}: {v:?} after {:.1} s of channel; {}; board a {:?}",
             c.now as f64 / HZ as f64,
+            lag_line(&c.lags),
             k[0]
         );
         verdicts.push(v);
