@@ -70,6 +70,8 @@ struct Weather {
     /// Chance per frame of a garbage packet (random bytes, or a real packet
     /// with a flipped bit).
     garbage: f64,
+    /// Frames of the channel during which every packet is lost.
+    blackout: (u64, u64),
 }
 
 const CLEAR: Weather = Weather {
@@ -77,6 +79,7 @@ const CLEAR: Weather = Weather {
     duplicate: 0.0,
     max_delay: 0,
     garbage: 0.0,
+    blackout: (0, 0),
 };
 
 /// A board: looking for an opponent, or racing; and the player at its tilt
@@ -256,7 +259,7 @@ impl<'a> Channel<'a> {
 
     fn send(&mut self, to: usize, bytes: &[u8]) {
         let w = self.weather;
-        if self.dice.chance(w.loss) {
+        if self.dice.chance(w.loss) || (w.blackout.0..w.blackout.1).contains(&self.now) {
             return;
         }
         let copies = if self.dice.chance(w.duplicate) { 2 } else { 1 };
@@ -414,6 +417,7 @@ fn two_boards_agree_through_loss_reordering_duplication_delays_and_garbage() {
         duplicate: 0.2,
         max_delay: 2 * HZ,
         garbage: 0.05,
+        ..CLEAR
     };
     let mut verdicts = Vec::new();
     for seed in 0..6u64 {
@@ -470,6 +474,43 @@ fn two_boards_agree_through_loss_reordering_duplication_delays_and_garbage() {
     assert!(verdicts.contains(&Verdict::Won) && verdicts.contains(&Verdict::Lost));
 }
 
+/// Five seconds without a packet in the middle of a race: each board says
+/// it is alone and plays on; when the channel comes back they catch up and
+/// agree. (`RaceLink` and `Race` sizes are printed: a board keeps one.)
+#[test]
+fn a_blackout_mid_race_leaves_each_board_alone_then_they_agree() {
+    println!(
+        "RaceLink {} B, Race {} B",
+        std::mem::size_of::<RaceLink>(),
+        std::mem::size_of::<Race<'static, Fx>>()
+    );
+    let mazes = Mazes::new(&[SPEC_2]);
+    let boards = vec![Board::new(1, SPEC_2, 0), Board::new(2, SPEC_2, 100)];
+    let mut c = Channel::new(boards, CLEAR, 9);
+    c.run(&mazes, 30 * HZ, |c| {
+        c.boards
+            .iter()
+            .all(|b| b.race().is_some_and(|r| r.own_run().frames > 64))
+    });
+    let from = c.now;
+    c.weather.blackout = (from, from + 5 * HZ);
+    let mut alone = [false; 2];
+    while c.now < from + 5 * HZ {
+        c.frame(&mazes);
+        for (i, b) in c.boards.iter().enumerate() {
+            alone[i] |= b.race().unwrap().link().silent();
+        }
+    }
+    assert_eq!(alone, [true, true], "both said they were alone");
+    for b in &c.boards {
+        let r = b.race().unwrap();
+        assert!(r.own_run().frames > 5 * 128, "it played on alone");
+    }
+    c.run(&mazes, from + 60 * HZ, |c| c.boards.iter().all(settled));
+    check_agreement(&c, 0, 1);
+    assert!(c.boards.iter().all(|b| !b.race().unwrap().link().silent()));
+}
+
 /// A board restarted in the middle of a race is a new board: its opponent
 /// says it is alone after three seconds of silence, plays its run to its end
 /// and claims no verdict; the restarted board never joins the old race; once
@@ -481,7 +522,7 @@ fn a_board_restarted_mid_race_leaves_its_opponent_alone_then_races_again() {
         loss: 0.2,
         duplicate: 0.1,
         max_delay: HZ / 4,
-        garbage: 0.0,
+        ..CLEAR
     };
     let boards = vec![Board::new(10, SPEC, 0), Board::new(20, SPEC, 0)];
     let mut c = Channel::new(boards, weather, 3);
@@ -531,6 +572,7 @@ fn a_third_board_on_the_channel_changes_nothing() {
         duplicate: 0.1,
         max_delay: HZ / 2,
         garbage: 0.01,
+        ..CLEAR
     };
     for seed in 0..3u64 {
         let boards = vec![

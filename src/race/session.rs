@@ -233,9 +233,13 @@ impl RaceLink {
         self.peer_calibration
     }
 
-    /// Paired, and nothing heard from the opponent for [`SILENCE_FRAMES`].
+    /// Paired, the race not [complete](RaceLink::complete), and nothing heard
+    /// from the opponent for [`SILENCE_FRAMES`]. (Once complete, both boards
+    /// fall quiet on purpose.)
     pub fn silent(&self) -> bool {
-        self.paired().is_some() && self.now.wrapping_sub(self.last_heard) >= SILENCE_FRAMES
+        self.paired().is_some()
+            && !self.complete()
+            && self.now.wrapping_sub(self.last_heard) >= SILENCE_FRAMES
     }
 
     /// Frames since the opponent was last heard (0 before the pairing).

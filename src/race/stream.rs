@@ -336,7 +336,16 @@ impl Inbox {
             slot.copy_from_slice(tokens);
             return match self.early.push(block) {
                 Ok(()) => Taken::Kept,
-                Err(_) => Taken::Left,
+                Err(block) => {
+                    // Full: the block nearest the gap is worth the most.
+                    match self.early.iter_mut().max_by_key(|b| b.first) {
+                        Some(far) if far.first > first => {
+                            *far = block;
+                            Taken::Kept
+                        }
+                        _ => Taken::Left,
+                    }
+                }
             };
         }
         let taken = match self.next(tokens) {
