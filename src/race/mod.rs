@@ -13,6 +13,7 @@
 //! * [`replay`]: the opponent's marble replayed bit-exactly from its readings,
 //!   and the verdict (fewer frames wins).
 //! * [`play`]: all of it around this board's own session ([`Race`]).
+//! * [`wire`]: the packets on a byte stream (a UART between two boards).
 //!
 //! docs/race.md describes the protocol and what a lost packet costs.
 
@@ -22,6 +23,7 @@ pub mod play;
 pub mod replay;
 pub mod session;
 pub mod stream;
+pub mod wire;
 
 pub use packet::{MazeSpec, MAX_PACKET};
 pub use play::{Race, RaceError, Status};
