@@ -469,9 +469,10 @@ fn two_boards_agree_through_loss_reordering_duplication_delays_and_garbage() {
             "seed {seed}: no repeat seen"
         );
         println!(
-            "seed {seed}: {v:?} after {:.1} s of channel; {}; board a {:?}",
+            "seed {seed}: {v:?} after {:.1} s of channel; {}; board a sent {:.0} B/s; {:?}",
             c.now as f64 / HZ as f64,
             lag_line(&c.lags),
+            k[0].sent_bytes as f64 * HZ as f64 / c.now as f64,
             k[0]
         );
         verdicts.push(v);
@@ -756,7 +757,7 @@ proptest! {
     #[test]
     fn random_bytes_never_panic_and_are_counted(
         stage in 0u8..2,
-        packets in prop::collection::vec(prop::collection::vec(any::<u8>(), 0..120), 1..20),
+        packets in prop::collection::vec(prop::collection::vec(any::<u8>(), 0..200), 1..20),
     ) {
         let mut link = link_in_stage(stage);
         let before = *link.counters();
@@ -775,7 +776,7 @@ proptest! {
     fn random_bodies_behind_a_sound_header_never_panic(
         stage in 0u8..2,
         from in prop::sample::select(vec![1u32, 2, 3]),
-        body in prop::collection::vec(any::<u8>(), 0..75),
+        body in prop::collection::vec(any::<u8>(), 0..150),
         seq in any::<u16>(),
     ) {
         let mut link = link_in_stage(stage);

@@ -20,7 +20,7 @@
 //! n-2 CRC-16/IBM-3740    u16 LE over bytes 0 .. n-2
 //! ```
 //!
-//! A packet is at most [`MAX_PACKET`] bytes. The checks, in order: length,
+//! A packet is at most [`MAX_PACKET`] (160) bytes. The checks, in order: length,
 //! CRC (garbled), magic (another protocol), version, kind, then the body's
 //! framing; every failure is a [`Drop`] and nothing else happens. A block's
 //! tokens are decoded only when the block is taken (`stream`).
@@ -29,9 +29,12 @@ use crc::{Crc, NoTable, CRC_16_IBM_3740};
 
 use crate::input::sensor::Calibration;
 
-/// The longest packet (bytes, CRC included): well under the nRF radio's 255
-/// and a UART line's patience.
-pub const MAX_PACKET: usize = 96;
+/// The longest packet (bytes, CRC included): room for the fixed fields and
+/// three blocks of [`BLOCK_BYTES`], so that a packet carries the oldest block
+/// the opponent lacks and two more in turn (with room for one, a lossy link
+/// delivered a block a round trip); under the 255 bytes of an 8-bit length
+/// field (the nRF radio's).
+pub const MAX_PACKET: usize = 160;
 /// The protocol's version: a packet of any other is dropped.
 pub const VERSION: u8 = 1;
 /// The most token bytes in a block.
