@@ -14,7 +14,7 @@ use marble_rolling::game::level::{parse, Level, LevelView};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::Session;
 use marble_rolling::input::sensor::Calibration;
-use marble_rolling::race::packet::{self, Drop, End, MazeSpec, Writer, MAX_PACKET};
+use marble_rolling::race::packet::{self, Drop, End, MazeSpec, Writer, BLOCK_BYTES, MAX_PACKET};
 use marble_rolling::race::replay::{decide, Run, Verdict};
 use marble_rolling::race::session::{COUNTDOWN_FRAMES, SILENCE_FRAMES};
 use marble_rolling::race::wire::{self, Unframed, Unframer, MAX_FRAME};
@@ -388,6 +388,11 @@ fn two_boards_on_a_clear_channel_agree() {
         );
     }
     println!("{}", lag_line(&c.lags));
+    println!(
+        "board a's run: {} frames in {} blocks",
+        a.own_run().frames,
+        b.link().counters().blocks_taken
+    );
     let hash_a = a.own().state_hash();
     assert_eq!(b.opponent().session().state_hash(), hash_a);
     #[cfg(feature = "tools")]
@@ -672,8 +677,11 @@ fn packets_round_trip_and_fail_their_checks() {
     };
     let mut w = Writer::race(&mut buf, 77, 78, 65535, SPEC, cal, 300, true, Some(end));
     assert!(w.block(300, &[3, 4, 5]));
-    assert!(w.block(1 << 20, &[7; 40]));
-    assert!(!w.block(0, &[0; 41]), "a block longer than BLOCK_BYTES");
+    assert!(w.block(1 << 20, &[7; BLOCK_BYTES]));
+    assert!(
+        !w.block(0, &[0; BLOCK_BYTES + 1]),
+        "a block longer than BLOCK_BYTES"
+    );
     assert!(!w.block(0, &[]), "an empty block");
     let race = w.finish().to_vec();
     assert!(race.len() <= MAX_PACKET);
@@ -685,7 +693,10 @@ fn packets_round_trip_and_fail_their_checks() {
         (cal, 300, true, Some(end))
     );
     let blocks: Vec<_> = body.blocks().collect();
-    assert_eq!(blocks, [(300, &[3u8, 4, 5][..]), (1 << 20, &[7u8; 40][..])]);
+    assert_eq!(
+        blocks,
+        [(300, &[3u8, 4, 5][..]), (1 << 20, &[7u8; BLOCK_BYTES][..])]
+    );
 
     // Every single bit flipped is caught.
     for bit in 0..race.len() * 8 {

@@ -93,15 +93,9 @@ pub struct Args {
     pub channel: u16,
 }
 
-/// Runs the player with the process arguments; returns the exit status.
-pub fn main() -> i32 {
-    let args = match super::parse_args::<Args>() {
-        Ok(a) => a,
-        Err(status) => return status,
-    };
-    if args.race {
-        return race_main(&args);
-    }
+/// Runs the player with `args`, the process arguments (the binary hands
+/// `--race` to [`super::race::main`] instead); returns the exit status.
+pub fn main(args: Args) -> i32 {
     let generated = match args.maze.level() {
         Ok(g) => g.map(|(_, view)| Loaded {
             view,
@@ -146,35 +140,6 @@ pub fn main() -> i32 {
         r
     };
     match result {
-        Ok(()) => 0,
-        Err(e) => {
-            eprintln!("play: error: {e}");
-            1
-        }
-    }
-}
-
-/// `--race`: checks the terminal, then races ([`super::race::run`]).
-fn race_main(args: &Args) -> i32 {
-    use super::generated::{DEFAULT_DIFFICULTY, DEFAULT_SIZE};
-    let offer = crate::race::MazeSpec {
-        seed: args
-            .maze
-            .generate
-            .unwrap_or_else(|| super::race::fresh_id().get()),
-        size: args.maze.size.unwrap_or(DEFAULT_SIZE),
-        storeys: args.maze.storeys.unwrap_or(1),
-        difficulty: args.maze.difficulty.unwrap_or(DEFAULT_DIFFICULTY),
-    };
-    if let Err(e) = crate::race::maze(offer) {
-        eprintln!("play: error: {e}");
-        return 2;
-    }
-    if !io::stdin().is_terminal() || !io::stdout().is_terminal() {
-        eprintln!("play: error: standard input and output must be a terminal to race");
-        return 2;
-    }
-    match super::race::run(args.channel, offer, args.autopilot) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("play: error: {e}");

@@ -11,19 +11,19 @@
 //! [`UdpBoard`] is one side without a terminal (`tests/race.rs` races two in
 //! one process over real sockets); [`run`] is the terminal around it.
 
-use std::format;
-use std::io::{self, Write};
+use std::io::{self, IsTerminal, Write};
 use std::net::{SocketAddr, UdpSocket};
 use std::string::{String, ToString};
 use std::time::{Duration, Instant};
 use std::vec::Vec;
+use std::{eprintln, format};
 
 use crossterm::event::{self, Event};
 use crossterm::style::{Print, ResetColor, SetForegroundColor};
 use crossterm::terminal::{self, Clear, ClearType};
 use crossterm::{cursor, execute, queue};
 
-use super::play::{colour, key_of, shade, TerminalGuard, GHOST_BRIGHTNESS};
+use super::play::{colour, key_of, shade, Args, TerminalGuard, GHOST_BRIGHTNESS};
 use crate::game::autopilot::Autopilot;
 use crate::game::level::LevelView;
 use crate::game::player::FRAME_HZ;
@@ -182,6 +182,33 @@ impl UdpBoard {
             let _ = self.socket.send_to(&p, self.peer);
         }
         Ok(())
+    }
+}
+
+/// `cargo play -- --race`: checks the offer and the terminal, then races
+/// ([`run`]); returns the exit status.
+pub fn main(args: &Args) -> i32 {
+    use super::generated::{DEFAULT_DIFFICULTY, DEFAULT_SIZE};
+    let offer = crate::race::MazeSpec {
+        seed: args.maze.generate.unwrap_or_else(|| fresh_id().get()),
+        size: args.maze.size.unwrap_or(DEFAULT_SIZE),
+        storeys: args.maze.storeys.unwrap_or(1),
+        difficulty: args.maze.difficulty.unwrap_or(DEFAULT_DIFFICULTY),
+    };
+    if let Err(e) = crate::race::maze(offer) {
+        eprintln!("play: error: {e}");
+        return 2;
+    }
+    if !std::io::stdin().is_terminal() || !std::io::stdout().is_terminal() {
+        eprintln!("play: error: standard input and output must be a terminal to race");
+        return 2;
+    }
+    match run(args.channel, offer, args.autopilot) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("play: error: {e}");
+            1
+        }
     }
 }
 

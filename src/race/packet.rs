@@ -15,12 +15,12 @@
 //!     end                frames varint, state hash u64 LE (flag bit 1 only)
 //!     blocks, until the CRC:
 //!       first            varint: the frame of the block's first reading
-//!       len              u8, 1 ..= BLOCK_BYTES
+//!       len              u8, 1 ..= BLOCK_BYTES (28)
 //!       tokens           the ghost's coding, from the reading before `first`
 //! n-2 CRC-16/IBM-3740    u16 LE over bytes 0 .. n-2
 //! ```
 //!
-//! A packet is at most [`MAX_PACKET`] (160) bytes. The checks, in order: length,
+//! A packet is at most [`MAX_PACKET`] (125) bytes. The checks, in order: length,
 //! CRC (garbled), magic (another protocol), version, kind, then the body's
 //! framing; every failure is a [`Drop`] and nothing else happens. A block's
 //! tokens are decoded only when the block is taken (`stream`).
@@ -29,16 +29,18 @@ use crc::{Crc, NoTable, CRC_16_IBM_3740};
 
 use crate::input::sensor::Calibration;
 
-/// The longest packet (bytes, CRC included): room for the fixed fields and
-/// three blocks of [`BLOCK_BYTES`], so that a packet carries the oldest block
-/// the opponent lacks and two more in turn (with room for one, a lossy link
-/// delivered a block a round trip); under the 255 bytes of an 8-bit length
-/// field (the nRF radio's).
-pub const MAX_PACKET: usize = 160;
+/// The longest packet (bytes, CRC included): the payload of an IEEE 802.15.4
+/// frame, the one mode embassy-nrf 0.11 drives the nRF52833's radio in
+/// (`radio::ieee802154::Packet::CAPACITY`), so a packet is one radio frame.
+/// It holds the fixed fields and three blocks of [`BLOCK_BYTES`]: the oldest
+/// block the opponent lacks and two more in turn (with room for one, a lossy
+/// link would deliver one block a round trip).
+pub const MAX_PACKET: usize = 125;
 /// The protocol's version: a packet of any other is dropped.
 pub const VERSION: u8 = 1;
-/// The most token bytes in a block.
-pub const BLOCK_BYTES: usize = 40;
+/// The most token bytes in a block: three blocks and their heads fit a packet
+/// beside the fixed fields.
+pub const BLOCK_BYTES: usize = 28;
 /// Bytes of a hello, CRC included.
 pub const HELLO_BYTES: usize = MAZE_END + 2;
 
