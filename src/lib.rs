@@ -16,6 +16,7 @@ pub mod input;
 pub mod render;
 pub mod matrix;
 pub mod sound;
+pub mod race;
 #[cfg(feature = "records")]
 pub mod records;
 #[cfg(feature = "app")]

@@ -19,6 +19,7 @@ const LAYERS: &[(&str, u8)] = &[
     ("input", 1),
     ("game", 2),
     ("matrix", 3),
+    ("race", 3),
     ("render", 4),
     ("sound", 4),
     ("game::player", 5),

@@ -106,12 +106,7 @@ impl core::fmt::Display for GhostError {
 /// Writes a run's readings into a caller's buffer (no allocation).
 #[derive(Debug)]
 pub struct GhostWriter<'a> {
-    buf: &'a mut [u8],
-    len: usize,
-    frames: u32,
-    last: [i32; 3],
-    /// Frames repeating `last`, not written yet.
-    run: u32,
+    tokens: TokenWriter<'a>,
 }
 
 impl<'a> GhostWriter<'a> {
@@ -122,13 +117,72 @@ impl<'a> GhostWriter<'a> {
         }
         buf[..HEADER_BYTES].fill(0);
         buf[..4].copy_from_slice(&MAGIC);
-        Ok(GhostWriter {
+        let mut tokens = TokenWriter::new(buf, FLAT);
+        tokens.len = HEADER_BYTES;
+        Ok(GhostWriter { tokens })
+    }
+
+    /// Forgets every frame: the writer starts a new ghost in its buffer.
+    pub fn restart(&mut self) {
+        let t = &mut self.tokens;
+        t.len = HEADER_BYTES;
+        t.frames = 0;
+        t.last = FLAT;
+        t.run = 0;
+    }
+
+    /// Frames written so far.
+    pub fn frames(&self) -> u32 {
+        self.tokens.frames
+    }
+
+    /// Adds one frame's reading. On [`GhostError::Full`] the ghost so far stays
+    /// whole (finish it, or drop it).
+    pub fn push(&mut self, reading: [i32; 3]) -> Result<(), GhostError> {
+        self.tokens.push(reading)
+    }
+
+    /// Closes the ghost with the run's end state hash and the tilt path's
+    /// calibration during the run; returns its bytes.
+    pub fn finish(
+        mut self,
+        state_hash: u64,
+        calibration: Calibration,
+    ) -> Result<&'a [u8], GhostError> {
+        let t = &mut self.tokens;
+        t.flush_run()?;
+        t.buf[4..8].copy_from_slice(&t.frames.to_le_bytes());
+        t.buf[8..16].copy_from_slice(&state_hash.to_le_bytes());
+        t.buf[16..20].copy_from_slice(&calibration.offset_x.to_le_bytes());
+        t.buf[20..24].copy_from_slice(&calibration.offset_z.to_le_bytes());
+        let len = t.len;
+        Ok(&self.tokens.buf[..len])
+    }
+}
+
+/// The ghost's tokens alone, without its header, from any reading before the
+/// first: the coding other formats reuse (the race's blocks of readings,
+/// `crate::race`). [`Readings::from_tokens`] reads them back.
+#[derive(Debug)]
+pub struct TokenWriter<'a> {
+    buf: &'a mut [u8],
+    len: usize,
+    frames: u32,
+    last: [i32; 3],
+    /// Frames repeating `last`, not written yet.
+    run: u32,
+}
+
+impl<'a> TokenWriter<'a> {
+    /// A writer into `buf`; `before` is the reading before the first frame.
+    pub fn new(buf: &'a mut [u8], before: [i32; 3]) -> Self {
+        TokenWriter {
             buf,
-            len: HEADER_BYTES,
+            len: 0,
             frames: 0,
-            last: FLAT,
+            last: before,
             run: 0,
-        })
+        }
     }
 
     /// Frames written so far.
@@ -136,16 +190,19 @@ impl<'a> GhostWriter<'a> {
         self.frames
     }
 
-    /// Forgets every frame: the writer starts a new ghost in its buffer.
-    pub fn restart(&mut self) {
-        self.len = HEADER_BYTES;
-        self.frames = 0;
-        self.last = FLAT;
-        self.run = 0;
+    /// Bytes written so far; a pending run of repeated readings adds its
+    /// token (a varint of twice its frames) when the writer finishes.
+    pub fn len(&self) -> usize {
+        self.len
     }
 
-    /// Adds one frame's reading. On [`GhostError::Full`] the ghost so far stays
-    /// whole (finish it, or drop it).
+    /// Whether nothing has been written yet.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Adds one frame's reading. On [`GhostError::Full`] the tokens so far stay
+    /// whole.
     pub fn push(&mut self, reading: [i32; 3]) -> Result<(), GhostError> {
         if reading == self.last {
             self.run += 1;
@@ -153,7 +210,7 @@ impl<'a> GhostWriter<'a> {
             return Ok(());
         }
         // The pending run and this frame go in together or not at all.
-        let mark = self.len;
+        let (mark, run) = (self.len, self.run);
         let result = self.flush_run().and_then(|()| {
             let last = self.last;
             let changed = |a: usize| reading[a] != last[a];
@@ -168,6 +225,7 @@ impl<'a> GhostWriter<'a> {
         });
         if result.is_err() {
             self.len = mark;
+            self.run = run;
             return result;
         }
         self.run = 0;
@@ -176,18 +234,9 @@ impl<'a> GhostWriter<'a> {
         Ok(())
     }
 
-    /// Closes the ghost with the run's end state hash and the tilt path's
-    /// calibration during the run; returns its bytes.
-    pub fn finish(
-        mut self,
-        state_hash: u64,
-        calibration: Calibration,
-    ) -> Result<&'a [u8], GhostError> {
+    /// Writes the pending run; returns the tokens.
+    pub fn finish(mut self) -> Result<&'a [u8], GhostError> {
         self.flush_run()?;
-        self.buf[4..8].copy_from_slice(&self.frames.to_le_bytes());
-        self.buf[8..16].copy_from_slice(&state_hash.to_le_bytes());
-        self.buf[16..20].copy_from_slice(&calibration.offset_x.to_le_bytes());
-        self.buf[20..24].copy_from_slice(&calibration.offset_z.to_le_bytes());
         let len = self.len;
         Ok(&self.buf[..len])
     }
@@ -274,12 +323,7 @@ impl<'a> Ghost<'a> {
 
     /// The readings, frame by frame.
     pub fn readings(&self) -> Readings<'a> {
-        Readings {
-            tokens: self.tokens,
-            pos: 0,
-            last: FLAT,
-            run: 0,
-        }
+        Readings::from_tokens(self.tokens, FLAT)
     }
 }
 
@@ -290,6 +334,20 @@ pub struct Readings<'a> {
     pos: usize,
     last: [i32; 3],
     run: u64,
+}
+
+impl<'a> Readings<'a> {
+    /// The readings coded by bare `tokens` (a [`TokenWriter`]'s), `before`
+    /// being the reading before the first. Error offsets count as in a ghost,
+    /// from the start of its header.
+    pub fn from_tokens(tokens: &'a [u8], before: [i32; 3]) -> Self {
+        Readings {
+            tokens,
+            pos: 0,
+            last: before,
+            run: 0,
+        }
+    }
 }
 
 impl Readings<'_> {
@@ -558,7 +616,7 @@ impl<'r> Recorder<'r> {
             self.lost = Some(RecordError::Missed);
         } else if self.writer.push(session.reading()).is_err() {
             self.lost = Some(RecordError::TooLong {
-                bytes: self.writer.buf.len(),
+                bytes: self.writer.tokens.buf.len(),
             });
         }
     }
@@ -566,7 +624,7 @@ impl<'r> Recorder<'r> {
     /// The attempt `session` ended as a ghost (its end state hash and the
     /// tilt path's calibration in the header).
     pub fn finish(self, session: &Session<'_, Fx>) -> Result<&'r [u8], RecordError> {
-        let bytes = self.writer.buf.len();
+        let bytes = self.writer.tokens.buf.len();
         if let Some(lost) = self.lost {
             return Err(lost);
         }

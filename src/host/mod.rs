@@ -1,6 +1,7 @@
 //! Host tools (`tools` feature, std): the simulator CLI ([`sim`], `cargo sim`) and
-//! the terminal player ([`play`], `cargo play`). The `sim` and `play` binaries are
-//! thin wrappers around [`sim::main`] and [`play::main`], so the logic lives in the
+//! the terminal player ([`play`], `cargo play`, and [`race`], `cargo play --
+//! --race`). The `sim` and `play` binaries are thin wrappers around
+//! [`sim::main`], [`play::main`] and [`race::main`], so the logic lives in the
 //! library where it is documented and type-checked with the rest of the crate.
 //! What `cargo sim --gif` records of a game, the matrix picture and (for a level
 //! with storeys) every storey's map beside it, is composed in [`storey_maps`] and
@@ -13,6 +14,7 @@ pub mod generated;
 pub mod ghost_file;
 pub mod gif_out;
 pub mod play;
+pub mod race;
 pub mod motion_trace;
 pub mod report;
 pub mod sim;

@@ -4,6 +4,7 @@
 //! cargo play                      # the built-in levels, from the first
 //! cargo play -- --level cavern    # a built-in level by name, or a level file
 //! cargo play -- --generate 7 --storeys 2   # a generated maze, then the built-in ones
+//! cargo play -- --race            # race another terminal (the same command) on UDP
 //! ```
 //!
 //! Each level's best winning run is kept as a ghost in `target/ghosts/`
@@ -82,14 +83,19 @@ pub struct Args {
     /// Where each level's best run is kept as a ghost (`NAME.ghost`).
     #[arg(long, value_name = "DIR", default_value = "target/ghosts")]
     pub ghosts: PathBuf,
+    /// Race another terminal on this machine (UDP on localhost): start the
+    /// same command in a second terminal. The maze is `--generate`'s (a new
+    /// seed without it) of whichever side the handshake picks.
+    #[arg(long, conflicts_with = "level")]
+    pub race: bool,
+    /// The race's channel: a pair of UDP ports (47400 + 2 N and the next).
+    #[arg(long, value_name = "N", default_value_t = 0, requires = "race")]
+    pub channel: u16,
 }
 
-/// Runs the player with the process arguments; returns the exit status.
-pub fn main() -> i32 {
-    let args = match super::parse_args::<Args>() {
-        Ok(a) => a,
-        Err(status) => return status,
-    };
+/// Runs the player with `args`, the process arguments (the binary hands
+/// `--race` to [`super::race::main`] instead); returns the exit status.
+pub fn main(args: Args) -> i32 {
     let generated = match args.maze.level() {
         Ok(g) => g.map(|(_, view)| Loaded {
             view,
@@ -144,10 +150,10 @@ pub fn main() -> i32 {
 
 /// Raw mode + alternate screen + hidden cursor while alive; restored on drop and
 /// by the panic hook.
-struct TerminalGuard;
+pub(super) struct TerminalGuard;
 
 impl TerminalGuard {
-    fn enter() -> io::Result<TerminalGuard> {
+    pub(super) fn enter() -> io::Result<TerminalGuard> {
         terminal::enable_raw_mode()?;
         // From here on every way out restores the terminal.
         let guard = TerminalGuard;
@@ -241,7 +247,7 @@ struct Game {
 }
 
 /// The ghost marble's brightness (the live marble is drawn at full).
-const GHOST_BRIGHTNESS: u8 = 4;
+pub(super) const GHOST_BRIGHTNESS: u8 = 4;
 
 impl Game {
     fn new(first: Loaded, autopilot: bool, ghosts: &Path) -> io::Result<Game> {
@@ -462,7 +468,7 @@ impl Game {
 }
 
 /// Two characters per pixel, denser for brighter pixels (readable without colour).
-fn shade(v: u8) -> &'static str {
+pub(super) fn shade(v: u8) -> &'static str {
     match v {
         0 => "  ",
         1..=2 => "░░",
@@ -473,7 +479,7 @@ fn shade(v: u8) -> &'static str {
 }
 
 /// Amber, scaled by brightness.
-fn colour(v: u8) -> Color {
+pub(super) fn colour(v: u8) -> Color {
     let f = 0.15 + 0.85 * (v as f64 / MAX_BRIGHTNESS as f64).sqrt();
     Color::Rgb {
         r: (255.0 * f) as u8,
