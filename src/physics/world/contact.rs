@@ -3,7 +3,10 @@
 //! faces a resting marble keeps, and one contact's response (eq. 1 through
 //! `respond`).
 
-use super::*;
+use super::{
+    candidates, candidates_plane, contact, events, lid_contact, resolve, Contact, Feature, Impact,
+    Kick, Marble, Outcome, Scalar, Solver, TileIndex, Vec3, World, T_LOG2,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The contact solver's view of a step of `2^-k` s whose pull adds `dv` (pitch/s)

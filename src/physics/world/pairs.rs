@@ -2,7 +2,7 @@
 //! slices): pushed apart, eq. 1 between them, and one more tile pass for a
 //! marble its neighbour pushed.
 
-use super::*;
+use super::{events, marble_pair, Marble, Scalar, Solver, Vec3, World, T_LOG2};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Marble–marble contacts. A marble pushed by its neighbour gets one more tile

@@ -19,7 +19,7 @@
 //! eq. 6, which eq. 5 and 6 decide alike on every boundary, on every backend.
 
 use super::super::super::geometry::grid::Tiles;
-use super::*;
+use super::{reach, Aabb, Marble, Scalar, TileIndex, TileRange, Vec3, World};
 
 /// Rows a region grows each way beyond the search's own tiles: a marble crossing
 /// an open floor keeps one region for several frames (grown further, a rebuild

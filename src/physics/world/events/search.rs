@@ -2,7 +2,10 @@
 //! every tile in reach (and the lid), the end of a held face's support, and what
 //! a slice leaves out.
 
-use super::*;
+use super::{
+    behind_held, entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Event, Flight,
+    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The earliest event of the flight `f` within `limit` steps, leaving tile
