@@ -234,8 +234,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let vn_now = m.vel.dot(c.normal);
         // Under the format's top (127 pitch/s, the event step's limit; fixed steps
         // cap lower): `normal × vn_new` below must fit, and a unit normal times 128
-        // does not — it wrapped to −128 in release builds (found by the property
-        // `step_survives_arbitrary_states`).
+        // does not (it wraps to −128 in release builds; the property
+        // `step_survives_arbitrary_states` drives such states).
         let top = p.v_max.min(S::from_int(127));
         let vn_new = (res.vn + v_board.dot(c.normal))
             .shl(T_LOG2)
