@@ -32,6 +32,13 @@
 //! padded to the flash's 4-byte words) — see `tests/records.rs::wear` for the
 //! flash operations per update and the pages erased per update, from which the
 //! life figure in docs/testing.md comes.
+//!
+//! # Ghosts
+//!
+//! [`Ghosts`] keeps each level's best run ([`crate::game::ghost`]'s bytes) the
+//! same way, in a map of its own beside the records (a full ghosts region
+//! never costs a best time); `tests/ghost_flash.rs` cuts the power in a
+//! ghost's write, fills the region and offers a ghost longer than a page.
 
 use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::cache::{Cache, Uncached};
@@ -190,6 +197,258 @@ impl<F: NorFlash> Records<F> {
             },
             Error::FullStorage => RecordError::Full,
             _ => RecordError::Flash,
+        }
+    }
+}
+
+/// Where a level's ghost lives in the ghosts' map: the FNV-1a hash (32 bits)
+/// of the level's name (a built-in level's name, or a generated maze's, which
+/// holds its arguments). Two names on one key would share a slot; a ghost is
+/// used only once its replay wins the level on its own state hash, so the
+/// other level's ghost is never shown on the wrong maze, only replaced.
+pub const fn ghost_key(name: &str) -> u32 {
+    let bytes = name.as_bytes();
+    let mut hash: u32 = 0x811C_9DC5;
+    let mut i = 0;
+    while i < bytes.len() {
+        hash ^= bytes[i] as u32;
+        hash = hash.wrapping_mul(0x0100_0193);
+        i += 1;
+    }
+    hash
+}
+
+/// The longest ghost (bytes) a ghosts' region on flash `F` keeps: an item
+/// fills at most one erase page, less the page's two state words, the item's
+/// 8-byte header (rounded up to a word) and the 4-byte key.
+pub const fn max_ghost_bytes<F: NorFlash>() -> usize {
+    let header = 8usize.div_ceil(F::WRITE_SIZE) * F::WRITE_SIZE;
+    F::ERASE_SIZE.saturating_sub(2 * F::WRITE_SIZE + header + 4)
+}
+
+/// The work buffer [`Ghosts::keep`] needs for a ghost of `len` bytes: its key
+/// and bytes, rounded up to the flash's words.
+pub const fn ghost_work_bytes<F: NorFlash>(len: usize) -> usize {
+    (len + 4).div_ceil(F::WRITE_SIZE) * F::WRITE_SIZE
+}
+
+/// Why a ghost could not be read or kept.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GhostStoreError {
+    /// Longer than one item of the region may be (`max` bytes): not kept.
+    TooLong {
+        /// The ghost's length.
+        len: usize,
+        /// The longest the region keeps.
+        max: usize,
+    },
+    /// The caller's buffer cannot hold the ghost (`needs` bytes).
+    Buffer {
+        /// The bytes it needs.
+        needs: usize,
+    },
+    /// The region stayed full after the oldest ghosts gave way: not kept.
+    Full,
+    /// The flash reported an error.
+    Flash,
+    /// The region was corrupted beyond the crate's repair: it has been erased
+    /// (every ghost is lost, the region works again).
+    Corrupted,
+    /// The region was corrupted and could not even be erased.
+    Unrecoverable,
+}
+
+impl GhostStoreError {
+    /// A short name for logs and the terminal.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            GhostStoreError::TooLong { .. } => "ghost longer than a flash page: not kept",
+            GhostStoreError::Buffer { .. } => "ghost longer than its RAM buffer",
+            GhostStoreError::Full => "ghosts region full: not kept",
+            GhostStoreError::Flash => "flash error",
+            GhostStoreError::Corrupted => "ghosts corrupted: region erased",
+            GhostStoreError::Unrecoverable => "ghosts corrupted: erase failed",
+        }
+    }
+}
+
+/// What [`Ghosts::keep`] did.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Kept {
+    /// The bytes written.
+    pub bytes: usize,
+    /// Other levels' ghosts that gave way for it (the oldest first).
+    pub evicted: u8,
+}
+
+/// The most ghosts [`Ghosts::keep`] evicts for one ghost before it says
+/// [`GhostStoreError::Full`].
+const MOST_EVICTIONS: u8 = 16;
+
+/// The best run of each level ([`crate::game::ghost`]'s bytes, as `cargo
+/// play` writes them to a file) in sequential-storage's map over the flash
+/// `F`, in a region of its own beside the records: one item per level, keyed
+/// by [`ghost_key`] of its name.
+///
+/// Power cuts: as for the records, a ghost is one item with its own CRCs,
+/// appended after the one it replaces, so a cut while it is written leaves
+/// the old ghost (the new one fails its CRC) or the new one; a ghost read
+/// back is also parsed ([`Ghost::parse`](crate::game::ghost::Ghost::parse)),
+/// and one that does not parse is no ghost.
+///
+/// A full region: the ghost of another level that sits oldest in the region
+/// (the first met from the oldest page; a page migration moves the live ones
+/// forward) gives way — an empty item under its key, which the next
+/// migration drops — up to `MOST_EVICTIONS` of them; a ghost longer than one item may be
+/// ([`max_ghost_bytes`]) is refused before anything is written.
+pub struct Ghosts<F: NorFlash> {
+    map: MapStorage<u32, F, Cache<Uncached, Uncached, Uncached, u32>>,
+}
+
+impl<F: NorFlash> Ghosts<F> {
+    /// The ghosts in `region` of `flash` (whole erase pages, at least two).
+    /// `None` when the region is not that.
+    pub fn new(flash: F, region: core::ops::Range<u32>) -> Option<Self> {
+        let config = MapConfig::try_new(region).ok()?;
+        Some(Ghosts {
+            map: MapStorage::new(flash, config, Cache::new_uncached()),
+        })
+    }
+
+    /// The flash back (tests, and QEMU saving its image).
+    pub fn into_flash(self) -> F {
+        self.map.destroy().0
+    }
+
+    /// The flash (QEMU saves its image after an update).
+    pub fn flash(&mut self) -> &mut F {
+        self.map.flash()
+    }
+
+    /// The ghost of the level `name`, read into `buf`: its bytes, if it has
+    /// one that parses. `buf` should hold [`ghost_work_bytes`] of the longest
+    /// ghost kept; a stored ghost longer than `buf` is
+    /// [`GhostStoreError::Buffer`].
+    pub async fn load<'b>(
+        &mut self,
+        name: &str,
+        buf: &'b mut [u8],
+    ) -> Result<Option<&'b [u8]>, GhostStoreError> {
+        let key = ghost_key(name);
+        let fetched = self.map.fetch_item::<&[u8]>(buf, &key).await;
+        match fetched {
+            Ok(Some(bytes)) => {
+                let whole = crate::game::ghost::Ghost::parse(bytes).is_ok();
+                Ok(whole.then_some(bytes))
+            }
+            Ok(None) => Ok(None),
+            Err(Error::BufferTooSmall(needs)) => Err(GhostStoreError::Buffer { needs }),
+            Err(e) => Err(self.recover(e).await),
+        }
+    }
+
+    /// Keeps `ghost` as the level `name`'s, replacing its old one; `work` is
+    /// the crate's buffer: at least [`ghost_work_bytes`]`(ghost.len())`, and
+    /// to make room in a full region it reads the other ghosts through it
+    /// (a buffer for the longest ghost the board keeps). Ghosts evicted for
+    /// one that then still does not fit (one the size of a whole page) are
+    /// gone.
+    pub async fn keep(
+        &mut self,
+        name: &str,
+        ghost: &[u8],
+        work: &mut [u8],
+    ) -> Result<Kept, GhostStoreError> {
+        let max = max_ghost_bytes::<F>();
+        if ghost.len() > max {
+            return Err(GhostStoreError::TooLong {
+                len: ghost.len(),
+                max,
+            });
+        }
+        let needs = ghost_work_bytes::<F>(ghost.len());
+        if work.len() < needs {
+            return Err(GhostStoreError::Buffer { needs });
+        }
+        let key = ghost_key(name);
+        let mut evicted = 0;
+        loop {
+            match self.map.store_item(work, &key, &ghost).await {
+                Ok(()) => {
+                    return Ok(Kept {
+                        bytes: ghost.len(),
+                        evicted,
+                    })
+                }
+                Err(Error::FullStorage) if evicted < MOST_EVICTIONS => {
+                    if !self.evict_oldest(key, work).await? {
+                        return Err(GhostStoreError::Full);
+                    }
+                    evicted += 1;
+                }
+                Err(Error::FullStorage) => return Err(GhostStoreError::Full),
+                Err(Error::ItemTooBig) => {
+                    return Err(GhostStoreError::TooLong {
+                        len: ghost.len(),
+                        max,
+                    })
+                }
+                Err(e) => return Err(self.recover(e).await),
+            }
+        }
+    }
+
+    /// Forgets every ghost.
+    pub async fn clear(&mut self) -> Result<(), GhostStoreError> {
+        self.map
+            .erase_all()
+            .await
+            .map_err(|_| GhostStoreError::Flash)
+    }
+
+    /// The oldest ghost in the region of a key other than `keep` gets an
+    /// empty item (no ghost); `false` when there is none to evict.
+    async fn evict_oldest(&mut self, keep: u32, work: &mut [u8]) -> Result<bool, GhostStoreError> {
+        // The items come oldest first, a key's newest last: the keys with a
+        // ghost, in the order of their newest item (an empty one is a ghost
+        // already gone).
+        let mut live: heapless::Vec<u32, 32> = heapless::Vec::new();
+        let found = async {
+            let mut items = self.map.fetch_all_items(work).await?;
+            while let Some((key, value)) = items.next::<&[u8]>(work).await? {
+                live.retain(|&k| k != key);
+                if key != keep && !value.is_empty() {
+                    // More live ghosts than the list holds: the newest wait.
+                    let _ = live.push(key);
+                }
+            }
+            Ok::<_, Error<F::Error>>(())
+        }
+        .await;
+        if let Err(e) = found {
+            return Err(self.recover(e).await);
+        }
+        let Some(&key) = live.first() else {
+            return Ok(false);
+        };
+        match self.map.store_item::<&[u8]>(work, &key, &&[][..]).await {
+            Ok(()) => Ok(true),
+            Err(Error::FullStorage) => Ok(false),
+            Err(e) => Err(self.recover(e).await),
+        }
+    }
+
+    /// A crate error as ours; a corrupted region is erased first.
+    async fn recover(&mut self, e: Error<F::Error>) -> GhostStoreError {
+        match e {
+            Error::Corrupted { .. } | Error::LogicBug { .. } => match self.map.erase_all().await {
+                Ok(()) => GhostStoreError::Corrupted,
+                Err(_) => GhostStoreError::Unrecoverable,
+            },
+            Error::FullStorage => GhostStoreError::Full,
+            _ => GhostStoreError::Flash,
         }
     }
 }

@@ -9,6 +9,8 @@
 
 use embassy_time::Ticker;
 
+#[cfg(feature = "ghosts")]
+use super::ghosts::GhostStore;
 #[cfg(feature = "records")]
 use super::links::Win;
 use super::links::{Links, Meter};
@@ -140,6 +142,7 @@ pub(super) async fn demo<
     ticker: &mut Ticker,
     records: bool,
     mazes: &mut MazeSlot<WORDS, TEXT>,
+    #[cfg(feature = "ghosts")] mut ghosts: Option<&mut impl GhostStore>,
 ) -> GameExit {
     let meter = links.meter.get();
     let mut summary = DemoSummary::default();
@@ -188,6 +191,21 @@ pub(super) async fn demo<
         };
         player.endless_at(number);
         let maze = endless.maze(number);
+        // The level's stored best run raced beside the autopilot, and its
+        // win kept when it is faster (the ghosts check: the first demo
+        // writes them, the next races them to their hashes).
+        #[cfg(feature = "ghosts")]
+        let mut ghost = match ghosts.as_deref_mut() {
+            Some(kit) => Some(
+                kit.begin::<EVENTS>(
+                    *player.game().level(),
+                    Player::<W, H, PILOT, EVENTS>::CONFIG,
+                    SYNTHETIC_TILT,
+                )
+                .await,
+            ),
+            None => None,
+        };
         if let Some(fault) = sensor {
             player.handle(InputEvent::SensorDown(fault));
         }
@@ -208,12 +226,22 @@ pub(super) async fn demo<
                 None => player.frame(Tilt::FLAT.reading_mg()),
                 Some(meter) => profiled_frame(player, meter, &mut profile),
             };
+            #[cfg(feature = "ghosts")]
+            if let Some(ghost) = &mut ghost {
+                ghost.frame(player.session());
+            }
             links.status.set(status_of(player, maze));
             if !links.frames.signaled() || phase != Phase::Playing {
-                links.frames.signal(match meter {
+                #[allow(unused_mut)]
+                let mut picture = match meter {
                     None => player.render(),
                     Some(meter) => profiled_render(player, meter, &mut profile),
-                });
+                };
+                #[cfg(feature = "ghosts")]
+                if let Some(ghost) = &ghost {
+                    ghost.draw(&mut picture, player.session(), player.viewport());
+                }
+                links.frames.signal(picture);
             }
             if phase != Phase::Playing {
                 break phase;
@@ -250,6 +278,15 @@ pub(super) async fn demo<
         if meter.is_some() {
             profile.log(player.level_name());
         }
+        #[cfg(feature = "ghosts")]
+        if let Some(ghost) = ghost {
+            log_raced(player.level_name(), &ghost);
+            if let Some(len) = ghost.leave(player.session()) {
+                if let Some(kit) = ghosts.as_deref_mut() {
+                    let _ = kit.keep_recorded(player.level_name(), len).await;
+                }
+            }
+        }
         let last = player.render();
         // The pause's picture changes only when the flash does: each one is
         // sent once (the display keeps showing it), not once a refresh.
@@ -271,6 +308,26 @@ pub(super) async fn demo<
         sensor = player.sensor_down();
     }
     GameExit::DemoDone(summary)
+}
+
+/// Whether the raced ghost reached the end of its run on its own state hash
+/// (the board replayed it bit-exactly), for the ghosts check.
+#[cfg(feature = "ghosts")]
+#[inline(never)]
+fn log_raced<const EVENTS: bool>(name: &str, ghost: &super::ghosts::LevelGhost<'_, '_, EVENTS>) {
+    match ghost.raced_to_its_end() {
+        #[cfg(feature = "defmt")]
+        Some((frames, hash)) => defmt::info!(
+            "ghost {=str} raced to its end: {=u32} frames, state_hash={=u64:016x} (its own)",
+            name,
+            frames,
+            hash
+        ),
+        #[cfg(not(feature = "defmt"))]
+        Some(_) => {}
+        None => {}
+    }
+    let _ = name;
 }
 
 /// `player`'s status, with the generated maze on show (`maze`, feature

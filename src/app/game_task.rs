@@ -17,6 +17,9 @@ use crate::game::player::{Carried, Player};
 use crate::game::rules::Phase;
 use crate::input::tilt::TiltConfig;
 
+#[cfg(feature = "ghosts")]
+use super::ghosts::GhostStore;
+
 /// Runs the game at [`FRAME_HZ`] in `mode` (see [`GameMode`]), publishing a
 /// frame on [`Links::frames`] and the [`Links::status`] every tick. Returns
 /// on [`Command::Quit`](crate::input::event::Command::Quit) or at the end of the demo. `PILOT` says whether the
@@ -37,20 +40,45 @@ pub async fn game_task<
     links: &Links<W, H>,
     mode: GameMode,
     mazes: &mut MazeSlot<WORDS, TEXT>,
+    #[cfg(feature = "ghosts")] ghosts: Option<&mut impl GhostStore>,
 ) -> GameExit {
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
     match mode {
-        #[cfg(not(feature = "sleep"))]
+        #[cfg(all(not(feature = "sleep"), not(feature = "ghosts")))]
         GameMode::Play { tilt, seeds } => {
             play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes).await
         }
-        #[cfg(feature = "sleep")]
+        #[cfg(all(not(feature = "sleep"), feature = "ghosts"))]
+        GameMode::Play { tilt, seeds } => {
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes, ghosts)
+                .await
+        }
+        #[cfg(all(feature = "sleep", not(feature = "ghosts")))]
         GameMode::Play { tilt, level, seeds } => {
             play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, level, seeds, mazes)
                 .await
         }
+        #[cfg(all(feature = "sleep", feature = "ghosts"))]
+        GameMode::Play { tilt, level, seeds } => {
+            play::<W, H, PILOT, EVENTS, WORDS, TEXT>(
+                links,
+                &mut ticker,
+                tilt,
+                level,
+                seeds,
+                mazes,
+                ghosts,
+            )
+            .await
+        }
+        #[cfg(not(feature = "ghosts"))]
         GameMode::Demo { records } => {
             demo::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, records, mazes).await
+        }
+        #[cfg(feature = "ghosts")]
+        GameMode::Demo { records } => {
+            demo::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, records, mazes, ghosts)
+                .await
         }
     }
 }
@@ -76,6 +104,7 @@ async fn play<
     #[cfg(feature = "sleep")] level: u8,
     seeds: Seeds,
     mazes: &mut MazeSlot<WORDS, TEXT>,
+    #[cfg(feature = "ghosts")] mut ghosts: Option<&mut impl GhostStore>,
 ) -> GameExit {
     // Without `sleep` there is no level to resume: the run starts at the
     // first.
@@ -154,6 +183,20 @@ async fn play<
             player.level_index() + 1,
             player.level_name()
         );
+        // The level's best run, raced beside each attempt (read from flash
+        // and replayed to its hash first), and the attempts recorded.
+        #[cfg(feature = "ghosts")]
+        let mut ghost = match ghosts.as_deref_mut() {
+            Some(kit) => Some(
+                kit.begin::<EVENTS>(
+                    *player.game().level(),
+                    Player::<W, H, PILOT, EVENTS>::CONFIG,
+                    player.session().tilt_config(),
+                )
+                .await,
+            ),
+            None => None,
+        };
         loop {
             ticker.next().await;
             while let Ok(event) = links.events.try_receive() {
@@ -187,6 +230,18 @@ async fn play<
             // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
             let draw = !links.frames.signaled();
             let tick = player.tick(links.tilt.get().reading_mg(), draw);
+            #[cfg(feature = "ghosts")]
+            let tick = match &mut ghost {
+                Some(ghost) => {
+                    ghost.frame(player.session());
+                    let mut tick = tick;
+                    if let Some(frame) = &mut tick.frame {
+                        ghost.draw(frame, player.session(), player.viewport());
+                    }
+                    tick
+                }
+                None => tick,
+            };
             if let Some(phase) = tick.finished {
                 #[cfg(feature = "defmt")]
                 defmt::info!(
@@ -240,6 +295,14 @@ async fn play<
             #[cfg(feature = "sound")]
             for sound in tick.sounds.iter() {
                 let _ = links.sounds.try_send(sound);
+            }
+        }
+        // A win that beat the ghost becomes the level's ghost, written
+        // between levels.
+        #[cfg(feature = "ghosts")]
+        if let Some(len) = ghost.and_then(|ghost| ghost.leave(player.session())) {
+            if let Some(kit) = ghosts.as_deref_mut() {
+                let _ = kit.keep_recorded(player.level_name(), len).await;
             }
         }
         carried = Some(player.carried());

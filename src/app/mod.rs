@@ -39,6 +39,8 @@
 mod demo;
 mod display_task;
 mod game_task;
+#[cfg(feature = "ghosts")]
+mod ghosts;
 mod input_task;
 mod links;
 mod mode;
@@ -53,6 +55,8 @@ pub use crate::game::player::FRAME_HZ;
 pub use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 pub use display_task::display_task;
 pub use game_task::game_task;
+#[cfg(feature = "ghosts")]
+pub use ghosts::{GhostKit, GhostStore, LevelGhost};
 pub use input_task::{input_task, TiltInput};
 #[cfg(feature = "records")]
 pub use links::{Bests, Win};

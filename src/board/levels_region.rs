@@ -23,4 +23,8 @@ const _: () = {
     assert!(V2.start.is_multiple_of(4096) && V2.end <= 512 * 1024);
     let records = super::microbit::RECORDS;
     assert!(V2.end <= records.start || V2.start >= records.end);
+    let ghosts = super::microbit::GHOSTS;
+    assert!(V2.end <= ghosts.start || V2.start >= ghosts.end);
+    assert!(ghosts.end <= records.start);
+    assert!(ghosts.start.is_multiple_of(4096) && ghosts.end.is_multiple_of(4096));
 };

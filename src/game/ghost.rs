@@ -53,9 +53,12 @@
 //! --test ghost -- --nocapture` prints them).
 
 use crate::input::sensor::Calibration;
-use crate::physics::Scalar;
+use crate::input::tilt::TiltConfig;
+use crate::physics::world::SetupError;
+use crate::physics::{Fx, Scalar};
 
-use super::rules::{Game, Phase};
+use super::level::LevelView;
+use super::rules::{Game, GameConfig, Phase};
 use super::session::Session;
 
 /// Bytes before the tokens.
@@ -117,6 +120,15 @@ impl<'a> GhostWriter<'a> {
         let mut tokens = TokenWriter::new(buf, FLAT);
         tokens.len = HEADER_BYTES;
         Ok(GhostWriter { tokens })
+    }
+
+    /// Forgets every frame: the writer starts a new ghost in its buffer.
+    pub fn restart(&mut self) {
+        let t = &mut self.tokens;
+        t.len = HEADER_BYTES;
+        t.frames = 0;
+        t.last = FLAT;
+        t.run = 0;
     }
 
     /// Frames written so far.
@@ -431,4 +443,196 @@ pub fn replay<S: Scalar>(
 /// has played means that `live` started over: replay from the start.
 pub fn race_frame<S: Scalar>(idle: u32, live: &Game<'_, S>) -> u32 {
     idle.saturating_add(live.clock_frames())
+}
+
+/// [`replay`] with the stepper fixed at compile time (firmware: a board links
+/// only its own stepper, [`Session::frame_in`]).
+pub fn replay_in<const EVENTS: bool>(
+    session: &mut Session<'_, Fx>,
+    ghost: &Ghost<'_>,
+) -> Result<(Phase, bool), GhostError> {
+    session.tilt_mut().set_calibration(ghost.calibration);
+    let mut phase = session.game().phase();
+    for r in ghost.readings() {
+        if phase != Phase::Playing {
+            break;
+        }
+        phase = session.frame_in::<EVENTS>(r?);
+    }
+    Ok((phase, session.state_hash() == ghost.state_hash))
+}
+
+/// Why a stored ghost is not raced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RaceError {
+    /// Its bytes are not a ghost.
+    Ghost(GhostError),
+    /// The level cannot be set up.
+    Setup(SetupError),
+    /// Its replay does not win the level.
+    NotWon,
+    /// Its replay wins on another state hash (another build's physics, or
+    /// another level under the same key).
+    Hash,
+}
+
+impl core::fmt::Display for RaceError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            RaceError::Ghost(e) => write!(f, "{e}"),
+            RaceError::Setup(e) => write!(f, "the level cannot be set up: {e:?}"),
+            RaceError::NotWon => f.write_str("its replay does not win the level"),
+            RaceError::Hash => f.write_str("its replay does not end on its state hash"),
+        }
+    }
+}
+
+/// A stored ghost raced beside the live attempt on a board: its own session,
+/// stepped to [`race_frame`] each frame, its readings read from the stored
+/// bytes as it goes (no copy of the run in RAM).
+#[derive(Clone, Debug)]
+pub struct Racer<'a, 'g, const EVENTS: bool> {
+    session: Session<'a, Fx>,
+    ghost: Ghost<'g>,
+    readings: Readings<'g>,
+    idle: u32,
+}
+
+impl<'a, 'g, const EVENTS: bool> Racer<'a, 'g, EVENTS> {
+    /// The ghost in `bytes` on `level` (game configuration `config`, tilt
+    /// path `tilt`), once its whole replay has won the level on its own state
+    /// hash.
+    pub fn new(
+        bytes: &'g [u8],
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> Result<Self, RaceError> {
+        let ghost = Ghost::parse(bytes).map_err(RaceError::Ghost)?;
+        let mut session = Session::new(level, config, tilt).map_err(RaceError::Setup)?;
+        match replay_in::<EVENTS>(&mut session, &ghost).map_err(RaceError::Ghost)? {
+            (Phase::Won, true) => {}
+            (Phase::Won, false) => return Err(RaceError::Hash),
+            _ => return Err(RaceError::NotWon),
+        }
+        let idle = session.game().frames() - session.game().clock_frames();
+        // A restart keeps the calibration the replay set.
+        session.restart();
+        Ok(Racer {
+            session,
+            readings: ghost.readings(),
+            ghost,
+            idle,
+        })
+    }
+
+    /// The ghost's time: its frames on the level clock.
+    pub fn clock(&self) -> u32 {
+        self.ghost.frames - self.idle
+    }
+
+    /// The ghost's run in frames, and its end state hash.
+    pub fn run(&self) -> (u32, u64) {
+        (self.ghost.frames, self.ghost.state_hash)
+    }
+
+    /// Plays the ghost up to where it is beside `live` ([`race_frame`]; from
+    /// the start again when `live` started over).
+    pub fn follow(&mut self, live: &Game<'_, Fx>) {
+        let target = race_frame(self.idle, live).min(self.ghost.frames);
+        if target < self.session.game().frames() {
+            self.session.restart();
+            self.readings = self.ghost.readings();
+        }
+        while self.session.game().frames() < target {
+            match self.readings.next() {
+                Some(Ok(r)) => {
+                    self.session.frame_in::<EVENTS>(r);
+                }
+                // Checked whole in `new`: not reached.
+                _ => break,
+            }
+        }
+    }
+
+    /// The ghost's game where it is.
+    pub fn game(&self) -> &Game<'a, Fx> {
+        self.session.game()
+    }
+
+    /// Its state hash where it is (at the end of its run: the ghost's own).
+    pub fn state_hash(&self) -> u64 {
+        self.session.state_hash()
+    }
+}
+
+/// A board's recording of the live attempts at one level into a buffer: the
+/// current attempt's readings from its first frame ([`Recorder::observe`]
+/// after every frame), started over on a restart, the buffer's size the
+/// longest run it keeps.
+#[derive(Debug)]
+pub struct Recorder<'r> {
+    writer: GhostWriter<'r>,
+    /// Why the attempt cannot be a ghost: frames missed, or a full buffer.
+    lost: Option<RecordError>,
+}
+
+/// Why a won attempt gives no ghost.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RecordError {
+    /// The run outgrew the buffer of `bytes` bytes.
+    TooLong {
+        /// The buffer's size.
+        bytes: usize,
+    },
+    /// Frames of the attempt were not seen (the recording started late).
+    Missed,
+}
+
+impl<'r> Recorder<'r> {
+    /// A recorder into `buf` (at least [`HEADER_BYTES`]).
+    pub fn new(buf: &'r mut [u8]) -> Result<Self, GhostError> {
+        Ok(Recorder {
+            writer: GhostWriter::new(buf)?,
+            lost: None,
+        })
+    }
+
+    /// Takes the frame `session` has just played, if it played one: a new
+    /// attempt (fewer frames than recorded) starts the recording over.
+    pub fn observe(&mut self, session: &Session<'_, Fx>) {
+        let frames = session.game().frames();
+        if frames < self.writer.frames() {
+            self.writer.restart();
+            self.lost = None;
+        }
+        let recorded = self.writer.frames();
+        if frames == recorded || self.lost.is_some() {
+            return;
+        }
+        if frames != recorded + 1 {
+            self.lost = Some(RecordError::Missed);
+        } else if self.writer.push(session.reading()).is_err() {
+            self.lost = Some(RecordError::TooLong {
+                bytes: self.writer.tokens.buf.len(),
+            });
+        }
+    }
+
+    /// The attempt `session` ended as a ghost (its end state hash and the
+    /// tilt path's calibration in the header).
+    pub fn finish(self, session: &Session<'_, Fx>) -> Result<&'r [u8], RecordError> {
+        let bytes = self.writer.tokens.buf.len();
+        if let Some(lost) = self.lost {
+            return Err(lost);
+        }
+        if self.writer.frames() != session.game().frames() {
+            return Err(RecordError::Missed);
+        }
+        self.writer
+            .finish(session.state_hash(), session.tilt().calibration())
+            .map_err(|_| RecordError::TooLong { bytes })
+    }
 }

@@ -363,6 +363,11 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         self.session.frame_in::<EVENTS>(reading)
     }
 
+    /// The viewport of the last picture (a ghost is drawn through it).
+    pub fn viewport(&self) -> crate::render::Viewport {
+        self.renderer.viewport()
+    }
+
     /// The current picture.
     pub fn render(&mut self) -> Frame<W, H> {
         self.renderer.render(self.session.game())

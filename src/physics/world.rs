@@ -71,6 +71,10 @@ pub struct World<'a, S: Scalar, const M: usize> {
     /// Per marble, the last candidate range found free of solid tiles (the tiles
     /// never change, so it stays free): the next step usually has the same one.
     clear: [TileRange; M],
+    /// Per marble, event stepping's free region (`events/free.rs`).
+    free: [events::FreeRegion<S>; M],
+    /// Whether searches build free regions (tests turn it off to compare).
+    free_regions: bool,
     /// Flights a step may take in all ([`events::FLIGHT_BUDGET`] unless set).
     flight_budget: u32,
     /// Flights the step under way may still take.
@@ -167,6 +171,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 ]
             },
             clear: [TileRange::EMPTY; M],
+            free: [events::FreeRegion::EMPTY; M],
+            free_regions: true,
             flight_budget: events::FLIGHT_BUDGET,
             flights_left: 0,
             stats: StepStats::default(),
@@ -268,6 +274,13 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         core::mem::take(&mut self.impacts)
     }
 
+    /// Turns event stepping's free regions on (the default) or off. They are a
+    /// cache: the tests turn them off to check that they change nothing.
+    pub fn set_free_regions(&mut self, on: bool) {
+        self.free_regions = on;
+        self.free = [events::FreeRegion::EMPTY; M];
+    }
+
     /// Turns skipping of resting marbles on (the default) or off. Off, every marble
     /// is stepped every time: the tests use it to check that skipping changes nothing.
     pub fn set_sleeping(&mut self, on: bool) {
@@ -331,16 +344,15 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let p = m.pos;
         // Past the board's edge: the border walls and the lid close every
         // storey, so a centre beyond them went under the board through a hole
-        // (a board shaken hard rolled a fallen marble round the border slab's
-        // lower edges and out sideways: the events soak, frame 659 548).
+        // (a board shaken hard can roll a fallen marble round the border slab's
+        // lower edges and out sideways).
         let beyond = p.x < S::ZERO || p.z < S::ZERO || p.x > ex || p.z > ez;
         if SPACE {
             // Through a hole once entirely below the floor slab (top at or below
             // −s): there is nothing down there to hold it, not even under the
             // neighbouring tiles. At exactly −s the slab's underside could hold it
-            // up: a board shaken hard (its surface velocity in eq. 1) carried a
-            // fallen marble along the underside at 120 pitch/s (the events soak,
-            // frame 539 521).
+            // up, and a board shaken hard (its surface velocity in eq. 1) would
+            // carry a fallen marble along the underside at up to 120 pitch/s.
             let depth = self.params.layout.s + self.params.radius;
             if beyond || p.y <= -depth || p.y > S::from_int(self.tiles.storeys() as i32 + 3) {
                 m.out = true;

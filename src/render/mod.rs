@@ -422,6 +422,34 @@ fn draw_marbles<S: Scalar, const M: usize, const W: usize, const H: usize>(
     }
 }
 
+/// The ghost marble's total brightness (the best run raced beside the live
+/// attempt, `game::ghost`): a third of [`MARBLE`], so that on a matrix of 16
+/// levels the two are told apart, and the ghost still outshines a wall.
+pub const GHOST: Brightness = 5;
+const _: () = assert!(GHOST < MARBLE && GHOST > WALL);
+
+/// Draws `ghost`'s marbles still in play (the ghost's game, on `live`'s level)
+/// at [`GHOST`] brightness on top of `frame`, a picture of `live` through
+/// `viewport`: only those on the storey on show.
+pub fn draw_ghost<S: Scalar, const W: usize, const H: usize>(
+    frame: &mut Frame<W, H>,
+    live: &Game<'_, S>,
+    ghost: &Game<'_, S>,
+    viewport: Viewport,
+) {
+    let storey = focus_storey(live.world());
+    let world = ghost.world();
+    let layout = &world.params().layout;
+    for m in world.marbles().iter().filter(|m| {
+        !m.out
+            && (!cfg!(feature = "storeys")
+                || world.tiles().storeys() == 1
+                || layout.storey_of(m.pos.y).max(0) == storey)
+    }) {
+        draw_marble(frame, tile_point(layout, m.pos.x, m.pos.z), viewport, GHOST);
+    }
+}
+
 /// Renders a game on a `W`×`H` matrix, keeping a viewport that follows the
 /// marble across mazes larger than the matrix.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

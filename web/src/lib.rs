@@ -66,14 +66,19 @@
 //! [`game_loop`]: the game in play, its frame and its level lists;
 //! [`page_state`]: what the page draws (LEDs, tiles, marbles); [`storage`]:
 //! the buffers shared with the page and the editor's level kept in them;
-//! [`maze`]: generated mazes; [`ghost`]: the ghost's recording and replay.
+//! [`maze`]: generated mazes; [`ghost`]: the ghost's recording and replay;
+//! [`download`]: the editor's level written into the micro:bit's universal
+//! hex ([`universal_hex`]), the file the page offers as "Download for
+//! micro:bit".
 #![cfg_attr(target_arch = "wasm32", no_std)]
 
+pub mod download;
 pub mod game_loop;
 pub mod ghost;
 pub mod maze;
 pub mod page_state;
 pub mod storage;
+pub mod universal_hex;
 
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::level::LevelView;

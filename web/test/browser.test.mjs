@@ -18,7 +18,13 @@
 // check), and each win's ghost replays beside the next attempt to its hash; a
 // broken level pasted in the editor shows the parser's line:column message,
 // the same as `cargo sim -- --check` (a bad tile, a negative time limit, grids
-// of 200 and 400 tiles a side); a generated maze has `cargo sim --
+// of 200 and 400 tiles a side); "Download for micro:bit" saves the served
+// universal hex with the edited level in both boards' levels regions (the
+// Foundation's library reads it, the region decodes to the level's text, the
+// rest is as served; with MARBLE_WEB_SAME_AS=HEX,LEVEL, LEVEL's download is
+// HEX, `cargo xtask hex --level LEVEL`'s file), says what is wrong when the
+// page is served without the .hex or with a broken one, and refuses, saying why, a level too large for any
+// micro:bit and one too long for the region; a generated maze has `cargo sim --
 // --generate SEED --print-level`'s text and the autopilot wins it with cargo
 // sim's hash, the URL's seed plays it, "New maze", `n` and "Next level" put a
 // new seed in the URL, `?storeys=9` without a seed is refused with why, and its
@@ -28,11 +34,14 @@
 // measures the per-frame cost with performance.now(), with a ghost too.
 
 import { spawn, spawnSync } from 'node:child_process';
-import { mkdtempSync, rmSync, writeFileSync, mkdirSync } from 'node:fs';
+import { mkdtempSync, readFileSync, rmSync, writeFileSync, mkdirSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
+// The micro:bit Foundation's own reader of universal hexes (the version
+// `cargo xtask hex --check` pins): the downloaded file is judged by it, not by ours.
+import universalHex from '@microbit/microbit-universal-hex';
 
 const ROOT = process.env.MARBLE_ROOT ?? resolve(dirname(fileURLToPath(import.meta.url)), '../..');
 const CARGO = process.env.CARGO ?? 'cargo';
@@ -133,6 +142,69 @@ function room(n) {
   const inner = (k) => `#${k === 1 ? 'S' : '.'}${'.'.repeat(n - 5)}${k === n - 2 ? 'G' : '.'}#`;
   const rows = Array.from({ length: n - 2 }, (_, k) => inner(k + 1));
   return `name: room-${n}\n---\n${wall}\n${rows.join('\n')}\n${wall}\n`;
+}
+
+// An open room `n` tiles a side (`n` odd), its start and goal on cells: a level.
+function openRoom(n) {
+  const wall = '#'.repeat(n);
+  const rows = Array.from({ length: n - 2 },
+    (_, i) => `#${i === 0 ? 'S' : '.'}${'.'.repeat(n - 4)}${i === n - 3 ? 'G' : '.'}#`);
+  return `name: open-${n}\n---\n${wall}\n${rows.join('\n')}\n${wall}\n`;
+}
+
+// The levels region of each micro:bit (src/board/levels_region.rs: V1, V2)
+// and its size, by the universal hex's block type.
+const REGIONS = new Map([[0x9900, 0x3f000], [0x9903, 0x7b000]]);
+const REGION_SIZE = 4096;
+
+// Each board's flash bytes (address → byte) in a universal hex, as the
+// Foundation's library separates it into one Intel HEX per board.
+function imagesOf(text) {
+  const images = new Map();
+  for (const { boardId, hex } of universalHex.separateUniversalHex(text)) {
+    const image = new Map();
+    let base = 0;
+    for (const line of hex.split(/\r?\n/).filter((l) => l.startsWith(':'))) {
+      const b = Buffer.from(line.slice(1), 'hex');
+      const offset = (b[1] << 8) | b[2];
+      const data = b.subarray(4, b.length - 1);
+      if (b[3] === 0x04) base = ((data[0] << 8) | data[1]) * 0x10000;
+      else if (b[3] === 0x02) base = ((data[0] << 8) | data[1]) * 16;
+      else if (b[3] === 0x00 || b[3] === 0x0d) data.forEach((v, i) => image.set(base + offset + i, v));
+    }
+    images.set(boardId, image);
+  }
+  return images;
+}
+
+// CRC-32 as zlib computes it (the region's header: docs/boards.md).
+function crc32(bytes) {
+  let crc = ~0;
+  for (const byte of bytes) {
+    crc ^= byte;
+    for (let k = 0; k < 8; k++) crc = (crc >>> 1) ^ (0xedb88320 & -(crc & 1));
+  }
+  return ~crc >>> 0;
+}
+
+// The level texts of the levels region at `at` of `image`, decoded as the
+// layout says (magic MRLV, CRC-32 of bytes 8 .. 16 + length, version 1, the
+// count, the length, then each text after its 2-byte length), or why not.
+function regionTexts(image, at) {
+  const bytes = Buffer.from(Array.from({ length: REGION_SIZE }, (_, i) => image.get(at + i) ?? 0xff));
+  if (bytes.toString('latin1', 0, 4) !== 'MRLV') return { error: `magic ${bytes.subarray(0, 4).toString('hex')}` };
+  const length = bytes.readUInt32LE(12);
+  if (16 + length > REGION_SIZE) return { error: `length ${length}` };
+  if (crc32(bytes.subarray(8, 16 + length)) !== bytes.readUInt32LE(4)) return { error: 'CRC' };
+  if (bytes[8] !== 1) return { error: `version ${bytes[8]}` };
+  const texts = [];
+  let p = 16;
+  for (let i = 0; i < bytes[9]; i++) {
+    const n = bytes.readUInt16LE(p);
+    texts.push(bytes.toString('utf8', p + 2, p + 2 + n));
+    p += 2 + n;
+  }
+  return p === 16 + length ? { texts } : { error: `entries end at ${p}, the length says ${16 + length}` };
 }
 
 let passed = 0;
@@ -641,6 +713,109 @@ async function main() {
       check(pageSays === expected && hostSays === expected,
         `the editor refuses ${name} (${source.length} characters) as cargo sim -- --check does: "${pageSays}"`,
         `host: "${hostSays}", expected "${expected}"`);
+    }
+
+    // 4b. "Download for micro:bit": the served universal hex with the edited
+    // level in both boards' levels regions, the rest as served; a level no
+    // micro:bit can show and one the region cannot hold are refused, saying why.
+    {
+      const downloads = [];
+      page.on('download', (d) => downloads.push(d));
+      const served = await (await fetch(new URL('marble-rolling.hex', url))).text();
+      const servedImages = imagesOf(served);
+      await page.evaluate(() => window.marbleTest.editor(true));
+      await page.fill('#source', SPLIT);
+      const [download] = await Promise.all([
+        page.waitForEvent('download', { timeout: 20000 }),
+        page.click('#download-hex'),
+      ]);
+      const text = readFileSync(await download.path(), 'ascii');
+      const says = await page.textContent('#download-status');
+      check(download.suggestedFilename() === 'marble-rolling-split.hex' && /copy it onto the MICROBIT drive/.test(says),
+        `Download for micro:bit saves ${download.suggestedFilename()}: "${says}"`);
+      const images = imagesOf(text);
+      check(universalHex.isUniversalHex(text) && images.has(0x9900) && images.has(0x9903),
+        `the Foundation's library takes the download (${text.length} B) for a universal hex with both boards' images`,
+        [...images.keys()].map((k) => k.toString(16)).join(', '));
+      for (const [board, at] of REGIONS) {
+        const image = images.get(board) ?? new Map();
+        const region = regionTexts(image, at);
+        check(region.texts?.length === 1 && region.texts[0] === SPLIT,
+          `the download's ${board.toString(16)} image has the edited level in its levels region at 0x${at.toString(16)}`,
+          JSON.stringify(region).slice(0, 200));
+        const before = servedImages.get(board) ?? new Map();
+        const outside = (a) => a < at || a >= at + REGION_SIZE;
+        const changed = [...new Set([...before.keys(), ...image.keys()])]
+          .filter((a) => outside(a) && before.get(a) !== image.get(a));
+        check(before.size > 10000 && changed.length === 0,
+          `the download's ${board.toString(16)} image is the served one outside the region (${before.size} B)`,
+          `${changed.length} bytes differ, the first at 0x${changed[0]?.toString(16)}`);
+      }
+      // Given `cargo xtask hex --level FILE`'s universal hex for the served
+      // one (CI keeps it from its .hex step), FILE's download is that file,
+      // byte for byte.
+      const sameAs = process.env.MARBLE_WEB_SAME_AS;
+      if (sameAs) {
+        const [hexFile, levelFile] = sameAs.split(',');
+        await page.fill('#source', readFileSync(resolve(ROOT, levelFile), 'utf8'));
+        const [same] = await Promise.all([
+          page.waitForEvent('download', { timeout: 20000 }),
+          page.click('#download-hex'),
+        ]);
+        const ours = readFileSync(await same.path());
+        const theirs = readFileSync(resolve(ROOT, hexFile));
+        check(ours.equals(theirs),
+          `the download of ${levelFile} is ${hexFile} (cargo xtask hex --level), byte for byte (${ours.length} B)`,
+          `${ours.length} B against ${theirs.length} B`);
+      }
+      // A level only the v2 can show: saved, with a warning that names the v1.
+      await page.fill('#source', openRoom(31));
+      const [wide] = await Promise.all([
+        page.waitForEvent('download', { timeout: 20000 }),
+        page.click('#download-hex'),
+      ]);
+      const warned = await page.textContent('#download-status');
+      check(wide.suggestedFilename() === 'marble-rolling-open-31.hex'
+        && /; a micro:bit v1 cannot show this level: it needs 61 occupancy words of tiles, the micro:bit v1 holds 57 /.test(warned)
+        && await page.getAttribute('#download-status', 'class') === 'warn',
+      `a level only the v2 can show is saved with a warning: "${warned}"`);
+      for (const [source, expected] of [
+        [openRoom(61), /^cannot download: too large for a micro:bit: the level needs 233 occupancy words of tiles; the micro:bit v1 holds 57 .*the micro:bit v2 111/],
+        [`name: ${'a'.repeat(4100)}\n---\n#####\n#S.G#\n#####\n`,
+          /^cannot download: too long for the levels region: the level's text takes 4\d\d\d B there .*the region holds 4096 B$/],
+      ]) {
+        const saved = downloads.length;
+        await page.fill('#source', source);
+        await page.click('#download-hex');
+        await page.waitForFunction(() => /^cannot/.test(document.querySelector('#download-status').textContent),
+          null, { timeout: 10000 });
+        const refused = await page.textContent('#download-status');
+        check(expected.test(refused) && downloads.length === saved
+          && await page.getAttribute('#download-status', 'class') === 'bad',
+        `Download for micro:bit refuses ${/^name: (\S{1,12})/.exec(source)[1]}: "${refused}"`);
+      }
+      // A page served without the .hex, or with a broken one: it says so.
+      const lines = served.split('\n');
+      lines[2] = lines[2].slice(0, -1) + (lines[2].endsWith('0') ? '1' : '0');
+      for (const [what, reply, expected] of [
+        ['without the .hex', { status: 404, body: '404 Not Found\n' },
+          /^cannot download: this page is served without the micro:bit \.hex \(HTTP 404\); run `cargo xtask hex`, then reload the page$/],
+        ['a .hex with a bad checksum on its line 3', { status: 200, body: lines.join('\n') },
+          /^cannot download: the served \.hex: line 3: wrong checksum$/],
+      ]) {
+        const other = await context.newPage();
+        await other.route('**/marble-rolling.hex', (route) => route.fulfill({ contentType: 'text/plain', ...reply }));
+        await other.goto(url);
+        await other.waitForSelector('body[data-ready="true"]', { timeout: 20000 });
+        await other.evaluate(() => { window.marbleTest.setRunning(false); window.marbleTest.editor(true); });
+        await other.fill('#source', SPLIT);
+        await other.click('#download-hex');
+        await other.waitForFunction(() => /^cannot/.test(document.querySelector('#download-status').textContent),
+          null, { timeout: 10000 });
+        const said = await other.textContent('#download-status');
+        check(expected.test(said), `served ${what}, Download for micro:bit says so: "${said}"`);
+        await other.close();
+      }
     }
 
     // 5. Generated mazes: the page's generator gives `cargo sim -- --generate`'s

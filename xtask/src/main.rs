@@ -9,6 +9,7 @@ mod error;
 mod firmware;
 mod game;
 mod hex;
+mod hex_check;
 mod hex_files;
 mod microbit_v1;
 mod process;
@@ -93,6 +94,10 @@ enum Task {
     /// Check that the QEMU demo plays exactly like the host simulator, within
     /// the CPU budget (CPU_BUDGET_CENTIPERCENT, default 300).
     CheckDemo,
+    /// QEMU keeps a ghost across a restart of the demo: `--demo --ghosts`
+    /// twice on a fresh flash image; the second run races every ghost the
+    /// first kept to its own state hash.
+    CheckGhosts,
     /// The micro:bit firmware's flash and RAM against their budgets (FLASH_BUDGET,
     /// RAM_BUDGET), as a markdown table, and the stepping it links (must be events).
     SizeReport {
@@ -168,6 +173,7 @@ impl Task {
             Task::BenchM4 { .. } => "bench-m4",
             Task::BenchM0 { .. } => "bench-m0",
             Task::CheckDemo => "check-demo",
+            Task::CheckGhosts => "check-ghosts",
             Task::SizeReport { .. } => "size-report",
             Task::Properties { .. } => "properties",
             Task::QemuProfile { .. } => "qemu-profile",
@@ -188,6 +194,7 @@ impl Task {
             Task::BenchM4 { args } => study::bench_m4(&args),
             Task::BenchM0 { args } => study::bench_m0(&args),
             Task::CheckDemo => demo::run(),
+            Task::CheckGhosts => demo::check_ghosts(),
             Task::SizeReport { no_build, elf } => size::run(no_build, elf),
             Task::Properties { cases } => properties::run(cases),
             Task::QemuProfile { top, v1, bench } => {

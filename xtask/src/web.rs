@@ -18,6 +18,7 @@ use std::thread;
 use std::time::Duration;
 
 use crate::error::{say, Failure, Outcome};
+use crate::hex_files;
 use crate::process;
 use crate::setup;
 use crate::workspace;
@@ -28,6 +29,8 @@ pub const WASM: &str = "wasm32-unknown-unknown";
 pub const DEFAULT_PORT: u16 = 8128;
 /// The module's name in the page (web/www/app.js fetches it).
 const WASM_URL: &str = "/marble_web.wasm";
+/// The universal hex in the page (web/www/app.js fetches it for the download).
+const HEX_URL: &str = "/marble-rolling.hex";
 /// The largest request head read; the page only ever sends short GETs.
 const MAX_HEAD: usize = 16 * 1024;
 
@@ -37,22 +40,51 @@ pub fn run(port: u16, no_serve: bool) -> Outcome {
     if no_serve {
         return Ok(0);
     }
+    let hex = universal_hex()?;
+    if hex.is_file() {
+        say!(
+            "the editor's Download for micro:bit starts from {}",
+            hex.display()
+        );
+    } else {
+        say!(
+            "no {}: run `cargo xtask hex` for the editor's Download for micro:bit",
+            hex.display()
+        );
+    }
     let (listener, url) = bind(port)?;
     // On stdout, flushed: the browser test (run on its own) reads the URL from it.
     println!("serving {url} (Ctrl-C stops)");
     let _ = std::io::stdout().flush();
-    serve(listener, www(), wasm);
+    serve(listener, www(), wasm, hex);
+}
+
+/// Where `cargo xtask hex` writes the universal hex.
+fn universal_hex() -> Result<PathBuf, Failure> {
+    Ok(workspace::target_dir()?
+        .join("hex")
+        .join(hex_files::UNIVERSAL))
 }
 
 /// `cargo xtask web-test [--screenshot FILE]`: builds, serves on a free port
 /// and runs web/test/browser.test.mjs against it; its exit status is ours.
 pub fn test(screenshot: Option<PathBuf>) -> Outcome {
     let wasm = build()?;
+    let hex = universal_hex()?;
+    if hex.is_file() {
+        say!("the download starts from {} as it is", hex.display());
+    } else {
+        // The download's test needs it; CI has built it by now.
+        hex_files::run(false, &[])?;
+    }
     let chromium = setup::apt_tool("chromium", "chromium")?;
     let node = setup::apt_tool("node", "nodejs")?;
     let npm = setup::apt_tool("npm", "npm")?;
     let dir = workspace::root().join("web/test");
-    if !dir.join("node_modules/playwright-core").is_dir() {
+    let installed = ["playwright-core", "@microbit/microbit-universal-hex"]
+        .iter()
+        .all(|package| dir.join("node_modules").join(package).is_dir());
+    if !installed {
         let mut ci = Command::new(npm);
         ci.current_dir(&dir).args(["ci", "--no-audit", "--no-fund"]);
         process::quietly(
@@ -62,7 +94,7 @@ pub fn test(screenshot: Option<PathBuf>) -> Outcome {
     }
     let (listener, url) = bind(0)?;
     let www = www();
-    thread::spawn(move || serve(listener, www, wasm));
+    thread::spawn(move || serve(listener, www, wasm, hex));
     say!("serving {url} for the browser test");
     let mut node = Command::new(node);
     node.current_dir(&dir)
@@ -166,22 +198,22 @@ fn bind(port: u16) -> Result<(TcpListener, String), Failure> {
 
 /// Serves until the process ends, a thread per connection (a browser opens a
 /// few at once, and one slow client must not hold up the page).
-fn serve(listener: TcpListener, www: PathBuf, wasm: PathBuf) -> ! {
+fn serve(listener: TcpListener, www: PathBuf, wasm: PathBuf, hex: PathBuf) -> ! {
     loop {
         let Ok((stream, _)) = listener.accept() else {
             // Out of descriptors or an aborted handshake: the next one may do.
             thread::sleep(Duration::from_millis(50));
             continue;
         };
-        let (www, wasm) = (www.clone(), wasm.clone());
+        let (www, wasm, hex) = (www.clone(), wasm.clone(), hex.clone());
         thread::spawn(move || {
-            let _ = respond(stream, &www, &wasm);
+            let _ = respond(stream, &www, &wasm, &hex);
         });
     }
 }
 
 /// Answers one request and closes the connection.
-fn respond(mut stream: TcpStream, www: &Path, wasm: &Path) -> std::io::Result<()> {
+fn respond(mut stream: TcpStream, www: &Path, wasm: &Path, hex: &Path) -> std::io::Result<()> {
     stream.set_read_timeout(Some(Duration::from_secs(10)))?;
     let head = read_head(&mut stream)?;
     let takes_gzip = accepts_gzip(&head);
@@ -190,6 +222,7 @@ fn respond(mut stream: TcpStream, www: &Path, wasm: &Path) -> std::io::Result<()
         Ok((path, head_only)) => {
             let file = match path.as_str() {
                 WASM_URL => Some(wasm.to_path_buf()),
+                HEX_URL => Some(hex.to_path_buf()),
                 _ => local_file(www, &path),
             };
             // Read at every request: a rebuilt module or an edited page shows on reload.
@@ -334,7 +367,7 @@ fn content_type(path: &Path) -> &'static str {
         "svg" => "image/svg+xml",
         "ico" => "image/x-icon",
         "json" => "application/json",
-        "txt" | "level" => "text/plain; charset=utf-8",
+        "txt" | "level" | "hex" => "text/plain; charset=utf-8",
         _ => "application/octet-stream",
     }
 }
@@ -367,6 +400,10 @@ mod tests {
         let www = Path::new("/w");
         assert_eq!(local_file(www, "/"), Some(PathBuf::from("/w/index.html")));
         assert_eq!(local_file(www, "/app.js"), Some(PathBuf::from("/w/app.js")));
+        assert_eq!(
+            local_file(www, "/js/core.js"),
+            Some(PathBuf::from("/w/js/core.js"))
+        );
         assert_eq!(local_file(www, "/../Cargo.toml"), None);
         assert_eq!(local_file(www, "/a/../../x"), None);
         assert_eq!(local_file(www, "/.git/config"), None);

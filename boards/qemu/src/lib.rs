@@ -94,8 +94,6 @@ pub fn options() -> Options {
 /// workspace root (`cargo qemu` starts it there).
 pub mod records_file {
     use core::ffi::CStr;
-    use semihosting::fs;
-    use semihosting::io::Read;
 
     /// The image's file.
     pub const PATH: &CStr = c"target/qemu-records.bin";
@@ -103,30 +101,69 @@ pub mod records_file {
     /// Fills `image` from the file; a missing file (the first run) or one of
     /// another size leaves `image` as it is (erased), with a log line.
     pub fn load(image: &mut [u8]) {
-        let read = fs::File::open(PATH).and_then(|mut file| {
+        super::flash_file::load(PATH, "records", image)
+    }
+
+    /// Writes `image` to the file (a failure is logged: the records still
+    /// hold for this run).
+    pub fn save(image: &[u8]) {
+        super::flash_file::save(PATH, "records", image)
+    }
+}
+
+/// The ghosts' flash image in a host file, as the records' is.
+pub mod ghosts_file {
+    use core::ffi::CStr;
+
+    /// The image's file.
+    pub const PATH: &CStr = c"target/qemu-ghosts.bin";
+
+    /// Fills `image` from the file (see [`super::records_file::load`]).
+    pub fn load(image: &mut [u8]) {
+        super::flash_file::load(PATH, "ghosts", image)
+    }
+
+    /// Writes `image` to the file (a failure is logged).
+    pub fn save(image: &[u8]) {
+        super::flash_file::save(PATH, "ghosts", image)
+    }
+}
+
+/// A flash image in a host file (semihosting).
+mod flash_file {
+    use core::ffi::CStr;
+    use semihosting::fs;
+    use semihosting::io::Read;
+
+    /// Fills `image` from `path`; a missing file (the first run) or one of
+    /// another size leaves `image` as it is (erased), with a log line naming
+    /// `what`.
+    pub fn load(path: &CStr, what: &str, image: &mut [u8]) {
+        let read = fs::File::open(path).and_then(|mut file| {
             let len = file.metadata()?.len();
             if len != image.len() as u64 {
                 return Ok(false);
             }
             file.read_exact(image).map(|()| true)
         });
+        let name = path.to_str().unwrap_or("?");
         match read {
-            Ok(true) => defmt::info!("records: loaded from {=str}", path()),
-            Ok(false) => defmt::warn!("records: {=str} has another size, not loaded", path()),
-            Err(_) => defmt::info!("records: no {=str} yet: starting empty", path()),
+            Ok(true) => defmt::info!("{=str}: loaded from {=str}", what, name),
+            Ok(false) => defmt::warn!("{=str}: {=str} has another size, not loaded", what, name),
+            Err(_) => defmt::info!("{=str}: no {=str} yet: starting empty", what, name),
         }
     }
 
-    /// Writes `image` to the file (a failure is logged: the records still
-    /// hold for this run).
-    pub fn save(image: &[u8]) {
-        if fs::write(PATH, image).is_err() {
-            defmt::warn!("records: cannot write {=str}", path());
+    /// Writes `image` to `path` (a failure is logged: what is in RAM still
+    /// holds for this run).
+    pub fn save(path: &CStr, what: &str, image: &[u8]) {
+        if fs::write(path, image).is_err() {
+            defmt::warn!(
+                "{=str}: cannot write {=str}",
+                what,
+                path.to_str().unwrap_or("?")
+            );
         }
-    }
-
-    fn path() -> &'static str {
-        PATH.to_str().unwrap_or("?")
     }
 }
 

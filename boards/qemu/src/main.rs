@@ -29,6 +29,7 @@ mod fault_script;
 mod sensor;
 
 use defmt_semihosting as _;
+use marble_rolling::app::GhostKit;
 use marble_rolling::app::{self, GameExit, GameMode, Links, SensorTotals, TerminalSound};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
@@ -42,7 +43,7 @@ use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{Frame, OnTimeIntegrator, Scanner};
-use marble_rolling::records::Records;
+use marble_rolling::records::{Ghosts, Records};
 
 use marble_qemu as hw;
 
@@ -201,6 +202,26 @@ async fn display(interactive: bool) -> ! {
 /// The records' region: four 4 KiB pages, as on the micro:bit v2.
 const RECORDS_BYTES: usize = 4 * ram_flash::PAGE;
 
+/// The ghosts' region: as on the micro:bit v2 (`board::microbit::GHOSTS`).
+const GHOSTS_BYTES: usize = {
+    let region = marble_rolling::board::microbit::GHOSTS;
+    (region.end - region.start) as usize
+};
+
+/// The ghosts, with the v2's buffers (`board::microbit::GHOST_BYTES`).
+type Kit = GhostKit<RamFlash<GHOSTS_BYTES>, { marble_rolling::board::microbit::GHOST_BYTES }>;
+
+/// The ghosts over their image loaded from its host file, saved after each
+/// write.
+fn open_ghosts() -> Option<Kit> {
+    let mut flash = RamFlash::<GHOSTS_BYTES>::new();
+    hw::ghosts_file::load(flash.image_mut());
+    let store = Ghosts::new(flash, 0..GHOSTS_BYTES as u32)?;
+    Some(GhostKit::new(store, |flash| {
+        hw::ghosts_file::save(flash.image())
+    }))
+}
+
 /// The best times, in a RAM flash image kept in a host file between runs
 /// (`marble_rolling::board::qemu::ram_flash`): the same records code as the v2.
 #[embassy_executor::task]
@@ -273,11 +294,22 @@ async fn game(options: Options) {
         }
     }
     let mut mazes = Mazes::new(MAZE_REACH);
+    // Each level's best run (always when interactive; `--ghosts` in the
+    // demo: the ghosts check).
+    let mut ghosts = if options.ghosts { open_ghosts() } else { None };
+    if options.ghosts && ghosts.is_none() {
+        hw::fatal("the ghosts' region is not whole pages");
+    }
     // The mps2-an386 board has no levels region (no .hex carries it there):
     // the slot has none, and the run starts with the built-in levels.
     let start = hw::cpu_meter::sample();
-    let mut exit =
-        app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
+    let mut exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
+        &LINKS,
+        mode,
+        &mut mazes,
+        ghosts.as_mut(),
+    )
+    .await;
     // Idle for two minutes: QEMU has no power to save; it blanks the matrix,
     // waits for a key, and resumes at the start of the level (as the v2 does
     // from System OFF).
@@ -288,7 +320,13 @@ async fn game(options: Options) {
             level,
             seeds: Seeds::Count,
         };
-        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(&LINKS, mode, &mut mazes).await;
+        exit = app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
+            &LINKS,
+            mode,
+            &mut mazes,
+            ghosts.as_mut(),
+        )
+        .await;
     }
     let end = hw::cpu_meter::sample();
     if exit == GameExit::Quit {

@@ -187,6 +187,17 @@ pub const TWIM_COPY_BUFFER_BYTES: usize = 2;
 /// the erases rotate: see `marble_rolling::records` and the wear figure in docs/testing.md.
 pub const RECORDS: core::ops::Range<u32> = 0x7_C000..0x8_0000;
 
+/// The ghosts' flash region (`marble_rolling::records::Ghosts`): the four 4 KiB
+/// pages below the levels region, left out of `FLASH` in
+/// `boards/microbit/memory.x`. Each level's best run is one item of at most a
+/// page; a full region makes the oldest ghost give way.
+pub const GHOSTS: core::ops::Range<u32> = 0x7_7000..0x7_B000;
+
+/// The longest run the v2 records and keeps as a ghost, in bytes (the game
+/// task's two buffers, `app::GhostKit`): about 7 s of the autopilot's play at
+/// its 279 B/s, 4 s of a noisy sensor's at 489 B/s (docs/ghost.md).
+pub const GHOST_BYTES: usize = 2048;
+
 /// The largest generated maze the endless run plays on the v2
 /// ([`crate::game::endless`]): 10 cells a side (21 tiles; the 5 × 5 view follows
 /// the marble) on up to four storeys. Its slot keeps 444 B of tiles in the game

@@ -111,6 +111,10 @@ pub struct Options {
     /// records check (the autopilot's wins offered as records, so that two
     /// runs show the records written, saved and read back).
     pub records: bool,
+    /// Keep and race each level's best run (`--ghosts`): always when
+    /// interactive; in the demo, the ghosts check (the autopilot's wins kept
+    /// as ghosts, so that the next run races them to their hashes).
+    pub ghosts: bool,
 }
 
 impl Default for Options {
@@ -120,6 +124,7 @@ impl Default for Options {
             fault_script: false,
             twim_copy_buffer: DEFAULT_COPY_BUFFER,
             records: false,
+            ghosts: false,
         }
     }
 }
@@ -142,6 +147,7 @@ impl Options {
                 }
                 "--no-copy-buffer" => options.twim_copy_buffer = 0,
                 "--records" => options.records = true,
+                "--ghosts" => options.ghosts = true,
                 _ => {
                     if let Some(Ok(bytes)) = arg
                         .strip_prefix("--twim-copy-buffer=")
@@ -156,6 +162,7 @@ impl Options {
             options.interactive = false;
         }
         options.records |= options.interactive && !options.fault_script;
+        options.ghosts |= options.interactive && !options.fault_script;
         options
     }
 }
@@ -187,6 +194,9 @@ mod tests {
         assert!(Options::parse(["--interactive"]).records);
         assert!(!Options::parse(["--demo"]).records);
         assert!(Options::parse(["--demo", "--records"]).records);
+        assert!(Options::parse(["--interactive"]).ghosts);
+        assert!(!Options::parse(["--demo", "--records"]).ghosts);
+        assert!(Options::parse(["--demo", "--ghosts"]).ghosts);
         assert_eq!(Options::parse(["--twim-copy-buffer=3"]).twim_copy_buffer, 3);
         assert_eq!(
             Options::parse(["--twim-copy-buffer=x"]).twim_copy_buffer,

@@ -11,7 +11,9 @@
 //!    grid (eq. 7). No root, no division. A tile behind a face the marble is held
 //!    on cannot be touched (the centre stays a radius in front of the face) and is
 //!    left out. In a maze nearly every frame finds nothing, and the frame is one
-//!    closed-form update — the same sums as one fixed step.
+//!    closed-form update — the same sums as one fixed step. A search that finds
+//!    nothing leaves the marble a *free region* (`events/free.rs`): later flights
+//!    whose swept box stays inside it skip the test.
 //! 2. Otherwise **the earliest event**: for every tile in reach, the time of
 //!    impact ([`toi`](crate::physics::dynamics::toi): exact for faces, converging separating planes for edges and
 //!    corners; the ghost-bump rule of eq. 8's narrowphase decides who owns a
@@ -75,10 +77,12 @@ use super::super::geometry::narrowphase::{offset, owned, shadowed, Contact, Feat
 use super::super::geometry::sweep::{reach, swept};
 use super::super::geometry::tiles::{Aabb, TileIndex};
 pub use budget::FLIGHT_BUDGET;
+pub(super) use free::FreeRegion;
 
 use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
 
 mod budget;
+mod free;
 mod pivot;
 mod search;
 mod together;
@@ -404,7 +408,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 self.stats.event_limits = self.stats.event_limits.wrapping_add(1);
                 return;
             }
-            let (s, ev) = self.next::<SPACE>(m, f);
+            let (s, ev) = self.next::<SPACE>(n, m, f);
             self.land::<SPACE, O>(n, m, f, s, ev, obs);
         }
     }
@@ -425,7 +429,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 
     /// The marble's next flight and the event that ends it (steps from `f.t`):
     /// the flight's acceleration, a slice begun if one was asked for, the search.
-    fn next<const SPACE: bool>(&mut self, m: &mut Marble<S>, f: &mut Flight<S>) -> (S, Event<S>) {
+    fn next<const SPACE: bool>(
+        &mut self,
+        n: usize,
+        m: &mut Marble<S>,
+        f: &mut Flight<S>,
+    ) -> (S, Event<S>) {
         self.spend(1, 1);
         self.prepare::<SPACE>(m, f);
         if f.events >= 2 * MAX_EVENTS && f.slice.is_none() {
@@ -469,8 +478,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         } else if f.slice.is_some_and(|sl| sl.rail) {
             // An event inside a rail slice (a bounce off a wall at its end, say)
             // leaves the flight its whole pull again: the rest of the slice is a
-            // plain one, bounded by the sink (the storey property: a rail slice
-            // of 3/4 step went on after a bounce and sank the marble 3.4 % of r).
+            // plain one, bounded by the sink (a rail slice of 3/4 step going on
+            // after a bounce can sink the marble 3.4 % of r).
             let to = f.after(self.slice_len(&f.seg).min(f.len));
             if let Some(sl) = f.slice.as_mut() {
                 sl.rail = false;
@@ -494,7 +503,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let (s, ev) = if sl.skip == EVERY {
                     (limit, Event::End)
                 } else {
-                    self.search::<SPACE>(m, f, limit, sl.skip, !sl.pivot)
+                    self.search::<SPACE>(n, m, f, limit, sl.skip, !sl.pivot)
                 };
                 if ev == Event::End && f.after(s) == sl.to {
                     (s, Event::SliceEnd)
@@ -502,7 +511,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     (s, ev)
                 }
             }
-            None => self.search::<SPACE>(m, f, f.len, EVERY, false),
+            None => self.search::<SPACE>(n, m, f, f.len, EVERY, false),
         }
     }
 

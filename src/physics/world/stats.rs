@@ -1,7 +1,7 @@
 //! What the steps did: counters per effect and the bounces a game may show. The
 //! physics only adds to them; nothing in it reads them back.
 
-use super::*;
+use super::Scalar;
 
 /// Counters of what the step did. Each effect's counter moves only when that
 /// effect's code runs.
@@ -38,6 +38,9 @@ pub struct StepStats {
     /// and each marble's slice of a pair slice): the unit of a step's work that
     /// [`events::FLIGHT_BUDGET`] bounds.
     pub flights: u32,
+    /// Events stepping: searches a marble's free region answered without
+    /// looking at a tile (`events/free.rs`).
+    pub free_served: u32,
     /// Events stepping: the flight budget's units spent (a flight 1, a pair's time
     /// of impact 1, a pair slice 3; see [`events::FLIGHT_BUDGET`]).
     pub work: u32,

@@ -2,14 +2,18 @@
 //! every tile in reach (and the lid), the end of a held face's support, and what
 //! a slice leaves out.
 
-use super::*;
+use super::{
+    behind_held, entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Event, Flight,
+    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The earliest event of the flight `f` within `limit` steps, leaving tile
     /// `skip` out (a slice's; [`EVERY`] for none) and, if `rest_out`, every tile
     /// the marble rests against (a plain slice's: its passes take them).
     pub(super) fn search<const SPACE: bool>(
-        &self,
+        &mut self,
+        n: usize,
         m: &Marble<S>,
         f: &mut Flight<S>,
         limit: S,
@@ -29,6 +33,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
         }
         let path = swept(seg.p, end, seg.h, limit);
+        let reach_r = r + tol;
+        if self.free[n].serves(m, &path, reach_r, SPACE) {
+            self.stats.free_served = self.stats.free_served.wrapping_add(1);
+            return best;
+        }
         // Held faces: the tile behind the contact point must stay there.
         let mut bits = m.rest_mask;
         while bits != 0 {
@@ -52,8 +61,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // fixed steps do. Where a marble rolls over an edge that two floor tiles
         // share, the two would otherwise hand the slice back and forth, a
         // zero-length event each, until the step's event budget ran out and
-        // blind slices flew the marble 9 µm into the next edge (found by the
-        // multi-storey property, a slot beside a hole; one storey has it too).
+        // blind slices flew the marble up to 9 µm into the next edge (a slot
+        // beside a hole, on one storey or several).
         // A pivot slice leaves out only its edge: another tile it rests against
         // would be sunk into over the pivot slice's length (two edges under a
         // marble over a slot), so it is found at once and a plain slice takes over.
@@ -64,8 +73,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             EVERY
         };
         // Tiles in reach (plain loops: iterator adapters cost more than the test).
-        let mut range = reach(layout, &path, r + tol, SPACE);
+        let mut range = reach(layout, &path, reach_r, SPACE);
         self.leave_out_held(m, &mut range);
+        let mut empty = true;
         let mut k = range.lo.k;
         while k <= range.hi.k {
             let mut j = range.lo.j;
@@ -73,10 +83,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut i = range.lo.i;
                 while i <= range.hi.i {
                     let t = TileIndex::new(i, j, k);
-                    if tiles.is_solid(t)
-                        && t != skip
-                        && !(slicing && self.still_skipped(seg, t, limit))
-                    {
+                    let solid = tiles.is_solid(t);
+                    empty &= !solid;
+                    if solid && t != skip && !(slicing && self.still_skipped(seg, t, limit)) {
                         let b = layout.tile_box(t);
                         // `leave_out_held` left exactly the tiles not behind a held face.
                         debug_assert!(!behind_held(m, &b));
@@ -115,7 +124,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             k += 1;
         }
         let lid_y = if SPACE { self.lid() } else { S::ZERO };
-        if SPACE && skip != LID && path.max.y + r + tol >= lid_y {
+        if SPACE && skip != LID && path.max.y + reach_r >= lid_y {
             let lid = Aabb {
                 min: Vec3::new(S::from_int(-127), lid_y, S::from_int(-127)),
                 max: Vec3::new(S::from_int(127), S::from_int(127), S::from_int(127)),
@@ -131,6 +140,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 }
             }
         }
+        if empty && self.free_regions && matches!(best.1, Event::End | Event::Stop) {
+            self.build_free(n, m, &path, SPACE);
+        }
         best
     }
 
@@ -141,8 +153,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// on the far side of the tile that starts there: exactly the tiles
     /// [`behind_held`] would refuse (eq. 6 and eq. 5 agree on every boundary),
     /// so the search need not ask it per tile (debug builds still check).
-    #[inline]
-    fn leave_out_held(&self, m: &Marble<S>, range: &mut TileRange) {
+    #[inline(never)]
+    pub(super) fn leave_out_held(&self, m: &Marble<S>, range: &mut TileRange) {
         let layout = &self.params.layout;
         let mut bits = m.rest_mask;
         while bits != 0 {
@@ -180,11 +192,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// (bounced off the wall across a narrow corridor, say) and flies back is
     /// searched against it like against any tile: the passes at the slice's end
     /// are for the slow contact the slice was begun for, and a return at speed
-    /// would sink into the tile until then (the narrow-corridor regression, 47 µm
-    /// at 1 pitch/s). Nor while it closes fast enough to sink more than `2^-12·r`
+    /// would sink into the tile until then (47 µm at 1 pitch/s in a narrow
+    /// corridor). Nor while it closes fast enough to sink more than `2^-12·r`
     /// into the tile within the slice's `limit` steps: a marble over a slot,
-    /// rolling round one edge, closes on the other at up to the threshold, and
-    /// over a slice that sank it `1.3·10⁻³ r` in (the storey property).
+    /// rolling round one edge, closes on the other at up to the threshold, which
+    /// over a slice sinks it `1.3·10⁻³ r` in.
     fn still_skipped(&self, seg: &Segment<S>, skip: TileIndex, limit: S) -> bool {
         let p = &self.params;
         let (r, tol) = (p.radius, self.tol());
@@ -255,10 +267,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     // Eq. 5's columns are `[lo, hi)`: a centre on `hi` is still in
                     // the next one, which holds the face (eq. 6 says so, and the
                     // hold asks eq. 6). Entering through `hi` at the closed end
-                    // released the face on the seam, a touch held it again at
-                    // once, and the two took turns until the idle rule flew a
-                    // blind slice at 28 pitch/s into the next wall (3.7·10⁻³ r
-                    // in: the storey property).
+                    // would release the face on the seam, a touch hold it again
+                    // at once, and the two take turns until the idle rule flew a
+                    // blind slice into the next wall (at 28 pitch/s: 3.7·10⁻³ r
+                    // in).
                     let b = layout.tile_box(t);
                     let hi = Vec3::new(
                         b.max.x.next_down(),

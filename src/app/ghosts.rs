@@ -1,0 +1,281 @@
+//! The ghost on a board (feature `ghosts`): each level's best run kept in
+//! flash ([`Ghosts`]), raced beside the next attempt ([`Racer`]) and drawn
+//! dimmer than the marble ([`draw_ghost`]), and each attempt recorded
+//! ([`Recorder`]) so that a win that beats the ghost's time replaces it.
+//!
+//! The game task reads the level's ghost when the level starts, and writes a
+//! new one when the level is left (between levels, as the records are
+//! written): a stored ghost is raced only if its whole replay wins the level
+//! on its own state hash, and a new one is written only if its replay does.
+
+use embedded_storage_async::nor_flash::NorFlash;
+
+#[cfg(feature = "defmt")]
+use crate::game::ghost::RecordError;
+use crate::game::ghost::{Racer, Recorder};
+use crate::game::level::LevelView;
+use crate::game::rules::{GameConfig, Phase};
+use crate::game::session::Session;
+use crate::input::tilt::TiltConfig;
+use crate::matrix::Frame;
+use crate::physics::Fx;
+use crate::records::{max_ghost_bytes, GhostStoreError, Ghosts};
+use crate::render::{draw_ghost, Viewport};
+
+/// The board's ghosts: the store, and two buffers of `N` bytes — the stored
+/// ghost being raced (the store's work buffer between levels) and the live
+/// attempt being recorded. `N` is the longest run the board keeps (at most
+/// one flash page: [`crate::records::max_ghost_bytes`]).
+pub struct GhostKit<F: NorFlash, const N: usize> {
+    /// The ghosts in flash.
+    pub store: Ghosts<F>,
+    /// Runs after each write (QEMU saves its flash image there).
+    pub written: fn(&mut F),
+    stored: [u8; N],
+    record: [u8; N],
+}
+
+impl<F: NorFlash, const N: usize> GhostKit<F, N> {
+    /// The kit over `store`.
+    pub const fn new(store: Ghosts<F>, written: fn(&mut F)) -> Self {
+        GhostKit {
+            store,
+            written,
+            stored: [0; N],
+            record: [0; N],
+        }
+    }
+
+    /// The level's parts: its racer (a stored ghost that replays to its
+    /// hash, read from flash and checked here) and a recorder of the
+    /// attempts. Logs what it found.
+    pub async fn begin<'k, 'a, const EVENTS: bool>(
+        &'k mut self,
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> LevelGhost<'a, 'k, EVENTS> {
+        let name = level.info.name;
+        let GhostKit {
+            store,
+            stored,
+            record,
+            ..
+        } = self;
+        // The stored ghost is read into the front of the buffer; the crate
+        // wants room for the key and the word rounding too.
+        let racer = match store.load(name, &mut stored[..]).await {
+            Ok(Some(bytes)) => match Racer::<EVENTS>::new(bytes, level, config, tilt) {
+                Ok(racer) => {
+                    #[cfg(feature = "defmt")]
+                    defmt::info!(
+                        "ghost {=str}: {=usize} bytes, replays to its hash: racing it ({=u32} frames on the clock)",
+                        name,
+                        bytes.len(),
+                        racer.clock()
+                    );
+                    Some(racer)
+                }
+                Err(e) => {
+                    #[cfg(feature = "defmt")]
+                    defmt::warn!("ghost {=str} not raced: {}", name, e);
+                    let _ = e;
+                    None
+                }
+            },
+            Ok(None) => None,
+            Err(e) => {
+                #[cfg(feature = "defmt")]
+                defmt::warn!("ghost {=str}: {=str}", name, e.as_str());
+                let _ = e;
+                None
+            }
+        };
+        let best = racer.as_ref().map(Racer::clock);
+        LevelGhost {
+            racer,
+            recorder: Recorder::new(&mut record[..Self::longest()]).ok(),
+            best,
+        }
+    }
+
+    /// The longest ghost the kit records and keeps: its buffer less the
+    /// key and the word rounding the store needs, at most a flash page's
+    /// item ([`max_ghost_bytes`]).
+    pub const fn longest() -> usize {
+        let words = N / F::WRITE_SIZE * F::WRITE_SIZE;
+        let fits = words.saturating_sub(4);
+        let page = max_ghost_bytes::<F>();
+        if fits < page {
+            fits
+        } else {
+            page
+        }
+    }
+
+    /// Writes the run the level's recorder left in its buffer (`len` bytes,
+    /// [`LevelGhost::leave`]) as the ghost of `name`; logs the outcome.
+    pub async fn keep_recorded(&mut self, name: &str, len: usize) -> Result<(), GhostStoreError> {
+        let Some(bytes) = self.record.get(..len) else {
+            return Err(GhostStoreError::Buffer { needs: len });
+        };
+        keep(&mut self.store, self.written, name, bytes, &mut self.stored).await
+    }
+}
+
+/// What the game task asks of a board's ghosts ([`GhostKit`]), so that its
+/// flash type and buffer size stay the board's.
+// The firmware's executors are single-threaded: no `Send` bound is wanted.
+#[allow(async_fn_in_trait)]
+pub trait GhostStore {
+    /// See [`GhostKit::begin`].
+    async fn begin<'k, 'a, const EVENTS: bool>(
+        &'k mut self,
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> LevelGhost<'a, 'k, EVENTS>;
+
+    /// See [`GhostKit::keep_recorded`].
+    async fn keep_recorded(&mut self, name: &str, len: usize) -> Result<(), GhostStoreError>;
+}
+
+impl<F: NorFlash, const N: usize> GhostStore for GhostKit<F, N> {
+    async fn begin<'k, 'a, const EVENTS: bool>(
+        &'k mut self,
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> LevelGhost<'a, 'k, EVENTS> {
+        GhostKit::begin(self, level, config, tilt).await
+    }
+
+    async fn keep_recorded(&mut self, name: &str, len: usize) -> Result<(), GhostStoreError> {
+        GhostKit::keep_recorded(self, name, len).await
+    }
+}
+
+/// One level's ghost: the racer and the recorder.
+pub struct LevelGhost<'a, 'k, const EVENTS: bool> {
+    racer: Option<Racer<'a, 'k, EVENTS>>,
+    recorder: Option<Recorder<'k>>,
+    /// The raced ghost's time (frames on the level clock).
+    best: Option<u32>,
+}
+
+impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
+    /// After each frame of `live` (the attempt at the level): records it and
+    /// moves the ghost to where it races.
+    pub fn frame(&mut self, live: &Session<'_, Fx>) {
+        if let Some(recorder) = &mut self.recorder {
+            recorder.observe(live);
+        }
+        if let Some(racer) = &mut self.racer {
+            racer.follow(live.game());
+        }
+    }
+
+    /// Draws the ghost on `frame` (a picture of `live` through `viewport`)
+    /// while the attempt is played.
+    pub fn draw<const W: usize, const H: usize>(
+        &self,
+        frame: &mut Frame<W, H>,
+        live: &Session<'_, Fx>,
+        viewport: Viewport,
+    ) {
+        if let (Some(racer), Phase::Playing) = (&self.racer, live.game().phase()) {
+            draw_ghost(frame, live.game(), racer.game(), viewport);
+        }
+    }
+
+    /// The raced ghost, at the end of its run, on its own state hash (the
+    /// board replayed it bit-exactly): its frames and hash. `None`: no ghost,
+    /// or not at its end.
+    pub fn raced_to_its_end(&self) -> Option<(u32, u64)> {
+        let racer = self.racer.as_ref()?;
+        let (frames, hash) = racer.run();
+        (racer.game().frames() == frames && racer.state_hash() == hash).then_some((frames, hash))
+    }
+
+    /// The level is left with `live`: a win faster on the clock than the
+    /// raced ghost (or the first) whose recorded run replays to a win on its
+    /// hash is to be written (between levels: [`GhostKit::keep_recorded`]):
+    /// its length in the record buffer. Logs why a win is not kept.
+    pub fn leave(self, live: &Session<'_, Fx>) -> Option<usize> {
+        let game = live.game();
+        let name = game.level().info.name;
+        let clock = game.clock_frames();
+        if game.phase() != Phase::Won || self.best.is_some_and(|b| b <= clock) {
+            return None;
+        }
+        let bytes = match self.recorder?.finish(live) {
+            Ok(bytes) => bytes,
+            Err(e) => {
+                #[cfg(feature = "defmt")]
+                match e {
+                    RecordError::TooLong { bytes } => defmt::warn!(
+                        "ghost {=str}: the run is longer than the {=usize}-byte buffer: not kept",
+                        name,
+                        bytes
+                    ),
+                    RecordError::Missed => {
+                        defmt::warn!("ghost {=str}: frames of the run missed: not kept", name)
+                    }
+                }
+                let _ = (e, name);
+                return None;
+            }
+        };
+        match Racer::<EVENTS>::new(bytes, *game.level(), game.config(), live.tilt_config()) {
+            Ok(_) => Some(bytes.len()),
+            Err(e) => {
+                #[cfg(feature = "defmt")]
+                defmt::warn!(
+                    "ghost {=str}: the run does not replay: not kept ({})",
+                    name,
+                    e
+                );
+                let _ = (e, name);
+                None
+            }
+        }
+    }
+}
+
+/// Writes `bytes` as `name`'s ghost through `work`; logs the outcome.
+pub async fn keep<F: NorFlash>(
+    store: &mut Ghosts<F>,
+    written: fn(&mut F),
+    name: &str,
+    bytes: &[u8],
+    work: &mut [u8],
+) -> Result<(), GhostStoreError> {
+    let kept = store.keep(name, bytes, work).await;
+    match kept {
+        Ok(k) => {
+            #[cfg(feature = "defmt")]
+            defmt::info!(
+                "ghost {=str} kept: {=usize} bytes ({=u8} older ghosts gave way)",
+                name,
+                k.bytes,
+                k.evicted
+            );
+            let _ = k;
+            written(store.flash());
+            Ok(())
+        }
+        Err(e) => {
+            #[cfg(feature = "defmt")]
+            match e {
+                GhostStoreError::TooLong { len, max } => defmt::warn!(
+                    "ghost {=str}: {=usize} bytes, longer than a flash page allows ({=usize}): not kept",
+                    name,
+                    len,
+                    max
+                ),
+                _ => defmt::warn!("ghost {=str}: {=str}", name, e.as_str()),
+            }
+            Err(e)
+        }
+    }
+}

@@ -1,0 +1,233 @@
+//! A marble's free region: a box of tiles around it in which the search can find
+//! nothing, so that a flight inside it skips the search.
+//!
+//! In a maze nearly every search finds no tile in reach and no end to a held
+//! face's support, yet each pays for the swept box's tile indices (eq. 6), the
+//! held faces' narrowing, the grid lookups and the support columns: some 800
+//! instructions, most of a quiet frame. The region is built when a search finds
+//! its tiles in reach empty: grown row by row from them, up to [`GROW`] rows each
+//! way, while every tile in it is empty and every tile behind a held face under
+//! it is solid. It is kept with the held faces it assumed; a later flight whose
+//! swept box (widened by the radius and the tolerance, as the reach test widens
+//! it) lies inside it, with the same held faces, has exactly the search's answer
+//! without the search: no tile, no lid, no support ending, only the flight's own
+//! end or stop. The tiles and the layout never change, so the region stays true
+//! until the held faces change or the marble leaves it.
+//!
+//! A pure cache: every state hash is the same with it or without it. The bounds
+//! are tile boundaries (eq. 5) compared with the very sums the reach test feeds to
+//! eq. 6, which eq. 5 and 6 decide alike on every boundary, on every backend.
+
+use super::super::super::geometry::grid::Tiles;
+use super::{reach, Aabb, Marble, Scalar, TileIndex, TileRange, Vec3, World};
+
+/// Rows a region grows each way beyond the search's own tiles: a marble crossing
+/// an open floor keeps one region for several frames (grown further, a rebuild
+/// would cost more than the searches it spares).
+const GROW: i32 = 4;
+
+/// Held-face bits of a region that holds none: it serves no flight.
+const NONE: u8 = u8::MAX;
+
+/// A marble's free region: the centre's box (tile frame) and the held faces it
+/// was built with. Each side of the box is a tile boundary; the swept box
+/// widened by `r + tol` must lie inside it, except on a side a held face bounds
+/// (the search leaves the rows behind a held face out whatever the path), where
+/// the swept box itself must.
+#[derive(Clone, Copy, Debug)]
+pub(in crate::physics::world) struct FreeRegion<S> {
+    lo: Vec3<S>,
+    hi: Vec3<S>,
+    /// `Marble::rest_mask` when built ([`NONE`]: no region).
+    held: u8,
+    /// `Marble::rest_plane` when built, on the held axes (zero on the others).
+    planes: [S; 3],
+}
+
+impl<S: Scalar> FreeRegion<S> {
+    pub(in crate::physics::world) const EMPTY: Self = FreeRegion {
+        lo: Vec3 {
+            x: S::ZERO,
+            y: S::ZERO,
+            z: S::ZERO,
+        },
+        hi: Vec3 {
+            x: S::ZERO,
+            y: S::ZERO,
+            z: S::ZERO,
+        },
+        held: NONE,
+        planes: [S::ZERO; 3],
+    };
+
+    /// Whether the marble holds the faces the region was built with.
+    #[inline]
+    fn holds(&self, m: &Marble<S>) -> bool {
+        if self.held != m.rest_mask {
+            return false;
+        }
+        let mut bits = self.held;
+        while bits != 0 {
+            let axis = (bits.trailing_zeros() / 2) as usize;
+            bits &= bits - 1;
+            if self.planes[axis] != m.rest_plane[axis] {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Whether a flight of the marble whose centre sweeps `path` can meet
+    /// nothing: the search would return the flight's own end or stop. `space`:
+    /// the world has holes (3-D). Out of line, one copy for both kinds of world:
+    /// the micro:bit v1's flash.
+    #[inline(never)]
+    pub(in crate::physics::world) fn serves(
+        &self,
+        m: &Marble<S>,
+        path: &Aabb<S>,
+        reach: S,
+        space: bool,
+    ) -> bool {
+        if !self.holds(m) {
+            return false;
+        }
+        // A held face's up bit (axis·2 + 1) bounds the low side, its down bit
+        // the high side: that side is not widened.
+        let widen = |bit: u8| {
+            if self.held & (1 << bit) != 0 {
+                S::ZERO
+            } else {
+                reach
+            }
+        };
+        let x = path.min.x - widen(1) >= self.lo.x && path.max.x + widen(0) < self.hi.x;
+        let z = path.min.z - widen(5) >= self.lo.z && path.max.z + widen(4) < self.hi.z;
+        let y = !space || (path.min.y - widen(3) >= self.lo.y && path.max.y + widen(2) < self.hi.y);
+        x && z && y
+    }
+}
+
+impl<S: Scalar, const M: usize> World<'_, S, M> {
+    /// Builds marble `n`'s region around `path` (its flight's swept box, whose
+    /// widened tiles the search just found empty); none if the support of a held
+    /// face already runs out under them. `space`: the world has holes (3-D).
+    /// Out of line and not generic over `space`: it runs a few times a second,
+    /// and one copy keeps the micro:bit v1 within its flash.
+    #[inline(never)]
+    pub(super) fn build_free(&mut self, n: usize, m: &Marble<S>, path: &Aabb<S>, space: bool) {
+        self.free[n] = FreeRegion::EMPTY;
+        let layout = self.params.layout;
+        let mut range = reach(&layout, path, self.params.radius + self.tol(), space);
+        // A held face bounds its side whatever the path, from the face's row on
+        // (`leave_out_held` narrows the open side to it); the row behind it must
+        // be solid under the whole region (the lid's need not: it is everywhere).
+        let mut behind = [None; 3];
+        let held = m.rest_mask;
+        let mut bits = held;
+        while bits != 0 {
+            let bit = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (axis, up) = (bit / 2, bit % 2 == 1);
+            let plane = m.rest_plane[axis];
+            if axis != 1 || space {
+                let (lo, hi) = bounds(&mut range, axis);
+                if up {
+                    *lo = i32::MIN;
+                } else {
+                    *hi = i32::MAX;
+                }
+            }
+            if axis != 1 || up {
+                let at = if up { plane.next_down() } else { plane };
+                behind[axis] = Some(if axis == 1 {
+                    layout.index_y(at)
+                } else {
+                    layout.index_xz(at)
+                });
+            }
+        }
+        self.leave_out_held(m, &mut range);
+        if !fits(self.tiles, &range, &behind) {
+            return;
+        }
+        // Grow each side that no held face bounds, a row at a time.
+        for side in 0..6 {
+            let axis = side / 2;
+            if (axis == 1 && !space) || held & (1 << (side ^ 1)) != 0 {
+                continue;
+            }
+            for _ in 0..GROW {
+                let mut row = range;
+                let (lo, hi) = bounds(&mut row, axis);
+                if side % 2 == 0 {
+                    *lo -= 1;
+                    *hi = *lo;
+                } else {
+                    *hi += 1;
+                    *lo = *hi;
+                }
+                if !fits(self.tiles, &row, &behind) {
+                    break;
+                }
+                let (lo, hi) = bounds(&mut range, axis);
+                let (new_lo, new_hi) = bounds(&mut row, axis);
+                *lo = (*lo).min(*new_lo);
+                *hi = (*hi).max(*new_hi);
+            }
+        }
+        let mut region = FreeRegion {
+            lo: layout.tile_box(range.lo).min,
+            hi: layout.tile_box(range.hi).max,
+            held,
+            planes: [S::ZERO; 3],
+        };
+        if space {
+            // The lid is searched when the widened box reaches it.
+            region.hi.y = region.hi.y.min(self.lid());
+        }
+        for (axis, plane) in region.planes.iter_mut().enumerate() {
+            if held & (3 << (2 * axis)) != 0 {
+                *plane = m.rest_plane[axis];
+            }
+        }
+        self.free[n] = region;
+    }
+}
+
+/// The low and high bound of `r` along `axis` (0 = i, 1 = j, 2 = k).
+fn bounds(r: &mut TileRange, axis: usize) -> (&mut i32, &mut i32) {
+    match axis {
+        0 => (&mut r.lo.i, &mut r.hi.i),
+        1 => (&mut r.lo.j, &mut r.hi.j),
+        _ => (&mut r.lo.k, &mut r.hi.k),
+    }
+}
+
+/// Whether every tile of `r` is empty and every tile behind a held face under it
+/// (the row `behind[axis]` across the other two axes) is solid.
+#[inline(never)]
+fn fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3]) -> bool {
+    // Axis 3: the range itself, whose tiles must be empty.
+    for axis in 0..4 {
+        let mut s = *r;
+        match behind.get(axis) {
+            Some(Some(row)) => {
+                let (lo, hi) = bounds(&mut s, axis);
+                (*lo, *hi) = (*row, *row);
+            }
+            Some(None) => continue,
+            None => {}
+        }
+        for k in s.lo.k..=s.hi.k {
+            for j in s.lo.j..=s.hi.j {
+                for i in s.lo.i..=s.hi.i {
+                    if tiles.is_solid(TileIndex::new(i, j, k)) != (axis < 3) {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    true
+}

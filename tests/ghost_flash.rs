@@ -1,0 +1,324 @@
+//! The boards' ghosts in flash (`marble_rolling::records::Ghosts`) on
+//! sequential-storage's mock flash, shaped like the micro:bit v2's ghosts
+//! region (4 KiB pages of 4-byte words, each word written once between
+//! erases, 8 pages): a power cut at any byte of a ghost's write leaves the old
+//! ghost or the new one, whole; a full region makes the oldest ghost of another
+//! level give way; a ghost longer than a page is refused before anything is
+//! written; and QEMU's RAM flash keeps a ghost across a reload of its image.
+
+use embassy_futures::block_on;
+use marble_rolling::game::ghost::{Ghost, GhostError, GhostWriter};
+use marble_rolling::input::sensor::Calibration;
+use marble_rolling::records::{
+    ghost_key, ghost_work_bytes, max_ghost_bytes, GhostStoreError, Ghosts, Kept,
+};
+use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
+
+const PAGES: usize = 8;
+type Flash = MockFlashBase<PAGES, 4, 1024>;
+const REGION: core::ops::Range<u32> = 0..(PAGES as u32 * 4096);
+/// The longest ghost a 4 KiB page keeps.
+const MAX: usize = max_ghost_bytes::<Flash>();
+
+fn flash() -> Flash {
+    Flash::new(WriteCountCheck::OnceOnly, None, true)
+}
+
+fn ghosts(flash: Flash) -> Ghosts<Flash> {
+    Ghosts::new(flash, REGION).expect("the region is whole pages")
+}
+
+/// A ghost of about `len` bytes (a few less: the writer stops whole), its
+/// readings from `seed`, ending on hash `seed`.
+fn ghost_of(len: usize, seed: i32) -> Vec<u8> {
+    let mut buf = vec![0u8; len];
+    let mut w = GhostWriter::new(&mut buf).expect("room for the header");
+    let mut n = 0i32;
+    loop {
+        // Changes of one or two bytes per axis, never a repeat.
+        let reading = [seed + n % 97, 1000 - n % 13, (n * 7) % 300];
+        match w.push(reading) {
+            Ok(()) => n += 1,
+            Err(GhostError::Full) => break,
+            Err(e) => panic!("{e}"),
+        }
+    }
+    w.finish(seed as u64, Calibration::NONE)
+        .expect("the writer stopped whole")
+        .to_vec()
+}
+
+fn load(flash: &Flash, name: &str) -> Result<Option<Vec<u8>>, GhostStoreError> {
+    let mut g = ghosts(flash.clone());
+    let mut buf = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    block_on(g.load(name, &mut buf)).map(|b| b.map(<[u8]>::to_vec))
+}
+
+/// Keeps `ghost` with a work buffer for the longest ghost (making room reads
+/// the others through it).
+fn keep(g: &mut Ghosts<Flash>, name: &str, ghost: &[u8]) -> Result<Kept, GhostStoreError> {
+    let mut work = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    block_on(g.keep(name, ghost, &mut work))
+}
+
+#[test]
+fn the_keys_are_fnv1a_of_the_name() {
+    // FNV-1a's published test vectors.
+    assert_eq!(ghost_key(""), 0x811c_9dc5);
+    assert_eq!(ghost_key("a"), 0xe40c_292c);
+    assert_eq!(ghost_key("foobar"), 0xbf9c_f968);
+    assert_ne!(ghost_key("maze-11-4x4x1-d1"), ghost_key("maze-12-4x4x1-d1"));
+    // A page of 4096 bytes: two state words, the item's header, the key.
+    assert_eq!(MAX, 4096 - 8 - 8 - 4);
+}
+
+#[test]
+fn a_ghost_is_kept_per_level_and_replaced() {
+    let mut g = ghosts(flash());
+    let corner = ghost_of(900, 1);
+    let tour = ghost_of(3000, 2);
+    assert_eq!(
+        keep(&mut g, "corner", &corner).map(|k| k.bytes),
+        Ok(corner.len())
+    );
+    assert_eq!(
+        keep(&mut g, "grand-tour", &tour).map(|k| k.bytes),
+        Ok(tour.len())
+    );
+    let f = g.into_flash();
+    // Across a "power cycle": a new instance over the same flash.
+    assert_eq!(load(&f, "corner"), Ok(Some(corner.clone())));
+    assert_eq!(load(&f, "grand-tour"), Ok(Some(tour.clone())));
+    assert_eq!(load(&f, "switchback"), Ok(None));
+    let mut g = ghosts(f);
+    let faster = ghost_of(700, 3);
+    keep(&mut g, "corner", &faster).unwrap();
+    let f = g.into_flash();
+    assert_eq!(load(&f, "corner"), Ok(Some(faster)));
+    assert_eq!(load(&f, "grand-tour"), Ok(Some(tour)));
+    // A buffer too small for the stored ghost is an error naming the need.
+    let mut g = ghosts(f);
+    let mut small = [0u8; 64];
+    assert!(matches!(
+        block_on(g.load("grand-tour", &mut small)),
+        Err(GhostStoreError::Buffer { .. })
+    ));
+}
+
+/// Cuts the power in every erase and write of keeping `new` as `name`'s ghost
+/// over `before`: at every byte of the first and last 256 bytes the update
+/// writes or erases, and every 61st in between. After each cut `name` reads
+/// back its old ghost or `new`, whole; the other levels' ghosts are
+/// untouched; and the next ghost is kept. Returns the bytes the update wrote
+/// and erased.
+fn cut_everywhere(before: &Flash, name: &str, new: &[u8], others: &[(&str, Vec<u8>)]) -> u32 {
+    let old = load(before, name).unwrap();
+    let total = {
+        let mut f = before.clone();
+        f.bytes_until_shutoff = Some(u32::MAX);
+        let mut g = ghosts(f);
+        keep(&mut g, name, new).unwrap();
+        u32::MAX - g.into_flash().bytes_until_shutoff.unwrap()
+    };
+    let next = ghost_of(500, 99);
+    let mut cut = 0u32;
+    loop {
+        let mut f = before.clone();
+        f.bytes_until_shutoff = Some(cut);
+        let mut g = ghosts(f);
+        let result = keep(&mut g, name, new);
+        let mut f = g.into_flash();
+        let finished = f.bytes_until_shutoff.is_some();
+        f.bytes_until_shutoff = None;
+        if finished {
+            assert!(result.is_ok(), "no cut: it must succeed, got {result:?}");
+        }
+        let got = load(&f, name).unwrap_or_else(|e| panic!("cut at byte {cut}: {e:?}"));
+        assert!(
+            got == old || got.as_deref() == Some(new),
+            "cut at byte {cut}: {name} reads {} bytes, neither the old ghost nor the new",
+            got.map_or(0, |g| g.len())
+        );
+        if let Some(bytes) = &got {
+            assert!(
+                Ghost::parse(bytes).is_ok(),
+                "cut at byte {cut}: a broken ghost"
+            );
+        }
+        for (other, bytes) in others.iter().filter(|(o, _)| *o != name) {
+            assert_eq!(
+                load(&f, other),
+                Ok(Some(bytes.clone())),
+                "cut at byte {cut}: {other}"
+            );
+        }
+        let mut g = ghosts(f);
+        assert!(
+            keep(&mut g, name, &next).is_ok(),
+            "cut at byte {cut}: the next ghost is not kept"
+        );
+        assert_eq!(load(&g.into_flash(), name), Ok(Some(next.clone())));
+        if finished {
+            assert_eq!(cut, total);
+            return total;
+        }
+        cut += if cut < 256 || cut + 256 >= total {
+            1
+        } else {
+            61
+        };
+    }
+}
+
+#[test]
+fn a_power_cut_while_a_ghost_is_written_leaves_the_old_or_the_new() {
+    // A first ghost on an empty region, a replacement appended, and one that
+    // turns pages: the region holds two large ghosts of other levels, so a
+    // third page's worth migrates the live ones and erases a page.
+    let a = ("corner", ghost_of(2500, 1));
+    let b = ("switchback", ghost_of(3500, 2));
+    let c = ("cavern", ghost_of(3800, 3));
+    let f = flash();
+    cut_everywhere(&f, a.0, &a.1, &[]);
+    let mut g = ghosts(f);
+    keep(&mut g, a.0, &a.1).unwrap();
+    let f = g.into_flash();
+    cut_everywhere(&f, a.0, &ghost_of(2000, 4), std::slice::from_ref(&a));
+    let mut g = ghosts(f);
+    keep(&mut g, b.0, &b.1).unwrap();
+    keep(&mut g, c.0, &c.1).unwrap();
+    for n in 0..PAGES as i32 {
+        keep(&mut g, a.0, &ghost_of(3000, 10 + n)).unwrap();
+    }
+    let a = (a.0, ghost_of(3000, 10 + PAGES as i32 - 1));
+    let f = g.into_flash();
+    let longest = cut_everywhere(&f, a.0, &ghost_of(3900, 5), &[a.clone(), b, c]);
+    assert!(
+        longest > 4096,
+        "the update erased no page (cut at byte {longest} at most)"
+    );
+}
+
+#[test]
+fn a_full_region_makes_the_oldest_ghost_give_way() {
+    // Each ghost takes most of a page: the region keeps one less than its
+    // pages (the crate keeps a page free to migrate into).
+    let mut g = ghosts(flash());
+    let names: Vec<String> = (0..PAGES + 3)
+        .map(|n| format!("maze-{n}-4x4x1-d1"))
+        .collect();
+    let mut kept: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut evicted_total = 0;
+    for (n, name) in names.iter().enumerate() {
+        let ghost = ghost_of(3000, n as i32);
+        let k = keep(&mut g, name, &ghost).unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        evicted_total += usize::from(k.evicted);
+        kept.push((name.clone(), ghost));
+    }
+    assert!(
+        evicted_total >= 3,
+        "the region never filled ({evicted_total} evicted)"
+    );
+    let f = g.into_flash();
+    // Every ghost left is whole, as many gave way as were evicted (the one
+    // sitting oldest in the region: migrations move live ghosts forward),
+    // and the last ghost kept is there.
+    let mut gone = 0;
+    for (name, ghost) in &kept {
+        match load(&f, name).unwrap() {
+            Some(bytes) => assert_eq!(&bytes, ghost, "{name}"),
+            None => gone += 1,
+        }
+    }
+    assert_eq!(gone, evicted_total);
+    assert!(load(&f, names.last().unwrap()).unwrap().is_some());
+}
+
+#[test]
+fn a_region_too_small_for_two_ghosts_says_full() {
+    // Two pages: one live page, one to migrate into; a ghost per level of
+    // most of a page each. The second level's ghost finds the first one's
+    // in the way, evicts it, and is kept.
+    type Small = MockFlashBase<2, 4, 1024>;
+    let mut g = Ghosts::new(Small::new(WriteCountCheck::OnceOnly, None, true), 0..8192).unwrap();
+    let mut work = vec![0u8; ghost_work_bytes::<Small>(MAX)];
+    let a = ghost_of(3000, 1);
+    let b = ghost_of(3000, 2);
+    block_on(async {
+        assert!(g.keep("a", &a, &mut work).await.is_ok());
+        let k = g.keep("b", &b, &mut work).await;
+        assert_eq!(k.map(|k| k.evicted), Ok(1), "a gives way to b");
+        let mut buf = vec![0u8; work.len()];
+        assert_eq!(g.load("a", &mut buf).await, Ok(None));
+        assert_eq!(
+            g.load("b", &mut buf).await.map(|b| b.map(<[u8]>::to_vec)),
+            Ok(Some(b.clone()))
+        );
+        // A ghost the size of a whole page cannot share a page with the
+        // eviction marks: not kept, said so, and the region works on.
+        let c = ghost_of(MAX, 3);
+        assert_eq!(g.keep("c", &c, &mut work).await, Err(GhostStoreError::Full));
+        assert_eq!(g.load("c", &mut buf).await, Ok(None));
+        let d = ghost_of(1000, 4);
+        assert!(g.keep("d", &d, &mut work).await.is_ok());
+        assert_eq!(
+            g.load("d", &mut buf).await.map(|b| b.map(<[u8]>::to_vec)),
+            Ok(Some(d))
+        );
+    });
+}
+
+#[test]
+fn a_ghost_longer_than_a_page_is_refused_and_nothing_is_written() {
+    let mut g = ghosts(flash());
+    let short = ghost_of(1000, 1);
+    keep(&mut g, "corner", &short).unwrap();
+    let before = g.flash().as_bytes().to_vec();
+    let long = ghost_of(MAX + 64, 2);
+    assert!(long.len() > MAX);
+    assert_eq!(
+        keep(&mut g, "corner", &long),
+        Err(GhostStoreError::TooLong {
+            len: long.len(),
+            max: MAX
+        })
+    );
+    assert_eq!(
+        GhostStoreError::TooLong { len: 1, max: 0 }.as_str(),
+        "ghost longer than a flash page: not kept"
+    );
+    assert_eq!(g.flash().as_bytes(), &before[..], "nothing written");
+    // The longest that fits is kept.
+    let longest = ghost_of(MAX, 3);
+    assert!(longest.len() <= MAX && longest.len() + 8 > MAX);
+    keep(&mut g, "corner", &longest).unwrap();
+    assert_eq!(load(&g.into_flash(), "corner"), Ok(Some(longest)));
+}
+
+#[test]
+fn a_stored_item_that_is_not_a_ghost_is_no_ghost() {
+    let mut g = ghosts(flash());
+    let mut ghost = ghost_of(800, 1);
+    // Well-formed for the flash (its CRCs hold), but one frame short.
+    ghost[4] = ghost[4].wrapping_add(1);
+    keep(&mut g, "corner", &ghost).unwrap();
+    assert_eq!(load(&g.into_flash(), "corner"), Ok(None));
+}
+
+/// QEMU's RAM flash (the NVMC's rules) keeps a ghost across a save and reload
+/// of its image.
+#[test]
+fn qemu_ram_flash_holds_a_ghost_across_a_reload() {
+    use marble_rolling::board::qemu::ram_flash::RamFlash;
+    const N: usize = 8 * 4096;
+    let mut g = Ghosts::new(RamFlash::<N>::new(), 0..N as u32).unwrap();
+    let ghost = ghost_of(2000, 7);
+    let mut work = vec![0u8; ghost_work_bytes::<RamFlash<N>>(ghost.len())];
+    block_on(g.keep("corner", &ghost, &mut work)).unwrap();
+    let saved = g.flash().image().to_vec();
+    let mut reloaded = RamFlash::<N>::new();
+    reloaded.image_mut().copy_from_slice(&saved);
+    let mut g = Ghosts::new(reloaded, 0..N as u32).unwrap();
+    let mut buf = vec![0u8; ghost_work_bytes::<RamFlash<N>>(MAX)];
+    assert_eq!(block_on(g.load("corner", &mut buf)), Ok(Some(&ghost[..])));
+}
