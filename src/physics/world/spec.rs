@@ -3,7 +3,7 @@
 
 use super::{Effects, LayoutError, Scalar, TileLayout, MAX_MG, T_LOG2};
 
-/// How [`World::step`] crosses its interval `dt`.
+/// How [`World::step`](super::World::step) crosses its interval `dt`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Stepping {
@@ -15,7 +15,7 @@ pub enum Stepping {
     /// Events: each marble flies the closed form to its next event — the end of the
     /// step, the instant it touches a tile, the lid or another marble, loses a
     /// face's support or stops under rolling resistance — as many as the physics
-    /// has, in time order (see [`events`]). No speed cap but the number format's.
+    /// has, in time order (see [`events`](super::events)). No speed cap but the number format's.
     /// `dt` is then the frame (2^7 ..= 2^10 steps/s).
     Events,
 }

@@ -29,31 +29,31 @@ pub struct StepStats {
     pub events: u32,
     /// Events stepping: discrete slices flown instead of a closed form (a marble
     /// rolling around an edge, pressed against another marble, or starting inside
-    /// a tile), see [`events`].
+    /// a tile), see [`events`](super::events).
     pub slices: u32,
-    /// Events stepping: marble-steps that ran out of events ([`events::MAX_EVENTS`])
+    /// Events stepping: marble-steps that ran out of events ([`events::MAX_EVENTS`](super::events::MAX_EVENTS))
     /// and finished in slices. Physics does not get there: 0 in every test.
     pub event_limits: u32,
     /// Events stepping: flights flown (each search for a marble's next event,
     /// and each marble's slice of a pair slice): the unit of a step's work that
-    /// [`events::FLIGHT_BUDGET`] bounds.
+    /// [`events::FLIGHT_BUDGET`](super::events::FLIGHT_BUDGET) bounds.
     pub flights: u32,
     /// Events stepping: searches a marble's free region answered without
     /// looking at a tile (`events/free.rs`).
     pub free_served: u32,
     /// Events stepping: the flight budget's units spent (a flight 1, a pair's time
-    /// of impact 1, a pair slice 3; see [`events::FLIGHT_BUDGET`]).
+    /// of impact 1, a pair slice 3; see [`events::FLIGHT_BUDGET`](super::events::FLIGHT_BUDGET)).
     pub work: u32,
     /// Events stepping: marble-steps whose rest was left unflown because the
-    /// step's flight budget ran out (see [`events`]). 0 on every built-in level.
+    /// step's flight budget ran out (see [`events`](super::events)). 0 on every built-in level.
     pub budget_cuts: u32,
 }
 
-/// How many bounces between two [`World::take_impacts`] keep their speed.
+/// How many bounces between two [`World::take_impacts`](super::World::take_impacts) keep their speed.
 pub const IMPACTS_KEPT: usize = 4;
 
 /// The bounces against tiles and between marbles (eq. 1 with `e`, not the slow
-/// impacts that become contacts) since the last [`World::take_impacts`], for
+/// impacts that become contacts) since the last [`World::take_impacts`](super::World::take_impacts), for
 /// what a game plays or shows of them: a click per bounce, louder the harder it
 /// hits. A bounce between two marbles counts once, at their closing speed.
 ///
