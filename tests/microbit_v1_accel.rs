@@ -28,11 +28,11 @@ use marble_rolling::board::qemu::virtual_lsm303agr::{
     ChipControl, InjectedFault, VirtualLsm303agr, MICROBIT_V2,
 };
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::input::event::Tilt;
 use marble_rolling::input::sensor::{AccelMg, Fault, Read, Transition};
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::physics::Scalar;
+use marble_rolling::player::Player;
 use marble_rolling::render::screens::fault_frame;
 
 type Twi<'a> = VirtualTwi<'a, Box<dyn Fn() -> u64 + 'a>>;

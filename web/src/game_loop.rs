@@ -1,5 +1,5 @@
 //! The game loop: the page's game (`App`, in `APP`) plays one
-//! [`Player::tick`](marble_rolling::game::player::Player::tick) a frame at the
+//! [`Player::tick`](marble_rolling::player::Player::tick) a frame at the
 //! page's tilt, keeps the LEDs and the last finished attempt, and moves
 //! between the level lists (built-ins, the editor's level, a generated maze);
 //! its exports are the frame, the tilt, the level choice and the attempt's
@@ -10,9 +10,9 @@ use core::cell::RefCell;
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::FRAME_HZ;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::input::event::Tilt;
+use marble_rolling::player::FRAME_HZ;
 
 use crate::ghost::{GhostRun, Recorder};
 use crate::maze::MazeArgs;
@@ -237,7 +237,7 @@ pub extern "C" fn frame_hz() -> u32 {
 }
 
 /// One game frame at the current tilt: the loop's step
-/// ([`Player::tick`](marble_rolling::game::player::Player::tick)). Bit 0: an
+/// ([`Player::tick`](marble_rolling::player::Player::tick)). Bit 0: an
 /// attempt finished; bit 1: a new attempt started.
 #[no_mangle]
 pub extern "C" fn tick() -> u32 {

@@ -39,10 +39,10 @@ use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatri
 use marble_rolling::board::qemu::{Options, HEIGHT, MAZE_REACH, QEMU_RAM, WIDTH};
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{Frame, OnTimeIntegrator, Scanner};
+use marble_rolling::player::Player;
 use marble_rolling::records::{Ghosts, Records};
 
 use marble_qemu as hw;

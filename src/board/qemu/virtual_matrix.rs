@@ -28,7 +28,7 @@
 //! level's screen (which is otherwise exactly what it was before storeys).
 //!
 //! [`storey_tile`]: crate::render::storey_tile
-//! [`Status::marbles`]: crate::game::player::Status
+//! [`Status::marbles`]: crate::player::Status
 
 use core::fmt::Write as _;
 
@@ -39,10 +39,10 @@ use super::{HEIGHT, WIDTH};
 use crate::game::endless::{MazeArgs, MazeSlot};
 use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
-use crate::game::player::Status;
-use crate::game::player::FRAME_HZ;
 use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 use crate::matrix::{Brightness, Frame, OnTimeIntegrator, ScanStep, Scanner};
+use crate::player::Status;
+use crate::player::FRAME_HZ;
 #[cfg(feature = "storey-maps")]
 pub use storey_maps::{map_window, MapWindow, MAPS_COLUMNS, MAP_ROWS};
 
@@ -307,10 +307,10 @@ mod storey_maps {
 
     use super::{grey, shade, Out, HEIGHT};
     use crate::game::level::LevelView;
-    use crate::game::player::Status;
-    use crate::game::player::FRAME_HZ;
     use crate::matrix::output::Console;
     use crate::matrix::MAX_BRIGHTNESS;
+    use crate::player::Status;
+    use crate::player::FRAME_HZ;
     use crate::render::{blink_on, storey_tile};
 
     /// How wide the storey maps may be together, in terminal columns with their
