@@ -16,11 +16,12 @@ use std::cell::Cell;
 use embassy_futures::block_on;
 use embedded_hal_async::i2c::I2c;
 
+use marble_rolling::board::i2c::Recovering;
 use marble_rolling::board::microbit::{INPUT_PERIOD_MS, SUPERVISOR};
 use marble_rolling::board::microbit_v1::accel::{identify, nxp, Accelerometer, NxpChip, PROBES};
 use marble_rolling::board::microbit_v1::nxp_driver::{probe, read};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Polled, Probed};
-use marble_rolling::board::microbit_v1::twi::{Pause, Recovering, TwiError};
+use marble_rolling::board::microbit_v1::twi::{Pause, TwiError};
 use marble_rolling::board::microbit_v1::virtual_nxp::{
     VirtualChip, VirtualNxp, VirtualTwi, RESET_US,
 };

@@ -48,7 +48,7 @@ use marble_rolling::records::{Ghosts, Records};
 use marble_qemu as hw;
 
 use hw::uart::{UartConsole, UartRx};
-use sensor::{Bus, Keys, QemuInput, SensorReport};
+use sensor::{Bus, Keys, QemuInput, SensorReport, TimedTwim};
 
 /// The links between the tasks.
 static LINKS: Links<WIDTH, HEIGHT> = Links::new();
@@ -170,7 +170,7 @@ async fn sensor_input(options: Options) -> ! {
         sensor::now_us as fn() -> u64,
         QEMU_RAM,
     );
-    let sensor = lsm303agr::Lsm303agr::new_with_i2c(Bus::new(twim));
+    let sensor = lsm303agr::Lsm303agr::new_with_i2c(Bus::new(TimedTwim::new(twim)));
     let keys = options.interactive.then(|| Keys::new(UartRx, UartConsole));
     let mut input = QemuInput::new(sensor, keys, &CHIP, &REPORT);
     app::input_task(&LINKS, &mut input).await

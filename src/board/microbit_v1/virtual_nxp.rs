@@ -1,6 +1,6 @@
 //! Virtual MMA8653FC and FXOS8700CQ, and the QEMU board's virtual LSM303AGR
 //! as a v1.5 carries it ([`VirtualChip`]), on a virtual v1 TWI: the v1's sensor
-//! stack (probe, [`super::nxp_driver`], [`Recovering`](super::twi::Recovering),
+//! stack (probe, [`super::nxp_driver`], [`Recovering`](crate::board::i2c::Recovering),
 //! the supervision) runs against them on the host, with the fidelity rules of
 //! the QEMU board's virtual LSM303AGR
 //! (`board::qemu::virtual_lsm303agr`) and its [`ChipControl`] for the tilt and
@@ -58,7 +58,8 @@
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 
 use super::accel::{nxp, Accelerometer};
-use super::twi::{BusClear, Pause, TwiError};
+use super::twi::{Pause, TwiError};
+use crate::board::i2c::ClearBus;
 use crate::board::qemu::virtual_lsm303agr::{
     ChipControl, InjectedFault, SampleSource, VirtualLsm303agr, MICROBIT_V2,
 };
@@ -647,7 +648,7 @@ impl<C: Fn() -> u64> I2c for VirtualTwi<'_, C> {
     }
 }
 
-impl<C: Fn() -> u64> BusClear for VirtualTwi<'_, C> {
+impl<C: Fn() -> u64> ClearBus for VirtualTwi<'_, C> {
     /// Frees the bus, unless the slave is still faulty.
     fn clear_bus(&mut self) {
         self.clears = self.clears.wrapping_add(1);
