@@ -3,11 +3,11 @@
 //! [`TiltPipeline`] supervision — running on a virtual LSM303AGR on a virtual
 //! TWIM (`marble_rolling::board::qemu::{virtual_lsm303agr, virtual_i2c}`).
 //!
-//! The terminal's arrow keys no longer hand the game a tilt: they set the
+//! The terminal's arrow keys do not hand the game a tilt: they set the
 //! virtual chip's tilt, and the game gets what the driver reads back through
 //! the pipeline, with the sensor's down/up transitions; the digit keys inject
-//! faults (see `fault_keys`). Commands from keys pass through as before. The
-//! headless runs (demo, fault script) have no keys; the fault script drives
+//! faults (see `fault_keys`). Commands from keys pass straight to the game.
+//! The headless runs (demo, fault script) have no keys; the fault script drives
 //! the chip through the same [`ChipControl`].
 //!
 //! Like `boards/microbit/src/sensor.rs`'s `MicrobitInput`, which this follows

@@ -25,7 +25,7 @@
 //! of tiles on every storey, centred on the followed marble and clamped to
 //! the maze (`map_window`). Every draw ends by clearing the rest of the
 //! screen, so the maps of a level before do not linger under a one-storey
-//! level's screen (which is otherwise exactly what it was before storeys).
+//! level's screen, which draws none.
 //!
 //! [`storey_tile`]: crate::render::storey_tile
 //! [`Status::marbles`]: crate::player::Status
