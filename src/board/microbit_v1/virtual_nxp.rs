@@ -198,7 +198,7 @@ impl VirtualNxp {
     }
 
     /// Back to the power-on state (the clock and the tilt are kept).
-    pub fn power_on_reset(&mut self) {
+    pub(crate) fn power_on_reset(&mut self) {
         self.regs = [0; REGISTERS];
         self.pointer = 0;
         self.msb_read = 0;
@@ -247,18 +247,18 @@ impl VirtualNxp {
     }
 
     /// Sets the tilt (board frame, milli-g) the next samples take.
-    pub fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
+    pub(crate) fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
         self.tilt_mg = tilt_mg;
     }
 
     /// Frozen (no new samples) or garbage (implausible samples).
-    pub fn set_faults(&mut self, frozen: bool, garbage: bool) {
+    pub(crate) fn set_faults(&mut self, frozen: bool, garbage: bool) {
         self.frozen = frozen;
         self.garbage = garbage;
     }
 
     /// Runs the sampling clock to `now_us`: latches a sample when one is due.
-    pub fn advance_to(&mut self, now_us: u64) {
+    pub(crate) fn advance_to(&mut self, now_us: u64) {
         self.now_us = self.now_us.max(now_us);
         if !self.active() || self.now_us < self.next_due_us {
             return;
@@ -331,7 +331,7 @@ impl VirtualNxp {
     /// An I²C write: sub-address, then data from there on. `false` when a
     /// data byte was not acknowledged (the FXOS8700CQ's `RST`): the bytes
     /// after it are not taken.
-    pub fn i2c_write(&mut self, bytes: &[u8]) -> bool {
+    pub(crate) fn i2c_write(&mut self, bytes: &[u8]) -> bool {
         let Some((&sub, data)) = bytes.split_first() else {
             return true;
         };
@@ -346,7 +346,7 @@ impl VirtualNxp {
     }
 
     /// An I²C read from the register pointer on.
-    pub fn i2c_read(&mut self, buffer: &mut [u8]) {
+    pub(crate) fn i2c_read(&mut self, buffer: &mut [u8]) {
         for byte in buffer.iter_mut() {
             *byte = self.read(self.pointer);
             self.pointer = (self.pointer + 1) & 0x7F;
