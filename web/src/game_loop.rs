@@ -14,8 +14,7 @@ use marble_rolling::game::rules::Phase;
 use marble_rolling::input::event::Tilt;
 use marble_rolling::player::FRAME_HZ;
 
-use crate::ghost::{GhostRun, Recorder};
-use crate::maze::MazeArgs;
+use crate::ghost_run::{GhostRun, Recorder};
 use crate::{AnyPlayer, Single};
 
 /// The game, set up by [`init`].
@@ -34,9 +33,20 @@ pub(crate) struct Finished {
     /// Frames on the level clock (the time a player is shown and a record keeps).
     pub(crate) clock: u32,
     pub(crate) hash: u64,
-    /// Bytes of the attempt's ghost in [`RECORD`](crate::ghost::RECORD) (a
+    /// Bytes of the attempt's ghost in [`RECORD`](crate::ghost_run::RECORD) (a
     /// win played whole from its first frame, that fitted); 0 for none.
     pub(crate) ghost_len: u32,
+}
+
+/// The arguments of
+/// [`generate`](marble_rolling::game::generate::generate) a generated maze
+/// came from ([`crate::maze`] makes it).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) struct MazeArgs {
+    pub(crate) seed: u32,
+    pub(crate) size: u8,
+    pub(crate) storeys: u8,
+    pub(crate) difficulty: u8,
 }
 
 /// Where the level list in play comes from.

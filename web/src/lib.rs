@@ -75,6 +75,7 @@
 pub mod download;
 pub mod game_loop;
 pub mod ghost;
+pub mod ghost_run;
 pub mod maze;
 pub mod page_state;
 pub mod storage;
