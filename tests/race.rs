@@ -522,6 +522,43 @@ fn a_blackout_mid_race_leaves_each_board_alone_then_they_agree() {
     assert!(c.boards.iter().all(|b| !b.race().unwrap().link().silent()));
 }
 
+/// A blackout longer than the outbox holds: the second board looks at the
+/// maze for 3 000 frames (a flat board: blocks of 16 frames, 2 048 frames
+/// in the outbox) while nothing gets through for 30 s, so its run outgrows
+/// the outbox and can no longer reach the other whole. Nothing stalls: both
+/// runs go on to their end, and whatever verdicts the boards still reach
+/// (the runs they hold may settle it) mirror each other.
+#[test]
+fn a_blackout_longer_than_the_outbox_stalls_nothing() {
+    let mazes = Mazes::new(&[SPEC_2]);
+    let boards = vec![Board::new(1, SPEC_2, 0), Board::new(2, SPEC_2, 3000)];
+    let mut c = Channel::new(boards, CLEAR, 5);
+    c.run(&mazes, 30 * HZ, |c| {
+        c.boards
+            .iter()
+            .all(|b| b.race().is_some_and(|r| r.own_run().frames > 64))
+    });
+    let from = c.now;
+    c.weather.blackout = (from, from + 30 * HZ);
+    c.run(&mazes, from + 60 * HZ, |_| false);
+    let races: Vec<_> = c.boards.iter().map(|b| b.race().unwrap()).collect();
+    for r in &races {
+        assert_ne!(
+            r.own_run().phase,
+            Phase::Playing,
+            "its run went on to its end"
+        );
+    }
+    assert!(
+        races[1].lost() && !races[0].lost(),
+        "the long run outgrew its outbox"
+    );
+    if let (Some(a), Some(b)) = (races[0].verdict(), races[1].verdict()) {
+        assert_eq!(a, b.mirrored());
+    }
+    println!("{}\n{}", describe(&c.boards[0]), describe(&c.boards[1]));
+}
+
 /// A board restarted in the middle of a race is a new board: its opponent
 /// says it is alone after three seconds of silence, plays its run to its end
 /// and claims no verdict; the restarted board never joins the old race; once

@@ -344,16 +344,15 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let p = m.pos;
         // Past the board's edge: the border walls and the lid close every
         // storey, so a centre beyond them went under the board through a hole
-        // (a board shaken hard rolled a fallen marble round the border slab's
-        // lower edges and out sideways: the events soak, frame 659 548).
+        // (a board shaken hard can roll a fallen marble round the border slab's
+        // lower edges and out sideways).
         let beyond = p.x < S::ZERO || p.z < S::ZERO || p.x > ex || p.z > ez;
         if SPACE {
             // Through a hole once entirely below the floor slab (top at or below
             // −s): there is nothing down there to hold it, not even under the
             // neighbouring tiles. At exactly −s the slab's underside could hold it
-            // up: a board shaken hard (its surface velocity in eq. 1) carried a
-            // fallen marble along the underside at 120 pitch/s (the events soak,
-            // frame 539 521).
+            // up, and a board shaken hard (its surface velocity in eq. 1) would
+            // carry a fallen marble along the underside at up to 120 pitch/s.
             let depth = self.params.layout.s + self.params.radius;
             if beyond || p.y <= -depth || p.y > S::from_int(self.tiles.storeys() as i32 + 3) {
                 m.out = true;

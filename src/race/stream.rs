@@ -143,8 +143,12 @@ impl Outbox {
         Ok(())
     }
 
-    /// Closes the run: cuts what is pending and keeps `end` to send.
+    /// Closes the run: cuts what is pending and keeps `end` to send. After an
+    /// [`Overflow`] there is no end to send: the opponent could not reach it.
     pub fn end(&mut self, end: End) -> Result<(), Overflow> {
+        if self.overflowed {
+            return Err(Overflow);
+        }
         while !self.pending.is_empty() {
             self.cut()?;
         }

@@ -11,9 +11,13 @@ use crate::setup::{self, M4};
 use crate::workspace;
 
 /// `cargo xtask qemu [--demo] [ARGS...]`: headless when `--demo` is given or
-/// stdin is not a terminal (CI, pipes), else the game on the terminal.
+/// stdin is not a terminal (CI, pipes), else the game on the terminal;
+/// `--race`: two boards racing, headless ([`crate::race`]).
 pub fn qemu(args: &[String]) -> Outcome {
     let args = runner::drop_separators(args);
+    if args.iter().any(|arg| arg == "--race") {
+        return crate::race::run();
+    }
     let limit = runner::timeout(600)?;
     let tools = setup::m4_qemu()?;
     let elf = firmware::build(&Artifact::firmware("marble-qemu", "qemu", M4))?;

@@ -15,6 +15,7 @@ mod microbit_v1;
 mod process;
 mod profile;
 mod properties;
+mod race;
 mod runner;
 mod setup;
 mod size;

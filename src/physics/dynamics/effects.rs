@@ -77,7 +77,7 @@ impl<S: Scalar> Drag<S> {
         let limit = decel.shr(Self::SCALE);
         Drag {
             decel,
-            limit2: limit * limit,
+            limit2: limit.times(limit),
             half_step: decel.shr(k + 1),
         }
     }

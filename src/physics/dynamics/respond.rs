@@ -31,7 +31,7 @@ use super::super::vec::Vec3;
 #[inline]
 pub fn restitution<S: Scalar>(v_m: Vec3<S>, v_b: Vec3<S>, n: Vec3<S>, e: S) -> Vec3<S> {
     let vn = (v_m - v_b).dot(n);
-    v_m - n.scale((S::ONE + e) * vn)
+    v_m - n.scale((S::ONE + e).times(vn))
 }
 
 /// What a contact turned out to be.
@@ -101,7 +101,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         let mut out = vn;
         let mut deficit = S::ZERO;
         if b > S::ZERO {
-            let e2 = vn * vn - two * b * delta;
+            let e2 = vn.times(vn) - two.times(b).times(delta);
             if e2 > S::ZERO {
                 out = e2.sqrt();
             } else {
@@ -118,8 +118,8 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
             deficit,
         };
     }
-    let wc2 = w * w - two * b * delta;
-    if wc2 <= threshold * threshold {
+    let wc2 = w.times(w) - two.times(b).times(delta);
+    if wc2 <= threshold.times(threshold) {
         // Put on the surface with no normal speed. When the normal energy ½w² does
         // not cover lifting it by δ against b (a marble grazing an edge sideways),
         // the rest is the caller's to take from the tangential speed.
@@ -128,9 +128,9 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         // free flight), not a deficit.
         let mut deficit = S::ZERO;
         if wc2 < S::ZERO && b > S::ZERO {
-            let unpaid = delta - (w * w).div(b + b);
-            if unpaid > (delta - delta.next_down()) * S::from_int(8) {
-                deficit = b * unpaid;
+            let unpaid = delta - w.times(w).div(b + b);
+            if unpaid > (delta - delta.next_down()).times(S::from_int(8)) {
+                deficit = b.times(unpaid);
             }
         }
         return Resolution {
@@ -143,11 +143,11 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         };
     }
     let wc = wc2.sqrt();
-    let tau = (two * delta).div(w + wc).min(c.dt);
+    let tau = two.times(delta).div(w + wc).min(c.dt);
     // The velocity at impact: tangential part as now, normal part −w_c.
     let v_c = c.v + c.n.scale(w - wc);
     let out = (restitution(v_c, c.v_board, c.n, e) - c.v_board).dot(c.n);
-    let u = out * tau - b * tau * tau.half();
+    let u = out.times(tau) - b.times(tau).times(tau.half());
     if u <= S::ZERO {
         return Resolution {
             push: delta,
@@ -160,10 +160,10 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     }
     // Rounding must not add energy: the normal energy after (½vn² + b·u) may not
     // exceed the energy before (½w² − b·δ, the state at the end of the step).
-    let mut vn = out - b * tau;
-    let before = w * w.half() - b * delta;
-    if vn * vn.half() + b * u > before {
-        let room = before - b * u;
+    let mut vn = out - b.times(tau);
+    let before = w.times(w.half()) - b.times(delta);
+    if vn.times(vn.half()) + b.times(u) > before {
+        let room = before - b.times(u);
         let mut mag = if room > S::ZERO {
             (room + room).sqrt()
         } else {
@@ -172,7 +172,7 @@ pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
         // The root rounds, and an approximate one (micromath) may overshoot: step
         // down an ULP at a time, then by 1/64 at a time.
         let mut tries = 0;
-        while mag > S::ZERO && mag * mag.half() + b * u > before && tries < 16 {
+        while mag > S::ZERO && mag.times(mag.half()) + b.times(u) > before && tries < 16 {
             mag = if tries < 4 {
                 mag.next_down()
             } else {

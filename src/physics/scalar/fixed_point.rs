@@ -39,7 +39,7 @@ fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
 ///
 /// Its `muls` keeps the low 32 bits only, so LLVM builds an `i64` product from a
 /// call to the generic 64 × 64 library multiply (`__aeabi_lmul`, 37 instructions
-/// with its stack frame), which was 27 % of the v1 demo's instructions. Both
+/// with its stack frame), 27 % of the v1 demo's instructions through it. Both
 /// operands are 32-bit here, which [`mul_shr_halves`] uses. Not inlined: one copy
 /// for all the step's products keeps the v1 within its flash.
 #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]

@@ -3,7 +3,10 @@
 //! faces a resting marble keeps, and one contact's response (eq. 1 through
 //! `respond`).
 
-use super::*;
+use super::{
+    candidates, candidates_plane, contact, events, lid_contact, resolve, Contact, Feature, Impact,
+    Kick, Marble, Outcome, Scalar, Solver, TileIndex, Vec3, World, T_LOG2,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The contact solver's view of a step of `2^-k` s whose pull adds `dv` (pitch/s)
@@ -231,8 +234,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let vn_now = m.vel.dot(c.normal);
         // Under the format's top (127 pitch/s, the event step's limit; fixed steps
         // cap lower): `normal × vn_new` below must fit, and a unit normal times 128
-        // does not — it wrapped to −128 in release builds (found by the property
-        // `step_survives_arbitrary_states`).
+        // does not (it wraps to −128 in release builds; the property
+        // `step_survives_arbitrary_states` drives such states).
         let top = p.v_max.min(S::from_int(127));
         let vn_new = (res.vn + v_board.dot(c.normal))
             .shl(T_LOG2)

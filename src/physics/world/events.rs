@@ -478,8 +478,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         } else if f.slice.is_some_and(|sl| sl.rail) {
             // An event inside a rail slice (a bounce off a wall at its end, say)
             // leaves the flight its whole pull again: the rest of the slice is a
-            // plain one, bounded by the sink (the storey property: a rail slice
-            // of 3/4 step went on after a bounce and sank the marble 3.4 % of r).
+            // plain one, bounded by the sink (a rail slice of 3/4 step going on
+            // after a bounce can sink the marble 3.4 % of r).
             let to = f.after(self.slice_len(&f.seg).min(f.len));
             if let Some(sl) = f.slice.as_mut() {
                 sl.rail = false;

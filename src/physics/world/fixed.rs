@@ -12,7 +12,10 @@
 //! default 1024 steps/s and a 3.5 mm marble in a 12 mm pitch the cap is 64 pitch/s
 //! (0.77 m/s), well above what a tilted toy reaches in one cell.
 
-use super::*;
+use super::{
+    advance, advance_plane, candidates, candidates_plane, lid_contact, out_of_reach, Kick, Marble,
+    Scalar, TileIndex, Vec3, World,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     pub(super) fn step_fixed(&mut self) {

@@ -1,6 +1,6 @@
 //! One marble's state: what the steppers move, compare for sleep and hash.
 
-use super::*;
+use super::Vec3;
 
 /// One marble. Equality compares the physical state (`asleep` is a cache of
 /// "nothing will change", not state).

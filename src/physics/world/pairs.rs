@@ -2,7 +2,7 @@
 //! slices): pushed apart, eq. 1 between them, and one more tile pass for a
 //! marble its neighbour pushed.
 
-use super::*;
+use super::{events, marble_pair, Marble, Scalar, Solver, Vec3, World, T_LOG2};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Marble–marble contacts. A marble pushed by its neighbour gets one more tile
@@ -31,14 +31,14 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             return false;
         }
         let len2 = d.length_sq();
-        if len2 >= r2 * r2 {
+        if len2 >= r2.times(r2) {
             return false;
         }
         let inv = len2.rsqrt();
         let (n, len) = if inv == S::ZERO {
             (Vec3::new(S::ONE, S::ZERO, S::ZERO), S::ZERO)
         } else {
-            (d.scale(inv), len2 * inv)
+            (d.scale(inv), len2.times(inv))
         };
         let push = (r2 - len).half();
         let (va, vb, bounce) = marble_pair(

@@ -1,7 +1,7 @@
 //! What a scene is, in integers ([`PhysicsSpec`]), and the same in the scalar the
 //! world runs in ([`Params`]): the one place a scene's numbers are checked.
 
-use super::*;
+use super::{Effects, LayoutError, Scalar, TileLayout, MAX_MG, T_LOG2};
 
 /// How [`World::step`] crosses its interval `dt`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

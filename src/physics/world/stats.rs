@@ -1,7 +1,7 @@
 //! What the steps did: counters per effect and the bounces a game may show. The
 //! physics only adds to them; nothing in it reads them back.
 
-use super::*;
+use super::Scalar;
 
 /// Counters of what the step did. Each effect's counter moves only when that
 /// effect's code runs.

@@ -38,7 +38,7 @@
 //! `two-floors`: `tests/budget.rs`), the stress scenes of a landing on a marble and
 //! of four marbles shaken do.
 
-use super::*;
+use super::{Flight, Scalar, World};
 
 /// Units of work (flights) a step may spend, all marbles together, unless
 /// [`World::set_flight_budget`] sets another budget (see the module doc). Every

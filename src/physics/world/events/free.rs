@@ -19,7 +19,7 @@
 //! eq. 6, which eq. 5 and 6 decide alike on every boundary, on every backend.
 
 use super::super::super::geometry::grid::Tiles;
-use super::*;
+use super::{reach, Aabb, Marble, Scalar, TileIndex, TileRange, Vec3, World};
 
 /// Rows a region grows each way beyond the search's own tiles: a marble crossing
 /// an open floor keeps one region for several frames (grown further, a rebuild
@@ -38,10 +38,11 @@ const NONE: u8 = u8::MAX;
 pub(in crate::physics::world) struct FreeRegion<S> {
     lo: Vec3<S>,
     hi: Vec3<S>,
-    /// `Marble::rest_mask` when built ([`NONE`]: no region).
+    /// `Marble::rest_mask` when built ([`NONE`]: no region). Each held face's
+    /// plane is the box's side it bounds (a region is built only then), so the
+    /// planes need no room of their own: the level's setup keeps several copies
+    /// of the world on the micro:bit v1's stack.
     held: u8,
-    /// `Marble::rest_plane` when built, on the held axes (zero on the others).
-    planes: [S; 3],
 }
 
 impl<S: Scalar> FreeRegion<S> {
@@ -57,7 +58,6 @@ impl<S: Scalar> FreeRegion<S> {
             z: S::ZERO,
         },
         held: NONE,
-        planes: [S::ZERO; 3],
     };
 
     /// Whether the marble holds the faces the region was built with.
@@ -68,9 +68,11 @@ impl<S: Scalar> FreeRegion<S> {
         }
         let mut bits = self.held;
         while bits != 0 {
-            let axis = (bits.trailing_zeros() / 2) as usize;
+            let bit = bits.trailing_zeros();
             bits &= bits - 1;
-            if self.planes[axis] != m.rest_plane[axis] {
+            let axis = (bit / 2) as usize;
+            let side = if bit % 2 == 1 { self.lo } else { self.hi };
+            if side.axis(axis) != m.rest_plane[axis] {
                 return false;
             }
         }
@@ -180,18 +182,14 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             lo: layout.tile_box(range.lo).min,
             hi: layout.tile_box(range.hi).max,
             held,
-            planes: [S::ZERO; 3],
         };
         if space {
             // The lid is searched when the widened box reaches it.
             region.hi.y = region.hi.y.min(self.lid());
         }
-        for (axis, plane) in region.planes.iter_mut().enumerate() {
-            if held & (3 << (2 * axis)) != 0 {
-                *plane = m.rest_plane[axis];
-            }
+        if region.holds(m) {
+            self.free[n] = region;
         }
-        self.free[n] = region;
     }
 }
 

@@ -162,7 +162,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// its parts along the edges (the rail) and the slice is bounded like a pivot
     /// slice's, not by the sink.
     ///
-    /// Two supports used to mean plain slices of `2^-5` step, short enough that
+    /// Plain slices over two supports would be `2^-5` step, short enough that
     /// the pull sinks the marble at most `2^-12·r` into either edge before the
     /// passes push it out: 32 slices and 32 touches a frame for a marble lying
     /// still over a slot, every frame a hand on the board changes the pull by a

@@ -2,7 +2,10 @@
 //! every tile in reach (and the lid), the end of a held face's support, and what
 //! a slice leaves out.
 
-use super::*;
+use super::{
+    behind_held, entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Event, Flight,
+    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The earliest event of the flight `f` within `limit` steps, leaving tile
@@ -58,8 +61,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // fixed steps do. Where a marble rolls over an edge that two floor tiles
         // share, the two would otherwise hand the slice back and forth, a
         // zero-length event each, until the step's event budget ran out and
-        // blind slices flew the marble 9 µm into the next edge (found by the
-        // multi-storey property, a slot beside a hole; one storey has it too).
+        // blind slices flew the marble up to 9 µm into the next edge (a slot
+        // beside a hole, on one storey or several).
         // A pivot slice leaves out only its edge: another tile it rests against
         // would be sunk into over the pivot slice's length (two edges under a
         // marble over a slot), so it is found at once and a plain slice takes over.
@@ -189,11 +192,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// (bounced off the wall across a narrow corridor, say) and flies back is
     /// searched against it like against any tile: the passes at the slice's end
     /// are for the slow contact the slice was begun for, and a return at speed
-    /// would sink into the tile until then (the narrow-corridor regression, 47 µm
-    /// at 1 pitch/s). Nor while it closes fast enough to sink more than `2^-12·r`
+    /// would sink into the tile until then (47 µm at 1 pitch/s in a narrow
+    /// corridor). Nor while it closes fast enough to sink more than `2^-12·r`
     /// into the tile within the slice's `limit` steps: a marble over a slot,
-    /// rolling round one edge, closes on the other at up to the threshold, and
-    /// over a slice that sank it `1.3·10⁻³ r` in (the storey property).
+    /// rolling round one edge, closes on the other at up to the threshold, which
+    /// over a slice sinks it `1.3·10⁻³ r` in.
     fn still_skipped(&self, seg: &Segment<S>, skip: TileIndex, limit: S) -> bool {
         let p = &self.params;
         let (r, tol) = (p.radius, self.tol());
@@ -264,10 +267,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     // Eq. 5's columns are `[lo, hi)`: a centre on `hi` is still in
                     // the next one, which holds the face (eq. 6 says so, and the
                     // hold asks eq. 6). Entering through `hi` at the closed end
-                    // released the face on the seam, a touch held it again at
-                    // once, and the two took turns until the idle rule flew a
-                    // blind slice at 28 pitch/s into the next wall (3.7·10⁻³ r
-                    // in: the storey property).
+                    // would release the face on the seam, a touch hold it again
+                    // at once, and the two take turns until the idle rule flew a
+                    // blind slice into the next wall (at 28 pitch/s: 3.7·10⁻³ r
+                    // in).
                     let b = layout.tile_box(t);
                     let hi = Vec3::new(
                         b.max.x.next_down(),

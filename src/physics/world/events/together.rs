@@ -3,7 +3,10 @@
 //! slices with the fixed step's pair code.
 
 use super::budget::{PAIR_SLICE, PAIR_TEST};
-use super::*;
+use super::{
+    cap_speed, marble_pair, max_abs, swept, toi_box, Aabb, Contact, Event, Flight, Marble, Scalar,
+    Segment, Solver, StepObserver, Toi, Vec3, World, MAX_EVENTS, T_LOG2,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Several marbles that touch each other: one timeline for all, every event —

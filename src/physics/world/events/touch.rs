@@ -2,7 +2,10 @@
 //! against an edge, a slice); a held face's support ends; rolling resistance
 //! stops the marble; a slice ends with the fixed step's contact passes.
 
-use super::*;
+use super::{
+    cap_speed, impact_speed, max_abs, no_faster, Around, Contact, Event, Feature, Flight, Marble,
+    Scalar, Segment, Solver, World, EVERY, IDLE_EVENTS, MAX_EVENTS, T_LOG2,
+};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Handles event `ev`, reached after a flight of `s` steps.
