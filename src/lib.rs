@@ -2,6 +2,7 @@
 //!
 //! Data flows one way: board → [`input`] → [`game`] (with its [`physics`]) →
 //! [`render`] → [`matrix`] (the display), and [`sound`] beside the picture;
+//! the [`player`] runs that loop a frame at a time, above all of them;
 //! imports point down the layers of docs/architecture.md (`tests/layers.rs`
 //! checks them). The [`board`] modules hold the safe,
 //! host-tested half of each board; the firmware's tasks are `app` (feature
@@ -16,6 +17,7 @@ pub mod input;
 pub mod render;
 pub mod matrix;
 pub mod sound;
+pub mod player;
 pub mod race;
 #[cfg(feature = "records")]
 pub mod records;

@@ -1,6 +1,6 @@
 //! Best time per level, kept in flash across power-off (feature `records`).
 //!
-//! A record is the number of game frames ([`FRAME_HZ`](crate::game::player::FRAME_HZ)
+//! A record is the number of game frames ([`FRAME_HZ`](crate::player::FRAME_HZ)
 //! per second) a level took to win, stored under the level's index with
 //! `sequential-storage`'s map, over any `embedded-storage-async` NOR flash: the
 //! micro:bit v2's NVMC (wrapped by `BlockingAsync`), QEMU's RAM image saved to a

@@ -22,7 +22,7 @@ pub const CLICK_FROM_MM_S: u32 = 40;
 pub const CLICK_FULL_MM_S: u32 = 640;
 
 /// The most sounds one frame makes: a click per kept impact, and the outcome.
-pub const MAX_SOUNDS: usize = IMPACTS_KEPT + 1;
+pub(crate) const MAX_SOUNDS: usize = IMPACTS_KEPT + 1;
 
 /// One sound to play.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -128,7 +128,7 @@ fn wins_every_builtin_level_with_the_sensor_tilt_path() {
 #[test]
 fn wins_with_other_tilt_paths() {
     // No filter at all (gravity = −reading), a quick filter, a sluggish one, and
-    // (ramped) dead zones, which the default path no longer has: more or less lag
+    // (ramped) dead zones, which the default path does not have: more or less lag
     // and friction than the gains were tuned for.
     let paths = [
         None,

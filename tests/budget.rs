@@ -6,11 +6,11 @@ mod common;
 
 use common::*;
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::game::stress::{StressScene, STRESS};
 use marble_rolling::physics::{Effects, Fx, PhysicsSpec, Scalar, Vec3, FLIGHT_BUDGET};
+use marble_rolling::player::Player;
 
 /// 5 µm in pitch (10 mm: `PhysicsSpec::DEFAULT`'s long tile).
 const FIVE_UM: f64 = 0.005 / 10.0;

@@ -11,13 +11,13 @@ use marble_rolling::game::endless::{
 use marble_rolling::game::generate::{generate, text_bytes, MAX_DIFFICULTY, MAX_SIZE};
 use marble_rolling::game::level::{parse, LevelView};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::{GameConfig, Phase, DEFAULT_EVENTS};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::physics::geometry::grid::{words_for, MAX_STOREYS};
 use marble_rolling::physics::geometry::tiles::TileIndex;
 use marble_rolling::physics::Fx;
+use marble_rolling::player::Player;
 
 /// The boards' reaches, by name.
 const BOARDS: [(&str, Reach); 3] = [
@@ -433,8 +433,7 @@ fn the_run_goes_on_from_the_last_built_in_level_into_mazes() {
     let mut played = Vec::new();
     for _ in 0..3 {
         let level = endless.level(number, &mut mazes).expect("a level");
-        let autopilot =
-            carried.is_none_or(|c: marble_rolling::game::player::Carried| c.autopilot());
+        let autopilot = carried.is_none_or(|c: marble_rolling::player::Carried| c.autopilot());
         let mut made = FivePlayer::single(level, SYNTHETIC_TILT, autopilot);
         let player = made.as_mut().expect("set up");
         player.endless_at(number);

@@ -8,11 +8,11 @@ use common::*;
 use marble_rolling::game::generate::generate;
 use marble_rolling::game::level::{parse, Level};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::game::stress::STRESS;
 use marble_rolling::physics::{Effects, Fx, Scalar, Vec3};
+use marble_rolling::player::Player;
 
 type Pilot<'a> = Player<'a, 19, 9, true, true>;
 

@@ -12,7 +12,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// Module-path prefixes and their layer, lowest first. The player runs the
-/// game loop above the picture and the sound it drives, so `game::player`
+/// game loop above the picture and the sound it drives, so `player`
 /// sits above `render` and `sound`, which read the rules and levels below.
 const LAYERS: &[(&str, u8)] = &[
     ("physics", 0),
@@ -22,7 +22,7 @@ const LAYERS: &[(&str, u8)] = &[
     ("race", 3),
     ("render", 4),
     ("sound", 4),
-    ("game::player", 5),
+    ("player", 5),
     ("records", 6),
     ("board", 7),
     ("app", 8),
@@ -271,6 +271,23 @@ fn imports_point_down_the_layers_and_close_no_loop() {
         "layer violations:\n{}",
         errors.join("\n")
     );
+}
+
+/// Each layer is a whole folder (or file) of `src/`: no module takes a layer
+/// other than its folder's, so the floors can be read off the tree.
+#[test]
+fn every_layer_is_a_folder_of_src() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    for (prefix, _) in LAYERS {
+        assert!(
+            !prefix.contains("::"),
+            "layer {prefix:?} is a module inside a folder: give it a folder of its own"
+        );
+        assert!(
+            root.join(prefix).is_dir() || root.join(format!("{prefix}.rs")).is_file(),
+            "layer {prefix:?} names no src/{prefix}/ and no src/{prefix}.rs"
+        );
+    }
 }
 
 /// The check can fail: a back arrow, a loop inside a layer and a module

@@ -220,7 +220,7 @@ fn with_header(header: &str) -> String {
 fn what_setup_refuses_is_a_parse_error_at_the_value() {
     // (header, line, column, kind, words the message must contain)
     let cases: &[(&str, u32, u32, LevelErrorKind, &[&str])] = &[
-        // Issue 12 item 4.1: a 0.004 mm pitch used to parse and fail at setup.
+        // A 0.004 mm pitch is refused at parsing, where the line is known, not at setup.
         (
             "short_mm: 0.001\nlong_mm: 0.003\nmarble_radius_mm: 0.001\n",
             2,

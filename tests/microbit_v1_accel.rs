@@ -16,11 +16,12 @@ use std::cell::Cell;
 use embassy_futures::block_on;
 use embedded_hal_async::i2c::I2c;
 
+use marble_rolling::board::i2c::Recovering;
 use marble_rolling::board::microbit::{INPUT_PERIOD_MS, SUPERVISOR};
 use marble_rolling::board::microbit_v1::accel::{identify, nxp, Accelerometer, NxpChip, PROBES};
 use marble_rolling::board::microbit_v1::nxp_driver::{probe, read};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Polled, Probed};
-use marble_rolling::board::microbit_v1::twi::{Pause, Recovering, TwiError};
+use marble_rolling::board::microbit_v1::twi::{Pause, TwiError};
 use marble_rolling::board::microbit_v1::virtual_nxp::{
     VirtualChip, VirtualNxp, VirtualTwi, RESET_US,
 };
@@ -28,11 +29,11 @@ use marble_rolling::board::qemu::virtual_lsm303agr::{
     ChipControl, InjectedFault, VirtualLsm303agr, MICROBIT_V2,
 };
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::input::event::Tilt;
 use marble_rolling::input::sensor::{AccelMg, Fault, Read, Transition};
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::physics::Scalar;
+use marble_rolling::player::Player;
 use marble_rolling::render::screens::fault_frame;
 
 type Twi<'a> = VirtualTwi<'a, Box<dyn Fn() -> u64 + 'a>>;

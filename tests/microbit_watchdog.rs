@@ -13,7 +13,7 @@ use marble_rolling::board::microbit::{
     Heartbeats, Task, Tasks, Verdict, WatchdogGate, INPUT_PERIOD_MS, RTC_HZ, WATCHDOG_CHECK_MS,
     WATCHDOG_TIMEOUT_TICKS,
 };
-use marble_rolling::game::player::FRAME_HZ;
+use marble_rolling::player::FRAME_HZ;
 
 fn beat_all(h: &Heartbeats) {
     for task in Task::ALL {

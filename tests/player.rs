@@ -1,14 +1,14 @@
-//! The game loop step every front end runs (`game::player::Player::tick`):
+//! The game loop step every front end runs (`player::Player::tick`):
 //! a downed sensor pauses the game and the game resumes exactly where it was;
 //! the terminal player's keys give the firmware's readings and game.
 
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::{Player, LOSS_PAUSE_FRAMES, WIN_PAUSE_FRAMES};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::event::{Command, InputEvent, Tilt};
 use marble_rolling::input::keys::KeyTilt;
 use marble_rolling::input::sensor::Fault;
+use marble_rolling::player::{Player, LOSS_PAUSE_FRAMES, WIN_PAUSE_FRAMES};
 use marble_rolling::render::screens::fault_frame;
 
 type FivePlayer = Player<'static, 5, 5, true, false>;

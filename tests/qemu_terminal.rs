@@ -15,9 +15,9 @@ use marble_rolling::board::qemu::{self, HEIGHT, WIDTH};
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::levels::{by_name, LEVELS};
-use marble_rolling::game::player::{MarbleSpot, Player, Status};
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
+use marble_rolling::player::{MarbleSpot, Player, Status};
 use marble_rolling::render::storey_tile;
 
 /// QEMU's player: the board's matrix, the autopilot, the event stepper.

@@ -7,11 +7,11 @@ mod common;
 use common::*;
 use fixed::types::I8F24;
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::physics::{Effects, PhysicsSpec, Scalar, Vec3};
+use marble_rolling::player::Player;
 use marble_rolling::sound::{self, Sound, CLICK_FROM_MM_S};
 
 type S = I8F24;

@@ -206,7 +206,7 @@ fn a_held_tilt_rolls_at_five_sevenths_g_sin_theta() {
     // The firmware's tilt path (stuck check on) fed a sensor held still at θ, with
     // ±5 mg of noise that dithers its whole-mg output: over the window the marble
     // accelerates at 5/7·g·sin θ (rolling) or g·sin θ (sliding) within 0.5 %, 1° to
-    // 60°, whatever the noise's draw. (The old 20 mg dead zone took 20 mg off every
+    // 60°, whatever the noise's draw. (A 20 mg dead zone would take 20 mg off every
     // tilt: 1 076 instead of 1 216 mm/s² at 10°, nothing at all at 1°.)
     let src = open_floor("rolling", "0.01");
     let level = parse::<W>(&src).expect("parses");
@@ -287,7 +287,7 @@ fn rolling_resistance_holds_a_marble_on_a_near_level_board() {
         assert!(!moved, "2° ±5 mg at c_rr 0.05, seed {seed}: moved {d} mm");
     }
     // Without friction the same near-level boards do roll the marble: that is the
-    // physics of a frictionless marble, and the path no longer hides it.
+    // physics of a frictionless marble, and the path does not hide it.
     let (d, moved) = case("rolling", "0.01", level_board, 1);
     println!("level ±5 mg, no friction: moved {d:.2} mm in 10 s");
     assert!(moved && d > 0.1, "level ±5 mg, no friction: {d} mm");

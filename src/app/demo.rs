@@ -17,12 +17,12 @@ use super::links::{Links, Meter};
 use super::mode::{DemoSummary, GameExit};
 use crate::game::endless::{Endless, MazeArgs, MazeSlot, Seeds, StageError, DEMO_MAZES};
 use crate::game::levels::LEVELS;
-use crate::game::player::{Player, Status, WIN_PAUSE_FRAMES};
 use crate::game::rules::Phase;
 use crate::game::session::SYNTHETIC_TILT;
 use crate::input::event::{Command, InputEvent, Tilt};
 use crate::matrix::Frame;
 use crate::physics::world::SetupError;
+use crate::player::{Player, Status, WIN_PAUSE_FRAMES};
 use crate::render::screens::{win_flash, win_frame};
 
 /// [`Player::frame`]'s two calls, each counted (out of line: the demo's

@@ -12,10 +12,10 @@ use super::links::Win;
 use super::mode::{GameExit, GameMode};
 use super::FRAME_HZ;
 use crate::game::endless::{Endless, MazeSlot, Seeds, StageError};
-use crate::game::player::{Carried, Player};
 #[cfg(feature = "records")]
 use crate::game::rules::Phase;
 use crate::input::tilt::TiltConfig;
+use crate::player::{Carried, Player};
 
 #[cfg(feature = "ghosts")]
 use super::ghosts::GhostStore;
@@ -275,7 +275,7 @@ async fn play<
                 }
             }
             #[cfg(feature = "records")]
-            let status = crate::game::player::Status {
+            let status = crate::player::Status {
                 best: builtin
                     .and_then(|index| links.bests.get().get(index).copied())
                     .flatten(),
@@ -284,7 +284,7 @@ async fn play<
             #[cfg(not(feature = "records"))]
             let status = player.status();
             #[cfg(feature = "storey-maps")]
-            let status = crate::game::player::Status {
+            let status = crate::player::Status {
                 maze: endless.maze(number),
                 ..status
             };

@@ -11,9 +11,9 @@ use embassy_sync::signal::Signal;
 
 #[cfg(feature = "records")]
 use crate::game::levels::LEVELS;
-use crate::game::player::Status;
 use crate::input::event::{InputEvent, Tilt};
 use crate::matrix::Frame;
+use crate::player::Status;
 #[cfg(feature = "sound")]
 use crate::sound::Sound;
 

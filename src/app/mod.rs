@@ -15,7 +15,7 @@
 //!
 //! * [`TiltInput`]: where tilt and commands come from (accelerometer and
 //!   buttons, or a terminal via [`TerminalInput`]).
-//! * [`game_task`] runs the game ([`Player`](crate::game::player::Player), the game layer's synchronous
+//! * [`game_task`] runs the game ([`Player`](crate::player::Player), the synchronous game
 //!   loop step) at the game's frame rate [`FRAME_HZ`] on an embassy `Ticker`
 //!   (not `Timer::after`, which rounds up to the time driver's tick and
 //!   drifts). After the built-in levels it plays the endless run of generated
@@ -51,8 +51,8 @@ mod sound_task;
 mod summary;
 mod terminal_input;
 
-pub use crate::game::player::FRAME_HZ;
 pub use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
+pub use crate::player::FRAME_HZ;
 pub use display_task::display_task;
 pub use game_task::game_task;
 #[cfg(feature = "ghosts")]

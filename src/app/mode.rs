@@ -54,7 +54,7 @@ pub enum GameExit {
     #[cfg(feature = "sleep")]
     Asleep {
         /// The level on show (its number in the run, as
-        /// [`Player::level_index`](crate::game::player::Player::level_index); at most 255).
+        /// [`Player::level_index`](crate::player::Player::level_index); at most 255).
         level: u8,
     },
 }

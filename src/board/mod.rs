@@ -13,5 +13,7 @@ pub mod qemu;
 pub mod microbit;
 // The micro:bit v1 board module (nRF51822): pure code, host-tested.
 pub mod microbit_v1;
+// What every board's I²C bus shares: the bus-clear rule.
+pub mod i2c;
 // The levels region both micro:bits read from flash (`cargo xtask hex --level`).
 pub mod levels_region;

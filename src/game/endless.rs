@@ -306,7 +306,7 @@ impl fmt::Display for StageError<'_> {
 /// The name a level text's header gives (`name: …` before `---`), for saying
 /// which level of the region is skipped when it does not parse. `None` when
 /// the header has none, or it is not UTF-8.
-pub fn name_of(text: &[u8]) -> Option<&str> {
+pub(crate) fn name_of(text: &[u8]) -> Option<&str> {
     for line in text.split(|&b| b == b'\n') {
         let line = line.strip_suffix(b"\r").unwrap_or(line);
         if line == b"---" {

@@ -45,12 +45,12 @@ use super::ghost_file::{self, GhostKeeper, GhostRun};
 use super::{load_level, Loaded};
 use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
-use crate::game::player::{Player, FRAME_HZ};
 use crate::game::rules::Phase;
 use crate::game::session::SYNTHETIC_TILT;
 use crate::input::event::InputEvent;
 use crate::input::keys::{Key, KeyTilt};
 use crate::matrix::MAX_BRIGHTNESS;
+use crate::player::{Player, FRAME_HZ};
 use crate::render::{blink_on, follow_axis, render_world, tile_point, Viewport};
 
 /// The firmware's player. The terminal draws its own picture, sized to the

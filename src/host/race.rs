@@ -26,13 +26,13 @@ use crossterm::{cursor, execute, queue};
 use super::play::{colour, key_of, shade, Args, TerminalGuard, GHOST_BRIGHTNESS};
 use crate::game::autopilot::Autopilot;
 use crate::game::level::LevelView;
-use crate::game::player::FRAME_HZ;
 use crate::game::session::Session;
 use crate::input::event::InputEvent;
 use crate::input::keys::{Key, KeyTilt};
 use crate::input::sensor::Calibration;
 use crate::matrix::MAX_BRIGHTNESS;
 use crate::physics::Fx as I8F24;
+use crate::player::FRAME_HZ;
 use crate::race::{self, LinkStage, MazeSpec, Race, RaceLink, Status, Verdict, MAX_PACKET};
 use crate::render::{blink_on, follow_axis, render_world, tile_point, Viewport};
 

@@ -71,7 +71,7 @@ impl AxisSource {
     }
 
     /// `-axis`.
-    pub const fn neg(axis: Axis) -> Self {
+    pub(crate) const fn neg(axis: Axis) -> Self {
         Self { axis, negate: true }
     }
 

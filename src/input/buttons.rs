@@ -50,7 +50,7 @@ pub struct ButtonConfig {
 
 impl ButtonConfig {
     /// For a 10 ms sampling period: 30 ms debounce, 1 s hold.
-    pub const DEFAULT_10MS: Self = Self {
+    pub(crate) const DEFAULT_10MS: Self = Self {
         debounce_samples: 3,
         hold_samples: 100,
     };

@@ -4,7 +4,7 @@
 //! them without knowing which.
 
 /// One g in milli-g.
-pub const ONE_G_MG: i32 = 1000;
+pub(crate) const ONE_G_MG: i32 = 1000;
 
 // ---------------------------------------------------------------------------
 // Tilt and commands

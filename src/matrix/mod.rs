@@ -72,7 +72,7 @@ pub const TICKS_PER_ROW: u32 = (1 << BCM_BITS) - 1;
 pub const SLICE_ORDER: [u8; BCM_BITS] = [3, 2, 1, 0];
 
 /// Widest supported matrix: a row's column pattern is a `u32` bitmask.
-pub const MAX_WIDTH: usize = 32;
+pub(crate) const MAX_WIDTH: usize = 32;
 
 /// Base tick frequency (Hz) that gives `refresh_hz` full refreshes per second
 /// of an `H`-row matrix: `refresh_hz × H × TICKS_PER_ROW` (saturating).

@@ -327,7 +327,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// about 24 KiB of Cortex-M4 code: more than a 64 KiB board can spare).
     ///
     /// `EVENTS` must agree with the world's [`Stepping`] (its `dt` was validated
-    /// for that mode); the game's [`Player`](crate::game::player::Player) sets up
+    /// for that mode); the game's [`Player`](crate::player::Player) sets up
     /// both from one constant.
     #[inline]
     pub fn step_in<const EVENTS: bool>(&mut self) {

@@ -79,7 +79,7 @@ pub const OUTSIDE: Brightness = 0;
 /// of the background (saturating at [`MAX_BRIGHTNESS`]).
 pub const MARBLE: Brightness = MAX_BRIGHTNESS;
 /// Goal blink frequency, as `log2` Hz: 2 Hz.
-pub const BLINK_HZ_LOG2: u32 = 1;
+pub(crate) const BLINK_HZ_LOG2: u32 = 1;
 /// Goal blink frequency (Hz): a full on/off cycle every half second, lit for
 /// the first quarter second of it (see [`blink_on`]).
 pub const BLINK_HZ: u32 = 1 << BLINK_HZ_LOG2;
@@ -87,7 +87,7 @@ pub const BLINK_HZ: u32 = 1 << BLINK_HZ_LOG2;
 /// lands on a lower storey (fading to nothing over a quarter second).
 pub const DROP_FLASH: Brightness = 6;
 /// The drop flash lasts `2^(frame_log2 − DROP_FLASH_LOG2)` frames: 1/4 s.
-pub const DROP_FLASH_LOG2: u32 = 2;
+pub(crate) const DROP_FLASH_LOG2: u32 = 2;
 /// Fraction bits of a [`TilePoint`] (1/64 tile).
 pub const SUBPIXEL_BITS: u32 = 6;
 /// One tile in [`TilePoint`] units.
@@ -193,7 +193,7 @@ pub const fn margin(size: i32) -> i32 {
 /// One axis of the viewport: `tiles` tiles on `size` pixels, following tile
 /// `focus` (if any) from the previous origin `current` (`None`: start fresh,
 /// centred on the focus).
-pub fn follow_axis(current: Option<i32>, tiles: i32, size: i32, focus: Option<i32>) -> i32 {
+pub(crate) fn follow_axis(current: Option<i32>, tiles: i32, size: i32, focus: Option<i32>) -> i32 {
     if tiles <= size {
         // Centred; the odd pixel (if any) goes to the right / bottom.
         return -((size - tiles) >> 1);

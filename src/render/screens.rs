@@ -42,7 +42,7 @@ pub fn record_frame<const W: usize, const H: usize>(shown: u32) -> Frame<W, H> {
 }
 
 /// Whether [`win_frame`] shows the full-on screen with `left` frames to go.
-pub fn win_flash(left: u32) -> bool {
+pub(crate) fn win_flash(left: u32) -> bool {
     (left / WIN_FLASH_FRAMES.max(1)).is_multiple_of(2)
 }
 

@@ -53,7 +53,7 @@ pub trait Job {
 }
 
 /// Every backend, as a mask for [`with_backend_in`].
-pub const ALL_BACKENDS: u32 = (1 << BACKENDS.len()) - 1;
+pub(crate) const ALL_BACKENDS: u32 = (1 << BACKENDS.len()) - 1;
 
 /// Runs `job` with backend number `index` of [`BACKENDS`] (`None` if out of range).
 pub fn with_backend<J: Job>(index: usize, job: J) -> Option<J::Output> {
@@ -289,7 +289,7 @@ impl Scene {
 
     /// The spec at `2^step_log2` steps/s with `effects`.
     /// ([`EVENTS_LOG2`]: event stepping at the frame rate).
-    pub fn spec_at(&self, step_log2: u32, effects: Effects) -> PhysicsSpec {
+    pub(crate) fn spec_at(&self, step_log2: u32, effects: Effects) -> PhysicsSpec {
         let (step_log2, stepping) = match step_log2 {
             EVENTS_LOG2 => (FRAME_LOG2, Stepping::Events),
             k => (k, Stepping::Fixed),

@@ -1,5 +1,5 @@
 //! The game loop: the page's game (`App`, in `APP`) plays one
-//! [`Player::tick`](marble_rolling::game::player::Player::tick) a frame at the
+//! [`Player::tick`](marble_rolling::player::Player::tick) a frame at the
 //! page's tilt, keeps the LEDs and the last finished attempt, and moves
 //! between the level lists (built-ins, the editor's level, a generated maze);
 //! its exports are the frame, the tilt, the level choice and the attempt's
@@ -10,12 +10,11 @@ use core::cell::RefCell;
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::FRAME_HZ;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::input::event::Tilt;
+use marble_rolling::player::FRAME_HZ;
 
-use crate::ghost::{GhostRun, Recorder};
-use crate::maze::MazeArgs;
+use crate::ghost_run::{GhostRun, Recorder};
 use crate::{AnyPlayer, Single};
 
 /// The game, set up by [`init`].
@@ -34,9 +33,20 @@ pub(crate) struct Finished {
     /// Frames on the level clock (the time a player is shown and a record keeps).
     pub(crate) clock: u32,
     pub(crate) hash: u64,
-    /// Bytes of the attempt's ghost in [`RECORD`](crate::ghost::RECORD) (a
+    /// Bytes of the attempt's ghost in [`RECORD`](crate::ghost_run::RECORD) (a
     /// win played whole from its first frame, that fitted); 0 for none.
     pub(crate) ghost_len: u32,
+}
+
+/// The arguments of
+/// [`generate`](marble_rolling::game::generate::generate) a generated maze
+/// came from ([`crate::maze`] makes it).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) struct MazeArgs {
+    pub(crate) seed: u32,
+    pub(crate) size: u8,
+    pub(crate) storeys: u8,
+    pub(crate) difficulty: u8,
 }
 
 /// Where the level list in play comes from.
@@ -237,7 +247,7 @@ pub extern "C" fn frame_hz() -> u32 {
 }
 
 /// One game frame at the current tilt: the loop's step
-/// ([`Player::tick`](marble_rolling::game::player::Player::tick)). Bit 0: an
+/// ([`Player::tick`](marble_rolling::player::Player::tick)). Bit 0: an
 /// attempt finished; bit 1: a new attempt started.
 #[no_mangle]
 pub extern "C" fn tick() -> u32 {

@@ -75,6 +75,7 @@
 pub mod download;
 pub mod game_loop;
 pub mod ghost;
+pub mod ghost_run;
 pub mod maze;
 pub mod page_state;
 pub mod storage;
@@ -82,10 +83,10 @@ pub mod universal_hex;
 
 use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::level::LevelView;
-use marble_rolling::game::player::{Player, Tick};
 use marble_rolling::game::rules::Game;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::physics::Fx;
+use marble_rolling::player::{Player, Tick};
 
 /// The micro:bit's player (its 5×5 matrix) with the autopilot (the page has
 /// a button for it, as the QEMU board has a key), stepped by events (`EVENTS`)

@@ -5,7 +5,7 @@ use core::fmt::Write;
 
 use marble_rolling::game::generate::{generate, MAX_TEXT_BYTES};
 
-use crate::game_loop::{with_app, Source};
+use crate::game_loop::{with_app, MazeArgs, Source};
 use crate::storage::{answer, checked, play_source, TEXT, TEXT_CAPACITY};
 
 /// `cargo sim -- --generate SEED`'s defaults (`src/host/generated.rs`, which
@@ -16,15 +16,6 @@ pub(crate) const DEFAULT_MAZE_SIZE: u8 = 6;
 pub(crate) const DEFAULT_MAZE_STOREYS: u8 = 1;
 
 pub(crate) const DEFAULT_MAZE_DIFFICULTY: u8 = 2;
-
-/// The arguments of [`generate`] a generated maze came from.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub(crate) struct MazeArgs {
-    pub(crate) seed: u32,
-    pub(crate) size: u8,
-    pub(crate) storeys: u8,
-    pub(crate) difficulty: u8,
-}
 
 /// A [`Write`] into a byte buffer that fails, rather than cut the text, when
 /// it is full (a cut level text would be another level).

@@ -1,5 +1,5 @@
 use marble_rolling::game::generate::generate;
-use marble_rolling::game::player::FRAME_HZ;
+use marble_rolling::player::FRAME_HZ;
 
 use crate::game_loop::{
     clock_frames, finished_count, finished_frames, finished_ghost_len, finished_hash,

@@ -10,8 +10,8 @@
 import { $, answer, loadModule, setUp, status, w } from './js/core.js';
 import { keys, onKey, setupStick, toggleOrientation } from './js/input.js';
 import { loop } from './js/loop.js';
-import { mazeFromUrl, newMaze, playMaze } from './js/maze.js';
-import { newAttempt, nextLevel, restart, setStepping, toggleAutopilot } from './js/attempt.js';
+import { mazeFromUrl } from './js/maze.js';
+import { newAttempt, newMaze, nextLevel, playMaze, restart, setStepping, toggleAutopilot } from './js/attempt.js';
 import { downloadHex, setupEditor, toggleEditor } from './js/editor.js';
 import { testHooks } from './js/hooks.js';
 
@@ -47,8 +47,10 @@ async function main() {
   $('new-maze').addEventListener('click', () => { newMaze(); $('new-maze').blur(); });
   $('maze-storeys').addEventListener('change', () => $('maze-storeys').blur());
   $('orientation').addEventListener('click', toggleOrientation);
-  window.addEventListener('keydown', (e) => onKey(e, true));
-  window.addEventListener('keyup', (e) => onKey(e, false));
+  // The keys' commands: R restart, N next level, P autopilot, M a new maze.
+  const commands = { KeyR: restart, KeyN: nextLevel, KeyP: toggleAutopilot, KeyM: newMaze };
+  window.addEventListener('keydown', (e) => onKey(e, true, commands));
+  window.addEventListener('keyup', (e) => onKey(e, false, commands));
   // Keys held while the window loses focus never see their keyup.
   window.addEventListener('blur', () => keys.clear());
   setupStick($('board'));

@@ -303,7 +303,7 @@ pub fn verdict(qemu: &Level, sim: Option<&Sim>) -> Verdict {
     }
 }
 
-/// One table row (the old script's printf format).
+/// One table row, each column padded to its width.
 pub fn row(cells: [&str; 8]) -> String {
     let [name, q, s, qs, ss, qh, sh, result] = cells;
     format!("{name:<16} {q:<8} {s:<8} {qs:>8} {ss:>8} {qh:<16} {sh:<16} {result}")

@@ -25,7 +25,7 @@ pub fn qemu(args: &[String]) -> Outcome {
         say!("running it headless in QEMU mps2-an386 (defmt log below)");
         runner::headless(&tools, &elf, &args, Output::Terminal, limit)
     } else {
-        // As before: relative to where the user is, since it is the user's path.
+        // Relative to where the user is, since it is the user's path.
         let log = match std::env::var_os("QEMU_DEFMT_LOG") {
             Some(path) if !path.is_empty() => PathBuf::from(path),
             _ => workspace::target_dir()?.join("qemu-defmt.log"),

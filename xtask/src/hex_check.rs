@@ -13,7 +13,7 @@ use crate::demo;
 use crate::error::{say, Failure};
 use crate::hex::{self, Image};
 use crate::hex_files::{
-    region_holds, write, Built, BOARDS, FORMAT_WORDS, LIBRARY, LIBRARY_VERSION,
+    region_holds, write, Written, BOARDS, FORMAT_WORDS, LIBRARY, LIBRARY_VERSION,
 };
 use crate::microbit_v1;
 use crate::process;
@@ -24,12 +24,14 @@ use crate::workspace;
 use marble_rolling::board::levels_region;
 
 /// The proof (see the module doc).
-pub(crate) fn check(
-    target: &Path,
-    built: &[Built],
-    universal: &Path,
-    levels: Option<&[(String, Vec<u8>)]>,
-) -> Result<(), Failure> {
+pub(crate) fn check(written: &Written) -> Result<(), Failure> {
+    let Written {
+        target,
+        built,
+        universal,
+        levels,
+    } = written;
+    let levels = levels.as_deref();
     let dir = target.join("hex-check");
     std::fs::create_dir_all(&dir)
         .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;

@@ -25,14 +25,13 @@
 //! equal to the ELF's; and the V1's demo in QEMU to play the region's levels
 //! first (the firmware reads its region at boot), each won with the steps and
 //! `state_hash` of `cargo sim -- --level FILE --autopilot`
-//! ([`hex_check::region_first`]). The proof is [`crate::hex_check`].
+//! ([`crate::hex_check::region_first`]). The proof is [`crate::hex_check`].
 
 use std::path::{Path, PathBuf};
 
-use crate::error::{say, Failure, Outcome};
+use crate::error::{say, Failure};
 use crate::firmware::{self, Artifact};
 use crate::hex::{self, Image};
-use crate::hex_check;
 use crate::microbit_v1;
 use crate::setup::{self, M0, M4};
 use crate::workspace;
@@ -98,8 +97,21 @@ pub(crate) struct Built {
     pub(crate) plain: PathBuf,
 }
 
-/// `cargo xtask hex [--check] [--level FILE…]`.
-pub fn run(check: bool, levels: &[PathBuf]) -> Outcome {
+/// What [`run`] wrote: the proof's input ([`crate::hex_check::check`]).
+pub(crate) struct Written {
+    /// The target directory.
+    pub(crate) target: PathBuf,
+    /// The boards' builds, in [`BOARDS`]' order.
+    pub(crate) built: Vec<Built>,
+    /// The universal hex.
+    pub(crate) universal: PathBuf,
+    /// The level files put in the levels region (name, contents), if any.
+    pub(crate) levels: Option<Vec<(String, Vec<u8>)>>,
+}
+
+/// `cargo xtask hex [--level FILE…]`: builds both firmwares and writes the
+/// files (`--check` is [`crate::hex_check`]'s, on what this wrote).
+pub fn run(levels: &[PathBuf]) -> Result<Written, Failure> {
     let region = if levels.is_empty() {
         None
     } else {
@@ -176,11 +188,12 @@ pub fn run(check: bool, levels: &[PathBuf]) -> Outcome {
         text.len(),
         universal.display()
     );
-    if check {
-        let files = region.as_ref().map(|(files, _)| files.as_slice());
-        hex_check::check(&target, &built, &universal, files)?;
-    }
-    Ok(0)
+    Ok(Written {
+        target,
+        built,
+        universal,
+        levels: region.map(|(files, _)| files),
+    })
 }
 
 /// The occupancy words of the largest level the format allows: the files

@@ -212,7 +212,13 @@ impl Task {
             }
             Task::Web { port, no_serve } => web::run(port, no_serve),
             Task::WebTest { screenshot } => web::test(screenshot),
-            Task::Hex { check, levels } => hex_files::run(check, &levels),
+            Task::Hex { check, levels } => {
+                let written = hex_files::run(&levels)?;
+                if check {
+                    hex_check::check(&written)?;
+                }
+                Ok(0)
+            }
             Task::Accuracy { args } => study::accuracy(&args),
         }
     }

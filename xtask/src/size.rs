@@ -10,7 +10,7 @@
 //!
 //! Measured from the ELF's section headers with the `object` crate, with the
 //! Berkeley accounting of `llvm-size -B` (so no llvm-tools component is needed
-//! and the figures stay those of the old llvm-size report). Budgets in bytes:
+//! and the figures are the ones `llvm-size -B` prints). Budgets in bytes:
 //! FLASH_BUDGET (default 131072 = 128 KiB), RAM_BUDGET (default 16384 = 16 KiB),
 //! issue 27's: the v2 runs event stepping, about 18 KiB more code than fixed steps.
 //!

@@ -112,7 +112,7 @@ fn itanium_path(mangled: &str) -> Option<String> {
 
 /// A function's name for the tables: demangled without the hash, and typenum's
 /// nested type-level numbers (`<typenum::…>` inside another `<…>`) cut to
-/// `<..>`, as the old profiler's `readable()` did.
+/// `<..>`.
 pub fn readable(mangled: &str) -> String {
     let name = match rustc_demangle::try_demangle(mangled) {
         Ok(demangled) => format!("{demangled:#}"),
@@ -138,9 +138,9 @@ pub fn shorten_typenum(name: &str) -> String {
     out
 }
 
-/// Program counter → function name, the way the old profiler looked them up:
-/// the last symbol (by address, size, llvm-nm name) starting at or below the
-/// pc, if the pc is within its size (at least 2 bytes: one Thumb instruction).
+/// Program counter → function name: the last symbol (by address, size,
+/// llvm-nm name) starting at or below the pc, if the pc is within its size
+/// (at least 2 bytes: one Thumb instruction).
 pub struct Symbols {
     /// (address, size, name id), sorted.
     entries: Vec<(u64, u64, usize)>,

@@ -75,7 +75,7 @@ pub fn test(screenshot: Option<PathBuf>) -> Outcome {
         say!("the download starts from {} as it is", hex.display());
     } else {
         // The download's test needs it; CI has built it by now.
-        hex_files::run(false, &[])?;
+        hex_files::run(&[])?;
     }
     let chromium = setup::apt_tool("chromium", "chromium")?;
     let node = setup::apt_tool("node", "nodejs")?;

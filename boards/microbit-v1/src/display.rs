@@ -29,8 +29,8 @@ use marble_rolling::board::microbit_v1::{
     frame_from_refresh, rows_hex, schedule, Picture, Schedule, DARK_SCHEDULE,
     FRAME_LOG_MIN_REFRESHES, HEIGHT, REFRESH_US, SLICES, TIMER_PRESCALER, WIDTH,
 };
-use marble_rolling::game::player::Status;
 use marble_rolling::matrix::{ScanStep, Scanner};
+use marble_rolling::player::Status;
 use nrf_pac as pac;
 
 use crate::hw;

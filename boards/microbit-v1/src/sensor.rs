@@ -29,9 +29,10 @@ use embassy_time::{Duration, Ticker};
 use embedded_hal::i2c::{ErrorType, Operation};
 use heapless::Deque;
 use marble_rolling::app::TiltInput;
+use marble_rolling::board::i2c::ClearBus;
 use marble_rolling::board::microbit::{self as v2, Task};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Probed};
-use marble_rolling::board::microbit_v1::twi::{BusClear, Pause, TwiError};
+use marble_rolling::board::microbit_v1::twi::{Pause, TwiError};
 use marble_rolling::input::event::InputEvent;
 use marble_rolling::input::lsm303;
 use nrf_pac as pac;
@@ -252,7 +253,7 @@ impl embedded_hal_async::i2c::I2c for AsyncTwi {
     }
 }
 
-impl BusClear for AsyncTwi {
+impl ClearBus for AsyncTwi {
     fn clear_bus(&mut self) {
         self.0.clear_bus();
     }

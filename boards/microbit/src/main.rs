@@ -3,7 +3,7 @@
 //! `cargo microbit` builds it and runs it with `probe-rs run --chip nRF52833_xxAA`
 //! (defmt log over RTT). Wiring only: the tasks are the shared ones from
 //! `marble_rolling::app`, fed by the micro:bit input (LSM303AGR + buttons)
-//! and drawing on the 5×5 matrix (`src/hw.rs` here, and `marble_rolling::board::microbit`).
+//! and drawing on the 5×5 matrix (`src/hw.rs`, `src/sensor.rs` and `src/sleep.rs` here, and `marble_rolling::board::microbit`).
 //!
 //! Executors:
 //! * thread mode: input (accelerometer + buttons, 100 Hz), the game
@@ -28,6 +28,8 @@ use defmt_rtt as _;
 use panic_probe as _;
 
 mod hw;
+mod sensor;
+mod sleep;
 
 use core::pin::pin;
 
@@ -108,7 +110,7 @@ async fn sound(mut speaker: hw::Speaker) -> ! {
 }
 
 #[embassy_executor::task]
-async fn input(mut input: hw::MicrobitInput) -> ! {
+async fn input(mut input: sensor::MicrobitInput) -> ! {
     app::input_task(&LINKS, &mut input).await
 }
 
@@ -149,8 +151,8 @@ async fn game(self_test: bool, level: u8, seed: u32) {
         let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters
-            // System OFF (hw::system_off).
-            hw::request_sleep(level).await;
+            // System OFF (sleep::system_off).
+            sleep::request_sleep(level).await;
         }
         defmt::warn!("game_task returned: {}", exit);
     }
@@ -296,8 +298,8 @@ async fn main(spawner: Spawner) {
 
     // Buttons A P0.14, B P0.23: what is held now chooses (board::power_on).
     let (button_a, button_b) = (
-        hw::MicrobitInput::button_pin(p.P0_14),
-        hw::MicrobitInput::button_pin(p.P0_23),
+        sensor::MicrobitInput::button_pin(p.P0_14),
+        sensor::MicrobitInput::button_pin(p.P0_23),
     );
     let choice = power_on::power_on(button_a.is_low(), button_b.is_low());
     defmt::info!("power-on: {}", choice);
@@ -312,10 +314,10 @@ async fn main(spawner: Spawner) {
     // Internal I²C: SDA P0.16, SCL P0.08. The driver writes register
     // addresses from flash, so the bus gives its TWIM a RAM copy buffer
     // (board::TWIM_COPY_BUFFER_BYTES), a deadline per transfer and a bus
-    // clear (hw::Bus).
-    let bus = hw::Bus::new(p.TWISPI0, p.P0_16.into(), p.P0_08.into());
+    // clear (sensor::Bus).
+    let bus = sensor::bus(p.TWISPI0, p.P0_16.into(), p.P0_08.into());
     let sensor = Lsm303agr::new_with_i2c(bus);
-    let input_dev = hw::MicrobitInput::new(sensor, button_a, button_b, &HEARTBEATS);
+    let input_dev = sensor::MicrobitInput::new(sensor, button_a, button_b, &HEARTBEATS);
 
     // Speaker: P0.00, PWM0.
     let speaker = hw::Speaker::new(p.PWM0, p.P0_00, &HEARTBEATS);
@@ -329,7 +331,11 @@ async fn main(spawner: Spawner) {
     let seed = embassy_nrf::rng::Rng::new_blocking(p.RNG).blocking_next_u32();
     defmt::info!("generated mazes: seeds from {=u32}", seed);
     // After a wake-up from System OFF: the level it fell asleep on.
-    match game(choice == PowerOn::SelfTest, hw::level_after_reset(), seed) {
+    match game(
+        choice == PowerOn::SelfTest,
+        sleep::level_after_reset(),
+        seed,
+    ) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
     }

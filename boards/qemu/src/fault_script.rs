@@ -33,11 +33,11 @@ use marble_rolling::app::{Links, FRAME_HZ};
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
 use marble_rolling::board::qemu::{HEIGHT, WIDTH};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::event::{InputEvent, Tilt};
 use marble_rolling::input::sensor::Fault;
 use marble_rolling::matrix::Frame;
+use marble_rolling::player::Player;
 use marble_rolling::render::screens::fault_frame;
 
 use crate::sensor::SensorReport;

@@ -39,16 +39,16 @@ use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatri
 use marble_rolling::board::qemu::{Options, HEIGHT, MAZE_REACH, QEMU_RAM, WIDTH};
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::player::Player;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::matrix::{Frame, OnTimeIntegrator, Scanner};
+use marble_rolling::player::Player;
 use marble_rolling::records::{Ghosts, Records};
 
 use marble_qemu as hw;
 
 use hw::uart::{UartConsole, UartRx};
-use sensor::{Bus, Keys, QemuInput, SensorReport};
+use sensor::{Bus, Keys, QemuInput, SensorReport, TimedTwim};
 
 /// The links between the tasks.
 static LINKS: Links<WIDTH, HEIGHT> = Links::new();
@@ -170,7 +170,7 @@ async fn sensor_input(options: Options) -> ! {
         sensor::now_us as fn() -> u64,
         QEMU_RAM,
     );
-    let sensor = lsm303agr::Lsm303agr::new_with_i2c(Bus::new(twim));
+    let sensor = lsm303agr::Lsm303agr::new_with_i2c(Bus::new(TimedTwim::new(twim)));
     let keys = options.interactive.then(|| Keys::new(UartRx, UartConsole));
     let mut input = QemuInput::new(sensor, keys, &CHIP, &REPORT);
     app::input_task(&LINKS, &mut input).await

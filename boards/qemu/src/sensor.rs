@@ -3,14 +3,14 @@
 //! [`TiltPipeline`] supervision — running on a virtual LSM303AGR on a virtual
 //! TWIM (`marble_rolling::board::qemu::{virtual_lsm303agr, virtual_i2c}`).
 //!
-//! The terminal's arrow keys no longer hand the game a tilt: they set the
+//! The terminal's arrow keys do not hand the game a tilt: they set the
 //! virtual chip's tilt, and the game gets what the driver reads back through
 //! the pipeline, with the sensor's down/up transitions; the digit keys inject
-//! faults (see `fault_keys`). Commands from keys pass through as before. The
-//! headless runs (demo, fault script) have no keys; the fault script drives
+//! faults (see `fault_keys`). Commands from keys pass straight to the game.
+//! The headless runs (demo, fault script) have no keys; the fault script drives
 //! the chip through the same [`ChipControl`].
 //!
-//! Like `boards/microbit/src/hw.rs`'s `MicrobitInput`, which this follows
+//! Like `boards/microbit/src/sensor.rs`'s `MicrobitInput`, which this follows
 //! step for step (configure, read, poll, ticker reset after slow work), the
 //! board only forwards: the pipeline decides.
 
@@ -25,6 +25,7 @@ use embedded_hal_async::i2c::{ErrorKind, ErrorType, I2c, Operation};
 use heapless::Deque;
 
 use marble_rolling::app::{ByteSource, Console, TiltInput};
+use marble_rolling::board::i2c::{ClearBus, Recovering};
 use marble_rolling::board::qemu::fault_keys::{FaultKeys, QemuKey, FAULT_KEYS_HELP};
 use marble_rolling::board::qemu::virtual_i2c::{RamRange, TwimError, VirtualTwim};
 use marble_rolling::board::qemu::virtual_lsm303agr::ChipControl;
@@ -122,50 +123,56 @@ impl embedded_hal_async::i2c::Error for BusError {
     }
 }
 
-/// The virtual TWIM with a deadline on every transfer and the micro:bit's
-/// bus-clear rule (`boards/microbit/src/hw.rs`, `Bus`): a clear before the
-/// first transfer and after every transfer that failed on the wire; a stuck
-/// transfer is dropped after [`TRANSFER_TIMEOUT_MS`]. The virtual bus stays
-/// stuck until cleared, as a real one does. Logs the first failure of each
+/// The virtual TWIM under the boards' bus-clear rule ([`Recovering`]): a
+/// clear before the first transfer and after every transfer that failed on
+/// the wire. The virtual bus stays stuck until cleared, as a real one does.
+pub type Bus<'a> = Recovering<TimedTwim<'a>>;
+
+/// The virtual TWIM with a deadline on every transfer: a stuck transfer is
+/// dropped after [`TRANSFER_TIMEOUT_MS`]. Logs the first failure of each
 /// kind in a row.
-pub struct Bus<'a> {
+pub struct TimedTwim<'a> {
     twim: QemuTwim<'a>,
     last_logged: Option<BusError>,
-    clear_first: bool,
 }
 
-impl<'a> Bus<'a> {
+impl<'a> TimedTwim<'a> {
     /// `twim` with deadlines.
     pub fn new(twim: QemuTwim<'a>) -> Self {
         Self {
             twim,
             last_logged: None,
-            clear_first: true,
         }
     }
+}
 
-    fn clear(&mut self) {
+impl ClearBus for TimedTwim<'_> {
+    fn clear_bus(&mut self) {
         let outcome = self.twim.clear_bus();
         if !outcome.is_clear() {
             defmt::warn!("i2c: bus clear #{=u32}: {}", self.twim.clears(), outcome);
         }
     }
+
+    /// Only failures on the wire: a refused buffer never reached the bus.
+    fn on_the_wire(error: &BusError) -> bool {
+        matches!(
+            error,
+            BusError::Timeout | BusError::Twim(TwimError::AddressNack)
+        )
+    }
 }
 
-impl ErrorType for Bus<'_> {
+impl ErrorType for TimedTwim<'_> {
     type Error = BusError;
 }
 
-impl I2c for Bus<'_> {
+impl I2c for TimedTwim<'_> {
     async fn transaction(
         &mut self,
         address: u8,
         operations: &mut [Operation<'_>],
     ) -> Result<(), BusError> {
-        if self.clear_first {
-            self.clear_first = false;
-            self.clear();
-        }
         let copy_buffer = self.twim.copy_buffer_len();
         // A virtual transfer normally completes at its first poll: the
         // deadline (a clock read and a timer) is armed only for one that does
@@ -186,13 +193,6 @@ impl I2c for Bus<'_> {
             Ok(Err(e)) => Err(BusError::Twim(e)),
             Err(_) => Err(BusError::Timeout),
         };
-        // Only failures on the wire: a refused buffer never reached the bus.
-        if matches!(
-            result,
-            Err(BusError::Timeout | BusError::Twim(TwimError::AddressNack))
-        ) {
-            self.clear();
-        }
         match result {
             Ok(()) => self.last_logged = None,
             Err(e) if self.last_logged != Some(e) => {

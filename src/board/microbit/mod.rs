@@ -212,7 +212,7 @@ pub const MAZE_REACH: crate::game::endless::Reach = crate::game::endless::Reach 
 /// System OFF) holds while the toy sleeps: this tag in the high nibble, the
 /// level in the low one, so that a wake-up resumes at the start of that level
 /// and any other value (a power-on reset clears it to 0) starts at level 1.
-pub const SLEEP_TAG: u8 = 0xA0;
+pub(crate) const SLEEP_TAG: u8 = 0xA0;
 
 /// GPREGRET's value for sleeping on level `level` (levels past 15, which the 8
 /// built-in levels never reach, resume at level 1).

@@ -15,7 +15,7 @@
 //!
 //! `tests/microbit_sleep.rs` runs [`enter_system_off`] against a model of the
 //! pins and of embassy-nrf's handler, with a button pressed at every step;
-//! `boards/microbit/src/hw.rs` implements [`SleepRegisters`] on the nRF's.
+//! `boards/microbit/src/sleep.rs` implements [`SleepRegisters`] on the nRF's.
 
 /// Button pins that wake the board (port 0): A (P0.14) and B (P0.23).
 pub const WAKE_PINS: [usize; 2] = [14, 23];

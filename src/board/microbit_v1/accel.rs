@@ -134,7 +134,7 @@ pub fn identify(probe: &Probe, read: Option<u8>) -> Option<Accelerometer> {
 
 /// MMA8653FC and FXOS8700CQ axes → board frame: `m = (−c_x, −c_y, c_z)`
 /// (module doc), board `= (−m_x, −m_z, −m_y) = (c_x, −c_z, c_y)`.
-pub const NXP_AXIS_MAP: AxisMap = AxisMap {
+pub(crate) const NXP_AXIS_MAP: AxisMap = AxisMap {
     x: AxisSource::pos(Axis::X),
     y: AxisSource::neg(Axis::Z),
     z: AxisSource::pos(Axis::Y),
@@ -151,14 +151,14 @@ pub mod nxp {
     /// its FIFO off, the power-on state).
     pub const STATUS: u8 = 0x00;
     /// X output, most significant byte (then X LSB, Y MSB, …, Z LSB).
-    pub const OUT_X_MSB: u8 = 0x01;
+    pub(crate) const OUT_X_MSB: u8 = 0x01;
     /// FXOS8700CQ only: FIFO setup (`F_MODE`, bits 7:6; 0 is FIFO off,
     /// the power-on state). With the FIFO on, register 0x00 is `F_STATUS`
     /// (overflow, watermark, sample count) instead of `DR_STATUS`, and the
     /// output registers read the FIFO's oldest sample.
     pub const F_SETUP: u8 = 0x09;
     /// `F_SETUP`: the FIFO mode field.
-    pub const F_MODE: u8 = 0xC0;
+    pub(crate) const F_MODE: u8 = 0xC0;
     /// Identity.
     pub const WHO_AM_I: u8 = 0x0D;
     /// Full-scale range.
@@ -169,7 +169,7 @@ pub mod nxp {
     pub const CTRL_REG2: u8 = 0x2B;
     /// FXOS8700CQ only: the magnetometer's hybrid mode (0: accelerometer
     /// only, the data rates of `CTRL_REG1` as listed).
-    pub const M_CTRL_REG1: u8 = 0x5B;
+    pub(crate) const M_CTRL_REG1: u8 = 0x5B;
     /// `STATUS`: a new X, Y and Z sample is available.
     pub const STATUS_ZYXDR: u8 = 0x08;
     /// `STATUS`: a new sample overwrote an unread one.
@@ -179,7 +179,7 @@ pub mod nxp {
     /// `CTRL_REG1`: 8-bit fast read (the firmware keeps it off).
     pub const CTRL1_F_READ: u8 = 0x02;
     /// `CTRL_REG1`: data-rate field (bits 5:3).
-    pub const CTRL1_DR: u8 = 0x38;
+    pub(crate) const CTRL1_DR: u8 = 0x38;
     /// `CTRL_REG1`: 200 Hz (DR = 0b010; accelerometer-only on the FXOS).
     pub const CTRL1_DR_200HZ: u8 = 0x10;
     /// `CTRL_REG2`: software reset: every register back to its power-on
@@ -198,9 +198,9 @@ pub mod nxp {
     /// `CTRL_REG2`: high-resolution oversampling (MODS = 0b10).
     pub const CTRL2_MODS_HIGH_RESOLUTION: u8 = 0x02;
     /// `XYZ_DATA_CFG`: full-scale field; 0 is ±2 g.
-    pub const XYZ_FS: u8 = 0x03;
+    pub(crate) const XYZ_FS: u8 = 0x03;
     /// Bytes of one burst read from [`STATUS`]: the status, then X, Y, Z.
-    pub const BURST: usize = 7;
+    pub(crate) const BURST: usize = 7;
 }
 
 /// What differs between the two NXP chips.
@@ -297,7 +297,7 @@ impl NxpChip {
 
 /// The sample rate both NXP chips are set to, Hz (`CTRL1_DR_200HZ`): the
 /// v2's LSM303AGR rate, twice the 100 Hz poll.
-pub const NXP_ODR_HZ: u32 = 200;
+pub(crate) const NXP_ODR_HZ: u32 = 200;
 
 // The LSM303AGR path runs at the same rate (input::lsm303 checks its own).
 const _: () = assert!(NXP_ODR_HZ == crate::board::microbit::ACCEL_ODR_HZ);

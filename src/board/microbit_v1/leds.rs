@@ -53,9 +53,9 @@ pub const COL_PINS: [u8; COLS] = [4, 5, 6, 7, 8, 9, 10, 11, 12];
 /// The lowest row pin: rows are consecutive pins from here.
 pub const FIRST_ROW_PIN: u32 = 13;
 /// The lowest column pin: columns are consecutive pins from here.
-pub const FIRST_COL_PIN: u32 = 4;
+pub(crate) const FIRST_COL_PIN: u32 = 4;
 /// Every column bit of a `COLS`-bit mask.
-pub const COL_MASK: u32 = (1 << COLS) - 1;
+pub(crate) const COL_MASK: u32 = (1 << COLS) - 1;
 /// Every row bit of a `ROWS`-bit mask.
 pub const ROW_MASK: u32 = (1 << ROWS) - 1;
 /// The GPIO `OUT` bits of the matrix (P0.04 ..= P0.15).

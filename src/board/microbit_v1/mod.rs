@@ -84,7 +84,7 @@ pub const CPU_HZ: u64 = 16_000_000;
 /// The firmware's TIMERs count at 16 MHz / 2^4 = 1 MHz: one tick a µs.
 pub const TIMER_PRESCALER: u8 = 4;
 /// Ticks per second of the TIMERs at [`TIMER_PRESCALER`].
-pub const TIMER_HZ: u32 = 16_000_000 >> TIMER_PRESCALER;
+pub(crate) const TIMER_HZ: u32 = 16_000_000 >> TIMER_PRESCALER;
 
 /// Full refreshes of the LEDs per second (the app's `REFRESH_HZ`).
 pub const REFRESH_HZ: u32 = 100;
@@ -306,10 +306,10 @@ pub const FRAME_LOG_MIN_REFRESHES: u32 = 8;
 
 /// The `-icount shift=N` of headless runs: each instruction is `2^N` ns of
 /// virtual time, so a 1 MHz TIMER advances 1000 / 2^N ticks per instruction.
-pub const ICOUNT_SHIFT: u32 = 7;
+pub(crate) const ICOUNT_SHIFT: u32 = 7;
 
 /// TIMER µs per instruction × 1000 that `-icount shift=7` gives (128).
-pub const EXPECTED_MILLI_US_PER_INSTRUCTION: u64 = 1 << ICOUNT_SHIFT;
+pub(crate) const EXPECTED_MILLI_US_PER_INSTRUCTION: u64 = 1 << ICOUNT_SHIFT;
 
 /// µs per instruction, measured by timing a block of known length (a NOP
 /// loop) on the 1 MHz TIMER, as `study/bench-m0` does at 16 MHz.

@@ -29,15 +29,16 @@ use embedded_hal_async::i2c::I2c;
 
 use super::accel::{Accelerometer, NxpChip};
 use super::nxp_driver;
-use super::twi::{BusClear, Pause, Recovering, TwiError};
+use super::twi::{Pause, TwiError};
+use crate::board::i2c::{ClearBus, Recovering};
 use crate::board::microbit::SUPERVISOR;
 use crate::input::sensor::{AccelMg, Action, AxisMap, Fault, Read, TiltPipeline, Transition};
 
 /// The bus the poll loop needs: async I²C with the v1 TWI's errors, a bus
 /// clear, and a pause (the wait after an NXP chip's soft reset).
-pub trait Bus: I2c<Error = TwiError> + BusClear + Pause {}
+pub trait Bus: I2c<Error = TwiError> + ClearBus + Pause {}
 
-impl<T: I2c<Error = TwiError> + BusClear + Pause> Bus for T {}
+impl<T: I2c<Error = TwiError> + ClearBus + Pause> Bus for T {}
 
 /// The LSM303AGR driver on the recovering bus.
 #[cfg(feature = "lsm303agr")]

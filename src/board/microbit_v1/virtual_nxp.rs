@@ -1,6 +1,6 @@
 //! Virtual MMA8653FC and FXOS8700CQ, and the QEMU board's virtual LSM303AGR
 //! as a v1.5 carries it ([`VirtualChip`]), on a virtual v1 TWI: the v1's sensor
-//! stack (probe, [`super::nxp_driver`], [`Recovering`](super::twi::Recovering),
+//! stack (probe, [`super::nxp_driver`], [`Recovering`](crate::board::i2c::Recovering),
 //! the supervision) runs against them on the host, with the fidelity rules of
 //! the QEMU board's virtual LSM303AGR
 //! (`board::qemu::virtual_lsm303agr`) and its [`ChipControl`] for the tilt and
@@ -58,7 +58,8 @@
 use embedded_hal_async::i2c::{ErrorType, I2c, Operation};
 
 use super::accel::{nxp, Accelerometer};
-use super::twi::{BusClear, Pause, TwiError};
+use super::twi::{Pause, TwiError};
+use crate::board::i2c::ClearBus;
 use crate::board::qemu::virtual_lsm303agr::{
     ChipControl, InjectedFault, SampleSource, VirtualLsm303agr, MICROBIT_V2,
 };
@@ -197,7 +198,7 @@ impl VirtualNxp {
     }
 
     /// Back to the power-on state (the clock and the tilt are kept).
-    pub fn power_on_reset(&mut self) {
+    pub(crate) fn power_on_reset(&mut self) {
         self.regs = [0; REGISTERS];
         self.pointer = 0;
         self.msb_read = 0;
@@ -246,18 +247,18 @@ impl VirtualNxp {
     }
 
     /// Sets the tilt (board frame, milli-g) the next samples take.
-    pub fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
+    pub(crate) fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
         self.tilt_mg = tilt_mg;
     }
 
     /// Frozen (no new samples) or garbage (implausible samples).
-    pub fn set_faults(&mut self, frozen: bool, garbage: bool) {
+    pub(crate) fn set_faults(&mut self, frozen: bool, garbage: bool) {
         self.frozen = frozen;
         self.garbage = garbage;
     }
 
     /// Runs the sampling clock to `now_us`: latches a sample when one is due.
-    pub fn advance_to(&mut self, now_us: u64) {
+    pub(crate) fn advance_to(&mut self, now_us: u64) {
         self.now_us = self.now_us.max(now_us);
         if !self.active() || self.now_us < self.next_due_us {
             return;
@@ -330,7 +331,7 @@ impl VirtualNxp {
     /// An I²C write: sub-address, then data from there on. `false` when a
     /// data byte was not acknowledged (the FXOS8700CQ's `RST`): the bytes
     /// after it are not taken.
-    pub fn i2c_write(&mut self, bytes: &[u8]) -> bool {
+    pub(crate) fn i2c_write(&mut self, bytes: &[u8]) -> bool {
         let Some((&sub, data)) = bytes.split_first() else {
             return true;
         };
@@ -345,7 +346,7 @@ impl VirtualNxp {
     }
 
     /// An I²C read from the register pointer on.
-    pub fn i2c_read(&mut self, buffer: &mut [u8]) {
+    pub(crate) fn i2c_read(&mut self, buffer: &mut [u8]) {
         for byte in buffer.iter_mut() {
             *byte = self.read(self.pointer);
             self.pointer = (self.pointer + 1) & 0x7F;
@@ -647,7 +648,7 @@ impl<C: Fn() -> u64> I2c for VirtualTwi<'_, C> {
     }
 }
 
-impl<C: Fn() -> u64> BusClear for VirtualTwi<'_, C> {
+impl<C: Fn() -> u64> ClearBus for VirtualTwi<'_, C> {
     /// Frees the bus, unless the slave is still faulty.
     fn clear_bus(&mut self) {
         self.clears = self.clears.wrapping_add(1);

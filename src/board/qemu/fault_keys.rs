@@ -111,7 +111,7 @@ mod tests {
             feed_all(&mut keys, b"6q"),
             [QemuKey::Input(InputEvent::Command(Command::Quit))]
         );
-        // Game keys still work and tilt as before.
+        // Game keys tilt beside the fault keys.
         let mut keys = FaultKeys::new();
         assert_eq!(
             feed_all(&mut keys, b"d"),

@@ -97,7 +97,8 @@ pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
 /// virtual accelerometer's faults against the game's pause and resume);
 /// `--no-copy-buffer` (or `--twim-copy-buffer=N`, bytes) sets the virtual
 /// TWIM's copy buffer for write buffers outside RAM (default
-/// [`DEFAULT_COPY_BUFFER`]; 0: none, as the micro:bit's bug had it).
+/// [`DEFAULT_COPY_BUFFER`]; 0: none, so a write from flash is refused: the
+/// TWIM's DMA cannot read flash).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Options {

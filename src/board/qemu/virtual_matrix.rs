@@ -25,10 +25,10 @@
 //! of tiles on every storey, centred on the followed marble and clamped to
 //! the maze (`map_window`). Every draw ends by clearing the rest of the
 //! screen, so the maps of a level before do not linger under a one-storey
-//! level's screen (which is otherwise exactly what it was before storeys).
+//! level's screen, which draws none.
 //!
 //! [`storey_tile`]: crate::render::storey_tile
-//! [`Status::marbles`]: crate::game::player::Status
+//! [`Status::marbles`]: crate::player::Status
 
 use core::fmt::Write as _;
 
@@ -39,10 +39,10 @@ use super::{HEIGHT, WIDTH};
 use crate::game::endless::{MazeArgs, MazeSlot};
 use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
-use crate::game::player::Status;
-use crate::game::player::FRAME_HZ;
 use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 use crate::matrix::{Brightness, Frame, OnTimeIntegrator, ScanStep, Scanner};
+use crate::player::Status;
+use crate::player::FRAME_HZ;
 #[cfg(feature = "storey-maps")]
 pub use storey_maps::{map_window, MapWindow, MAPS_COLUMNS, MAP_ROWS};
 
@@ -307,10 +307,10 @@ mod storey_maps {
 
     use super::{grey, shade, Out, HEIGHT};
     use crate::game::level::LevelView;
-    use crate::game::player::Status;
-    use crate::game::player::FRAME_HZ;
     use crate::matrix::output::Console;
     use crate::matrix::MAX_BRIGHTNESS;
+    use crate::player::Status;
+    use crate::player::FRAME_HZ;
     use crate::render::{blink_on, storey_tile};
 
     /// How wide the storey maps may be together, in terminal columns with their

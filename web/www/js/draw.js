@@ -3,8 +3,8 @@
 
 import { $, hz, w } from './core.js';
 import { stick, STICK_MAX_MG, STICK_RADIUS_PX, tilt } from './input.js';
-import { drop, meanCost } from './loop.js';
-import { kindsOf, level, placements, storeyFloorMm } from './attempt.js';
+import { meanCost } from './cost.js';
+import { drop, kindsOf, level, placements, storeyFloorMm } from './level.js';
 
 let boardCache = null; // the storeys on show drawn at the canvas's size: { key, canvas }
 

@@ -3,7 +3,8 @@
 // micro:bit).
 
 import { $, answer, putText, status, w } from './core.js';
-import { level, newAttempt } from './attempt.js';
+import { newAttempt } from './attempt.js';
+import { level } from './level.js';
 
 const TEMPLATE = `name: my-corner
 effects: rolling, friction

@@ -5,8 +5,9 @@ import { $, answer, decoder, hex, levelName, PHASES, status, TICK_FINISHED, TICK
 import { keys, orientation, stick, tilt } from './input.js';
 import { advance, finished, frame, resetCatchUp, setRunning } from './loop.js';
 import { ghostKey, storedGhost } from './ghost.js';
-import { mazeArg, playMaze } from './maze.js';
-import { kindsOf, level, newAttempt, placements, restart, setStepping } from './attempt.js';
+import { mazeArg } from './maze.js';
+import { newAttempt, playMaze, restart, setStepping } from './attempt.js';
+import { kindsOf, level, placements } from './level.js';
 import { draw, mazeCanvas, view } from './draw.js';
 import { toggleEditor } from './editor.js';
 

@@ -3,8 +3,6 @@
 // level, autopilot, a new maze).
 
 import { $, status } from './core.js';
-import { newMaze } from './maze.js';
-import { nextLevel, restart, toggleAutopilot } from './attempt.js';
 
 // Held keys tilt the board this far (milli-g, per axis): enough to roll
 // briskly, well short of the 500 mg the terminal's keys reach.
@@ -31,7 +29,9 @@ function typing(event) {
   return t && (t.tagName === 'TEXTAREA' || t.tagName === 'INPUT' || t.tagName === 'SELECT');
 }
 
-export function onKey(event, down) {
+// A key pressed or released: a tilt key held or let go, Space levels
+// everything, and a key of `commands` (code → action) runs its action.
+export function onKey(event, down, commands) {
   if (typing(event)) return;
   const dir = KEY_DIRS[event.code];
   if (dir) {
@@ -43,13 +43,14 @@ export function onKey(event, down) {
     return;
   }
   if (!down || event.repeat) return;
-  switch (event.code) {
-    case 'Space': keys.clear(); stick.active = false; orientation.neutral = null; break;
-    case 'KeyR': restart(); break;
-    case 'KeyN': nextLevel(); break;
-    case 'KeyP': toggleAutopilot(); break;
-    case 'KeyM': newMaze(); break;
-    default: return;
+  if (event.code === 'Space') {
+    keys.clear();
+    stick.active = false;
+    orientation.neutral = null;
+  } else if (commands[event.code]) {
+    commands[event.code]();
+  } else {
+    return;
   }
   event.preventDefault();
 }

@@ -5,24 +5,17 @@
 import { $, hz, levelName, PHASE_WON, status, TICK_FINISHED, TICK_NEW_ATTEMPT, w } from './core.js';
 import { tilt } from './input.js';
 import { saveGhost } from './ghost.js';
-import { level, newAttempt } from './attempt.js';
+import { newAttempt } from './attempt.js';
 import { draw } from './draw.js';
+import { recordCost } from './cost.js';
+import { bestKey, followStorey } from './level.js';
 
 // Frames one animation frame may catch up on (at 128 frames/s, 62 ms): after a
 // longer stall (a hidden tab, a slow machine) the game slows down rather than
 // spiralling into ever longer catch-ups.
 const MAX_CATCH_UP = 8;
-// Frames whose mean cost the HUD shows.
-const COST_WINDOW = 256;
 
 let running = true; // the rAF loop steps the game (the browser test stops it)
-
-const costs = new Float64Array(COST_WINDOW);
-let costCount = 0;
-
-// The storey the followed marble (the first in play, as the LEDs follow it)
-// was on after the last frame, and the frame it last dropped to a lower one.
-export const drop = { storey: null, at: null };
 
 // One game frame: the step the animation loop and the test's fast-forward share.
 export function frame() {
@@ -30,29 +23,11 @@ export function frame() {
   w.set_tilt(right, up);
   const t0 = performance.now();
   const flags = w.tick();
-  costs[costCount++ % COST_WINDOW] = performance.now() - t0;
+  recordCost(performance.now() - t0);
   followStorey();
   if (flags & TICK_FINISHED) finished();
   if (flags & TICK_NEW_ATTEMPT) newAttempt();
   return flags;
-}
-
-// The followed marble's storey after a frame: a drop to a lower one starts the
-// floor flash (the LED matrix's, `render::drop_glow`).
-export function followStorey() {
-  if (!level || level.storeys < 2) return;
-  const followed = followedMarble();
-  if (followed < 0) return;
-  const storey = w.marble_storey(followed);
-  if (drop.storey !== null && storey < drop.storey) drop.at = w.frames();
-  drop.storey = storey;
-}
-
-// The first marble in play (the one the LED view follows), or -1.
-function followedMarble() {
-  const n = w.marble_count();
-  for (let m = 0; m < n; m++) if (!w.marble_out(m)) return m;
-  return -1;
 }
 
 let last = null;
@@ -116,10 +91,6 @@ export function finished() {
   }
 }
 
-export function bestKey() {
-  return `marble-rolling.best.${w.level_is_custom() ? 'editor:' : ''}${levelName()}`;
-}
-
 // Whether the animation loop steps the game (the browser test steps it itself).
 export function setRunning(on) {
   running = !!on;
@@ -128,13 +99,4 @@ export function setRunning(on) {
 // Forgets the time the loop had not played yet (the test's fast-forwards).
 export function resetCatchUp() {
   acc = 0;
-}
-
-// The mean cost of the last frames (up to COST_WINDOW), ms; null before the first.
-export function meanCost() {
-  const n = Math.min(costCount, COST_WINDOW);
-  if (n === 0) return null;
-  let sum = 0;
-  for (let i = 0; i < n; i++) sum += costs[i];
-  return sum / n;
 }

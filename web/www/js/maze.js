@@ -1,39 +1,12 @@
-// Generated mazes: a new seed, and the URL that names the maze in play.
+// Generated mazes' arguments: the maze in play's, and the URL that names it.
 
-import { $, answer, status, w } from './core.js';
-import { level, newAttempt } from './attempt.js';
+import { w } from './core.js';
 
 // Argument `what` of the generated maze in play (0 seed, 1 size, 2 storeys, 3
 // difficulty): the export's u32 arrives as a signed i32, so a seed from 2³¹ up
 // would read negative.
 export function mazeArg(what) {
   return w.level_maze(what) >>> 0;
-}
-
-// The maze of `seed` (the arguments of `cargo sim -- --generate`; those not
-// given take its defaults): true if it plays, else the generator's message.
-export function playMaze(seed, { size, storeys, difficulty } = {}) {
-  const err = w.play_generated(seed >>> 0, size ?? w.default_maze_size(),
-    storeys ?? w.default_maze_storeys(), difficulty ?? w.default_maze_difficulty());
-  if (err) {
-    status(`maze ${seed}: ${answer(err)}`);
-    return false;
-  }
-  newAttempt();
-  status(`maze ${seed}: ${level.name}, generated (the URL plays it again)`);
-  return true;
-}
-
-// A new seed (the browser's random numbers), with the storeys picked beside
-// the button and the size and difficulty of the maze in play, if one is.
-export function newMaze() {
-  const seed = crypto.getRandomValues(new Uint32Array(1))[0];
-  const generated = w.level_is_generated();
-  playMaze(seed, {
-    storeys: Number($('maze-storeys').value),
-    size: generated ? mazeArg(1) : undefined,
-    difficulty: generated ? mazeArg(3) : undefined,
-  });
 }
 
 // The URL says which maze is in play (`?seed=N&storeys=S`, size and
