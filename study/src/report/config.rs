@@ -8,7 +8,7 @@ use marble_rolling::study::{
 };
 
 use super::super::{Engine, Study};
-use super::{label, per_second, BUDGET_PER_MS, TARGET_MM};
+use super::{label, per_second, BUDGET_M0_PER_MS, BUDGET_PER_MS, TARGET_MM};
 
 /// One of our configurations, summarised.
 #[derive(Clone, Debug)]
@@ -72,7 +72,8 @@ impl Config {
     }
     /// Meets the cost budget (unknown without the target run).
     pub fn affordable(&self) -> Option<bool> {
-        self.m4_ms.map(|c| c <= BUDGET_PER_MS)
+        let m0 = self.m0_ms.is_none_or(|c| c <= BUDGET_M0_PER_MS);
+        self.m4_ms.map(|c| c <= BUDGET_PER_MS && m0)
     }
     /// The cost the Pareto front and the recommendation use: M4 instructions per
     /// simulated ms, or host ns per simulated ms without a target run.
