@@ -7,9 +7,9 @@ use std::path::Path;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use marble_rolling::study::{is_events, SceneId, BACKENDS, DEFAULT_STEP_LOG2, STEP_LOG2};
+use marble_rolling::study::{is_events, SceneId, BACKENDS, STEP_LOG2};
 
-use super::report::{configs, label, per_second, sig, BUDGET_PER_MS, TARGET_MM};
+use super::report::{configs, firmware_k, label, per_second, sig, BUDGET_PER_MS, TARGET_MM};
 use super::{Engine, Study, PEERS};
 
 const FLOOR: f64 = 1e-6;
@@ -167,11 +167,11 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
             )
         }))
         .map_err(|e| e.to_string())?;
-        // Ring around the current default.
+        // Ring around the firmware's default.
         if b == 0 {
             ch.draw_series(
                 pts.iter()
-                    .filter(|p| p.2 == DEFAULT_STEP_LOG2)
+                    .filter(|p| p.2 == firmware_k())
                     .map(|&(x, y, _, _)| Circle::new((x, y), 10, BLACK.stroke_width(1))),
             )
             .map_err(|e| e.to_string())?;

@@ -170,13 +170,19 @@ pub fn recommended(configs: &[Config]) -> Option<&Config> {
     cheapest(configs, true)
 }
 
-/// The firmware's default: `i8f24` with the stepping the game's rules pick
+/// The firmware's stepping: the one the game's rules pick
 /// (`game::rules::DEFAULT_EVENTS`; fixed steps at the default rate otherwise).
-pub fn current_default(configs: &[Config]) -> Option<&Config> {
-    let k = if DEFAULT_EVENTS {
+pub fn firmware_k() -> u32 {
+    if DEFAULT_EVENTS {
         EVENTS_LOG2
     } else {
         DEFAULT_STEP_LOG2
-    };
-    configs.iter().find(|c| c.backend == 0 && c.k == k)
+    }
+}
+
+/// The firmware's default: `i8f24` with [`firmware_k`].
+pub fn current_default(configs: &[Config]) -> Option<&Config> {
+    configs
+        .iter()
+        .find(|c| c.backend == 0 && c.k == firmware_k())
 }

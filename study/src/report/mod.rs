@@ -17,7 +17,7 @@ use marble_rolling::study::{is_events, steps_per_second, FRAME_LOG2};
 use super::target::TargetRun;
 use super::Study;
 
-pub use config::configs;
+pub use config::{configs, firmware_k};
 pub use peers::callgrind_rates;
 pub use summary::summary;
 
