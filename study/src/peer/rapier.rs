@@ -79,19 +79,21 @@ impl PeerWorld for Rapier {
 
     fn advance(&mut self) {
         let g = self.world.gravity;
-        let b = &mut self.world.bodies[self.ball];
-        let v = b.linvel();
-        match resistance(self.setup.decel, self.dt, [v.x, v.y], [g.x, g.y]) {
-            Resistance::Off => {}
-            Resistance::Push(a) => {
-                b.reset_forces(false);
-                b.add_force(Vector::new(a[0], a[1]) * self.mass, false);
-            }
-            Resistance::Hold(a) => {
-                b.reset_forces(false);
+        // Read through `Index`: a mutable borrow marks the body as changed by
+        // the user, and rapier then re-syncs it every step.
+        let v = self.world.bodies[self.ball].linvel();
+        let (a, hold) = match resistance(self.setup.decel, self.dt, [v.x, v.y], [g.x, g.y]) {
+            Resistance::Off => ([0.0; 2], None),
+            Resistance::Push(a) => (a, Some(false)),
+            Resistance::Hold(a) => (a, Some(true)),
+        };
+        if let Some(hold) = hold {
+            let b = &mut self.world.bodies[self.ball];
+            b.reset_forces(false);
+            if hold {
                 b.set_linvel(Vector::new(0.0, 0.0), false);
-                b.add_force(Vector::new(a[0], a[1]) * self.mass, false);
             }
+            b.add_force(Vector::new(a[0], a[1]) * self.mass, false);
         }
         self.world.step();
     }
