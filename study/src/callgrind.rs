@@ -6,12 +6,10 @@
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use marble_rolling::study::{Scene, SceneId, BACKENDS};
+use marble_rolling::study::{Scene, SceneId};
 
-use super::{host, peer};
-
-/// `ENGINE` for the peer.
-pub const RAPIER: &str = "rapier2d";
+use super::peer::{self, box2d::Box2d, rapier::Rapier};
+use super::{host, Engine};
 
 /// Whether valgrind is there.
 pub fn available() -> bool {
@@ -30,14 +28,10 @@ pub fn child(args: &[String]) -> Result<(), String> {
     };
     let id = scene_by_name(scene).ok_or("unknown scene")?;
     let k: u32 = k.parse().map_err(|_| "bad K")?;
-    if engine == RAPIER {
-        println!("{:?}", peer::plain(id, k));
-    } else {
-        let b = BACKENDS
-            .iter()
-            .position(|b| b == engine)
-            .ok_or("unknown backend")?;
-        println!("{:?}", host::plain(id, b, k, None));
+    match Engine::by_name(engine).ok_or("unknown engine")? {
+        Engine::Ours(b) => println!("{:?}", host::plain(id, b, k, None)),
+        Engine::Rapier => println!("{:?}", peer::plain::<Rapier>(id, k)),
+        Engine::Box2d => println!("{:?}", peer::plain::<Box2d>(id, k)),
     }
     Ok(())
 }

@@ -23,7 +23,7 @@ pub struct Outcome {
     pub ke_max: f64,
     /// The deepest overlap of the marble with a solid tile, µm (0: none).
     pub max_pen_um: f64,
-    /// Marble–tile contacts resolved (our engine) or contact-steps (rapier).
+    /// Marble–tile contacts resolved (our engine) or contact-steps (a peer).
     pub contacts: u64,
     /// Bounces.
     pub collisions: u64,

@@ -7,7 +7,7 @@
 //!    backend × stepping (event stepping at the frame rate, and fixed steps at
 //!    2^7 … 2^12 steps/s), against an `f64` reference at 2^14 steps/s and
 //!    against the analytic solution where one exists;
-//! 2. the peer: the same scenes in rapier2d (f32);
+//! 2. the peers: the same scenes in rapier2d and Box2D v3 (f32);
 //! 3. host cost: a timing loop (warm-up, repeated whole runs, minimum and median
 //!    ns/step) and `valgrind --tool=callgrind` instructions per step;
 //! 4. target cost: the `bench` firmware in QEMU mps2-an386 (Cortex-M4F) and
@@ -35,24 +35,54 @@ use marble_rolling::study::{
 };
 
 use host::{Outcome, Timing};
+use peer::box2d::Box2d;
+use peer::rapier::Rapier;
 use target::{Count, Cpu, TargetRun};
 
-/// An engine: one of ours ([`BACKENDS`] index) or the peer.
+/// An engine: one of ours ([`BACKENDS`] index) or a peer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Engine {
     /// Our engine with `BACKENDS[n]`.
     Ours(usize),
     /// rapier2d, f32.
     Rapier,
+    /// Box2D v3 (`boxdd`), f32.
+    Box2d,
 }
 
+/// The peers, in the order the report lists them.
+pub const PEERS: [Engine; 2] = [Engine::Rapier, Engine::Box2d];
+
 impl Engine {
-    /// Its name in tables.
+    /// Its name in tables (and `ENGINE` of `--callgrind-child`).
     pub fn name(self) -> &'static str {
         match self {
             Engine::Ours(b) => BACKENDS[b],
-            Engine::Rapier => callgrind::RAPIER,
+            Engine::Rapier => "rapier2d",
+            Engine::Box2d => "box2d",
         }
+    }
+
+    /// Its name in prose.
+    pub fn title(self) -> &'static str {
+        match self {
+            Engine::Ours(b) => BACKENDS[b],
+            Engine::Rapier => "rapier2d",
+            Engine::Box2d => "Box2D v3",
+        }
+    }
+
+    /// Whether it is a peer (no event stepping, no target counts).
+    pub fn is_peer(self) -> bool {
+        !matches!(self, Engine::Ours(_))
+    }
+
+    /// The engine called `name` in tables.
+    pub fn by_name(name: &str) -> Option<Engine> {
+        PEERS
+            .into_iter()
+            .find(|e| e.name() == name)
+            .or_else(|| BACKENDS.iter().position(|b| *b == name).map(Engine::Ours))
     }
 }
 
@@ -109,12 +139,12 @@ pub struct Study {
     pub quick: bool,
 }
 
-/// The configurations an engine runs: ours every stepping, rapier2d the fixed
-/// rates (it has no event mode).
+/// The configurations an engine runs: ours every stepping, the peers the fixed
+/// rates (they have no event mode).
 fn steppings(e: Engine) -> impl Iterator<Item = u32> {
     STEPPINGS
         .into_iter()
-        .filter(move |&k| e != Engine::Rapier || !is_events(k))
+        .filter(move |&k| !e.is_peer() || !is_events(k))
 }
 
 /// Analytic position (mm) at `t` seconds, where the scene has one.
@@ -232,7 +262,7 @@ fn main() {
     };
     let scenes = Scene::all();
     let mut engines: Vec<Engine> = (0..BACKENDS.len()).map(Engine::Ours).collect();
-    engines.push(Engine::Rapier);
+    engines.extend(PEERS);
 
     // 1–2. Accuracy.
     let t = Instant::now();
@@ -255,7 +285,8 @@ fn main() {
             for k in steppings(e) {
                 let out = match e {
                     Engine::Ours(b) => host::measure(s.id, b, k, None).expect("setup"),
-                    Engine::Rapier => peer::measure(s.id, k),
+                    Engine::Rapier => peer::measure::<Rapier>(s.id, k),
+                    Engine::Box2d => peer::measure::<Box2d>(s.id, k),
                 };
                 let cell = Cell {
                     err1: dist(out.pos1, reference.pos1),
@@ -291,7 +322,8 @@ fn main() {
             for k in steppings(e) {
                 let timing = match e {
                     Engine::Ours(b) => host::time(s.id, b, k, None, reps, min_s).expect("setup"),
-                    Engine::Rapier => peer::time(s.id, k, peer_reps, 0.0),
+                    Engine::Rapier => peer::time::<Rapier>(s.id, k, peer_reps, 0.0),
+                    Engine::Box2d => peer::time::<Box2d>(s.id, k, peer_reps, 0.0),
                 };
                 if let Some(c) = study.cells.get_mut(&(s.id, e, k)) {
                     c.host = timing;
@@ -319,7 +351,7 @@ fn main() {
     } else if !callgrind::available() {
         study.callgrind_note = Some("valgrind is not installed (apt-get install valgrind)".into());
     } else {
-        eprintln!("host instructions: callgrind at 2^{DEFAULT_STEP_LOG2} steps/s and with events");
+        eprintln!("host instructions: callgrind at 2^{DEFAULT_STEP_LOG2} steps/s, with events and at the peers' comparison rates");
         let exe = std::env::current_exe().expect("own path");
         let work = std::env::temp_dir().join(format!("accuracy-callgrind-{}", std::process::id()));
         let _ = std::fs::create_dir_all(&work);
@@ -327,10 +359,12 @@ fn main() {
             .iter()
             .flat_map(|s| {
                 engines.iter().flat_map(move |&e| {
-                    [DEFAULT_STEP_LOG2, EVENTS_LOG2]
-                        .into_iter()
-                        .filter(move |&k| e != Engine::Rapier || !is_events(k))
-                        .map(move |k| (s.id, e, k))
+                    let rates = if e.is_peer() {
+                        report::callgrind_rates(e)
+                    } else {
+                        vec![DEFAULT_STEP_LOG2, EVENTS_LOG2]
+                    };
+                    rates.into_iter().map(move |k| (s.id, e, k))
                 })
             })
             .collect();

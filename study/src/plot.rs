@@ -7,10 +7,10 @@ use std::path::Path;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use marble_rolling::study::{is_events, SceneId, BACKENDS, DEFAULT_STEP_LOG2, STEP_LOG2};
+use marble_rolling::study::{is_events, SceneId, BACKENDS, STEP_LOG2};
 
-use super::report::{configs, label, per_second, sig, BUDGET_PER_MS, TARGET_MM};
-use super::{Engine, Study};
+use super::report::{configs, firmware_k, label, per_second, sig, BUDGET_PER_MS, TARGET_MM};
+use super::{Engine, Study, PEERS};
 
 const FLOOR: f64 = 1e-6;
 
@@ -25,7 +25,13 @@ fn color(b: usize) -> RGBColor {
     ][b % 6]
 }
 
-const RAPIER: RGBColor = RGBColor(255, 127, 14);
+/// The peers' colours, in [`PEERS`] order.
+fn peer_color(e: Engine) -> RGBColor {
+    match e {
+        Engine::Box2d => RGBColor(127, 127, 127),
+        _ => RGBColor(255, 127, 14),
+    }
+}
 
 fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
@@ -161,11 +167,11 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
             )
         }))
         .map_err(|e| e.to_string())?;
-        // Ring around the current default.
+        // Ring around the firmware's default.
         if b == 0 {
             ch.draw_series(
                 pts.iter()
-                    .filter(|p| p.2 == DEFAULT_STEP_LOG2)
+                    .filter(|p| p.2 == firmware_k())
                     .map(|&(x, y, _, _)| Circle::new((x, y), 10, BLACK.stroke_width(1))),
             )
             .map_err(|e| e.to_string())?;
@@ -185,7 +191,7 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
 
     // Right: host time per simulated ms (an event step is a whole frame), with
-    // rapier2d (same suite error, maze time).
+    // the peers (same suite error, maze time).
     let ms = |ns: f64, k: u32| ns * per_second(k) / 1000.0;
     let mut pts: Vec<(Engine, u32, f64, f64)> = configs
         .iter()
@@ -198,8 +204,11 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
             )
         })
         .collect();
-    for k in STEP_LOG2 {
-        let cell = |id: SceneId| study.cells.get(&(id, Engine::Rapier, k));
+    for (peer, k) in PEERS
+        .into_iter()
+        .flat_map(|p| STEP_LOG2.into_iter().map(move |k| (p, k)))
+    {
+        let cell = |id: SceneId| study.cells.get(&(id, peer, k));
         if let (Some(i), Some(b), Some(c), Some(m)) = (
             cell(SceneId::Incline),
             cell(SceneId::Bounce),
@@ -207,14 +216,14 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
             cell(SceneId::Maze),
         ) {
             let suite = i.err10.max(b.err_max).max(c.ana10.unwrap_or(0.0));
-            pts.push((Engine::Rapier, k, ms(m.host.min_ns, k), err(suite)));
+            pts.push((peer, k, ms(m.host.min_ns, k), err(suite)));
         }
     }
     let (x0, x1) = bounds(pts.iter().map(|p| p.2));
     let (y0, y1) = bounds(pts.iter().map(|p| p.3).chain([TARGET_MM]));
     let mut ch = ChartBuilder::on(&right)
         .caption(
-            "Suite error vs host time, with rapier2d",
+            "Suite error vs host time, with rapier2d and Box2D v3",
             ("sans-serif", 22),
         )
         .margin(14)
@@ -242,11 +251,14 @@ pub fn chart(study: &Study, path: &Path) -> Result<(), String> {
         .iter()
         .enumerate()
         .map(|(b, n)| (Engine::Ours(b), *n))
-        .chain([(Engine::Rapier, "rapier2d (f32)")])
+        .chain([
+            (Engine::Rapier, "rapier2d (f32)"),
+            (Engine::Box2d, "Box2D v3 (f32)"),
+        ])
     {
         let col = match b {
             Engine::Ours(i) => color(i),
-            Engine::Rapier => RAPIER,
+            peer => peer_color(peer),
         };
         let mine: Vec<_> = pts.iter().filter(|p| p.0 == b).collect();
         ch.draw_series(

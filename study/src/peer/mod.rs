@@ -1,17 +1,21 @@
-//! The peer: the same scenes in rapier2d (f32), top view, millimetres.
+//! The peers: the same scenes in two established engines, rapier2d ([`rapier`])
+//! and Box2D v3 ([`box2d`]), top view, millimetres, f32.
 //!
-//! A ball collider (the marble's radius) on a fixed set of box colliders built
-//! from the level's wall tiles (maximal runs merged, so that a straight wall is
-//! one box and the ball never catches an internal edge). Gravity is the tilt's
-//! tangential part, scaled by 5/7 when the scene rolls (a 2-D disc cannot roll: the
-//! same reduction our engine applies). Restitution `e` on both sides (average
-//! rule), friction 0 (our walls are frictionless). With the `friction` effect, the
-//! same rolling resistance as ours: a constant force opposing the motion,
-//! `c_rr·g·5/7`, and static hold below it. Not modelled: our restitution
-//! threshold and our speed cap. Rapier's tolerances are scaled with
-//! `length_unit` (see [`LENGTH_UNIT`]); CCD as rapier's defaults have it.
+//! Both model the marble the same way, so that their differences are the
+//! engines': a disc on fixed boxes built from the level's wall tiles (maximal runs
+//! merged, so that a straight wall is one box and the disc never catches an
+//! internal edge), its rotation locked; gravity is the tilt's tangential part,
+//! scaled by 5/7 when the scene rolls (a 2-D disc cannot roll: the same reduction
+//! our engine applies); restitution `e`, frictionless walls. With the `friction`
+//! effect, the same rolling resistance as ours: a constant force opposing the
+//! motion, `c_rr·g·5/7`, and static hold below it ([`resistance`]). Not
+//! modelled: our restitution threshold and our speed cap.
+//!
+//! Everything measured about a peer run ([`measure`], [`time`], [`plain`]) is
+//! shared, so both are judged by the same yardstick as ours.
 
-use rapier2d::prelude::*;
+pub mod box2d;
+pub mod rapier;
 
 use marble_rolling::physics::geometry::grid::Tiles;
 use marble_rolling::physics::{Effects, Params, PhysicsSpec, TileIndex};
@@ -19,27 +23,30 @@ use marble_rolling::study::{steps, Scene, SceneId, FRAME_LOG2};
 
 use super::host::{energy, time_runs, Outcome, Timing, MM_S2_PER_MG};
 
-/// Rapier's `length_unit` for a scene in millimetres. Rapier is tuned for
-/// metre-sized objects; with 1000 (its literal "units per metre") its slop would
-/// be 5 mm, larger than the marble. 1.0 makes its tolerances 5 µm (slop) and
-/// 20 µm (prediction): the most accurate setting of those tried (1, 7, 1000).
-pub const LENGTH_UNIT: f32 = 1.0;
-
-/// A rapier world set up for a scene.
-pub struct Peer {
-    world: PhysicsWorld,
-    ball: RigidBodyHandle,
-    g_mg: [i32; 3],
-    rolling: bool,
-    /// Rolling resistance deceleration (mm/s²), 0 without the friction effect.
-    decel: f32,
-    dt: f32,
-    mass: f32,
+/// A peer engine's world set up for one scene.
+pub trait PeerWorld: Sized {
+    /// The scene at `2^step_log2` steps/s (substeps, for an engine that
+    /// substeps inside its own step).
+    fn new(scene: &Scene, step_log2: u32, effects: Effects) -> Self;
+    /// How many of the study's steps one [`PeerWorld::advance`] covers at
+    /// `2^step_log2` steps/s: 1 for an engine stepped at that rate, the
+    /// substeps per frame for one stepped once a frame.
+    fn steps_per_advance(step_log2: u32) -> u32;
+    /// The tilt now in force (mg).
+    fn gravity_mg(&self) -> [i32; 3];
+    /// A new tilt (mg), waking the marble.
+    fn set_gravity(&mut self, g_mg: [i32; 3]);
+    /// One step of the engine.
+    fn advance(&mut self);
+    /// Marble position and velocity (mm, mm/s).
+    fn state(&mut self) -> ([f64; 2], [f64; 2]);
+    /// Whether the marble touches a wall now.
+    fn touching(&mut self) -> bool;
 }
 
 /// Wall boxes `(x0, z0, x1, z1)` in pitches: maximal horizontal runs of wall
 /// tiles, and the tiles left single in their row merged vertically.
-fn wall_boxes(tiles: Tiles<'_>, params: &Params<f64>) -> Vec<(f64, f64, f64, f64)> {
+pub fn wall_boxes(tiles: Tiles<'_>, params: &Params<f64>) -> Vec<(f64, f64, f64, f64)> {
     let (nx, nz) = (tiles.nx() as i32, tiles.nz() as i32);
     let solid = |i: i32, k: i32| tiles.is_solid(TileIndex::new(i, 1, k));
     let mut used = vec![false; (nx * nz) as usize];
@@ -81,9 +88,25 @@ fn wall_boxes(tiles: Tiles<'_>, params: &Params<f64>) -> Vec<(f64, f64, f64, f64
     boxes
 }
 
-impl Peer {
-    /// The scene at `2^step_log2` steps/s.
-    pub fn new(scene: &Scene, step_log2: u32, effects: Effects) -> Peer {
+/// What a peer's scene is made of, in its units (mm, mm/s², f32).
+pub struct Setup {
+    /// Wall boxes: centre and half extents, mm.
+    pub walls: Vec<([f32; 2], [f32; 2])>,
+    /// The marble's start (mm) and radius (mm).
+    pub start: [f32; 2],
+    /// Radius, mm.
+    pub radius: f32,
+    /// Restitution.
+    pub restitution: f32,
+    /// Rolling resistance deceleration (mm/s²), 0 without the friction effect.
+    pub decel: f32,
+    /// Whether the marble rolls (gravity × 5/7).
+    pub rolling: bool,
+}
+
+impl Setup {
+    /// The scene's walls, marble and material at `2^step_log2` steps/s.
+    pub fn new(scene: &Scene, step_log2: u32, effects: Effects) -> Setup {
         let spec = PhysicsSpec {
             step_log2,
             effects,
@@ -91,41 +114,23 @@ impl Peer {
         };
         let params = Params::<f64>::new(spec).expect("valid spec");
         let pitch = params.layout.pitch_um as f64 / 1000.0;
-        let e = spec.restitution_milli as f32 / 1000.0;
-        let r = (params.radius * pitch) as f32;
-        let mut world = PhysicsWorld::new();
-        world.integration_parameters.dt = 1.0 / (1u32 << step_log2) as f32;
-        world.integration_parameters.length_unit = LENGTH_UNIT;
-        for (x0, z0, x1, z1) in wall_boxes(scene.tiles, &params) {
-            let (hx, hz) = (
-                ((x1 - x0) * pitch / 2.0) as f32,
-                ((z1 - z0) * pitch / 2.0) as f32,
-            );
-            let c = Vector::new(
-                ((x0 + x1) * pitch / 2.0) as f32,
-                ((z0 + z1) * pitch / 2.0) as f32,
-            );
-            world.colliders.insert(
-                ColliderBuilder::cuboid(hx, hz)
-                    .translation(c)
-                    .restitution(e)
-                    .friction(0.0),
-            );
-        }
-        let (sx, sz) = {
-            let (x0, x1) = params.layout.span_xz(scene.start.0 as i32);
-            let (z0, z1) = params.layout.span_xz(scene.start.1 as i32);
-            ((x0 + x1) / 2.0 * pitch, (z0 + z1) / 2.0 * pitch)
-        };
-        let body = RigidBodyBuilder::dynamic()
-            .translation(Vector::new(sx as f32, sz as f32))
-            .lock_rotations();
-        let collider = ColliderBuilder::ball(r)
-            .restitution(e)
-            .friction(0.0)
-            .density(1.0);
-        let (ball, _) = world.insert(body, collider);
-        let mass = world.bodies[ball].mass();
+        let walls = wall_boxes(scene.tiles, &params)
+            .into_iter()
+            .map(|(x0, z0, x1, z1)| {
+                (
+                    [
+                        ((x0 + x1) * pitch / 2.0) as f32,
+                        ((z0 + z1) * pitch / 2.0) as f32,
+                    ],
+                    [
+                        ((x1 - x0) * pitch / 2.0) as f32,
+                        ((z1 - z0) * pitch / 2.0) as f32,
+                    ],
+                )
+            })
+            .collect();
+        let (x0, x1) = params.layout.span_xz(scene.start.0 as i32);
+        let (z0, z1) = params.layout.span_xz(scene.start.1 as i32);
         let decel = if effects.friction {
             (spec.rolling_resistance_ppm as f64 / 1e6
                 * 1000.0
@@ -134,91 +139,87 @@ impl Peer {
         } else {
             0.0
         };
-        let mut p = Peer {
-            world,
-            ball,
-            g_mg: [0, -1000, 0],
-            rolling: effects.rolling,
+        Setup {
+            walls,
+            start: [
+                ((x0 + x1) / 2.0 * pitch) as f32,
+                ((z0 + z1) / 2.0 * pitch) as f32,
+            ],
+            radius: (params.radius * pitch) as f32,
+            restitution: spec.restitution_milli as f32 / 1000.0,
             decel,
-            dt: world_dt(step_log2),
-            mass,
-        };
-        p.set_gravity(scene.trace.gravity_mg(0));
-        p
+            rolling: effects.rolling,
+        }
     }
 
-    fn set_gravity(&mut self, g: [i32; 3]) {
-        self.g_mg = g;
+    /// The tangential acceleration of a tilt (mm/s²), reduced to 5/7 when the
+    /// marble rolls.
+    pub fn gravity(&self, g_mg: [i32; 3]) -> [f32; 2] {
         let c = if self.rolling { 5.0 / 7.0 } else { 1.0 };
         let s = (MM_S2_PER_MG * c) as f32;
-        self.world.gravity = Vector::new(g[0] as f32 * s, g[2] as f32 * s);
-        self.world.bodies[self.ball].wake_up(true);
-    }
-
-    fn step(&mut self) {
-        if self.decel > 0.0 {
-            let b = &mut self.world.bodies[self.ball];
-            let v = b.linvel();
-            let speed = v.length();
-            b.reset_forces(false);
-            if speed > self.decel * self.dt {
-                b.add_force(-v / speed * (self.decel * self.mass), false);
-            } else if self.world.gravity.length() <= self.decel {
-                b.set_linvel(Vector::new(0.0, 0.0), false);
-                b.add_force(-self.world.gravity * self.mass, false);
-            } else {
-                let g = self.world.gravity;
-                b.add_force(-g / g.length() * (self.decel * self.mass), false);
-            }
-        }
-        self.world.step();
-    }
-
-    /// Ball position and velocity (mm, mm/s).
-    pub fn state(&self) -> ([f64; 2], [f64; 2]) {
-        let b = &self.world.bodies[self.ball];
-        let (p, v) = (b.translation(), b.linvel());
-        ([p.x as f64, p.y as f64], [v.x as f64, v.y as f64])
-    }
-
-    fn touching(&self) -> bool {
-        self.world
-            .narrow_phase
-            .contact_pairs()
-            .any(|p| p.has_any_active_contact())
+        [g_mg[0] as f32 * s, g_mg[2] as f32 * s]
     }
 }
 
-fn world_dt(step_log2: u32) -> f32 {
-    1.0 / (1u32 << step_log2) as f32
+/// Rolling resistance over the next `dt` seconds, per unit mass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Resistance {
+    /// None (the friction effect is off).
+    Off,
+    /// A force per unit mass (mm/s²): against the motion, or, at rest on a tilt
+    /// steeper than the resistance, against gravity.
+    Push([f32; 2]),
+    /// Static hold: the marble stops and the push cancels gravity.
+    Hold([f32; 2]),
 }
 
-/// Steps `peer` from step `from` to `to` with the scene's tilt trace.
-fn drive(
-    peer: &mut Peer,
+/// The rolling resistance for velocity `v` (mm/s) under gravity `g` (mm/s²):
+/// `decel` (mm/s²) against the motion while the marble would not stop within
+/// `dt`; once it would, it holds if the tilt is no steeper than `decel`.
+pub fn resistance(decel: f32, dt: f32, v: [f32; 2], g: [f32; 2]) -> Resistance {
+    if decel <= 0.0 {
+        return Resistance::Off;
+    }
+    let speed = (v[0] * v[0] + v[1] * v[1]).sqrt();
+    let pull = (g[0] * g[0] + g[1] * g[1]).sqrt();
+    if speed > decel * dt {
+        Resistance::Push([-v[0] / speed * decel, -v[1] / speed * decel])
+    } else if pull <= decel {
+        Resistance::Hold([-g[0], -g[1]])
+    } else {
+        Resistance::Push([-g[0] / pull * decel, -g[1] / pull * decel])
+    }
+}
+
+/// Steps `peer` from step `from` to `to` with the scene's tilt trace, calling
+/// `each` after every advance with the number of steps done.
+fn drive<P: PeerWorld>(
+    peer: &mut P,
     scene: &Scene,
     step_log2: u32,
     from: u32,
     to: u32,
-    mut each: impl FnMut(&Peer, u32),
+    mut each: impl FnMut(&mut P, u32),
 ) {
     let sub = step_log2.saturating_sub(FRAME_LOG2);
-    let mask = (1u32 << sub) - 1;
-    for n in from..to {
-        if n & mask == 0 {
+    let per = P::steps_per_advance(step_log2).max(1);
+    let mut n = from;
+    while n < to {
+        if n & ((1u32 << sub) - 1) == 0 {
             let g = scene.trace.gravity_mg(n >> sub);
-            if g != peer.g_mg {
+            if g != peer.gravity_mg() {
                 peer.set_gravity(g);
             }
         }
-        peer.step();
-        each(peer, n + 1);
+        peer.advance();
+        n += per;
+        each(peer, n);
     }
 }
 
 /// The whole scene, unobserved (what is timed and what callgrind counts).
 #[inline(never)]
-pub fn run_plain(peer: &mut Peer, scene: &Scene, step_log2: u32) {
+pub fn run_plain<P: PeerWorld>(peer: &mut P, scene: &Scene, step_log2: u32) {
     drive(peer, scene, step_log2, 0, steps(step_log2), |_, _| {});
 }
 
@@ -265,8 +266,10 @@ fn overlap_mm(scene: &Scene, params: &Params<f64>, c: [f64; 2]) -> f64 {
     r - best
 }
 
-/// An instrumented rapier run.
-pub fn measure(id: SceneId, step_log2: u32) -> Outcome {
+/// An instrumented peer run. Overlap, contacts and bounces are sampled after
+/// every [`PeerWorld::advance`]: every step of an engine stepped at the rate,
+/// every frame of one that substeps inside its step.
+pub fn measure<P: PeerWorld>(id: SceneId, step_log2: u32) -> Outcome {
     let scene = Scene::get(id);
     let effects = scene.spec.effects;
     let params = Params::<f64>::new(PhysicsSpec {
@@ -274,7 +277,7 @@ pub fn measure(id: SceneId, step_log2: u32) -> Outcome {
         ..scene.spec
     })
     .expect("valid spec");
-    let mut peer = Peer::new(&scene, step_log2, effects);
+    let mut peer = P::new(&scene, step_log2, effects);
     let one = 1u32 << step_log2;
     let mut out = Outcome::default();
     let mut worst = f64::NEG_INFINITY;
@@ -317,7 +320,7 @@ pub fn measure(id: SceneId, step_log2: u32) -> Outcome {
     });
     let (pos, v) = peer.state();
     out.pos10 = pos;
-    out.energy_end = energy(rolling, peer.g_mg, pos, v).0;
+    out.energy_end = energy(rolling, peer.gravity_mg(), pos, v).0;
     out.max_pen_um = worst.max(0.0) * 1000.0;
     out.contacts = contact_steps;
     out.collisions = bounces;
@@ -325,23 +328,23 @@ pub fn measure(id: SceneId, step_log2: u32) -> Outcome {
     out
 }
 
-/// Host time per rapier step.
-pub fn time(id: SceneId, step_log2: u32, reps: usize, min_total_s: f64) -> Timing {
+/// Host time per study step (a substep, for an engine that substeps).
+pub fn time<P: PeerWorld>(id: SceneId, step_log2: u32, reps: usize, min_total_s: f64) -> Timing {
     let scene = Scene::get(id);
     let effects = scene.spec.effects;
     time_runs(
         steps(step_log2),
         reps,
         min_total_s,
-        || Peer::new(&scene, step_log2, effects),
+        || P::new(&scene, step_log2, effects),
         |p| run_plain(p, &scene, step_log2),
     )
 }
 
-/// One plain rapier run (for callgrind).
-pub fn plain(id: SceneId, step_log2: u32) -> [f64; 2] {
+/// One plain run (for callgrind): the end position.
+pub fn plain<P: PeerWorld>(id: SceneId, step_log2: u32) -> [f64; 2] {
     let scene = Scene::get(id);
-    let mut p = Peer::new(&scene, step_log2, scene.spec.effects);
+    let mut p = P::new(&scene, step_log2, scene.spec.effects);
     run_plain(&mut p, &scene, step_log2);
     p.state().0
 }
