@@ -17,6 +17,19 @@ pub struct TileRange {
     pub hi: TileIndex,
 }
 
+impl TileRange {
+    /// The low and high bound along `axis` (0 = i, 1 = j, 2 = k), to narrow or
+    /// widen the range on one axis.
+    #[inline]
+    pub fn axis_mut(&mut self, axis: usize) -> (&mut i32, &mut i32) {
+        match axis {
+            0 => (&mut self.lo.i, &mut self.hi.i),
+            1 => (&mut self.lo.j, &mut self.hi.j),
+            _ => (&mut self.lo.k, &mut self.hi.k),
+        }
+    }
+}
+
 /// Eq. 7 in 3-D.
 #[inline]
 pub fn candidates<S: Scalar>(layout: &TileLayout<S>, c: Vec3<S>, r: S) -> TileRange {

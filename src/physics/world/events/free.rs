@@ -133,7 +133,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             let (axis, up) = (bit / 2, bit % 2 == 1);
             let plane = m.rest_plane[axis];
             if axis != 1 || space {
-                let (lo, hi) = bounds(&mut range, axis);
+                let (lo, hi) = range.axis_mut(axis);
                 if up {
                     *lo = i32::MIN;
                 } else {
@@ -160,22 +160,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 continue;
             }
             for _ in 0..GROW {
+                // The row just beyond that side, then the side moved onto it.
+                let (lo, hi) = range.axis_mut(axis);
+                let next = if side % 2 == 0 { *lo - 1 } else { *hi + 1 };
                 let mut row = range;
-                let (lo, hi) = bounds(&mut row, axis);
-                if side % 2 == 0 {
-                    *lo -= 1;
-                    *hi = *lo;
-                } else {
-                    *hi += 1;
-                    *lo = *hi;
-                }
+                let (row_lo, row_hi) = row.axis_mut(axis);
+                (*row_lo, *row_hi) = (next, next);
                 if !fits(self.tiles, &row, &behind) {
                     break;
                 }
-                let (lo, hi) = bounds(&mut range, axis);
-                let (new_lo, new_hi) = bounds(&mut row, axis);
-                *lo = (*lo).min(*new_lo);
-                *hi = (*hi).max(*new_hi);
+                let (lo, hi) = range.axis_mut(axis);
+                *(if side % 2 == 0 { lo } else { hi }) = next;
             }
         }
         let mut region = FreeRegion {
@@ -193,15 +188,6 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     }
 }
 
-/// The low and high bound of `r` along `axis` (0 = i, 1 = j, 2 = k).
-fn bounds(r: &mut TileRange, axis: usize) -> (&mut i32, &mut i32) {
-    match axis {
-        0 => (&mut r.lo.i, &mut r.hi.i),
-        1 => (&mut r.lo.j, &mut r.hi.j),
-        _ => (&mut r.lo.k, &mut r.hi.k),
-    }
-}
-
 /// Whether every tile of `r` is empty and every tile behind a held face under it
 /// (the row `behind[axis]` across the other two axes) is solid.
 #[inline(never)]
@@ -211,7 +197,7 @@ fn fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3]) -> bool {
         let mut s = *r;
         match behind.get(axis) {
             Some(Some(row)) => {
-                let (lo, hi) = bounds(&mut s, axis);
+                let (lo, hi) = s.axis_mut(axis);
                 (*lo, *hi) = (*row, *row);
             }
             Some(None) => continue,

@@ -169,11 +169,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let at = layout.index_xz(plane);
                 (at, layout.span_xz(at).0)
             };
-            let (lo, hi) = match axis {
-                0 => (&mut range.lo.i, &mut range.hi.i),
-                1 => (&mut range.lo.j, &mut range.hi.j),
-                _ => (&mut range.lo.k, &mut range.hi.k),
-            };
+            let (lo, hi) = range.axis_mut(axis);
             if up {
                 // Held from above: every row before `at` ends at or below the plane.
                 *lo = (*lo).max(at);
