@@ -362,71 +362,23 @@ impl Game {
         }
     }
 
-    /// The matrix image: the whole level, one pixel per tile, or where it does not
-    /// fit the terminal a window that follows the marble (the renderer's viewport
-    /// rule, sized to the terminal).
-    fn picture(&mut self, cols: u16, rows: u16) -> (usize, usize, Vec<u8>) {
-        const N: usize = 128;
+    /// The matrix image with the ghost, dim, where it is on the storey on show.
+    fn picture(&mut self, cols: u16, rows: u16) -> Picture {
         let game = self.player.game();
-        let level = game.level();
-        let (nx, nz) = (level.info.nx as i32, level.info.nz as i32);
-        let w = nx.min(cols as i32 / 2).max(1);
-        let h = nz.min(rows as i32 - HUD_LINES as i32).max(1);
-        let layout = &game.world().params().layout;
-        let focus = game
-            .world()
-            .marbles()
-            .iter()
-            .find(|m| !m.out)
-            .map(|m| tile_point(layout, m.pos.x, m.pos.z).tile());
-        let vx = follow_axis(self.view.map(|v| v.0), nx, w, focus.map(|f| f.0));
-        let vz = follow_axis(self.view.map(|v| v.1), nz, h, focus.map(|f| f.1));
-        self.view = Some((vx, vz));
-        let blink = blink_on(game.frames(), game.config().frame_log2);
-        let frame: crate::matrix::Frame<N, N> =
-            render_world(level, game.world(), blink, Viewport::new(vx, vz));
-        let (w, h) = (w as usize, h as usize);
-        let mut px: Vec<u8> = frame
-            .rows()
-            .iter()
-            .take(h)
-            .flat_map(|r| r[..w].iter().copied())
-            .collect();
-        // The ghost, dim, where it is on the storey on show and nothing brighter is.
-        let storey = game
-            .world()
-            .marbles()
-            .iter()
-            .find(|m| !m.out)
-            .map(|m| layout.storey_of(m.pos.y));
+        let mut pic = Picture::of(game, &mut self.view, cols, rows.saturating_sub(HUD_LINES));
         if let Some((i, k, s)) = self.ghost.as_mut().and_then(|g| g.at(game)) {
-            let (x, y) = (i - vx, k - vz);
-            if Some(s) == storey && (0..w as i32).contains(&x) && (0..h as i32).contains(&y) {
-                let p = &mut px[y as usize * w + x as usize];
-                *p = (*p).max(GHOST_BRIGHTNESS);
-            }
+            pic.dim(i, k, s);
         }
-        (w, h, px)
+        pic
     }
 
     fn draw(&mut self) -> io::Result<()> {
         let (cols, rows) = terminal::size().unwrap_or((80, 24));
-        let (w, h, px) = self.picture(cols, rows);
+        let pic = self.picture(cols, rows);
+        let h = pic.rows();
         let b = &mut self.buf;
         b.clear();
-        let mut last: Option<u8> = None;
-        for y in 0..h {
-            queue!(b, cursor::MoveTo(0, y as u16))?;
-            for x in 0..w.min(cols as usize / 2) {
-                let v = px[y * w + x].min(MAX_BRIGHTNESS);
-                if last != Some(v) {
-                    queue!(b, SetForegroundColor(colour(v)))?;
-                    last = Some(v);
-                }
-                queue!(b, Print(shade(v)))?;
-            }
-        }
-        queue!(b, ResetColor)?;
+        pic.queue(b)?;
         let game = self.player.game();
         let info = &game.level().info;
         let hz = game.config().frame_hz() as f64;
@@ -475,6 +427,96 @@ pub(super) fn shade(v: u8) -> &'static str {
         3..=5 => "▒▒",
         6..=10 => "▓▓",
         _ => "██",
+    }
+}
+
+/// The matrix as the terminal shows it: the whole level, one pixel per tile, or
+/// where it does not fit a window that follows the marble (the renderer's
+/// viewport rule, sized to the terminal). `cargo play` and the race draw it.
+pub(super) struct Picture {
+    w: usize,
+    h: usize,
+    /// The window's first column and row (tiles).
+    origin: (i32, i32),
+    /// The storey of the marble followed, if one is in play.
+    storey: Option<i32>,
+    /// `w × h` brightness levels, row by row.
+    px: Vec<u8>,
+}
+
+impl Picture {
+    /// `game`'s maze in `cols × rows` character cells, two to a pixel; `view`
+    /// is the window kept from the last picture (the viewport moves only when
+    /// the marble nears its edge).
+    pub(super) fn of(
+        game: &crate::game::rules::Game<'_, crate::physics::Fx>,
+        view: &mut Option<(i32, i32)>,
+        cols: u16,
+        rows: u16,
+    ) -> Self {
+        const N: usize = 128;
+        let level = game.level();
+        let (nx, nz) = (level.info.nx as i32, level.info.nz as i32);
+        let w = nx.min(cols as i32 / 2).max(1);
+        let h = nz.min(rows as i32).max(1);
+        let layout = &game.world().params().layout;
+        let live = game.world().marbles().iter().find(|m| !m.out);
+        let focus = live.map(|m| tile_point(layout, m.pos.x, m.pos.z).tile());
+        let vx = follow_axis(view.map(|v| v.0), nx, w, focus.map(|f| f.0));
+        let vz = follow_axis(view.map(|v| v.1), nz, h, focus.map(|f| f.1));
+        *view = Some((vx, vz));
+        let blink = blink_on(game.frames(), game.config().frame_log2);
+        let frame: crate::matrix::Frame<N, N> =
+            render_world(level, game.world(), blink, Viewport::new(vx, vz));
+        let (w, h) = (w as usize, h as usize);
+        let px = frame
+            .rows()
+            .iter()
+            .take(h)
+            .flat_map(|r| r[..w].iter().copied())
+            .collect();
+        Picture {
+            w,
+            h,
+            origin: (vx, vz),
+            storey: live.map(|m| layout.storey_of(m.pos.y)),
+            px,
+        }
+    }
+
+    /// Rows drawn.
+    pub(super) fn rows(&self) -> usize {
+        self.h
+    }
+
+    /// A second marble (a ghost, an opponent) at tile `(i, k)` of storey `s`:
+    /// dim, where it is on the storey on show and nothing brighter is.
+    pub(super) fn dim(&mut self, i: i32, k: i32, s: i32) {
+        let (x, y) = (i - self.origin.0, k - self.origin.1);
+        if Some(s) == self.storey
+            && (0..self.w as i32).contains(&x)
+            && (0..self.h as i32).contains(&y)
+        {
+            let p = &mut self.px[y as usize * self.w + x as usize];
+            *p = (*p).max(GHOST_BRIGHTNESS);
+        }
+    }
+
+    /// Queues the picture at the terminal's top left.
+    pub(super) fn queue(&self, b: &mut Vec<u8>) -> io::Result<()> {
+        let mut last: Option<u8> = None;
+        for y in 0..self.h {
+            queue!(b, cursor::MoveTo(0, y as u16))?;
+            for x in 0..self.w {
+                let v = self.px[y * self.w + x].min(MAX_BRIGHTNESS);
+                if last != Some(v) {
+                    queue!(b, SetForegroundColor(colour(v)))?;
+                    last = Some(v);
+                }
+                queue!(b, Print(shade(v)))?;
+            }
+        }
+        queue!(b, ResetColor)
     }
 }
 

@@ -19,22 +19,21 @@ use std::vec::Vec;
 use std::{eprintln, format};
 
 use crossterm::event::{self, Event};
-use crossterm::style::{Print, ResetColor, SetForegroundColor};
+use crossterm::style::Print;
 use crossterm::terminal::{self, Clear, ClearType};
 use crossterm::{cursor, execute, queue};
 
-use super::play::{colour, key_of, shade, Args, TerminalGuard, GHOST_BRIGHTNESS};
+use super::play::{key_of, Args, Picture, TerminalGuard};
 use crate::game::autopilot::Autopilot;
 use crate::game::level::LevelView;
 use crate::game::session::Session;
 use crate::input::event::InputEvent;
 use crate::input::keys::{Key, KeyTilt};
 use crate::input::sensor::Calibration;
-use crate::matrix::MAX_BRIGHTNESS;
 use crate::physics::Fx as I8F24;
 use crate::player::FRAME_HZ;
 use crate::race::{self, LinkStage, MazeSpec, Race, RaceLink, Status, Verdict, MAX_PACKET};
-use crate::render::{blink_on, follow_axis, render_world, tile_point, Viewport};
+use crate::render::tile_point;
 
 /// The first port of channel 0.
 pub const BASE_PORT: u16 = 47_400;
@@ -387,55 +386,15 @@ fn draw_matrix(
     cols: u16,
     rows: u16,
 ) -> io::Result<usize> {
-    const N: usize = 128;
     let game = race.own().game();
-    let level = game.level();
-    let (nx, nz) = (level.info.nx as i32, level.info.nz as i32);
-    let w = nx.min(cols as i32 / 2).max(1);
-    let h = nz.min(rows as i32 - 5).max(1);
+    let mut pic = Picture::of(game, view, cols, rows.saturating_sub(5));
     let layout = &game.world().params().layout;
-    let live = game.world().marbles().iter().find(|m| !m.out);
-    let focus = live.map(|m| tile_point(layout, m.pos.x, m.pos.z).tile());
-    let vx = follow_axis(view.map(|v| v.0), nx, w, focus.map(|f| f.0));
-    let vz = follow_axis(view.map(|v| v.1), nz, h, focus.map(|f| f.1));
-    *view = Some((vx, vz));
-    let blink = blink_on(game.frames(), game.config().frame_log2);
-    let frame: crate::matrix::Frame<N, N> =
-        render_world(level, game.world(), blink, Viewport::new(vx, vz));
-    let (w, h) = (w as usize, h as usize);
-    let mut px: Vec<u8> = frame
-        .rows()
-        .iter()
-        .take(h)
-        .flat_map(|r| r[..w].iter().copied())
-        .collect();
-    let storey = live.map(|m| layout.storey_of(m.pos.y));
     for m in race.opponent().session().game().world().marbles() {
-        if m.out {
-            continue;
-        }
-        let (i, k) = tile_point(layout, m.pos.x, m.pos.z).tile();
-        let (x, y) = (i - vx, k - vz);
-        if Some(layout.storey_of(m.pos.y)) == storey
-            && (0..w as i32).contains(&x)
-            && (0..h as i32).contains(&y)
-        {
-            let p = &mut px[y as usize * w + x as usize];
-            *p = (*p).max(GHOST_BRIGHTNESS);
+        if !m.out {
+            let (i, k) = tile_point(layout, m.pos.x, m.pos.z).tile();
+            pic.dim(i, k, layout.storey_of(m.pos.y));
         }
     }
-    let mut last = None;
-    for y in 0..h {
-        queue!(b, cursor::MoveTo(0, y as u16))?;
-        for x in 0..w {
-            let v = px[y * w + x].min(MAX_BRIGHTNESS);
-            if last != Some(v) {
-                queue!(b, SetForegroundColor(colour(v)))?;
-                last = Some(v);
-            }
-            queue!(b, Print(shade(v)))?;
-        }
-    }
-    queue!(b, ResetColor)?;
-    Ok(h)
+    pic.queue(b)?;
+    Ok(pic.rows())
 }
