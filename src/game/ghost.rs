@@ -425,13 +425,22 @@ pub fn replay<S: Scalar>(
     session: &mut Session<'_, S>,
     ghost: &Ghost<'_>,
 ) -> Result<(Phase, bool), GhostError> {
+    replay_by(session, ghost, Session::frame)
+}
+
+/// [`replay`] and [`replay_in`]: the ghost's readings fed to `frame`.
+fn replay_by<'a, S: Scalar>(
+    session: &mut Session<'a, S>,
+    ghost: &Ghost<'_>,
+    mut frame: impl FnMut(&mut Session<'a, S>, [i32; 3]) -> Phase,
+) -> Result<(Phase, bool), GhostError> {
     session.tilt_mut().set_calibration(ghost.calibration);
     let mut phase = session.game().phase();
     for r in ghost.readings() {
         if phase != Phase::Playing {
             break;
         }
-        phase = session.frame(r?);
+        phase = frame(session, r?);
     }
     Ok((phase, session.state_hash() == ghost.state_hash))
 }
@@ -451,15 +460,7 @@ pub fn replay_in<const EVENTS: bool>(
     session: &mut Session<'_, Fx>,
     ghost: &Ghost<'_>,
 ) -> Result<(Phase, bool), GhostError> {
-    session.tilt_mut().set_calibration(ghost.calibration);
-    let mut phase = session.game().phase();
-    for r in ghost.readings() {
-        if phase != Phase::Playing {
-            break;
-        }
-        phase = session.frame_in::<EVENTS>(r?);
-    }
-    Ok((phase, session.state_hash() == ghost.state_hash))
+    replay_by(session, ghost, Session::frame_in::<EVENTS>)
 }
 
 /// Why a stored ghost is not raced.
