@@ -34,6 +34,14 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let mut now = S::ZERO;
         let mut rounds = 0u32;
         let mut no_sleep = [false; M];
+        // Per pair (`a < b`, at `[a][b]`): the time before which it cannot touch
+        // while both marbles fly their present plans; a new plan for either
+        // forgets it. Most rounds re-plan one marble, and the pairs without it
+        // need no second look (issue 40's item 3: four shaken marbles made six
+        // times of impact a round). Two marbles make one pair, which every new
+        // plan forgets: there it is not kept.
+        let mut apart = [[S::ZERO; M]; M];
+        let keep = count > 2;
         loop {
             if self.out_of_flights() {
                 self.cut_together::<SPACE, O>(&live, &mut fl, &mut no_sleep, now, obs);
@@ -66,11 +74,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     fl[n].t = if m.asleep { now } else { fl[n].t };
                     fl[n].set_seg(Segment::still(m.pos));
                     plan[n] = Some((S::ONE, Event::End));
+                    if keep {
+                        forget(&mut apart, n);
+                    }
                     continue;
                 }
                 let (s, ev) = self.next::<SPACE>(n, &mut m, &mut fl[n]);
                 self.marbles[n] = m;
                 plan[n] = Some((fl[n].after(s), ev));
+                if keep {
+                    forget(&mut apart, n);
+                }
             }
             let mut first: Option<(S, usize)> = None;
             for (n, pl) in plan.iter().enumerate().take(count) {
@@ -99,7 +113,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     // Both at the later of their own times (a marble a slice
                     // ahead of the others is checked from where it is).
                     let t0 = now.max(fl[a].t).max(fl[b].t);
-                    if t0 >= when {
+                    if t0 >= when || when <= apart[a][b] {
                         continue;
                     }
                     let at = |n: usize| {
@@ -119,7 +133,16 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         dv: Vec3::ZERO,
                         h: hb - ha,
                     };
-                    let horizon = when - t0;
+                    // Over both plans, not only to the round's first event: what
+                    // is found past it holds for the rounds after, until either
+                    // marble is planned anew. The advance is the same up to
+                    // `when`, so this round's answer is too.
+                    let until = |n: usize| plan[n].map_or(S::ONE, |(t, _)| t);
+                    let horizon = if keep {
+                        until(a).min(until(b)) - t0
+                    } else {
+                        when - t0
+                    };
                     // Out of reach over the horizon: no touch, and no square of a
                     // far separation (I8F24's |d|² leaves its range past 11.3
                     // pitch; wrapped, a pair 16 pitches apart read as touching).
@@ -134,10 +157,21 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         || path.min.z > near
                         || path.max.z < -near
                     {
+                        if keep {
+                            apart[a][b] = t0 + horizon;
+                        }
                         continue;
                     }
                     self.spend(0, PAIR_TEST);
-                    match toi_box(&rel, r2, &point, horizon, tol) {
+                    let toi = toi_box(&rel, r2, &point, horizon, tol);
+                    if keep {
+                        apart[a][b] = t0
+                            + match toi {
+                                Toi::Miss => horizon,
+                                Toi::Hit { at, .. } | Toi::Inside { at } | Toi::Later(at) => at,
+                            };
+                    }
+                    match toi {
                         Toi::Hit { at, contact, .. }
                             if t0 + at < when || (at == S::ZERO && t0 <= when) =>
                         {
@@ -375,5 +409,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         self.stats.slices = self.stats.slices.wrapping_add(1);
         self.spend(2, PAIR_SLICE);
+    }
+}
+
+/// Forgets what was known of marble `n`'s pairs (it has a new plan).
+#[inline]
+fn forget<S: Scalar, const M: usize>(apart: &mut [[S; M]; M], n: usize) {
+    for (a, row) in apart.iter_mut().enumerate() {
+        if a < n {
+            row[n] = S::ZERO;
+        } else if a == n {
+            *row = [S::ZERO; M];
+        }
     }
 }
