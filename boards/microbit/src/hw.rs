@@ -197,23 +197,41 @@ impl SoundOutput for Speaker {
 /// Between operations, and waiting for a win, the task has no other await
 /// (`app::records_task`), so it counts as waiting; a flash operation that
 /// never returned would stop the pets.
+///
+/// The ghosts' flash is the same type, unwatched (the game task beats at each
+/// poll): one copy of the flash-map code serves both stores.
 pub struct WatchedFlash<F> {
     flash: F,
-    heartbeats: &'static Heartbeats,
+    heartbeats: Option<&'static Heartbeats>,
 }
 
 impl<F> WatchedFlash<F> {
     /// `flash`, the records task waiting (also when no records task runs).
     pub fn new(flash: F, heartbeats: &'static Heartbeats) -> Self {
         heartbeats.waiting(Task::Records);
-        Self { flash, heartbeats }
+        Self {
+            flash,
+            heartbeats: Some(heartbeats),
+        }
+    }
+
+    /// `flash`, no task's heartbeat.
+    pub fn unwatched(flash: F) -> Self {
+        Self {
+            flash,
+            heartbeats: None,
+        }
     }
 
     /// Runs one flash operation as the records task's work.
     async fn watched<T>(&mut self, operation: impl AsyncFnOnce(&mut F) -> T) -> T {
-        self.heartbeats.working(Task::Records);
+        if let Some(heartbeats) = self.heartbeats {
+            heartbeats.working(Task::Records);
+        }
         let out = operation(&mut self.flash).await;
-        self.heartbeats.waiting(Task::Records);
+        if let Some(heartbeats) = self.heartbeats {
+            heartbeats.waiting(Task::Records);
+        }
         out
     }
 }

@@ -30,21 +30,19 @@ use panic_probe as _;
 mod hw;
 mod sensor;
 mod sleep;
+mod storage;
 
 use core::pin::pin;
 
-use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_nrf::interrupt;
 use embassy_nrf::interrupt::{InterruptExt, Priority};
-use embassy_nrf::nvmc::Nvmc;
 use embassy_nrf::twim;
 use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
 use embassy_nrf::{bind_interrupts, peripherals};
 use embassy_time::{Duration, Ticker};
 use lsm303agr::Lsm303agr;
 use marble_board_runtime::heartbeat::poll_beating;
-use marble_rolling::records::Records;
 
 use marble_rolling::app::{self, Links};
 use marble_rolling::board::levels_region;
@@ -119,9 +117,15 @@ type Mazes = MazeSlot<{ board::MAZE_REACH.words() }, { board::MAZE_REACH.text_by
 
 /// The game; first the self-test when B was held at power-on
 /// (`board::power_on`), until A. The generated mazes after the built-in
-/// levels take their seeds from `seed`, drawn at power-up.
+/// levels take their seeds from `seed`, drawn at power-up; each level's
+/// ghost is raced from `ghosts`.
 #[embassy_executor::task]
-async fn game(self_test: bool, level: u8, seed: u32) {
+async fn game(
+    self_test: bool,
+    level: u8,
+    seed: u32,
+    mut ghosts: Option<&'static mut storage::Kit>,
+) {
     if self_test {
         let test = pin!(run_self_test());
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
@@ -147,7 +151,7 @@ async fn game(self_test: bool, level: u8, seed: u32) {
             EVENTS,
             _,
             _,
-        >(&LINKS, mode, &mut mazes));
+        >(&LINKS, mode, &mut mazes, ghosts.as_deref_mut()));
         let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters
@@ -182,10 +186,10 @@ async fn run_self_test() {
 }
 
 /// A+B held at power-on: the question mark until one button answers (A
-/// clears every best time, B or 10 s of nothing keeps them), petting the
+/// clears every best time and ghost, B or 10 s of nothing keeps them), petting the
 /// watchdog meanwhile (its task is not running yet).
 async fn confirm_clear(
-    records: &mut Records<RecordsFlash>,
+    stores: &mut storage::Stores,
     a: &embassy_nrf::gpio::Input<'static>,
     b: &embassy_nrf::gpio::Input<'static>,
     wdt: &mut Option<WatchdogHandle>,
@@ -207,24 +211,16 @@ async fn confirm_clear(
         }
     };
     if clear {
-        match records.clear().await {
-            Ok(()) => defmt::info!("records cleared"),
-            Err(e) => defmt::error!("records: {=str}", e.as_str()),
-        }
+        storage::clear(stores).await;
     } else {
         defmt::info!("records kept");
     }
     LINKS.frames.signal(Frame::new());
 }
 
-/// The records' flash: the NVMC, blocking (the CPU waits on a page erase, about
-/// 85 ms, between levels only), as the async NOR flash the records take, each
-/// operation a heartbeat of the records task (hw::WatchedFlash).
-type RecordsFlash = hw::WatchedFlash<BlockingAsync<Nvmc<'static>>>;
-
 /// The best times in [`board::RECORDS`].
 #[embassy_executor::task]
-async fn records(mut records: Records<RecordsFlash>) -> ! {
+async fn records(mut records: marble_rolling::records::Records<storage::RecordsFlash>) -> ! {
     app::records_task(&LINKS, &mut records, |_| {}).await
 }
 
@@ -304,11 +300,11 @@ async fn main(spawner: Spawner) {
     let choice = power_on::power_on(button_a.is_low(), button_b.is_low());
     defmt::info!("power-on: {}", choice);
 
-    // The best times: the last 16 KiB of flash (board::RECORDS).
-    let flash = hw::WatchedFlash::new(BlockingAsync::new(Nvmc::new(p.NVMC)), &HEARTBEATS);
-    let mut store = Records::new(flash, board::RECORDS);
-    if let (PowerOn::ClearRecords, Some(store)) = (choice, store.as_mut()) {
-        confirm_clear(store, &button_a, &button_b, &mut wdt).await;
+    // The best times (board::RECORDS) and the ghosts (board::GHOSTS), one
+    // NVMC shared (storage).
+    let mut stores = storage::open(p.NVMC, &HEARTBEATS);
+    if choice == PowerOn::ClearRecords {
+        confirm_clear(&mut stores, &button_a, &button_b, &mut wdt).await;
     }
 
     // Internal I²C: SDA P0.16, SCL P0.08. The driver writes register
@@ -335,6 +331,7 @@ async fn main(spawner: Spawner) {
         choice == PowerOn::SelfTest,
         sleep::level_after_reset(),
         seed,
+        storage::kit(stores.ghosts),
     ) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
@@ -343,12 +340,12 @@ async fn main(spawner: Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("sound task already running"),
     }
-    match store {
+    match stores.records {
         Some(store) => match records(store) {
             Ok(token) => spawner.spawn(token),
             Err(_) => defmt::error!("records task already running"),
         },
-        None => defmt::error!("records: the region is not whole pages"),
+        None => defmt::error!("records: no store, no records task"),
     }
     if let Some(handle) = wdt {
         match watchdog(handle) {

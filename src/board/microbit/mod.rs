@@ -64,6 +64,8 @@
 pub mod power_on;
 pub mod sleep;
 pub mod speaker;
+#[cfg(feature = "shared-flash")]
+pub mod storage;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use crate::input::buttons::ButtonConfig;
