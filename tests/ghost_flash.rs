@@ -1,10 +1,12 @@
 //! The boards' ghosts in flash (`marble_rolling::records::Ghosts`) on
-//! sequential-storage's mock flash, shaped like the micro:bit v2's ghosts
-//! region (4 KiB pages of 4-byte words, each word written once between
-//! erases, 8 pages): a power cut at any byte of a ghost's write leaves the old
-//! ghost or the new one, whole; a full region makes the oldest ghost of another
-//! level give way; a ghost longer than a page is refused before anything is
-//! written; and QEMU's RAM flash keeps a ghost across a reload of its image.
+//! sequential-storage's mock flash, with the micro:bit v2's pages (4 KiB of
+//! 4-byte words, each word written once between erases; 8 of them here): a
+//! power cut at any byte of a ghost's write leaves the old ghost or the new
+//! one, whole; a full region makes the oldest ghost of another level give way;
+//! a ghost longer than a page is refused before anything is written; and
+//! QEMU's RAM flash keeps a ghost across a reload of its image. Module `v2`:
+//! the v2's own regions on a mock of its whole flash, shared by the records
+//! and the ghosts.
 
 use embassy_futures::block_on;
 use marble_rolling::game::ghost::{Ghost, GhostError, GhostWriter};
