@@ -3,7 +3,7 @@
 //! `cargo microbit` builds it and runs it with `probe-rs run --chip nRF52833_xxAA`
 //! (defmt log over RTT). Wiring only: the tasks are the shared ones from
 //! `marble_rolling::app`, fed by the micro:bit input (LSM303AGR + buttons)
-//! and drawing on the 5×5 matrix (`src/hw.rs`, `src/sensor.rs` and `src/sleep.rs` here, and `marble_rolling::board::microbit`).
+//! and drawing on the 5×5 matrix (`src/hw.rs`, `src/sensor.rs`, `src/sleep.rs` and `src/storage.rs` here, and `marble_rolling::board::microbit`).
 //!
 //! Executors:
 //! * thread mode: input (accelerometer + buttons, 100 Hz), the game
