@@ -284,3 +284,48 @@ pub fn levels_region() -> &'static [u8] {
     // so the bytes do not change while the slice lives.
     unsafe { core::slice::from_raw_parts(V2.start as usize as *const u8, SIZE) }
 }
+
+// ---------------------------------------------------------------------------
+// The stack's high-water mark
+// ---------------------------------------------------------------------------
+
+/// Stack painting (`marble_board_runtime::stack`) on the nRF52833's RAM: the
+/// free stack is painted at boot and the deepest word overwritten since is
+/// logged whenever it went deeper, so that a board measures the stack that
+/// nothing here can run (no nRF52 emulator).
+pub mod stack {
+    use marble_rolling::board::microbit::{RAM_BASE, STACK_PAINT};
+
+    /// Paints the free stack. Call first thing in `main`.
+    #[inline(always)]
+    pub fn paint() {
+        marble_board_runtime::stack::paint(RAM_BASE, STACK_PAINT);
+    }
+
+    /// The deepest stack use logged so far.
+    pub struct Meter {
+        logged: usize,
+    }
+
+    impl Meter {
+        /// Nothing logged yet.
+        pub const fn new() -> Self {
+            Meter { logged: 0 }
+        }
+
+        /// Logs the high-water mark if it is deeper than the last one logged.
+        /// Reads the stack region up to its deepest word (at most 112 KiB,
+        /// under a millisecond): call it seldom.
+        pub fn log_growth(&mut self) {
+            let stack = marble_board_runtime::stack::high_water(RAM_BASE, STACK_PAINT);
+            if stack.used > self.logged {
+                self.logged = stack.used;
+                defmt::info!(
+                    "stack high-water mark: {=usize} of {=usize} bytes",
+                    stack.used,
+                    stack.size
+                );
+            }
+        }
+    }
+}

@@ -68,6 +68,9 @@ static HEARTBEATS: Heartbeats = Heartbeats::new();
 /// (half the watchdog period).
 const STALL_LOG_CHECKS: u16 = 5;
 
+/// Checks between two looks at the stack's high-water mark (10 s).
+const STACK_LOG_CHECKS: u32 = 100;
+
 /// No autopilot on the micro:bit: no button combination is left for it, and
 /// leaving it out saves about 6 KiB of flash.
 const PILOT: bool = false;
@@ -229,8 +232,13 @@ async fn records(mut records: marble_rolling::records::Records<storage::RecordsF
 async fn watchdog(mut handle: WatchdogHandle) -> ! {
     let mut gate = WatchdogGate::new(HEARTBEATS.snapshot());
     let mut ticker = Ticker::every(Duration::from_millis(board::WATCHDOG_CHECK_MS));
+    let (mut stack, mut checks) = (hw::stack::Meter::new(), 0u32);
     loop {
         ticker.next().await;
+        checks = checks.wrapping_add(1);
+        if checks % STACK_LOG_CHECKS == 1 {
+            stack.log_growth();
+        }
         match gate.check(HEARTBEATS.snapshot()) {
             Verdict::Pet => handle.pet(),
             Verdict::Wait { stalled, checks } => {
@@ -261,6 +269,8 @@ fn start_watchdog(wdt: embassy_nrf::Peri<'static, peripherals::WDT>) -> Option<W
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
+    // Before anything deep uses the stack.
+    hw::stack::paint();
     let p = embassy_nrf::init(Default::default());
     defmt::info!("Marble Rolling on micro:bit v2");
 
