@@ -187,14 +187,7 @@ async fn play<
         // and replayed to its hash first), and the attempts recorded.
         #[cfg(feature = "ghosts")]
         let mut ghost = match ghosts.as_deref_mut() {
-            Some(kit) => Some(
-                kit.begin::<EVENTS>(
-                    *player.game().level(),
-                    Player::<W, H, PILOT, EVENTS>::CONFIG,
-                    player.session().tilt_config(),
-                )
-                .await,
-            ),
+            Some(kit) => Some(kit.begin::<EVENTS>(player.session()).await),
             None => None,
         };
         loop {
@@ -297,12 +290,16 @@ async fn play<
                 let _ = links.sounds.try_send(sound);
             }
         }
-        // A win that beat the ghost becomes the level's ghost, written
-        // between levels.
         #[cfg(feature = "ghosts")]
-        if let Some(len) = ghost.and_then(|ghost| ghost.leave(player.session())) {
-            if let Some(kit) = ghosts.as_deref_mut() {
-                let _ = kit.keep_recorded(player.level_name(), len).await;
+        let recorded = ghost.and_then(|ghost| ghost.leave(player.session()));
+        // A win that beat the ghost, whose recording replays to its hash,
+        // becomes the level's ghost, written between levels.
+        #[cfg(feature = "ghosts")]
+        if let Some(bytes) = recorded {
+            if let Some(len) = super::ghosts::replays::<EVENTS>(bytes, player.session()).await {
+                if let Some(kit) = ghosts.as_deref_mut() {
+                    let _ = kit.keep_recorded(player.level_name(), len).await;
+                }
             }
         }
         carried = Some(player.carried());

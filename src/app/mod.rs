@@ -56,7 +56,7 @@ pub use crate::player::FRAME_HZ;
 pub use display_task::display_task;
 pub use game_task::game_task;
 #[cfg(feature = "ghosts")]
-pub use ghosts::{GhostKit, GhostStore, LevelGhost};
+pub use ghosts::{replays, GhostKit, GhostStore, LevelGhost};
 pub use input_task::{input_task, TiltInput};
 #[cfg(feature = "records")]
 pub use links::{Bests, Win};
