@@ -83,6 +83,48 @@ pub async fn game_task<
     }
 }
 
+/// [`GameMode::Play`] alone, for a board that never runs the demo (the
+/// micro:bit v2): [`game_task`]'s future holds the larger of the play's and
+/// the demo's, and with the ghost the demo's is the larger (1 120 B more of
+/// the v2's static RAM). The arguments are [`GameMode::Play`]'s (`level` with
+/// feature `sleep`).
+pub async fn play_task<
+    const W: usize,
+    const H: usize,
+    const PILOT: bool,
+    const EVENTS: bool,
+    const WORDS: usize,
+    const TEXT: usize,
+>(
+    links: &Links<W, H>,
+    tilt: TiltConfig,
+    #[cfg(feature = "sleep")] level: u8,
+    seeds: Seeds,
+    mazes: &mut MazeSlot<WORDS, TEXT>,
+    #[cfg(feature = "ghosts")] ghosts: Option<&mut impl GhostStore>,
+) -> GameExit {
+    let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
+    #[cfg(all(not(feature = "sleep"), not(feature = "ghosts")))]
+    let game = play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes);
+    #[cfg(all(not(feature = "sleep"), feature = "ghosts"))]
+    let game =
+        play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes, ghosts);
+    #[cfg(all(feature = "sleep", not(feature = "ghosts")))]
+    let game =
+        play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, level, seeds, mazes);
+    #[cfg(all(feature = "sleep", feature = "ghosts"))]
+    let game = play::<W, H, PILOT, EVENTS, WORDS, TEXT>(
+        links,
+        &mut ticker,
+        tilt,
+        level,
+        seeds,
+        mazes,
+        ghosts,
+    );
+    game.await
+}
+
 /// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock, the
 /// levels of the region `mazes` carries, the built-in levels in order and
 /// then the endless run of generated mazes ([`Endless`]), each made in `mazes` when the one before

@@ -140,21 +140,23 @@ async fn game(
     let mut mazes = Mazes::new(board::MAZE_REACH).with_region(region);
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
-        let mode = app::GameMode::Play {
-            tilt: TiltConfig::DEFAULT,
-            level,
-            seeds: Seeds::Drawn(seed),
-        };
-        // The game loop is app's; being polled (every frame tick, paused or
-        // not) is its heartbeat.
-        let game = pin!(app::game_task::<
+        // The game loop is app's (play only: the v2 has no demo); being
+        // polled (every frame tick, paused or not) is its heartbeat.
+        let game = pin!(app::play_task::<
             { board::WIDTH },
             { board::HEIGHT },
             PILOT,
             EVENTS,
             _,
             _,
-        >(&LINKS, mode, &mut mazes, ghosts.as_deref_mut()));
+        >(
+            &LINKS,
+            TiltConfig::DEFAULT,
+            level,
+            Seeds::Drawn(seed),
+            &mut mazes,
+            ghosts.as_deref_mut()
+        ));
         let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters
