@@ -5,7 +5,7 @@
 use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::generate::generate;
 use marble_rolling::game::ghost::{
-    race_frame, replay, Ghost, GhostError, GhostWriter, HEADER_BYTES,
+    race_frame, replay, Checking, Ghost, GhostError, GhostWriter, RaceError, Racer, HEADER_BYTES,
 };
 use marble_rolling::game::level::{parse, LevelView};
 use marble_rolling::game::levels::LEVELS;
@@ -214,6 +214,58 @@ fn ghost_replay_of_another_run_misses_the_hash() {
     let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let (_, same) = replay(&mut fresh, &ghost).unwrap();
     assert!(!same);
+}
+
+/// A board checks a stored ghost a stretch at a time (`Checking`), yielding
+/// between stretches: the same racer as the whole replay, after as many
+/// stretches as the run has; and a run that misses its hash is refused the
+/// same way.
+#[test]
+fn ghost_is_checked_a_stretch_at_a_time() {
+    // Switchback: one reading 1 mg off misses the hash there.
+    let level = LEVELS[2];
+    let config = GameConfig::EVENTS;
+    let (mut readings, phase, hash) = record(level, config);
+    assert_eq!(phase, Phase::Won);
+    let bytes = encode(&readings, hash);
+    let whole = Racer::<true>::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
+    let mut checking = Checking::<true>::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
+    let mut stretches = 0;
+    while !checking.play(7) {
+        stretches += 1;
+    }
+    assert_eq!(
+        stretches,
+        (readings.len() - 1) / 7,
+        "{} frames",
+        readings.len()
+    );
+    assert!(checking.play(5), "over stays over");
+    let racer = checking.finish().unwrap();
+    assert_eq!((racer.run(), racer.clock()), (whole.run(), whole.clock()));
+    assert_eq!(racer.game().frames(), 0, "the racer starts at the start");
+    // Finishing early plays the rest.
+    let early = Checking::<true>::new(&bytes, level, config, SYNTHETIC_TILT).unwrap();
+    assert_eq!(early.finish().map(|r| r.run()), Ok(whole.run()));
+    // One reading 1 mg off: refused after its stretches, as a whole replay is.
+    let n = readings.len() / 2;
+    readings[n][0] += 1;
+    let other = encode(&readings, hash);
+    let mut checking = Checking::<true>::new(&other, level, config, SYNTHETIC_TILT).unwrap();
+    let mut stretches = 0;
+    while !checking.play(7) {
+        stretches += 1;
+    }
+    assert!(stretches > 0);
+    let refused = checking.finish().map(|r| r.run());
+    assert!(
+        matches!(refused, Err(RaceError::Hash | RaceError::NotWon)),
+        "{refused:?}"
+    );
+    assert_eq!(
+        Racer::<true>::new(&other, level, config, SYNTHETIC_TILT).map(|r| r.run()),
+        refused
+    );
 }
 
 #[test]

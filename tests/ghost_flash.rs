@@ -1,10 +1,12 @@
 //! The boards' ghosts in flash (`marble_rolling::records::Ghosts`) on
-//! sequential-storage's mock flash, shaped like the micro:bit v2's ghosts
-//! region (4 KiB pages of 4-byte words, each word written once between
-//! erases, 8 pages): a power cut at any byte of a ghost's write leaves the old
-//! ghost or the new one, whole; a full region makes the oldest ghost of another
-//! level give way; a ghost longer than a page is refused before anything is
-//! written; and QEMU's RAM flash keeps a ghost across a reload of its image.
+//! sequential-storage's mock flash, with the micro:bit v2's pages (4 KiB of
+//! 4-byte words, each word written once between erases; 8 of them here): a
+//! power cut at any byte of a ghost's write leaves the old ghost or the new
+//! one, whole; a full region makes the oldest ghost of another level give way;
+//! a ghost longer than a page is refused before anything is written; and
+//! QEMU's RAM flash keeps a ghost across a reload of its image. Module `v2`:
+//! the v2's own regions on a mock of its whole flash, shared by the records
+//! and the ghosts.
 
 use embassy_futures::block_on;
 use marble_rolling::game::ghost::{Ghost, GhostError, GhostWriter};
@@ -321,4 +323,298 @@ fn qemu_ram_flash_holds_a_ghost_across_a_reload() {
     let mut g = Ghosts::new(reloaded, 0..N as u32).unwrap();
     let mut buf = vec![0u8; ghost_work_bytes::<RamFlash<N>>(MAX)];
     assert_eq!(block_on(g.load("corner", &mut buf)), Ok(Some(&ghost[..])));
+}
+
+/// The micro:bit v2's one NVMC shared by the records task and the game
+/// task's ghosts (`board::microbit::storage`), on a mock of its whole
+/// 512 KiB flash with the board's own regions. The v2 runs nowhere here:
+/// these tests are what shows the sharing works.
+#[cfg(feature = "shared-flash")]
+mod v2 {
+    use super::ghost_of;
+    use embassy_futures::{block_on, join::join, yield_now};
+    use embassy_sync::blocking_mutex::raw::NoopRawMutex;
+    use embassy_sync::mutex::Mutex;
+    use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+    use marble_rolling::app::GhostKit;
+    use marble_rolling::board::levels_region;
+    use marble_rolling::board::microbit::storage::{
+        fits, local, nvmc_busy_us, overlap, partition, share, Shared, LONGEST_STALL_MS,
+    };
+    use marble_rolling::board::microbit::{GHOSTS, GHOST_BYTES, RECORDS};
+    use marble_rolling::records::{ghost_work_bytes, Ghosts, Offer, Records};
+    use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
+    use std::cell::Cell;
+
+    /// The nRF52833's flash: 128 pages of 4 KiB, 4-byte words.
+    type Nvmc = MockFlashBase<128, 4, 1024>;
+
+    /// The mock, each erase and write logged by its address and its NVMC
+    /// time (the datasheet's maxima) added up until someone takes it.
+    struct Logged<'c> {
+        flash: Nvmc,
+        log: Vec<u32>,
+        busy_us: &'c Cell<u64>,
+    }
+
+    impl ErrorType for Logged<'_> {
+        type Error = <Nvmc as ErrorType>::Error;
+    }
+
+    impl ReadNorFlash for Logged<'_> {
+        const READ_SIZE: usize = Nvmc::READ_SIZE;
+        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            self.flash.read(offset, bytes).await
+        }
+        fn capacity(&self) -> usize {
+            self.flash.capacity()
+        }
+    }
+
+    impl NorFlash for Logged<'_> {
+        const WRITE_SIZE: usize = Nvmc::WRITE_SIZE;
+        const ERASE_SIZE: usize = Nvmc::ERASE_SIZE;
+        async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            self.log.push(from);
+            let pages = u64::from((to - from) / Nvmc::ERASE_SIZE as u32);
+            self.busy_us
+                .set(self.busy_us.get() + nvmc_busy_us(pages, 0));
+            self.flash.erase(from, to).await
+        }
+        async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            self.log.push(offset);
+            let us = nvmc_busy_us(0, bytes.len() as u64);
+            self.busy_us.set(self.busy_us.get() + us);
+            self.flash.write(offset, bytes).await
+        }
+    }
+
+    fn logged(flash: Nvmc, busy_us: &Cell<u64>) -> Mutex<NoopRawMutex, Logged<'_>> {
+        Mutex::new(Logged {
+            flash,
+            log: Vec::new(),
+            busy_us,
+        })
+    }
+
+    fn erased() -> Nvmc {
+        Nvmc::new(WriteCountCheck::OnceOnly, None, true)
+    }
+
+    type Part<'a, 'c> = marble_rolling::board::microbit::storage::Paced<
+        embassy_embedded_hal::flash::partition::Partition<'a, NoopRawMutex, Logged<'c>>,
+    >;
+
+    fn stores<'a, 'c>(
+        flash: &'a Mutex<NoopRawMutex, Logged<'c>>,
+    ) -> (Records<Part<'a, 'c>>, Ghosts<Part<'a, 'c>>) {
+        let Shared { records, ghosts } = share(flash).expect("the v2's regions on its flash");
+        (
+            Records::new(records, local(&RECORDS)).unwrap(),
+            Ghosts::new(ghosts, local(&GHOSTS)).unwrap(),
+        )
+    }
+
+    /// The bytes outside the two stores' regions are as erased as they
+    /// started (the levels region between them above all).
+    fn outside_untouched(flash: &Nvmc) {
+        for (at, &b) in flash.as_bytes().iter().enumerate() {
+            let at = at as u32;
+            if !RECORDS.contains(&at) && !GHOSTS.contains(&at) {
+                assert_eq!(b, 0xFF, "byte {at:#x} written, outside both stores");
+            }
+        }
+    }
+
+    #[test]
+    fn the_regions_are_whole_pages_and_apart() {
+        assert!(fits::<Nvmc>(&RECORDS) && fits::<Nvmc>(&GHOSTS));
+        assert!(!overlap(&RECORDS, &GHOSTS));
+        assert!(!overlap(&GHOSTS, &levels_region::V2));
+        assert!(!overlap(&RECORDS, &levels_region::V2));
+        assert!(overlap(&(0..4096), &(4095..8192)) && !overlap(&(0..4096), &(4096..8192)));
+        assert_eq!(local(&GHOSTS), 0..16 * 1024);
+        // Not whole pages, or empty: no partition (never the panic of
+        // `Partition::new`).
+        let busy = Cell::new(0);
+        let flash = logged(erased(), &busy);
+        assert!(partition(&flash, 0x7_7000..0x7_7800).is_none());
+        assert!(partition(&flash, 0x7_7800..0x7_8800).is_none());
+        assert!(partition(&flash, 0x7_7000..0x7_7000).is_none());
+        let parts = share(&flash).expect("the v2's regions on its flash");
+        assert_eq!(parts.ghosts.0.offset(), GHOSTS.start);
+        assert_eq!(parts.records.0.size(), RECORDS.end - RECORDS.start);
+        // On a flash of 8 KiB pages the ghosts' region (0x77000) is not
+        // page-aligned: no stores, said by `None`.
+        type Big = MockFlashBase<64, 4, 2048>;
+        let big = Mutex::<NoopRawMutex, _>::new(Big::new(WriteCountCheck::OnceOnly, None, true));
+        assert!(share(&big).is_none());
+    }
+
+    #[test]
+    fn records_and_ghosts_written_at_once_each_keep_their_own() {
+        let busy = Cell::new(0);
+        let flash = logged(erased(), &busy);
+        let (mut records, mut ghosts) = stores(&flash);
+        let kept: Vec<(String, Vec<u8>)> = (0..6)
+            .map(|n| (format!("level-{n}"), ghost_of(1500 + 80 * n, n as i32)))
+            .collect();
+        let records_task = async {
+            for round in 0..3u32 {
+                for level in 0..10u8 {
+                    let offer = records
+                        .offer(level, 1000 - round * 100 - u32::from(level))
+                        .await
+                        .unwrap();
+                    assert!(matches!(offer, Offer::New { .. }), "{level}: {offer:?}");
+                }
+            }
+        };
+        let game_task = async {
+            let mut work = vec![0u8; ghost_work_bytes::<Nvmc>(GHOST_BYTES)];
+            for (name, ghost) in kept.iter().chain(kept.iter()) {
+                ghosts.keep(name, ghost, &mut work).await.unwrap();
+            }
+        };
+        block_on(join(records_task, game_task));
+        block_on(async {
+            for level in 0..10u8 {
+                assert_eq!(records.best(level).await, Ok(Some(800 - u32::from(level))));
+            }
+            let mut buf = vec![0u8; ghost_work_bytes::<Nvmc>(GHOST_BYTES)];
+            // The last ghosts kept are there, whole (older ones gave way).
+            for (name, ghost) in &kept[4..] {
+                let got = ghosts.load(name, &mut buf).await.unwrap();
+                assert_eq!(got, Some(&ghost[..]), "{name}");
+            }
+        });
+        let nvmc = flash.into_inner();
+        // The two tasks' operations did interleave, one at a time.
+        let turns = nvmc
+            .log
+            .windows(2)
+            .filter(|w| RECORDS.contains(&w[0]) != RECORDS.contains(&w[1]))
+            .count();
+        assert!(turns > 20, "the stores took {turns} turns");
+        outside_untouched(&nvmc.flash);
+    }
+
+    #[test]
+    fn a_power_cut_in_a_ghost_write_leaves_every_best_time() {
+        let busy = Cell::new(0);
+        let flash = logged(erased(), &busy);
+        let (mut records, mut ghosts) = stores(&flash);
+        let mut work = vec![0u8; ghost_work_bytes::<Nvmc>(GHOST_BYTES)];
+        block_on(async {
+            for level in 0..10u8 {
+                records.offer(level, 500 + u32::from(level)).await.unwrap();
+            }
+            // Ghosts that fill most of the region: the next one turns a page
+            // (migrates and erases).
+            for n in 0..6 {
+                let g = ghost_of(GHOST_BYTES - 100, n);
+                ghosts
+                    .keep(&format!("maze-{n}"), &g, &mut work)
+                    .await
+                    .unwrap();
+            }
+        });
+        let before = flash.into_inner().flash;
+        let new = ghost_of(GHOST_BYTES - 60, 9);
+        let mut cut = 0u32;
+        loop {
+            let mut nvmc = before.clone();
+            nvmc.bytes_until_shutoff = Some(cut);
+            let flash = logged(nvmc, &busy);
+            let (mut records, mut ghosts) = stores(&flash);
+            let result = block_on(ghosts.keep("maze-0", &new, &mut work));
+            let finished = {
+                let mut f = flash.try_lock().expect("no operation under way");
+                let finished = f.flash.bytes_until_shutoff.is_some();
+                f.flash.bytes_until_shutoff = None;
+                finished
+            };
+            for level in 0..10u8 {
+                assert_eq!(
+                    block_on(records.best(level)),
+                    Ok(Some(500 + u32::from(level))),
+                    "cut at byte {cut}: level {level}"
+                );
+            }
+            let mut buf = vec![0u8; ghost_work_bytes::<Nvmc>(GHOST_BYTES)];
+            let got = block_on(ghosts.load("maze-0", &mut buf)).map(|g| g.map(<[u8]>::to_vec));
+            if finished {
+                assert!(result.is_ok(), "{result:?}");
+                assert_eq!(got, Ok(Some(new.clone())));
+                outside_untouched(&flash.into_inner().flash);
+                assert!(cut > 4096, "the write turned no page ({cut} bytes)");
+                break;
+            }
+            cut += if cut < 256 { 1 } else { 61 };
+        }
+    }
+
+    #[test]
+    fn a_ghost_write_never_holds_the_cpu_as_long_as_the_watchdog_allows() {
+        // A ghost is kept in the game task, on the same thread executor as
+        // the watchdog task: between two of its yields the NVMC's time must
+        // stay under the watchdog's margin. Ghosts of every length the kit
+        // keeps, for more levels than the region holds, so that pages turn
+        // and ghosts are evicted; a sibling task notes the NVMC time since it
+        // last ran.
+        let longest = GhostKit::<Part<'static, 'static>, { GHOST_BYTES }>::longest();
+        let busy = Cell::new(0);
+        let flash = logged(erased(), &busy);
+        let (_, mut ghosts) = stores(&flash);
+        let mut work = vec![0u8; ghost_work_bytes::<Nvmc>(GHOST_BYTES)];
+        let done = Cell::new(false);
+        let (mut worst_keep, mut evicted) = (0u64, 0u32);
+        let game_task = async {
+            for n in 0..60usize {
+                let len = 200 + (n * 733) % (longest - 200);
+                let ghost = ghost_of(len, n as i32);
+                let before = flash.lock().await.flash.stats_snapshot();
+                let kept = ghosts
+                    .keep(&format!("maze-{}", n % 9), &ghost, &mut work)
+                    .await
+                    .unwrap();
+                let used = before.compare_to(flash.lock().await.flash.stats_snapshot());
+                worst_keep = worst_keep.max(nvmc_busy_us(used.erases, used.bytes_written));
+                evicted += u32::from(kept.evicted);
+            }
+            done.set(true);
+        };
+        let watchdog_task = async {
+            let mut worst = 0u64;
+            while !done.get() {
+                worst = worst.max(busy.replace(0));
+                yield_now().await;
+            }
+            worst.max(busy.get())
+        };
+        let ((), worst_stall) = block_on(join(game_task, watchdog_task));
+        println!(
+            "ghost writes on the v2: at most {worst_keep} us of NVMC a write, \
+             {worst_stall} us between two yields; {evicted} evicted"
+        );
+        assert!(evicted > 0, "the region never filled");
+        assert!(
+            worst_keep > LONGEST_STALL_MS * 1000,
+            "no write long enough to need the pacing ({worst_keep} us)"
+        );
+        assert!(
+            worst_stall < LONGEST_STALL_MS * 1000,
+            "{worst_stall} us between two yields, over {LONGEST_STALL_MS} ms"
+        );
+    }
+
+    #[test]
+    fn the_nvmc_time_counts_erases_and_words() {
+        assert_eq!(nvmc_busy_us(0, 0), 0);
+        assert_eq!(nvmc_busy_us(1, 0), 85_000);
+        assert_eq!(nvmc_busy_us(0, 4), 41);
+        assert_eq!(nvmc_busy_us(0, 5), 82);
+        assert_eq!(nvmc_busy_us(2, 4096), 170_000 + 1024 * 41);
+        assert_eq!(LONGEST_STALL_MS, 800);
+    }
 }

@@ -196,14 +196,7 @@ pub(super) async fn demo<
         // writes them, the next races them to their hashes).
         #[cfg(feature = "ghosts")]
         let mut ghost = match ghosts.as_deref_mut() {
-            Some(kit) => Some(
-                kit.begin::<EVENTS>(
-                    *player.game().level(),
-                    Player::<W, H, PILOT, EVENTS>::CONFIG,
-                    SYNTHETIC_TILT,
-                )
-                .await,
-            ),
+            Some(kit) => Some(kit.begin::<EVENTS>(player.session()).await),
             None => None,
         };
         if let Some(fault) = sensor {
@@ -281,7 +274,12 @@ pub(super) async fn demo<
         #[cfg(feature = "ghosts")]
         if let Some(ghost) = ghost {
             log_raced(player.level_name(), &ghost);
-            if let Some(len) = ghost.leave(player.session()) {
+            let recorded = ghost.leave(player.session());
+            let len = match recorded {
+                Some(bytes) => super::ghosts::replays::<EVENTS>(bytes, player.session()).await,
+                None => None,
+            };
+            if let Some(len) = len {
                 if let Some(kit) = ghosts.as_deref_mut() {
                     let _ = kit.keep_recorded(player.level_name(), len).await;
                 }

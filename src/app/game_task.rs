@@ -83,6 +83,48 @@ pub async fn game_task<
     }
 }
 
+/// [`GameMode::Play`] alone, for a board that never runs the demo (the
+/// micro:bit v2): [`game_task`]'s future holds the larger of the play's and
+/// the demo's, and with the ghost the demo's is the larger (1 120 B more of
+/// the v2's static RAM). The arguments are [`GameMode::Play`]'s (`level` with
+/// feature `sleep`).
+pub async fn play_task<
+    const W: usize,
+    const H: usize,
+    const PILOT: bool,
+    const EVENTS: bool,
+    const WORDS: usize,
+    const TEXT: usize,
+>(
+    links: &Links<W, H>,
+    tilt: TiltConfig,
+    #[cfg(feature = "sleep")] level: u8,
+    seeds: Seeds,
+    mazes: &mut MazeSlot<WORDS, TEXT>,
+    #[cfg(feature = "ghosts")] ghosts: Option<&mut impl GhostStore>,
+) -> GameExit {
+    let mut ticker = Ticker::every(Duration::from_hz(u64::from(FRAME_HZ)));
+    #[cfg(all(not(feature = "sleep"), not(feature = "ghosts")))]
+    let game = play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes);
+    #[cfg(all(not(feature = "sleep"), feature = "ghosts"))]
+    let game =
+        play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, seeds, mazes, ghosts);
+    #[cfg(all(feature = "sleep", not(feature = "ghosts")))]
+    let game =
+        play::<W, H, PILOT, EVENTS, WORDS, TEXT>(links, &mut ticker, tilt, level, seeds, mazes);
+    #[cfg(all(feature = "sleep", feature = "ghosts"))]
+    let game = play::<W, H, PILOT, EVENTS, WORDS, TEXT>(
+        links,
+        &mut ticker,
+        tilt,
+        level,
+        seeds,
+        mazes,
+        ghosts,
+    );
+    game.await
+}
+
 /// [`GameMode::Play`]: [`Player::tick`] at every tick of the frame clock, the
 /// levels of the region `mazes` carries, the built-in levels in order and
 /// then the endless run of generated mazes ([`Endless`]), each made in `mazes` when the one before
@@ -187,14 +229,7 @@ async fn play<
         // and replayed to its hash first), and the attempts recorded.
         #[cfg(feature = "ghosts")]
         let mut ghost = match ghosts.as_deref_mut() {
-            Some(kit) => Some(
-                kit.begin::<EVENTS>(
-                    *player.game().level(),
-                    Player::<W, H, PILOT, EVENTS>::CONFIG,
-                    player.session().tilt_config(),
-                )
-                .await,
-            ),
+            Some(kit) => Some(kit.begin::<EVENTS>(player.session()).await),
             None => None,
         };
         loop {
@@ -297,12 +332,16 @@ async fn play<
                 let _ = links.sounds.try_send(sound);
             }
         }
-        // A win that beat the ghost becomes the level's ghost, written
-        // between levels.
         #[cfg(feature = "ghosts")]
-        if let Some(len) = ghost.and_then(|ghost| ghost.leave(player.session())) {
-            if let Some(kit) = ghosts.as_deref_mut() {
-                let _ = kit.keep_recorded(player.level_name(), len).await;
+        let recorded = ghost.and_then(|ghost| ghost.leave(player.session()));
+        // A win that beat the ghost, whose recording replays to its hash,
+        // becomes the level's ghost, written between levels.
+        #[cfg(feature = "ghosts")]
+        if let Some(bytes) = recorded {
+            if let Some(len) = super::ghosts::replays::<EVENTS>(bytes, player.session()).await {
+                if let Some(kit) = ghosts.as_deref_mut() {
+                    let _ = kit.keep_recorded(player.level_name(), len).await;
+                }
             }
         }
         carried = Some(player.carried());

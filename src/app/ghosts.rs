@@ -12,15 +12,35 @@ use embedded_storage_async::nor_flash::NorFlash;
 
 #[cfg(feature = "defmt")]
 use crate::game::ghost::RecordError;
-use crate::game::ghost::{Racer, Recorder};
-use crate::game::level::LevelView;
-use crate::game::rules::{GameConfig, Phase};
+use crate::game::ghost::{Checking, RaceError, Racer, Recorder};
+use crate::game::rules::Phase;
 use crate::game::session::Session;
-use crate::input::tilt::TiltConfig;
 use crate::matrix::Frame;
 use crate::physics::Fx;
 use crate::records::{max_ghost_bytes, GhostStoreError, Ghosts};
 use crate::render::{draw_ghost, Viewport};
+
+/// Frames of a ghost's replay played between two yields to the executor: at
+/// QEMU's worst frame (51 840 Cortex-M4 instructions) 64 frames are 52 ms of
+/// a 64 MHz CPU, far from the watchdog's second, where a whole run of a
+/// 2 KiB ghost (over a thousand frames) might not be.
+pub const REPLAY_STRETCH: u32 = 64;
+
+/// The ghost in `bytes` replayed on `live`'s level, game configuration and
+/// tilt path to its end a stretch at a time, the task yielding between
+/// stretches: the racer, or why not.
+async fn check<'a, 'g, const EVENTS: bool>(
+    bytes: &'g [u8],
+    live: &Session<'a, Fx>,
+) -> Result<Racer<'a, 'g, EVENTS>, RaceError> {
+    let game = live.game();
+    let mut checking =
+        Checking::<EVENTS>::new(bytes, *game.level(), game.config(), live.tilt_config())?;
+    while !checking.play(REPLAY_STRETCH) {
+        embassy_futures::yield_now().await;
+    }
+    checking.finish()
+}
 
 /// The board's ghosts: the store, and two buffers of `N` bytes — the stored
 /// ghost being raced (the store's work buffer between levels) and the live
@@ -46,16 +66,16 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
         }
     }
 
-    /// The level's parts: its racer (a stored ghost that replays to its
-    /// hash, read from flash and checked here) and a recorder of the
-    /// attempts. Logs what it found.
+    /// The level's parts for `live`, a fresh attempt at it: its racer (a
+    /// stored ghost that replays to its hash on the same level, game
+    /// configuration and tilt path, read from flash and checked here) and a
+    /// recorder of the attempts. Logs what it found. By reference: an async
+    /// fn keeps its arguments while it runs, and a level is large.
     pub async fn begin<'k, 'a, const EVENTS: bool>(
         &'k mut self,
-        level: LevelView<'a>,
-        config: GameConfig,
-        tilt: TiltConfig,
+        live: &Session<'a, Fx>,
     ) -> LevelGhost<'a, 'k, EVENTS> {
-        let name = level.info.name;
+        let name = live.game().level().info.name;
         let GhostKit {
             store,
             stored,
@@ -64,25 +84,31 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
         } = self;
         // The stored ghost is read into the front of the buffer; the crate
         // wants room for the key and the word rounding too.
-        let racer = match store.load(name, &mut stored[..]).await {
-            Ok(Some(bytes)) => match Racer::<EVENTS>::new(bytes, level, config, tilt) {
-                Ok(racer) => {
-                    #[cfg(feature = "defmt")]
-                    defmt::info!(
+        // The load's future ends with this statement: as the scrutinee of
+        // the match it would be kept beside the replay's session.
+        let loaded = store.load(name, &mut stored[..]).await;
+        let racer = match loaded {
+            Ok(Some(bytes)) => {
+                let checked = check::<EVENTS>(bytes, live).await;
+                match checked {
+                    Ok(racer) => {
+                        #[cfg(feature = "defmt")]
+                        defmt::info!(
                         "ghost {=str}: {=usize} bytes, replays to its hash: racing it ({=u32} frames on the clock)",
                         name,
                         bytes.len(),
                         racer.clock()
                     );
-                    Some(racer)
+                        Some(racer)
+                    }
+                    Err(e) => {
+                        #[cfg(feature = "defmt")]
+                        defmt::warn!("ghost {=str} not raced: {}", name, e);
+                        let _ = e;
+                        None
+                    }
                 }
-                Err(e) => {
-                    #[cfg(feature = "defmt")]
-                    defmt::warn!("ghost {=str} not raced: {}", name, e);
-                    let _ = e;
-                    None
-                }
-            },
+            }
             Ok(None) => None,
             Err(e) => {
                 #[cfg(feature = "defmt")]
@@ -131,9 +157,7 @@ pub trait GhostStore {
     /// See [`GhostKit::begin`].
     async fn begin<'k, 'a, const EVENTS: bool>(
         &'k mut self,
-        level: LevelView<'a>,
-        config: GameConfig,
-        tilt: TiltConfig,
+        live: &Session<'a, Fx>,
     ) -> LevelGhost<'a, 'k, EVENTS>;
 
     /// See [`GhostKit::keep_recorded`].
@@ -143,11 +167,9 @@ pub trait GhostStore {
 impl<F: NorFlash, const N: usize> GhostStore for GhostKit<F, N> {
     async fn begin<'k, 'a, const EVENTS: bool>(
         &'k mut self,
-        level: LevelView<'a>,
-        config: GameConfig,
-        tilt: TiltConfig,
+        live: &Session<'a, Fx>,
     ) -> LevelGhost<'a, 'k, EVENTS> {
-        GhostKit::begin(self, level, config, tilt).await
+        GhostKit::begin(self, live).await
     }
 
     async fn keep_recorded(&mut self, name: &str, len: usize) -> Result<(), GhostStoreError> {
@@ -198,18 +220,18 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
     }
 
     /// The level is left with `live`: a win faster on the clock than the
-    /// raced ghost (or the first) whose recorded run replays to a win on its
-    /// hash is to be written (between levels: [`GhostKit::keep_recorded`]):
-    /// its length in the record buffer. Logs why a win is not kept.
-    pub fn leave(self, live: &Session<'_, Fx>) -> Option<usize> {
+    /// raced ghost (or the first) is to be kept if its recording replays to
+    /// a win on its hash ([`replays`], then [`GhostKit::keep_recorded`],
+    /// between levels): the recording. Logs why a win is not kept.
+    pub fn leave(self, live: &Session<'_, Fx>) -> Option<&'k [u8]> {
         let game = live.game();
         let name = game.level().info.name;
         let clock = game.clock_frames();
         if game.phase() != Phase::Won || self.best.is_some_and(|b| b <= clock) {
             return None;
         }
-        let bytes = match self.recorder?.finish(live) {
-            Ok(bytes) => bytes,
+        match self.recorder?.finish(live) {
+            Ok(bytes) => Some(bytes),
             Err(e) => {
                 #[cfg(feature = "defmt")]
                 match e {
@@ -223,21 +245,28 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
                     }
                 }
                 let _ = (e, name);
-                return None;
-            }
-        };
-        match Racer::<EVENTS>::new(bytes, *game.level(), game.config(), live.tilt_config()) {
-            Ok(_) => Some(bytes.len()),
-            Err(e) => {
-                #[cfg(feature = "defmt")]
-                defmt::warn!(
-                    "ghost {=str}: the run does not replay: not kept ({})",
-                    name,
-                    e
-                );
-                let _ = (e, name);
                 None
             }
+        }
+    }
+}
+
+/// Whether `bytes`, the recording of `live`'s winning attempt
+/// ([`LevelGhost::leave`]), replays to a win on its hash: its length if so
+/// (for [`GhostKit::keep_recorded`]). Logs why not. The replay yields to the
+/// executor between stretches.
+pub async fn replays<const EVENTS: bool>(bytes: &[u8], live: &Session<'_, Fx>) -> Option<usize> {
+    match check::<EVENTS>(bytes, live).await {
+        Ok(_) => Some(bytes.len()),
+        Err(e) => {
+            #[cfg(feature = "defmt")]
+            defmt::warn!(
+                "ghost {=str}: the run does not replay: not kept ({})",
+                live.game().level().info.name,
+                e
+            );
+            let _ = e;
+            None
         }
     }
 }

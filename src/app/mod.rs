@@ -54,9 +54,9 @@ mod terminal_input;
 pub use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 pub use crate::player::FRAME_HZ;
 pub use display_task::display_task;
-pub use game_task::game_task;
+pub use game_task::{game_task, play_task};
 #[cfg(feature = "ghosts")]
-pub use ghosts::{GhostKit, GhostStore, LevelGhost};
+pub use ghosts::{replays, GhostKit, GhostStore, LevelGhost};
 pub use input_task::{input_task, TiltInput};
 #[cfg(feature = "records")]
 pub use links::{Bests, Win};

@@ -500,10 +500,25 @@ pub struct Racer<'a, 'g, const EVENTS: bool> {
     idle: u32,
 }
 
-impl<'a, 'g, const EVENTS: bool> Racer<'a, 'g, EVENTS> {
-    /// The ghost in `bytes` on `level` (game configuration `config`, tilt
-    /// path `tilt`), once its whole replay has won the level on its own state
-    /// hash.
+/// A stored ghost's replay played a stretch at a time ([`Checking::play`]),
+/// so that a board can let its other tasks run between stretches: a long run
+/// replayed at once would hold the CPU for as long as the physics of every
+/// frame of it takes. [`Racer::new`] plays it whole.
+#[derive(Clone, Debug)]
+pub struct Checking<'a, 'g, const EVENTS: bool> {
+    session: Session<'a, Fx>,
+    ghost: Ghost<'g>,
+    readings: Readings<'g>,
+    phase: Phase,
+    /// The replay is over: the attempt ended, the readings did, or one of
+    /// them was not a reading (`error`).
+    ended: bool,
+    error: Option<GhostError>,
+}
+
+impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
+    /// The replay of the ghost in `bytes` on `level` (game configuration
+    /// `config`, tilt path `tilt`), at its start.
     pub fn new(
         bytes: &'g [u8],
         level: LevelView<'a>,
@@ -512,20 +527,78 @@ impl<'a, 'g, const EVENTS: bool> Racer<'a, 'g, EVENTS> {
     ) -> Result<Self, RaceError> {
         let ghost = Ghost::parse(bytes).map_err(RaceError::Ghost)?;
         let mut session = Session::new(level, config, tilt).map_err(RaceError::Setup)?;
-        match replay_in::<EVENTS>(&mut session, &ghost).map_err(RaceError::Ghost)? {
+        session.tilt_mut().set_calibration(ghost.calibration);
+        let phase = session.game().phase();
+        Ok(Checking {
+            session,
+            readings: ghost.readings(),
+            ghost,
+            phase,
+            ended: false,
+            error: None,
+        })
+    }
+
+    /// Plays up to `frames` more frames of the run; whether the replay is
+    /// over (then [`Checking::finish`] says how it ended).
+    pub fn play(&mut self, frames: u32) -> bool {
+        for _ in 0..frames {
+            if self.ended || self.phase != Phase::Playing {
+                self.ended = true;
+                break;
+            }
+            match self.readings.next() {
+                Some(Ok(r)) => self.phase = self.session.frame_in::<EVENTS>(r),
+                Some(Err(e)) => {
+                    self.error = Some(e);
+                    self.ended = true;
+                }
+                None => self.ended = true,
+            }
+        }
+        self.ended || self.phase != Phase::Playing
+    }
+
+    /// The racer, once the replay (played to its end here if it was not)
+    /// won the level on the ghost's own state hash; or why not.
+    pub fn finish(mut self) -> Result<Racer<'a, 'g, EVENTS>, RaceError> {
+        while !self.play(u32::MAX) {}
+        if let Some(e) = self.error {
+            return Err(RaceError::Ghost(e));
+        }
+        match (
+            self.phase,
+            self.session.state_hash() == self.ghost.state_hash,
+        ) {
             (Phase::Won, true) => {}
             (Phase::Won, false) => return Err(RaceError::Hash),
             _ => return Err(RaceError::NotWon),
         }
-        let idle = session.game().frames() - session.game().clock_frames();
+        let game = self.session.game();
+        let idle = game.frames() - game.clock_frames();
         // A restart keeps the calibration the replay set.
-        session.restart();
+        self.session.restart();
         Ok(Racer {
-            session,
-            readings: ghost.readings(),
-            ghost,
+            session: self.session,
+            readings: self.ghost.readings(),
+            ghost: self.ghost,
             idle,
         })
+    }
+}
+
+impl<'a, 'g, const EVENTS: bool> Racer<'a, 'g, EVENTS> {
+    /// The ghost in `bytes` on `level` (game configuration `config`, tilt
+    /// path `tilt`), once its whole replay has won the level on its own state
+    /// hash (played at once; a board plays it a stretch at a time with
+    /// [`Checking`]).
+    pub fn new(
+        bytes: &'g [u8],
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> Result<Self, RaceError> {
+        Checking::<EVENTS>::new(bytes, level, config, tilt)?.finish()
     }
 
     /// The ghost's time: its frames on the level clock.

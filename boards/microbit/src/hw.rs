@@ -197,23 +197,41 @@ impl SoundOutput for Speaker {
 /// Between operations, and waiting for a win, the task has no other await
 /// (`app::records_task`), so it counts as waiting; a flash operation that
 /// never returned would stop the pets.
+///
+/// The ghosts' flash is the same type, unwatched (the game task beats at each
+/// poll): one copy of the flash-map code serves both stores.
 pub struct WatchedFlash<F> {
     flash: F,
-    heartbeats: &'static Heartbeats,
+    heartbeats: Option<&'static Heartbeats>,
 }
 
 impl<F> WatchedFlash<F> {
     /// `flash`, the records task waiting (also when no records task runs).
     pub fn new(flash: F, heartbeats: &'static Heartbeats) -> Self {
         heartbeats.waiting(Task::Records);
-        Self { flash, heartbeats }
+        Self {
+            flash,
+            heartbeats: Some(heartbeats),
+        }
+    }
+
+    /// `flash`, no task's heartbeat.
+    pub fn unwatched(flash: F) -> Self {
+        Self {
+            flash,
+            heartbeats: None,
+        }
     }
 
     /// Runs one flash operation as the records task's work.
     async fn watched<T>(&mut self, operation: impl AsyncFnOnce(&mut F) -> T) -> T {
-        self.heartbeats.working(Task::Records);
+        if let Some(heartbeats) = self.heartbeats {
+            heartbeats.working(Task::Records);
+        }
         let out = operation(&mut self.flash).await;
-        self.heartbeats.waiting(Task::Records);
+        if let Some(heartbeats) = self.heartbeats {
+            heartbeats.waiting(Task::Records);
+        }
         out
     }
 }
@@ -265,4 +283,49 @@ pub fn levels_region() -> &'static [u8] {
     // only flash it writes is the best times', board::RECORDS, pages apart),
     // so the bytes do not change while the slice lives.
     unsafe { core::slice::from_raw_parts(V2.start as usize as *const u8, SIZE) }
+}
+
+// ---------------------------------------------------------------------------
+// The stack's high-water mark
+// ---------------------------------------------------------------------------
+
+/// Stack painting (`marble_board_runtime::stack`) on the nRF52833's RAM: the
+/// free stack is painted at boot and the deepest word overwritten since is
+/// logged whenever it went deeper, so that a board measures the stack that
+/// nothing here can run (no nRF52 emulator).
+pub mod stack {
+    use marble_rolling::board::microbit::{RAM_BASE, STACK_PAINT};
+
+    /// Paints the free stack. Call first thing in `main`.
+    #[inline(always)]
+    pub fn paint() {
+        marble_board_runtime::stack::paint(RAM_BASE, STACK_PAINT);
+    }
+
+    /// The deepest stack use logged so far.
+    pub struct Meter {
+        logged: usize,
+    }
+
+    impl Meter {
+        /// Nothing logged yet.
+        pub const fn new() -> Self {
+            Meter { logged: 0 }
+        }
+
+        /// Logs the high-water mark if it is deeper than the last one logged.
+        /// Reads the stack region up to its deepest word (at most 112 KiB,
+        /// under a millisecond): call it seldom.
+        pub fn log_growth(&mut self) {
+            let stack = marble_board_runtime::stack::high_water(RAM_BASE, STACK_PAINT);
+            if stack.used > self.logged {
+                self.logged = stack.used;
+                defmt::info!(
+                    "stack high-water mark: {=usize} of {=usize} bytes",
+                    stack.used,
+                    stack.size
+                );
+            }
+        }
+    }
 }

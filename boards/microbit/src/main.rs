@@ -3,7 +3,7 @@
 //! `cargo microbit` builds it and runs it with `probe-rs run --chip nRF52833_xxAA`
 //! (defmt log over RTT). Wiring only: the tasks are the shared ones from
 //! `marble_rolling::app`, fed by the micro:bit input (LSM303AGR + buttons)
-//! and drawing on the 5×5 matrix (`src/hw.rs`, `src/sensor.rs` and `src/sleep.rs` here, and `marble_rolling::board::microbit`).
+//! and drawing on the 5×5 matrix (`src/hw.rs`, `src/sensor.rs`, `src/sleep.rs` and `src/storage.rs` here, and `marble_rolling::board::microbit`).
 //!
 //! Executors:
 //! * thread mode: input (accelerometer + buttons, 100 Hz), the game
@@ -30,21 +30,19 @@ use panic_probe as _;
 mod hw;
 mod sensor;
 mod sleep;
+mod storage;
 
 use core::pin::pin;
 
-use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_executor::{InterruptExecutor, Spawner};
 use embassy_nrf::interrupt;
 use embassy_nrf::interrupt::{InterruptExt, Priority};
-use embassy_nrf::nvmc::Nvmc;
 use embassy_nrf::twim;
 use embassy_nrf::wdt::{self, Watchdog, WatchdogHandle};
 use embassy_nrf::{bind_interrupts, peripherals};
 use embassy_time::{Duration, Ticker};
 use lsm303agr::Lsm303agr;
 use marble_board_runtime::heartbeat::poll_beating;
-use marble_rolling::records::Records;
 
 use marble_rolling::app::{self, Links};
 use marble_rolling::board::levels_region;
@@ -69,6 +67,9 @@ static HEARTBEATS: Heartbeats = Heartbeats::new();
 /// Checks without a pet after which the watchdog task logs who is stalled
 /// (half the watchdog period).
 const STALL_LOG_CHECKS: u16 = 5;
+
+/// Checks between two looks at the stack's high-water mark (10 s).
+const STACK_LOG_CHECKS: u32 = 100;
 
 /// No autopilot on the micro:bit: no button combination is left for it, and
 /// leaving it out saves about 6 KiB of flash.
@@ -119,9 +120,15 @@ type Mazes = MazeSlot<{ board::MAZE_REACH.words() }, { board::MAZE_REACH.text_by
 
 /// The game; first the self-test when B was held at power-on
 /// (`board::power_on`), until A. The generated mazes after the built-in
-/// levels take their seeds from `seed`, drawn at power-up.
+/// levels take their seeds from `seed`, drawn at power-up; each level's
+/// ghost is raced from `ghosts`.
 #[embassy_executor::task]
-async fn game(self_test: bool, level: u8, seed: u32) {
+async fn game(
+    self_test: bool,
+    level: u8,
+    seed: u32,
+    mut ghosts: Option<&'static mut storage::Kit>,
+) {
     if self_test {
         let test = pin!(run_self_test());
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
@@ -133,21 +140,23 @@ async fn game(self_test: bool, level: u8, seed: u32) {
     let mut mazes = Mazes::new(board::MAZE_REACH).with_region(region);
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
-        let mode = app::GameMode::Play {
-            tilt: TiltConfig::DEFAULT,
-            level,
-            seeds: Seeds::Drawn(seed),
-        };
-        // The game loop is app's; being polled (every frame tick, paused or
-        // not) is its heartbeat.
-        let game = pin!(app::game_task::<
+        // The game loop is app's (play only: the v2 has no demo); being
+        // polled (every frame tick, paused or not) is its heartbeat.
+        let game = pin!(app::play_task::<
             { board::WIDTH },
             { board::HEIGHT },
             PILOT,
             EVENTS,
             _,
             _,
-        >(&LINKS, mode, &mut mazes));
+        >(
+            &LINKS,
+            TiltConfig::DEFAULT,
+            level,
+            Seeds::Drawn(seed),
+            &mut mazes,
+            ghosts.as_deref_mut()
+        ));
         let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters
@@ -182,10 +191,10 @@ async fn run_self_test() {
 }
 
 /// A+B held at power-on: the question mark until one button answers (A
-/// clears every best time, B or 10 s of nothing keeps them), petting the
+/// clears every best time and ghost, B or 10 s of nothing keeps them), petting the
 /// watchdog meanwhile (its task is not running yet).
 async fn confirm_clear(
-    records: &mut Records<RecordsFlash>,
+    stores: &mut storage::Stores,
     a: &embassy_nrf::gpio::Input<'static>,
     b: &embassy_nrf::gpio::Input<'static>,
     wdt: &mut Option<WatchdogHandle>,
@@ -207,24 +216,16 @@ async fn confirm_clear(
         }
     };
     if clear {
-        match records.clear().await {
-            Ok(()) => defmt::info!("records cleared"),
-            Err(e) => defmt::error!("records: {=str}", e.as_str()),
-        }
+        storage::clear(stores).await;
     } else {
         defmt::info!("records kept");
     }
     LINKS.frames.signal(Frame::new());
 }
 
-/// The records' flash: the NVMC, blocking (the CPU waits on a page erase, about
-/// 85 ms, between levels only), as the async NOR flash the records take, each
-/// operation a heartbeat of the records task (hw::WatchedFlash).
-type RecordsFlash = hw::WatchedFlash<BlockingAsync<Nvmc<'static>>>;
-
 /// The best times in [`board::RECORDS`].
 #[embassy_executor::task]
-async fn records(mut records: Records<RecordsFlash>) -> ! {
+async fn records(mut records: marble_rolling::records::Records<storage::RecordsFlash>) -> ! {
     app::records_task(&LINKS, &mut records, |_| {}).await
 }
 
@@ -233,8 +234,13 @@ async fn records(mut records: Records<RecordsFlash>) -> ! {
 async fn watchdog(mut handle: WatchdogHandle) -> ! {
     let mut gate = WatchdogGate::new(HEARTBEATS.snapshot());
     let mut ticker = Ticker::every(Duration::from_millis(board::WATCHDOG_CHECK_MS));
+    let (mut stack, mut checks) = (hw::stack::Meter::new(), 0u32);
     loop {
         ticker.next().await;
+        checks = checks.wrapping_add(1);
+        if checks % STACK_LOG_CHECKS == 1 {
+            stack.log_growth();
+        }
         match gate.check(HEARTBEATS.snapshot()) {
             Verdict::Pet => handle.pet(),
             Verdict::Wait { stalled, checks } => {
@@ -265,6 +271,8 @@ fn start_watchdog(wdt: embassy_nrf::Peri<'static, peripherals::WDT>) -> Option<W
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
+    // Before anything deep uses the stack.
+    hw::stack::paint();
     let p = embassy_nrf::init(Default::default());
     defmt::info!("Marble Rolling on micro:bit v2");
 
@@ -304,11 +312,11 @@ async fn main(spawner: Spawner) {
     let choice = power_on::power_on(button_a.is_low(), button_b.is_low());
     defmt::info!("power-on: {}", choice);
 
-    // The best times: the last 16 KiB of flash (board::RECORDS).
-    let flash = hw::WatchedFlash::new(BlockingAsync::new(Nvmc::new(p.NVMC)), &HEARTBEATS);
-    let mut store = Records::new(flash, board::RECORDS);
-    if let (PowerOn::ClearRecords, Some(store)) = (choice, store.as_mut()) {
-        confirm_clear(store, &button_a, &button_b, &mut wdt).await;
+    // The best times (board::RECORDS) and the ghosts (board::GHOSTS), one
+    // NVMC shared (storage).
+    let mut stores = storage::open(p.NVMC, &HEARTBEATS);
+    if choice == PowerOn::ClearRecords {
+        confirm_clear(&mut stores, &button_a, &button_b, &mut wdt).await;
     }
 
     // Internal I²C: SDA P0.16, SCL P0.08. The driver writes register
@@ -335,6 +343,7 @@ async fn main(spawner: Spawner) {
         choice == PowerOn::SelfTest,
         sleep::level_after_reset(),
         seed,
+        storage::kit(stores.ghosts),
     ) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
@@ -343,12 +352,12 @@ async fn main(spawner: Spawner) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("sound task already running"),
     }
-    match store {
+    match stores.records {
         Some(store) => match records(store) {
             Ok(token) => spawner.spawn(token),
             Err(_) => defmt::error!("records task already running"),
         },
-        None => defmt::error!("records: the region is not whole pages"),
+        None => defmt::error!("records: no store, no records task"),
     }
     if let Some(handle) = wdt {
         match watchdog(handle) {

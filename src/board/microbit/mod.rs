@@ -64,6 +64,8 @@
 pub mod power_on;
 pub mod sleep;
 pub mod speaker;
+#[cfg(feature = "shared-flash")]
+pub mod storage;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use crate::input::buttons::ButtonConfig;
@@ -186,6 +188,15 @@ pub const TWIM_COPY_BUFFER_BYTES: usize = 2;
 /// `boards/microbit/memory.x` (a host test reads it there). Four pages, so that
 /// the erases rotate: see `marble_rolling::records` and the wear figure in docs/testing.md.
 pub const RECORDS: core::ops::Range<u32> = 0x7_C000..0x8_0000;
+
+/// The start of the nRF52833's RAM, where the stack ends (flip-link puts the
+/// statics at the top of the 128 KiB and the stack under them).
+pub const RAM_BASE: usize = 0x2000_0000;
+
+/// What the free stack is painted with at boot, so that the deepest word
+/// the stack ever overwrote can be found (the firmware logs it as it grows:
+/// the v2's stack is measured only on a board).
+pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
 
 /// The ghosts' flash region (`marble_rolling::records::Ghosts`): the four 4 KiB
 /// pages below the levels region, left out of `FLASH` in

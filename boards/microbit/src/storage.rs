@@ -1,0 +1,109 @@
+//! The NVMC shared by the best times (the records task) and the ghosts (the
+//! game task): one mutex over the flash, a partition for each store
+//! ([`marble_rolling::board::microbit::storage`], host-tested there). Wiring
+//! only.
+
+use embassy_embedded_hal::adapter::BlockingAsync;
+use embassy_embedded_hal::flash::partition::Partition;
+use embassy_nrf::nvmc::Nvmc;
+use embassy_nrf::{peripherals, Peri};
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::mutex::Mutex;
+use marble_rolling::app::GhostKit;
+use marble_rolling::board::microbit::storage::{self, local, Paced};
+use marble_rolling::board::microbit::{self as board, Heartbeats};
+use marble_rolling::records::{Ghosts, Records};
+
+use crate::hw::WatchedFlash;
+
+/// The NVMC, blocking (the CPU waits on a page erase, about 85 ms, between
+/// levels only), as the async NOR flash the stores take.
+type Nvm = BlockingAsync<Nvmc<'static>>;
+
+/// One store's region of the NVMC, its task yielding after each erase and
+/// write.
+pub type Part = Paced<Partition<'static, CriticalSectionRawMutex, Nvm>>;
+
+/// The records' flash, each operation a heartbeat of the records task
+/// ([`WatchedFlash`]).
+pub type RecordsFlash = WatchedFlash<Part>;
+
+/// The ghosts' flash: the records' type, unwatched.
+pub type GhostsFlash = WatchedFlash<Part>;
+
+/// The ghosts and the game task's two run buffers of
+/// [`board::GHOST_BYTES`].
+pub type Kit = GhostKit<GhostsFlash, { board::GHOST_BYTES }>;
+
+/// The stores over the NVMC; a store whose region is not whole pages is
+/// `None` (logged).
+pub struct Stores {
+    /// The best times in [`board::RECORDS`].
+    pub records: Option<Records<RecordsFlash>>,
+    /// The ghosts in [`board::GHOSTS`].
+    pub ghosts: Option<Ghosts<GhostsFlash>>,
+}
+
+/// Opens both stores over the NVMC.
+pub fn open(nvmc: Peri<'static, peripherals::NVMC>, heartbeats: &'static Heartbeats) -> Stores {
+    let none = Stores {
+        records: None,
+        ghosts: None,
+    };
+    // The mutex lives as long as the tasks that lock it: a static, filled
+    // once here (the NVMC peripheral can be taken only once).
+    let Some(flash) = cortex_m::singleton!(
+        : Mutex<CriticalSectionRawMutex, Nvm> = Mutex::new(BlockingAsync::new(Nvmc::new(nvmc)))
+    ) else {
+        defmt::error!("flash: the NVMC is already shared");
+        return none;
+    };
+    let Some(shared) = storage::share(&*flash) else {
+        defmt::error!("flash: the records' or the ghosts' region is not whole pages");
+        return none;
+    };
+    let records = Records::new(
+        WatchedFlash::new(shared.records, heartbeats),
+        local(&board::RECORDS),
+    );
+    let ghosts = Ghosts::new(
+        WatchedFlash::unwatched(shared.ghosts),
+        local(&board::GHOSTS),
+    );
+    if records.is_none() || ghosts.is_none() {
+        defmt::error!(
+            "flash: records {=bool}, ghosts {=bool}: a region is not a map",
+            records.is_some(),
+            ghosts.is_some()
+        );
+    }
+    Stores { records, ghosts }
+}
+
+/// Forgets every best time and every ghost (A+B at power-on, answered A).
+pub async fn clear(stores: &mut Stores) {
+    if let Some(records) = &mut stores.records {
+        match records.clear().await {
+            Ok(()) => defmt::info!("records cleared"),
+            Err(e) => defmt::error!("records: {=str}", e.as_str()),
+        }
+    }
+    if let Some(ghosts) = &mut stores.ghosts {
+        match ghosts.clear().await {
+            Ok(()) => defmt::info!("ghosts cleared"),
+            Err(e) => defmt::error!("ghosts: {=str}", e.as_str()),
+        }
+    }
+}
+
+/// The ghosts with their buffers, in a static of their own (a task's
+/// argument would be moved through the game task's stack frame, which lies
+/// under the game's deepest call); `None` without a store.
+pub fn kit(ghosts: Option<Ghosts<GhostsFlash>>) -> Option<&'static mut Kit> {
+    let store = ghosts?;
+    let kit = cortex_m::singleton!(: Kit = GhostKit::new(store, |_| {}));
+    if kit.is_none() {
+        defmt::error!("ghosts: the kit is already taken");
+    }
+    kit
+}
