@@ -18,7 +18,8 @@
 //!   [`FLASH_PAGE_BYTES`]).
 //! * [`sensor`]: the accelerometer's poll loop (probe, configure, poll,
 //!   faults, bus clear), generic over the bus: the firmware runs it on its
-//!   TWI, the host tests on the virtual chips ([`virtual_nxp`]).
+//!   TWI, the host tests on the virtual chips ([`virtual_nxp`]) on a
+//!   virtual TWI ([`virtual_twi`]).
 //!
 //! # Memory map
 //!
@@ -34,6 +35,7 @@ pub mod nxp_driver;
 pub mod sensor;
 pub mod twi;
 pub mod virtual_nxp;
+pub mod virtual_twi;
 
 pub use accel::{identify, Accelerometer, Probe, PROBES};
 

@@ -2,7 +2,7 @@
 //! reset requests) and what its bus counts, shared between whoever injects
 //! (terminal keys, the fault script, a test) and the virtual bus that
 //! applies them: the QEMU board's [`VirtualTwim`] and the v1's virtual TWI
-//! (`board::microbit_v1::virtual_nxp`) alike.
+//! (`board::microbit_v1::virtual_twi`) alike.
 //!
 //! [`VirtualTwim`]: crate::board::qemu::virtual_i2c::VirtualTwim
 
