@@ -34,7 +34,6 @@ use marble_rolling::board::microbit::{self as v2, Task};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Probed};
 use marble_rolling::board::microbit_v1::twi::{Pause, TwiError};
 use marble_rolling::input::event::InputEvent;
-use marble_rolling::input::lsm303;
 use nrf_pac as pac;
 
 use crate::hw::clock;
@@ -329,6 +328,6 @@ impl TiltInput for Input {
             defmt::warn!("accelerometer: {}", transition);
             let _ = self.pending.push_back(transition.event());
         }
-        InputEvent::Tilt(lsm303::to_tilt(self.sensor.tilt()))
+        InputEvent::Tilt(self.sensor.reading())
     }
 }
