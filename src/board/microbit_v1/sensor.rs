@@ -30,8 +30,8 @@ use embedded_hal_async::i2c::I2c;
 use super::accel::{Accelerometer, NxpChip};
 use super::nxp_driver;
 use super::twi::{Pause, TwiError};
+use crate::board::accel_link::SUPERVISOR;
 use crate::board::i2c::{ClearBus, Recovering};
-use crate::board::microbit::SUPERVISOR;
 use crate::input::event::Tilt;
 use crate::input::sensor::{AccelMg, Action, AxisMap, Fault, Read, TiltPipeline, Transition};
 

@@ -57,7 +57,7 @@
 
 use super::accel::{nxp, Accelerometer};
 #[cfg(doc)]
-use crate::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
+use crate::board::virtual_lsm303agr::{ChipControl, InjectedFault};
 
 /// The NXP chips' placement on the v1 (both sit on the back of the board,
 /// the same way round): for chip axis X, Y, Z, the board axis it points

@@ -8,7 +8,7 @@ use super::accel::Accelerometer;
 use super::twi::{Pause, TwiError};
 use super::virtual_nxp::VirtualNxp;
 use crate::board::i2c::ClearBus;
-use crate::board::qemu::virtual_lsm303agr::{
+use crate::board::virtual_lsm303agr::{
     ChipControl, InjectedFault, SampleSource, VirtualLsm303agr, MICROBIT_V2,
 };
 

@@ -45,8 +45,8 @@
 
 use embedded_hal_async::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 
-use super::virtual_lsm303agr::{ChipControl, InjectedFault, SampleSource, VirtualLsm303agr};
-use crate::board::microbit::{clear_bus, BusClear, BusLines};
+use crate::board::i2c::{clear_bus, BusClear, BusLines};
+use crate::board::virtual_lsm303agr::{ChipControl, InjectedFault, SampleSource, VirtualLsm303agr};
 
 /// The largest transfer the TWIM's EasyDMA takes (nRF52833, embassy-nrf's
 /// `EASY_DMA_SIZE`).

@@ -5,7 +5,7 @@
 //! The QEMU board has no accelerometer, so without this its input stack
 //! (driver, [`TiltPipeline`](crate::input::sensor::TiltPipeline) supervision)
 //! would run nowhere but on a micro:bit. The chip sits on a virtual I²C bus,
-//! [`VirtualTwim`](super::virtual_i2c::VirtualTwim), which adds the bus
+//! [`VirtualTwim`](crate::board::qemu::virtual_i2c::VirtualTwim), which adds the bus
 //! behaviour (address acknowledge, a stuck bus, the nRF TWIM's DMA rule).
 //!
 //! # What is modelled
@@ -37,7 +37,7 @@
 //!   axes by the chip's own [`Placement`] on the board (where each of its
 //!   axes points: [`MICROBIT_V2`]), then quantised (rounded to the nearest
 //!   LSB, saturated at full scale). The firmware turns raw axes back with its
-//!   own table, `board::microbit::AXIS_MAP`; the two are written apart, so a
+//!   own table, `board::accel_link::AXIS_MAP`; the two are written apart, so a
 //!   sign or axis wrong in either reads a wrong tilt in the tests and in QEMU.
 //! * Power-on values: `CTRL_REG1_A` = 0x07 (power-down, axes enabled), the
 //!   other control registers 0, no data ready; [`VirtualLsm303agr::power_on_reset`]
@@ -97,7 +97,7 @@ const MAG_FIRST: u8 = 0x40;
 const MAG_COUNT: usize = 0x30;
 
 /// The virtual chip: registers, sampling clock, output latch. Transfers come
-/// from its bus ([`VirtualTwim`](super::virtual_i2c::VirtualTwim)), which
+/// from its bus ([`VirtualTwim`](crate::board::qemu::virtual_i2c::VirtualTwim)), which
 /// also feeds it the time ([`VirtualLsm303agr::advance_to`]), the tilt and
 /// the sample source; host tests can drive it directly too.
 #[derive(Clone, Debug)]
