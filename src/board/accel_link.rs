@@ -48,7 +48,7 @@ pub const I2C_TIMEOUT_MS: u64 = 5;
 /// register with `write_read(address, &[R::ADDR], …)` (`&[R::ADDR | 0x80]`
 /// for multi-byte reads): a constant slice, which Rust promotes to a
 /// `'static` in flash. With no copy buffer, every read — WHO_AM_I first —
-/// failed on every board. The largest write any driver call makes is 2 bytes
+/// fails. The largest write any driver call makes is 2 bytes
 /// (`write_accel_register`/`write_mag_register`: register address + value,
 /// built on the stack, but the optimiser may fold such constants into flash
 /// too), so 2 bytes cover every write wherever the compiler puts it.

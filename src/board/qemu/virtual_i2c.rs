@@ -11,8 +11,7 @@
 //! `Error::RAMBufferTooSmall` — before anything reaches the bus — when that
 //! buffer is shorter than the write. The `lsm303agr` driver reads a register
 //! with `write_read(address, &[REGISTER], ..)`: a promoted constant, in
-//! flash. Without a copy buffer every read fails; that was the micro:bit's
-//! bug. [`VirtualTwim`] applies the same rule with the same test (embassy's
+//! flash. Without a copy buffer every read fails. [`VirtualTwim`] applies the same rule with the same test (embassy's
 //! `slice_in_ram`: an empty slice passes, else `start >= RAM start` and
 //! `start + len < RAM end`) against a [`Ram`]: [`RamRange`] on a target
 //! ([`QEMU_RAM`](super::QEMU_RAM) on QEMU), a predicate on the host.
