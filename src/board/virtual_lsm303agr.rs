@@ -82,7 +82,7 @@ use crate::input::sensor::AxisMap;
 /// Where new samples come from.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SampleSource {
+pub(crate) enum SampleSource {
     /// The set tilt.
     Tilt,
     /// None: conversions stall ([`InjectedFault::FrozenData`]).
@@ -185,12 +185,12 @@ impl VirtualLsm303agr {
     }
 
     /// Sets the tilt (board frame, milli-g) the next samples take.
-    pub fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
+    pub(crate) fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
         self.tilt_mg = tilt_mg;
     }
 
     /// Sets where the next samples come from.
-    pub fn set_source(&mut self, source: SampleSource) {
+    pub(crate) fn set_source(&mut self, source: SampleSource) {
         self.source = source;
     }
 
@@ -362,7 +362,7 @@ impl VirtualLsm303agr {
     /// are written from there (auto-increment: bit 7 of the sub-address on
     /// the accelerometer, always on the magnetometer). Writes to read-only
     /// or reserved registers are ignored. An empty write only addresses.
-    pub fn i2c_write(&mut self, address: u8, bytes: &[u8]) {
+    pub(crate) fn i2c_write(&mut self, address: u8, bytes: &[u8]) {
         let Some((&sub, data)) = bytes.split_first() else {
             return;
         };
@@ -386,7 +386,7 @@ impl VirtualLsm303agr {
     }
 
     /// An I²C read from `address`, from the register pointer on.
-    pub fn i2c_read(&mut self, address: u8, buffer: &mut [u8]) {
+    pub(crate) fn i2c_read(&mut self, address: u8, buffer: &mut [u8]) {
         match address {
             ACCEL_ADDRESS => {
                 for byte in buffer.iter_mut() {

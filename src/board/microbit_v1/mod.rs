@@ -45,7 +45,7 @@ use leds::{out_word, COLS, LED_MAP, ROWS, SIZE};
 /// The logical display: 5 × 5 pixels.
 pub type Picture = Frame<SIZE, SIZE>;
 /// The electrical matrix: `COLS` (9) column lines wide, `ROWS` (3) rows high.
-pub type Electrical = Frame<COLS, ROWS>;
+pub(crate) type Electrical = Frame<COLS, ROWS>;
 
 /// Display width, pixels.
 pub const WIDTH: usize = SIZE;

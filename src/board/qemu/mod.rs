@@ -50,12 +50,12 @@ pub const TIMER0_BASE: usize = 0x4000_0000;
 pub const TIMER0_IRQ: u16 = 8;
 /// The `-icount shift=N` the runner uses for headless runs: every
 /// instruction advances virtual time by `2^N` ns.
-pub const ICOUNT_SHIFT: u32 = 7;
+pub(crate) const ICOUNT_SHIFT: u32 = 7;
 
 /// Start of RAM (memory.x): with flip-link the stack grows down towards it.
 pub const RAM_BASE: usize = 0x2000_0000;
 /// One past the end of RAM (memory.x: 128 KiB).
-pub const RAM_END: usize = 0x2002_0000;
+pub(crate) const RAM_END: usize = 0x2002_0000;
 /// RAM for the virtual TWIM's DMA rule: what its DMA could reach.
 pub const QEMU_RAM: RamRange = RamRange {
     start: RAM_BASE,

@@ -49,7 +49,7 @@ impl InjectedFault {
     ];
 
     /// The fault with this number (its key), if any.
-    pub const fn from_u8(value: u8) -> Option<InjectedFault> {
+    pub(crate) const fn from_u8(value: u8) -> Option<InjectedFault> {
         if (value as usize) < Self::ALL.len() {
             Some(Self::ALL[value as usize])
         } else {
@@ -143,7 +143,7 @@ impl ChipControl {
     }
 
     /// Chip resets asked for so far.
-    pub fn reset_requests(&self) -> u32 {
+    pub(crate) fn reset_requests(&self) -> u32 {
         self.reset_requests.load(Ordering::Relaxed)
     }
 
