@@ -273,6 +273,141 @@ fn imports_point_down_the_layers_and_close_no_loop() {
     );
 }
 
+/// The boards, each a folder of `src/board/` (its safe half) and the firmware
+/// crates under `boards/` that run it. What more than one board uses lives in
+/// `src/board/` outside every board's folder (the bus clear, the watchdog gate,
+/// the virtual chips), so that a board is described in its own folder and no
+/// board's folder reaches another's.
+const BOARDS: &[(&str, &[&str])] = &[
+    ("board::qemu", &["qemu", "qemu-race"]),
+    ("board::microbit", &["microbit"]),
+    ("board::microbit_v1", &["microbit-v1"]),
+];
+
+/// The boards other than `own` that `module`'s code reaches. A firmware
+/// crate's source is read with its paths into the library (`marble_rolling::`)
+/// as the library's own (`crate::`), its own `crate::` paths set aside.
+fn other_boards(own: &str, module: &str, text: &str, modules: &BTreeSet<String>) -> Vec<String> {
+    reaches(module, text, modules)
+        .into_iter()
+        .filter_map(|target| {
+            BOARDS
+                .iter()
+                .map(|(board, _)| *board)
+                .find(|&board| {
+                    board != own && (target == board || target.starts_with(&format!("{board}::")))
+                })
+                .map(|board| format!("{target} ({board})"))
+        })
+        .collect()
+}
+
+/// Every path from one board's code into another board's, as messages.
+fn board_crossings(
+    sources: &BTreeMap<String, String>,
+    firmware: &[(String, String)],
+) -> Vec<String> {
+    let modules: BTreeSet<String> = sources.keys().cloned().collect();
+    let mut errors = Vec::new();
+    for (module, text) in sources {
+        let Some((own, _)) = BOARDS
+            .iter()
+            .find(|(board, _)| module == board || module.starts_with(&format!("{board}::")))
+        else {
+            continue;
+        };
+        for crossing in other_boards(own, module, text, &modules) {
+            errors.push(format!("{module} → {crossing}"));
+        }
+    }
+    for (krate, text) in firmware {
+        let Some((own, _)) = BOARDS
+            .iter()
+            .find(|(_, crates)| crates.contains(&krate.as_str()))
+        else {
+            continue;
+        };
+        let text = code(text)
+            .replace("crate::", "firmware_crate::")
+            .replace("marble_rolling::", "crate::");
+        for crossing in other_boards(own, "firmware", &text, &modules) {
+            errors.push(format!("boards/{krate} → {crossing}"));
+        }
+    }
+    errors
+}
+
+/// Every `.rs` file under `boards/NAME/src`, as (NAME, source).
+fn firmware_sources(root: &Path) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(root).expect("boards/ readable") {
+        let dir = entry.expect("entry").path();
+        let name = dir
+            .file_name()
+            .expect("name")
+            .to_string_lossy()
+            .into_owned();
+        let mut stack = vec![dir.join("src")];
+        while let Some(dir) = stack.pop() {
+            let Ok(entries) = std::fs::read_dir(&dir) else {
+                continue;
+            };
+            for entry in entries {
+                let path = entry.expect("entry").path();
+                if path.is_dir() {
+                    stack.push(path);
+                } else if path.extension().is_some_and(|e| e == "rs") {
+                    let text = std::fs::read_to_string(&path).expect("source readable");
+                    out.push((name.clone(), text));
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_board_imports_another() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let sources = sources(&root.join("src"));
+    for (board, _) in BOARDS {
+        assert!(sources.contains_key(*board), "{board} is no module of src/");
+    }
+    let errors = board_crossings(&sources, &firmware_sources(&root.join("boards")));
+    assert!(errors.is_empty(), "board crossings:\n{}", errors.join("\n"));
+}
+
+/// The check can fail: a board's module or a board's firmware crate reaching
+/// another board is reported; a shared part of `board` is not.
+#[test]
+fn the_board_check_reports_a_crossing() {
+    let sources: BTreeMap<String, String> = [
+        ("board", ""),
+        ("board::i2c", ""),
+        (
+            "board::qemu",
+            "use crate::board::i2c::Recovering; use crate::board::microbit::AXIS_MAP;",
+        ),
+        ("board::microbit", ""),
+        ("board::microbit_v1", "use super::i2c::ClearBus;"),
+    ]
+    .iter()
+    .map(|(m, t)| (m.to_string(), t.to_string()))
+    .collect();
+    let firmware = [(
+        "microbit-v1".to_string(),
+        "use marble_rolling::board::microbit::Task; // marble_rolling::board::qemu in a comment"
+            .to_string(),
+    )];
+    assert_eq!(
+        board_crossings(&sources, &firmware),
+        [
+            "board::qemu → board::microbit (board::microbit)",
+            "boards/microbit-v1 → board::microbit (board::microbit)",
+        ]
+    );
+}
+
 /// Each layer is a whole folder (or file) of `src/`: no module takes a layer
 /// other than its folder's, so the floors can be read off the tree.
 #[test]

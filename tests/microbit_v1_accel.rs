@@ -22,9 +22,8 @@ use marble_rolling::board::microbit_v1::accel::{identify, nxp, Accelerometer, Nx
 use marble_rolling::board::microbit_v1::nxp_driver::{probe, read};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Polled, Probed};
 use marble_rolling::board::microbit_v1::twi::{Pause, TwiError};
-use marble_rolling::board::microbit_v1::virtual_nxp::{
-    VirtualChip, VirtualNxp, VirtualTwi, RESET_US,
-};
+use marble_rolling::board::microbit_v1::virtual_nxp::{VirtualNxp, RESET_US};
+use marble_rolling::board::microbit_v1::virtual_twi::{VirtualChip, VirtualTwi};
 use marble_rolling::board::qemu::virtual_lsm303agr::{
     ChipControl, InjectedFault, VirtualLsm303agr, MICROBIT_V2,
 };

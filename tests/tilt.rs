@@ -1,8 +1,8 @@
 //! The tilt input path (src/input/tilt.rs): accelerometer reading → gravity.
 
 use marble_rolling::input::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
-use marble_rolling::input::tilt::{TiltConfig, TiltError, TiltFilter};
-use marble_rolling::physics::world::MAX_MG;
+use marble_rolling::input::tilt::{TiltConfig, TiltError, TiltFilter, MAX_READING_MG};
+use marble_rolling::physics::range::MAX_MG;
 use proptest::prelude::*;
 
 /// Tiny zero-mean in-plane noise (±2 mg, a period of 5 samples) so that a long run
@@ -408,8 +408,9 @@ fn saturated_full_scale_readings_are_consistent() {
             assert_eq!(f.gravity_mg()[axis], -2000 * s, "last good kept");
         }
     }
-    // A full scale beyond the LSM303AGR's ±16 g is capped, and the output is
-    // clamped to what the physics accepts.
+    // A full scale beyond what the physics takes, less the largest calibration
+    // offset, is capped: such a reading is not believed, and the largest one
+    // believed, calibrated the other way, is the physics' largest pull.
     let wide = Plausibility {
         max_axis_mg: u32::MAX,
         min_total_mg: 0,
@@ -420,9 +421,19 @@ fn saturated_full_scale_readings_are_consistent() {
         filter_shift: 0,
         ..TiltConfig::DEFAULT
     });
-    assert_eq!(f.push([-16_000, 0, 0]), Ok([MAX_MG, 0, 0]));
+    assert_eq!(MAX_READING_MG as i32, MAX_MG - Calibration::MAX_OFFSET_MG);
+    assert_eq!(f.push([-7_500, 0, 0]), Ok([7_500, 0, 0]));
+    f.set_calibration(Calibration {
+        offset_x: 500,
+        offset_z: 0,
+    });
+    assert_eq!(f.push([-7_500, 0, 0]), Ok([MAX_MG, 0, 0]));
     assert!(matches!(
-        f.push([16_001, 0, 0]),
+        f.push([7_501, 0, 0]),
+        Err(TiltError::OutOfRange { .. })
+    ));
+    assert!(matches!(
+        f.push([-16_000, 0, 0]),
         Err(TiltError::OutOfRange { .. })
     ));
 }

@@ -13,7 +13,15 @@ pub mod qemu;
 pub mod microbit;
 // The micro:bit v1 board module (nRF51822): pure code, host-tested.
 pub mod microbit_v1;
-// What every board's I²C bus shares: the bus-clear rule.
+// Shared by boards (each board's folder reaches none of the others'):
+// what every board's I²C bus shares: the bus-clear rule.
 pub mod i2c;
+// The micro:bit's accelerometer link, which the v2 runs and the QEMU board models.
+pub mod accel_link;
+// The watchdog's rule: every task proves it runs.
+pub mod watchdog;
+// A model of the LSM303AGR, which the QEMU board carries and the v1's virtual
+// bus may carry (a v1.5).
+pub mod virtual_lsm303agr;
 // The levels region both micro:bits read from flash (`cargo xtask hex --level`).
 pub mod levels_region;

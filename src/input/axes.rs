@@ -128,3 +128,58 @@ impl AxisMap {
         a != b && b != c && a != c
     }
 }
+
+/// "This orientation is level": the offset subtracted from later samples.
+///
+/// Small-angle model: the horizontal components (`x`, `z`) of the reference
+/// sample are subtracted, `y` is kept. Exact for the tilt directions and
+/// accurate to a few percent for reference tilts up to ~15°, which is what a
+/// player calibrating "roughly flat" produces. The offset is clamped to
+/// ±[`Calibration::MAX_OFFSET_MG`] so that calibrating while holding the board
+/// on its side cannot make the game unplayable.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Calibration {
+    /// Offset subtracted from `x`, mg.
+    pub offset_x: i32,
+    /// Offset subtracted from `z`, mg.
+    pub offset_z: i32,
+}
+
+impl Calibration {
+    /// Largest offset accepted (about 30° of tilt).
+    pub const MAX_OFFSET_MG: i32 = 500;
+
+    /// No correction.
+    pub const NONE: Self = Self {
+        offset_x: 0,
+        offset_z: 0,
+    };
+
+    /// The calibration that makes `reference` (a board-frame sample) level.
+    pub const fn from_reference(reference: AccelMg) -> Self {
+        Self {
+            offset_x: clamp_i32(reference.x, Self::MAX_OFFSET_MG),
+            offset_z: clamp_i32(reference.z, Self::MAX_OFFSET_MG),
+        }
+    }
+
+    /// `s` corrected (saturating).
+    pub const fn apply(&self, s: AccelMg) -> AccelMg {
+        AccelMg {
+            x: s.x.saturating_sub(self.offset_x),
+            y: s.y,
+            z: s.z.saturating_sub(self.offset_z),
+        }
+    }
+}
+
+const fn clamp_i32(v: i32, limit: i32) -> i32 {
+    if v > limit {
+        limit
+    } else if v < -limit {
+        -limit
+    } else {
+        v
+    }
+}

@@ -15,7 +15,7 @@ use lsm303agr::interface::I2cInterface;
 use lsm303agr::mode::MagOneShot;
 use lsm303agr::{AccelMode, AccelOutputDataRate, Error, Lsm303agr};
 
-use super::event::{Fault, Tilt};
+use super::event::Fault;
 use super::sensor::{AccelMg, Action, Read, Step, TiltPipeline};
 
 /// The driver on bus `I2C`.
@@ -175,16 +175,5 @@ where
             Read::Sample(AccelMg::new(x, y, z))
         }
         Err(e) => Read::Failed(fault(e)),
-    }
-}
-
-/// The pipeline's tilt as the app's input event, each axis saturated to
-/// ±32 767 mg (the supervision bounds a plausible sample far inside that).
-pub fn to_tilt(s: AccelMg) -> Tilt {
-    let saturate = |v: i32| v.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16;
-    Tilt {
-        x: saturate(s.x),
-        y: saturate(s.y),
-        z: saturate(s.z),
     }
 }

@@ -4,8 +4,28 @@
 //! accelerometer ─► sensor: axis map, plausibility, fault supervision ─┐
 //! buttons ───────► buttons: debounce, A / B / A+B hold ───────────────┼─► events ─► game
 //! terminal keys ─► keys: decoding, key tilt ──────────────────────────┘
-//!                          (in the game's session) tilt: calibration, low-pass, stuck check ─► physics
+//!                          (in the game's session) tilt: plausibility, stuck check, low-pass,
+//!                                                  calibration ─► physics
 //! ```
+//!
+//! # One tilt path, and the stages a source skips
+//!
+//! Every reading is a board-frame reading in mg, and every one reaches the
+//! physics through the game's session and its [`tilt::TiltFilter`]: a sensor's
+//! sample (as the app's [`event::Tilt`], [`sensor::TiltPipeline::reading`]),
+//! the keys' tilt, the autopilot's, a trace's and a ghost's. One rule says which
+//! readings are believed ([`plausible::Plausibility::judge`]), and no stage
+//! clamps: a believed reading keeps to ±[`plausible::MAX_READING_MG`] per axis,
+//! so its gravity is within the physics' range as it is (the world holds it to
+//! its level's bound). What a source skips is said here and set in one place:
+//!
+//! | stage | sensor | keys, autopilot, trace, ghost | where it is set |
+//! |---|---|---|---|
+//! | axis map | yes | no: made in the board frame | [`sensor::TiltPipeline`] |
+//! | plausibility | yes, for the supervision, and again on entry | yes, on entry | [`tilt::TiltConfig::plausibility`] |
+//! | supervision | yes | no: nothing to re-initialise | [`sensor::TiltPipeline`] |
+//! | stuck check | yes (the QEMU board's keys and virtual chip share one setting: no) | no: repeats are normal | [`tilt::TiltConfig::stuck_samples`] (0 in `game::session::SYNTHETIC_TILT`) |
+//! | low-pass, calibration | yes | yes | [`tilt::TiltConfig`] |
 //!
 //! Everything here is pure: a board feeds bytes, pin levels and samples in,
 //! and host tests drive the same code.
@@ -19,5 +39,6 @@ pub mod lsm303;
 pub mod buttons;
 pub mod idle;
 pub mod pacing;
+pub mod plausible;
 pub mod sensor;
 pub mod tilt;

@@ -30,108 +30,10 @@
 //!
 //! [`Command::Calibrate`]: crate::input::event::Command::Calibrate
 
-pub use super::axes::{AccelMg, Axis, AxisMap, AxisSource};
+pub use super::axes::{AccelMg, Axis, AxisMap, AxisSource, Calibration};
 pub use super::event::Fault;
-use super::event::InputEvent;
-
-/// Bounds a sample must lie within to be believed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Plausibility {
-    /// Largest believable magnitude of any single axis, mg.
-    pub max_axis_mg: u32,
-    /// Smallest believable total magnitude, mg. A still or hand-held board
-    /// always feels about 1 g; an all-zero reading is a sensor that lost its
-    /// configuration (or free fall, when tilt means nothing anyway).
-    pub min_total_mg: u32,
-    /// Largest believable total magnitude, mg (beyond it: a knock or garbage).
-    pub max_total_mg: u32,
-}
-
-impl Plausibility {
-    /// Defaults for a hand-held toy on a ±2 g (or wider) range.
-    pub const DEFAULT: Self = Self {
-        max_axis_mg: 4_000,
-        min_total_mg: 300,
-        max_total_mg: 3_000,
-    };
-
-    /// Whether `s` is believable.
-    pub const fn check(&self, s: AccelMg) -> bool {
-        let max_axis = self.max_axis_mg;
-        if s.x.unsigned_abs() > max_axis
-            || s.y.unsigned_abs() > max_axis
-            || s.z.unsigned_abs() > max_axis
-        {
-            return false;
-        }
-        let m = s.magnitude_sq();
-        let lo = self.min_total_mg as u64;
-        let hi = self.max_total_mg as u64;
-        m >= lo * lo && m <= hi * hi
-    }
-}
-
-impl Default for Plausibility {
-    fn default() -> Self {
-        Self::DEFAULT
-    }
-}
-
-/// "This orientation is level": the offset subtracted from later samples.
-///
-/// Small-angle model: the horizontal components (`x`, `z`) of the reference
-/// sample are subtracted, `y` is kept. Exact for the tilt directions and
-/// accurate to a few percent for reference tilts up to ~15°, which is what a
-/// player calibrating "roughly flat" produces. The offset is clamped to
-/// ±[`Calibration::MAX_OFFSET_MG`] so that calibrating while holding the board
-/// on its side cannot make the game unplayable.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Calibration {
-    /// Offset subtracted from `x`, mg.
-    pub offset_x: i32,
-    /// Offset subtracted from `z`, mg.
-    pub offset_z: i32,
-}
-
-impl Calibration {
-    /// Largest offset accepted (about 30° of tilt).
-    pub const MAX_OFFSET_MG: i32 = 500;
-
-    /// No correction.
-    pub const NONE: Self = Self {
-        offset_x: 0,
-        offset_z: 0,
-    };
-
-    /// The calibration that makes `reference` (a board-frame sample) level.
-    pub const fn from_reference(reference: AccelMg) -> Self {
-        Self {
-            offset_x: clamp_i32(reference.x, Self::MAX_OFFSET_MG),
-            offset_z: clamp_i32(reference.z, Self::MAX_OFFSET_MG),
-        }
-    }
-
-    /// `s` corrected (saturating).
-    pub const fn apply(&self, s: AccelMg) -> AccelMg {
-        AccelMg {
-            x: s.x.saturating_sub(self.offset_x),
-            y: s.y,
-            z: s.z.saturating_sub(self.offset_z),
-        }
-    }
-}
-
-const fn clamp_i32(v: i32, limit: i32) -> i32 {
-    if v > limit {
-        limit
-    } else if v < -limit {
-        -limit
-    } else {
-        v
-    }
-}
+use super::event::{InputEvent, Tilt};
+pub use super::plausible::Plausibility;
 
 /// The outcome of one poll of the sensor, in the sensor's frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -469,6 +371,19 @@ impl TiltPipeline {
     /// the first one).
     pub const fn tilt(&self) -> AccelMg {
         self.supervisor.last_good()
+    }
+
+    /// [`TiltPipeline::tilt`] as the app's reading, exactly: only believed
+    /// samples (or level) are kept, and a believed sample keeps to
+    /// ±[`MAX_READING_MG`](super::plausible::MAX_READING_MG) per axis, which
+    /// 16 bits hold.
+    pub const fn reading(&self) -> Tilt {
+        let s = self.tilt();
+        Tilt {
+            x: s.x as i16,
+            y: s.y as i16,
+            z: s.z as i16,
+        }
     }
 
     /// Whether the sensor is considered down.

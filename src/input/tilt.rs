@@ -2,8 +2,12 @@
 //! apparent gravity the physics consumes ([`crate::physics::world::World::set_gravity_mg`]).
 //!
 //! ```text
-//! reading ─▶ plausibility ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ [dead zone (x, z), off by default] ─▶ negate ─▶ clamp ±8 g
+//! reading ─▶ plausibility ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ [dead zone (x, z), off by default] ─▶ negate
 //! ```
+//!
+//! Nothing is clamped here: a believed reading keeps to ±[`MAX_READING_MG`]
+//! per axis ([`super::plausible`]), so its gravity is within the physics'
+//! largest pull as it is, and the world holds it to its level's own bound.
 //!
 //! # What reaches the physics
 //!
@@ -50,12 +54,13 @@
 //!
 //! # Fit with [`crate::input::sensor`]
 //!
-//! The plausibility bounds are a [`Plausibility`], as in the sensor's
-//! [`TiltPipeline`](crate::input::sensor::TiltPipeline), so both accept the same
-//! samples; the "level" offset is a [`Calibration`], applied here and nowhere
+//! The plausibility bounds are a [`Plausibility`], judged by the one rule
+//! ([`Plausibility::judge`]) the sensor's
+//! [`TiltPipeline`](crate::input::sensor::TiltPipeline) applies, so both accept
+//! the same samples; the "level" offset is a [`Calibration`], applied here and nowhere
 //! else (a board's buttons and the keys send `Command::Calibrate` to the game). A
-//! [`TiltError`] converts into a [`Fault`] (`Stuck` → [`Fault::NoData`], the
-//! rest → [`Fault::Implausible`]), so a [`SensorSupervisor`](crate::input::sensor::SensorSupervisor)
+//! [`TiltError`] converts into a [`Fault`](crate::input::event::Fault) (`Stuck`
+//! → `Fault::NoData`, the rest → `Fault::Implausible`), so a [`SensorSupervisor`](crate::input::sensor::SensorSupervisor)
 //! over gravity can run the re-init / fault-display policy:
 //! `supervisor.feed(filter.push(raw).map_err(Fault::from))`. Feed it raw
 //! (uncalibrated) board-frame samples: the filter does its own calibration.
@@ -67,64 +72,18 @@
 //! cheap on a Cortex-M0. Every operation is saturating or provably in range,
 //! so no `i32` input can overflow or panic.
 
-use crate::input::event::Fault;
-use crate::input::sensor::{AccelMg, Axis, Calibration, Plausibility};
-use crate::physics::world::MAX_MG;
+use super::axes::{AccelMg, Calibration};
+pub use super::plausible::{Plausibility, TiltError, MAX_READING_MG};
 
 /// Fractional bits of the low-pass state (the state is mg · 2^12).
 ///
-/// With the readings limited to ±[`MAX_FULL_SCALE_MG`], the state and any
-/// difference of two states stay below 2^27, far from `i32` overflow.
+/// With the readings limited to ±[`MAX_READING_MG`], the state and any
+/// difference of two states stay below 2^26, far from `i32` overflow.
 const FRAC_BITS: u32 = 12;
-
-/// The widest full scale believed, mg: the LSM303AGR's largest range (±16 g).
-/// A [`Plausibility::max_axis_mg`] above it is treated as this.
-pub const MAX_FULL_SCALE_MG: u32 = 16_000;
 
 /// The largest low-pass shift accepted ([`TiltConfig::filter_shift`] is
 /// clamped to it): a time constant of about 32 767 samples.
 pub const MAX_FILTER_SHIFT: u8 = 15;
-
-/// Why a sample was not used. The filter's state (and so its gravity) is left
-/// exactly as it was.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum TiltError {
-    /// All three components are exactly zero: a sensor that lost its
-    /// configuration, or a dead bus reading zeros.
-    AllZero,
-    /// One component exceeds the sensor's full scale
-    /// ([`Plausibility::max_axis_mg`]); the first offending axis (x, y, z
-    /// order) and its raw value.
-    OutOfRange {
-        /// The offending axis.
-        axis: Axis,
-        /// Its raw value, mg.
-        value: i32,
-    },
-    /// The total magnitude is outside
-    /// [`Plausibility::min_total_mg`]..=[`Plausibility::max_total_mg`]
-    /// (free fall, a knock, or garbage).
-    Magnitude {
-        /// The squared magnitude of the sample, mg².
-        squared_mg2: u32,
-    },
-    /// [`TiltConfig::stuck_samples`] identical raw samples in a row: a frozen
-    /// sensor (real MEMS noise makes such repeats implausible). Reported for
-    /// every further identical sample; the next different one is used again.
-    Stuck,
-}
-
-impl From<TiltError> for Fault {
-    /// `Stuck` is a sensor that stopped producing new data; the rest are
-    /// implausible samples.
-    fn from(e: TiltError) -> Self {
-        match e {
-            TiltError::Stuck => Fault::NoData,
-            _ => Fault::Implausible,
-        }
-    }
-}
 
 /// Tuning of a [`TiltFilter`]. Every field is public; out-of-range values are
 /// clamped (documented per field), never rejected.
@@ -135,7 +94,7 @@ pub struct TiltConfig {
     /// ±4000 mg (twice the firmware's ±2 g range, whose saturated readings,
     /// ±2048 at most, are therefore always accepted per axis), total
     /// 300..=3000 mg (a held toy feels about 1 g; beyond 3 g is a knock, not a
-    /// tilt). `max_axis_mg` is capped at [`MAX_FULL_SCALE_MG`].
+    /// tilt). `max_axis_mg` is capped at [`MAX_READING_MG`].
     pub plausibility: Plausibility,
     /// Low-pass shift `k`: each sample moves the state by 2^−k of the way to
     /// it. Time constant τ ≈ 2^k − ½ samples (exactly −1 / ln(1 − 2^−k));
@@ -157,7 +116,7 @@ pub struct TiltConfig {
     /// tilt reaches the physics unchanged. **Default 0: no dead zone** — a
     /// resting marble is held by rolling resistance's static threshold, and no
     /// sourced noise figure of the accelerometer justifies a width (see the
-    /// module documentation). Capped at [`MAX_FULL_SCALE_MG`].
+    /// module documentation). Capped at [`MAX_READING_MG`].
     pub dead_zone_mg: u32,
     /// Identical consecutive raw samples after which [`TiltError::Stuck`] is
     /// reported (that sample and the following identical ones are rejected).
@@ -197,7 +156,7 @@ impl Default for TiltConfig {
 }
 
 /// The tilt filter: plausibility and stuck-sensor rejection, a first-order
-/// low-pass, "level" calibration, an optional dead zone and the output clamp.
+/// low-pass, "level" calibration and an optional dead zone.
 ///
 /// Until its first accepted sample its gravity is level, `(0, −1000, 0)`; the
 /// first accepted sample initialises the low-pass (no start-up transient).
@@ -233,7 +192,8 @@ impl TiltFilter {
     }
 
     /// Feeds one raw board-frame reading (mg) and returns the new gravity
-    /// (mg, physics convention: down = −y, each axis within ±[`MAX_MG`]).
+    /// (mg, physics convention: down = −y, each axis within ±8 000: the
+    /// physics' `MAX_MG`).
     ///
     /// A rejected reading returns why and leaves the filter — and so
     /// [`TiltFilter::gravity_mg`], the last good gravity — unchanged (only the
@@ -242,7 +202,7 @@ impl TiltFilter {
     /// [`TiltError::Magnitude`], [`TiltError::Stuck`].
     pub fn push(&mut self, reading_mg: [i32; 3]) -> Result<[i32; 3], TiltError> {
         let stuck = self.note_repeat(reading_mg);
-        check(&self.config.plausibility, reading_mg)?;
+        self.config.plausibility.judge(reading_mg)?;
         if stuck {
             return Err(TiltError::Stuck);
         }
@@ -252,7 +212,7 @@ impl TiltFilter {
                 *s = lowpass(*s, r << FRAC_BITS, k);
             }
         } else {
-            // |r| ≤ MAX_FULL_SCALE_MG < 2^14 after `check`: the shift fits.
+            // |r| ≤ MAX_READING_MG < 2^13 once judged: the shift fits.
             self.state = reading_mg.map(|r| r << FRAC_BITS);
             self.primed = true;
         }
@@ -266,18 +226,19 @@ impl TiltFilter {
 
     /// The gravity to hand to `World::set_gravity_mg` (mg, tile frame,
     /// down = −y): the negated filtered reading minus the calibration, with
-    /// the dead zone (if any) on `x` and `z`, each axis clamped to ±[`MAX_MG`]. Level,
-    /// `(0, −1000, 0)`, until the first good sample.
+    /// the dead zone (if any) on `x` and `z`; each axis within ±8 000 (a
+    /// believed reading's ±[`MAX_READING_MG`] plus the largest calibration
+    /// offset). Level, `(0, −1000, 0)`, until the first good sample.
     pub fn gravity_mg(&self) -> [i32; 3] {
         if !self.primed {
             return [0, -1000, 0];
         }
-        let dz = (min_u32(self.config.dead_zone_mg, MAX_FULL_SCALE_MG) as i32) << FRAC_BITS;
+        let dz = (min_u32(self.config.dead_zone_mg, MAX_READING_MG) as i32) << FRAC_BITS;
         let c = self.calibration;
         // |state| < 2^26, |offset| ≤ 500 · 2^12: no overflow below.
         let x = dead_zone(self.state[0] - (c.offset_x << FRAC_BITS), dz);
         let z = dead_zone(self.state[2] - (c.offset_z << FRAC_BITS), dz);
-        [x, self.state[1], z].map(|v| clamp_mg(-round_fx(v)))
+        [x, self.state[1], z].map(|v| -round_fx(v))
     }
 
     /// The low-pass output before calibration, dead zone and negation: the
@@ -310,7 +271,7 @@ impl TiltFilter {
     /// runs are not checked here: pass a reading the filter accepted, or
     /// [`TiltFilter::filtered_reading_mg`].
     pub fn calibrate(&mut self, current_reading_mg: [i32; 3]) -> Result<Calibration, TiltError> {
-        check(&self.config.plausibility, current_reading_mg)?;
+        self.config.plausibility.judge(current_reading_mg)?;
         let [x, y, z] = current_reading_mg;
         self.calibration = Calibration::from_reference(AccelMg::new(x, y, z));
         Ok(self.calibration)
@@ -355,33 +316,6 @@ impl Default for TiltFilter {
     }
 }
 
-/// The plausibility check of [`TiltFilter::push`], with the reason.
-fn check(p: &Plausibility, r: [i32; 3]) -> Result<(), TiltError> {
-    if r == [0; 3] {
-        return Err(TiltError::AllZero);
-    }
-    let max_axis = min_u32(p.max_axis_mg, MAX_FULL_SCALE_MG);
-    for (axis, value) in [(Axis::X, r[0]), (Axis::Y, r[1]), (Axis::Z, r[2])] {
-        if value.unsigned_abs() > max_axis {
-            return Err(TiltError::OutOfRange { axis, value });
-        }
-    }
-    // Each |component| ≤ 16 000 now, so the sum of squares is < 7.7·10^8,
-    // and bounds capped at 65 535 (> any such magnitude) square below 2^32:
-    // plain 32-bit multiplications, no overflow check, no 64-bit helper.
-    let sq = r.iter().fold(0u32, |acc, v| {
-        let a = v.unsigned_abs();
-        acc + a * a
-    });
-    let lo = min_u32(p.min_total_mg, 65_535);
-    let hi = min_u32(p.max_total_mg, 65_535);
-    let (lo, hi) = (lo * lo, hi * hi);
-    if sq < lo || sq > hi {
-        return Err(TiltError::Magnitude { squared_mg2: sq });
-    }
-    Ok(())
-}
-
 /// One step of the first-order IIR `s += (target − s) · 2^−k`, rounding the
 /// step away from zero so that any nonzero difference moves the state: it
 /// reaches `target` exactly (no dead band, no bias), from either side.
@@ -424,10 +358,6 @@ fn round_fx(v: i32) -> i32 {
     } else {
         m
     }
-}
-
-fn clamp_mg(v: i32) -> i32 {
-    v.clamp(-MAX_MG, MAX_MG)
 }
 
 const fn clamp_shift(k: u8) -> u32 {

@@ -24,7 +24,7 @@
 //!   difference of two positions, per axis (under 64).
 //! * **The largest speed** is 127 pitch/s along any direction with events
 //!   (`events::cap_speed`, scaled back along itself), `r/4` per step with fixed
-//!   steps; **the largest pull** is [`world::MAX_MG`] (8 g) or, with events, what a
+//!   steps; **the largest pull** is [`range::MAX_MG`] (8 g) or, with events, what a
 //!   step can add within that speed (`Params::mg_max`). In step units (pitch, pitch
 //!   per step) that is `|u| < 1` and `|h| ≤ ½` at 128 steps/s.
 //! * **Nothing far is squared.** A product of two positions' difference would not
@@ -46,6 +46,7 @@
 
 pub mod dynamics;
 pub mod geometry;
+pub mod range;
 pub mod scalar;
 pub mod vec;
 pub mod world;

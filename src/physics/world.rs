@@ -85,9 +85,7 @@ pub struct World<'a, S: Scalar, const M: usize> {
     impacts: Impacts<S>,
 }
 
-/// The largest acceleration the physics accepts per axis (milli-g); the tilt path
-/// clamps implausible readings long before this.
-pub const MAX_MG: i32 = 8_000;
+pub use super::range::MAX_MG;
 
 impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// A world with marbles resting on the floor at `starts` (tile-frame x', z'; the

@@ -23,12 +23,12 @@ use critical_section::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 use marble_rolling::app::{Latest, MatrixOutput};
-use marble_rolling::board::microbit::Task;
 use marble_rolling::board::microbit_v1::leds::{COL_PINS, MATRIX_PINS, ROW_PINS};
 use marble_rolling::board::microbit_v1::{
     frame_from_refresh, rows_hex, schedule, Picture, Schedule, DARK_SCHEDULE,
     FRAME_LOG_MIN_REFRESHES, HEIGHT, REFRESH_US, SLICES, TIMER_PRESCALER, WIDTH,
 };
+use marble_rolling::board::watchdog::Task;
 use marble_rolling::matrix::{ScanStep, Scanner};
 use marble_rolling::player::Status;
 use nrf_pac as pac;

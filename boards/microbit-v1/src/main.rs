@@ -56,11 +56,11 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use marble_board_runtime::heartbeat::poll_beating;
 use marble_rolling::app::{self, GameMode, Links, TiltInput};
 use marble_rolling::board::levels_region;
-use marble_rolling::board::microbit::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::board::microbit_v1::{
     LoadReport, Options, HEIGHT, MAZE_REACH, RAM_BUDGET_BYTES, RAM_BYTES, WATCHDOG_TIMEOUT_TICKS,
     WIDTH,
 };
+use marble_rolling::board::watchdog::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::game::endless::{MazeSlot, Seeds};
 use marble_rolling::input::tilt::TiltConfig;
 

@@ -29,12 +29,12 @@ use embassy_time::{Duration, Ticker};
 use embedded_hal::i2c::{ErrorType, Operation};
 use heapless::Deque;
 use marble_rolling::app::TiltInput;
+use marble_rolling::board::accel_link::INPUT_PERIOD_MS;
 use marble_rolling::board::i2c::ClearBus;
-use marble_rolling::board::microbit::{self as v2, Task};
 use marble_rolling::board::microbit_v1::sensor::{PollLoop, Probed};
 use marble_rolling::board::microbit_v1::twi::{Pause, TwiError};
+use marble_rolling::board::watchdog::Task;
 use marble_rolling::input::event::InputEvent;
-use marble_rolling::input::lsm303;
 use nrf_pac as pac;
 
 use crate::hw::clock;
@@ -320,7 +320,7 @@ impl TiltInput for Input {
             Some(ticker) => ticker.next().await,
             None => {
                 log_probe(self.sensor.bring_up().await);
-                self.ticker = Some(Ticker::every(Duration::from_millis(v2::INPUT_PERIOD_MS)));
+                self.ticker = Some(Ticker::every(Duration::from_millis(INPUT_PERIOD_MS)));
             }
         }
         let polled = self.sensor.poll().await;
@@ -329,6 +329,6 @@ impl TiltInput for Input {
             defmt::warn!("accelerometer: {}", transition);
             let _ = self.pending.push_back(transition.event());
         }
-        InputEvent::Tilt(lsm303::to_tilt(self.sensor.tilt()))
+        InputEvent::Tilt(self.sensor.reading())
     }
 }

@@ -392,7 +392,7 @@ impl TiltInput for MicrobitInput {
         if let Some(command) = command {
             let _ = self.pending.push_back(InputEvent::Command(command));
         }
-        let tilt = InputEvent::Tilt(lsm303::to_tilt(self.pipeline.tilt()));
+        let tilt = InputEvent::Tilt(self.pipeline.reading());
         let _ = self.pending.push_back(tilt);
         self.pending.pop_front().unwrap_or(tilt)
     }

@@ -36,7 +36,9 @@ use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
-use marble_rolling::board::qemu::{Options, HEIGHT, MAZE_REACH, QEMU_RAM, WIDTH};
+use marble_rolling::board::qemu::{
+    Options, GHOSTS_BYTES, GHOST_BYTES, HEIGHT, MAZE_REACH, QEMU_RAM, WIDTH,
+};
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
@@ -202,14 +204,9 @@ async fn display(interactive: bool) -> ! {
 /// The records' region: four 4 KiB pages, as on the micro:bit v2.
 const RECORDS_BYTES: usize = 4 * ram_flash::PAGE;
 
-/// The ghosts' region: as on the micro:bit v2 (`board::microbit::GHOSTS`).
-const GHOSTS_BYTES: usize = {
-    let region = marble_rolling::board::microbit::GHOSTS;
-    (region.end - region.start) as usize
-};
-
-/// The ghosts, with the v2's buffers (`board::microbit::GHOST_BYTES`).
-type Kit = GhostKit<RamFlash<GHOSTS_BYTES>, { marble_rolling::board::microbit::GHOST_BYTES }>;
+/// The ghosts, in a region and with buffers the micro:bit v2's size
+/// (`board::qemu::{GHOSTS_BYTES, GHOST_BYTES}`).
+type Kit = GhostKit<RamFlash<GHOSTS_BYTES>, GHOST_BYTES>;
 
 /// The ghosts over their image loaded from its host file, saved after each
 /// write.

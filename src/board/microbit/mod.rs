@@ -46,30 +46,35 @@
 //!
 //! # The watchdog: every task proves it runs
 //!
-//! A watchdog petted by one loop only proves that loop runs; a task parked
-//! forever at an `await` (a display waiting on a dead timer, a game never
-//! woken) would go unnoticed. So each task that must run bumps its own
-//! counter in [`Heartbeats`], and the watchdog task pets only when
-//! [`WatchdogGate`] has seen every counter move since the last pet. The
-//! watchdog task itself runs in thread mode, so its pets also prove the
-//! thread executor is not hogged.
+//! The watchdog task pets only when every task's heartbeat moved since the
+//! last pet ([`WatchdogGate`], the rule of `board::watchdog`, which the v1
+//! shares), within [`WATCHDOG_TIMEOUT_TICKS`].
 //!
-//! Some tasks wait for work that may not come for minutes (the sound task for
-//! a sound, the records task for a win): a silent counter there is not a stall.
-//! Such a task says when it waits ([`Heartbeats::waiting`]) and when it works
-//! ([`Heartbeats::working`]); the gate excuses a waiting task and holds a
-//! working one to the same rule as the others, so a sound whose timer never
-//! ends, or a flash operation that never returns, stops the pets.
+//! # Shared with other boards
+//!
+//! The accelerometer link (axis map, polling, supervision, bus deadline:
+//! `board::accel_link`, which the QEMU board models), the bus clear
+//! (`board::i2c`) and the watchdog's rule (`board::watchdog`) are re-exported
+//! here, so that this module lists everything the v2 runs with.
 
 pub mod power_on;
 pub mod sleep;
 pub mod speaker;
 #[cfg(feature = "shared-flash")]
 pub mod storage;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
+pub use super::accel_link::{
+    AXIS_MAP, I2C_KHZ, I2C_TIMEOUT_MS, INPUT_PERIOD_MS, LONGEST_TRANSFER_BITS, SUPERVISOR,
+    TWIM_COPY_BUFFER_BYTES,
+};
+pub use super::i2c::{
+    clear_bus, BusClear, BusLines, BUS_CLEAR_HALF_PERIOD_US, BUS_CLEAR_MAX_CLOCKS,
+    BUS_CLEAR_STRETCH_LIMIT,
+};
+pub use super::watchdog::{
+    Heartbeats, Snapshot, Task, Tasks, Verdict, WatchdogGate, WATCHDOG_CHECK_MS,
+};
 use crate::input::buttons::ButtonConfig;
-use crate::input::sensor::{Axis, AxisMap, AxisSource, SupervisorConfig};
 use crate::matrix::base_tick_hz;
 
 /// Frequency of the nRF RTC that drives embassy-time (`time-driver-rtc1`).
@@ -105,9 +110,6 @@ pub const fn refresh_millihz(rtc_ticks: u32) -> u32 {
     ((RTC_HZ as u64) * 1000 / per_refresh) as u32
 }
 
-/// Sensor and button polling period. 100 Hz: twice the game's step rate.
-pub const INPUT_PERIOD_MS: u64 = 10;
-
 /// Accelerometer output data rate and settle time: the input path's
 /// (see [`SUPERVISOR`] for the polling they are tuned with).
 pub use crate::input::accel_timing::{ACCEL_ODR_HZ, ACCEL_SETTLE_MS};
@@ -131,57 +133,6 @@ const _: () = assert!(ACCEL_BOOT_MS * 1000 > LSM303AGR_READY_US);
 /// must pet within it, which it does only while every task in [`Task::ALL`]
 /// checks in (see [`WatchdogGate`]), or the board resets.
 pub const WATCHDOG_TIMEOUT_TICKS: u32 = RTC_HZ;
-
-/// How often the watchdog task checks the heartbeats (and pets when all
-/// moved), ms. Ten checks per watchdog period: a task may be late for nine
-/// of them (a sensor re-init takes ~50 ms) before the board resets.
-pub const WATCHDOG_CHECK_MS: u64 = 100;
-
-/// Fault supervision tuned for [`INPUT_PERIOD_MS`] and [`ACCEL_ODR_HZ`]: a
-/// sample is due every 5 ms and the poll comes every 10 ms, so a poll without
-/// new data is timing (a poll squeezed after slow work, the first poll after a
-/// re-init); three in a row, about 30 ms or six sample periods without a
-/// sample, is [`Fault::NoData`](crate::input::event::Fault::NoData).
-pub const SUPERVISOR: SupervisorConfig = SupervisorConfig {
-    not_ready_before_fault: 3,
-    ..SupervisorConfig::DEFAULT
-};
-
-/// Internal I²C bus clock, kHz (the TWIM's `K400`).
-pub const I2C_KHZ: u32 = 400;
-
-/// Longest transfer the accelerometer driver makes: a register address
-/// written, six data bytes read back (the three axes) — in bits on the wire,
-/// including both address bytes, the ACK bits and the START/repeated
-/// START/STOP conditions.
-pub const LONGEST_TRANSFER_BITS: u32 = (2 + 1 + 6) * 9 + 3;
-
-/// Deadline of one I²C transfer, ms. The longest transfer lasts
-/// [`LONGEST_TRANSFER_BITS`] / [`I2C_KHZ`] ≈ 0.2 ms and the LSM303AGR does not
-/// stretch the clock, so a transfer still running after 5 ms (over 20× that,
-/// more than one RTC tick of timer granularity, half a poll period) is a hung
-/// bus, not a slow one.
-pub const I2C_TIMEOUT_MS: u64 = 5;
-
-/// Size of the TWIM's RAM copy buffer, bytes.
-///
-/// nRF EasyDMA reads only RAM. embassy-nrf's `Twim` (`twim.rs`,
-/// `Twim::set_tx_buffer`) copies a write buffer that is not in RAM into this
-/// buffer, and refuses the transfer with `Error::RAMBufferTooSmall` (no bus
-/// traffic at all) when the buffer is shorter than the write. lsm303agr 1.1
-/// (`interface.rs`, `I2cInterface::read_register` and friends) reads a
-/// register with `write_read(address, &[R::ADDR], …)` (`&[R::ADDR | 0x80]`
-/// for multi-byte reads): a constant slice, which Rust promotes to a
-/// `'static` in flash. With no copy buffer, every read — WHO_AM_I first —
-/// failed on every board. The largest write any driver call makes is 2 bytes
-/// (`write_accel_register`/`write_mag_register`: register address + value,
-/// built on the stack, but the optimiser may fold such constants into flash
-/// too), so 2 bytes cover every write wherever the compiler puts it.
-///
-/// The rule: every EasyDMA peripheral gets a copy buffer, sized for the
-/// largest write its drivers make, unless every buffer it is given is
-/// provably in RAM.
-pub const TWIM_COPY_BUFFER_BYTES: usize = 2;
 
 /// The best times' flash region (byte addresses, whole 4 KiB NVMC pages): the
 /// last 16 KiB of the nRF52833's 512 KiB, left out of `FLASH` in
@@ -246,354 +197,3 @@ pub const fn level_after_reset(gpregret: u8) -> u8 {
 
 /// Button timing for [`INPUT_PERIOD_MS`] (30 ms debounce, 1 s A+B hold).
 pub const BUTTONS: ButtonConfig = ButtonConfig::DEFAULT_10MS;
-
-/// LSM303AGR axes → board frame (`x` right, `y` up out of the LEDs, `z`
-/// towards the player, who holds the board with the logo away and the edge
-/// connector near; a flat board reads (0, +1000, 0)).
-///
-/// **Assumption (not verified on hardware here):** taken from the micro:bit
-/// runtime (CODAL, `LSM303Accelerometer.cpp` + `CoordinateSpace(SIMPLE_CARTESIAN,
-/// upside-down, 0°)`), which turns the raw registers into the documented
-/// micro:bit frame as `(x, y, z)ₘ = (raw_x, −raw_y, raw_z)`, where the micro:bit
-/// frame reads +1000 on x with the B (right) edge down, +1000 on y with the
-/// edge connector down, −1000 on z lying screen-up. Hence, with the chip on the
-/// back: raw `x` reads +1 g with the right edge down, raw `y` +1 g with the
-/// logo edge down, raw `z` +1 g lying screen-down. Independent raw readings
-/// (the "micro:bit v2 book" for Rust) agree for y and z. In the board frame:
-/// `x = −raw_x`, `y = −raw_z`, `z = +raw_y`.
-///
-/// If the marble rolls the wrong way along one axis on a real board, flip
-/// that row's sign here; the host tests in `tests/microbit_axes.rs` state
-/// the expected readings per orientation and must be updated with it.
-pub const AXIS_MAP: AxisMap = AxisMap {
-    x: AxisSource::neg(Axis::X),
-    y: AxisSource::neg(Axis::Z),
-    z: AxisSource::pos(Axis::Y),
-};
-
-// ---------------------------------------------------------------------------
-// I²C bus clear (UM10204 §3.1.16)
-// ---------------------------------------------------------------------------
-
-/// SCL clocks the bus clear gives a slave to release SDA: a slave
-/// transmitter stuck mid-byte has at most 8 data bits and the acknowledge
-/// slot to go, where the master's silence (a NACK) makes it let go.
-pub const BUS_CLEAR_MAX_CLOCKS: u8 = 9;
-
-/// Half-periods SCL may stay low after being released (a slave stretching
-/// the clock) before the bus clear gives up on it: 100 half-periods of
-/// [`BUS_CLEAR_HALF_PERIOD_US`], 0.5 ms.
-pub const BUS_CLEAR_STRETCH_LIMIT: u16 = 100;
-
-/// Half of a bus-clear clock period, µs: 100 kHz, standard mode, which every
-/// I²C slave accepts.
-pub const BUS_CLEAR_HALF_PERIOD_US: u32 = 5;
-
-/// The two I²C lines as open-drain GPIOs, for [`clear_bus`]. "High" is
-/// released: the pull-ups raise the line unless a device holds it low.
-pub trait BusLines {
-    /// Releases SCL (`true`) or pulls it low (`false`).
-    fn set_scl(&mut self, high: bool);
-    /// Releases SDA (`true`) or pulls it low (`false`).
-    fn set_sda(&mut self, high: bool);
-    /// Whether SCL reads high.
-    fn scl(&mut self) -> bool;
-    /// Whether SDA reads high.
-    fn sda(&mut self) -> bool;
-    /// Waits half a clock period ([`BUS_CLEAR_HALF_PERIOD_US`]).
-    fn half_period(&mut self);
-}
-
-/// How a [`clear_bus`] ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum BusClear {
-    /// SDA was high: a STOP alone freed the bus.
-    Free,
-    /// SDA went high after this many clocks (the STOP attempts a slave
-    /// answered with a 0 bit included); a STOP followed.
-    Released {
-        /// Clocks given, 1 ..= [`BUS_CLEAR_MAX_CLOCKS`].
-        clocks: u8,
-    },
-    /// SDA still low after [`BUS_CLEAR_MAX_CLOCKS`] clocks: only a power
-    /// cycle of the slave helps.
-    SdaStuck,
-    /// SCL stays low beyond clock stretching: a slave or a short holds it.
-    SclStuck,
-}
-
-impl BusClear {
-    /// Whether the bus ended idle (both lines high after a STOP).
-    pub const fn is_clear(&self) -> bool {
-        matches!(self, BusClear::Free | BusClear::Released { .. })
-    }
-}
-
-/// Releases SCL and waits while a slave stretches the clock (bounded).
-fn release_scl<L: BusLines>(lines: &mut L) -> bool {
-    lines.set_scl(true);
-    for _ in 0..BUS_CLEAR_STRETCH_LIMIT {
-        if lines.scl() {
-            return true;
-        }
-        lines.half_period();
-    }
-    lines.scl()
-}
-
-/// The I²C bus clear (UM10204 §3.1.16, "Bus clear"): with both lines
-/// released, clock SCL while SDA reads low — at most
-/// [`BUS_CLEAR_MAX_CLOCKS`] times — until the slave holding SDA lets go, then
-/// send a STOP so that every slave returns to idle.
-///
-/// SDA is sampled while SCL is high, where a slave keeps it stable. A STOP
-/// is SDA pulled low while SCL is low, SCL released, SDA released: its SCL
-/// pulse is itself a clock, so a slave transmitter stuck on a `1` bit may put
-/// a `0` on SDA and swallow the STOP; then SDA is still low afterwards and
-/// the clocking goes on, the failed attempt counted as one of the clocks.
-/// The master never pulls SDA low while SCL is high, so the clear cannot
-/// send a START. Bounded: at most [`BUS_CLEAR_MAX_CLOCKS`] + 1 SCL pulses
-/// (the last a STOP) and [`BUS_CLEAR_STRETCH_LIMIT`] waits per release of
-/// SCL. Pure: the board passes its pins as [`BusLines`].
-pub fn clear_bus<L: BusLines>(lines: &mut L) -> BusClear {
-    lines.set_sda(true);
-    if !release_scl(lines) {
-        return BusClear::SclStuck;
-    }
-    lines.half_period();
-    let mut clocks: u8 = 0;
-    loop {
-        if lines.sda() {
-            // STOP: SDA low while SCL is low, SCL high, then SDA high.
-            lines.set_scl(false);
-            lines.half_period();
-            lines.set_sda(false);
-            lines.half_period();
-            let scl_released = release_scl(lines);
-            lines.half_period();
-            lines.set_sda(true);
-            lines.half_period();
-            if !scl_released {
-                return BusClear::SclStuck;
-            }
-            if lines.sda() {
-                return match clocks {
-                    0 => BusClear::Free,
-                    clocks => BusClear::Released { clocks },
-                };
-            }
-            // A slave drove a 0 for that pulse and keeps SDA low.
-            clocks = clocks.saturating_add(1);
-        }
-        if clocks >= BUS_CLEAR_MAX_CLOCKS {
-            return BusClear::SdaStuck;
-        }
-        lines.set_scl(false);
-        lines.half_period();
-        if !release_scl(lines) {
-            return BusClear::SclStuck;
-        }
-        lines.half_period();
-        clocks += 1;
-    }
-}
-
-// ---------------------------------------------------------------------------
-// Watchdog: heartbeats of every task
-// ---------------------------------------------------------------------------
-
-/// A task the watchdog waits for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Task {
-    /// Accelerometer and buttons (thread mode): beats once per poll.
-    Input,
-    /// The game (thread mode): beats each time it is polled — it awaits
-    /// nothing but its frame ticker, so it is polled at the frame rate
-    /// whether it plays, pauses for a downed sensor or shows a won level.
-    Game,
-    /// The LED matrix (interrupt executor): beats on every scan step.
-    Display,
-    /// The speaker (thread mode): waiting between sounds, beats at each note.
-    Sound,
-    /// The best times (thread mode): waiting between wins, beats at each
-    /// flash operation.
-    Records,
-}
-
-impl Task {
-    /// Every task the watchdog waits for.
-    pub const ALL: [Task; 5] = [
-        Task::Input,
-        Task::Game,
-        Task::Display,
-        Task::Sound,
-        Task::Records,
-    ];
-
-    const fn index(self) -> usize {
-        self as usize
-    }
-}
-
-/// A set of [`Task`]s.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Tasks(u8);
-
-impl Tasks {
-    /// No task.
-    pub const NONE: Tasks = Tasks(0);
-
-    /// Whether `task` is in the set.
-    pub const fn contains(self, task: Task) -> bool {
-        self.0 & (1 << task.index()) != 0
-    }
-
-    /// Whether the set is empty.
-    pub const fn is_empty(self) -> bool {
-        self.0 == 0
-    }
-
-    const fn with(self, task: Task) -> Tasks {
-        Tasks(self.0 | (1 << task.index()))
-    }
-}
-
-/// One counter per [`Task`], and whether it waits for work, shared between
-/// executors (a `static`).
-///
-/// Each counter has a single writer, its task, so a load and a store suffice
-/// (no read-modify-write atomics: this builds for Cortex-M0 too). Only a
-/// change matters, not the count.
-#[derive(Debug, Default)]
-pub struct Heartbeats {
-    counts: [AtomicU32; Task::ALL.len()],
-    waiting: [AtomicBool; Task::ALL.len()],
-}
-
-/// What the watchdog task reads of [`Heartbeats`] at one check.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Snapshot {
-    /// The counters, indexed like [`Task::ALL`].
-    pub counts: [u32; Task::ALL.len()],
-    /// The tasks waiting for work.
-    pub waiting: Tasks,
-}
-
-impl From<[u32; Task::ALL.len()]> for Snapshot {
-    /// Counters only, no task waiting.
-    fn from(counts: [u32; Task::ALL.len()]) -> Self {
-        Snapshot {
-            counts,
-            waiting: Tasks::NONE,
-        }
-    }
-}
-
-impl Heartbeats {
-    /// No beat yet, no task waiting.
-    pub const fn new() -> Self {
-        Self {
-            counts: [const { AtomicU32::new(0) }; Task::ALL.len()],
-            waiting: [const { AtomicBool::new(false) }; Task::ALL.len()],
-        }
-    }
-
-    /// `task` ran. Call it only from `task` itself.
-    pub fn beat(&self, task: Task) {
-        let count = &self.counts[task.index()];
-        count.store(
-            count.load(Ordering::Relaxed).wrapping_add(1),
-            Ordering::Relaxed,
-        );
-    }
-
-    /// `task` waits for work (its queue is empty): excused until
-    /// [`Heartbeats::working`]. Call it only from `task` itself.
-    pub fn waiting(&self, task: Task) {
-        self.waiting[task.index()].store(true, Ordering::Relaxed);
-    }
-
-    /// `task` has work: it beats, and must go on beating until it waits again.
-    pub fn working(&self, task: Task) {
-        self.waiting[task.index()].store(false, Ordering::Relaxed);
-        self.beat(task);
-    }
-
-    /// The counters and the waiting tasks now.
-    pub fn snapshot(&self) -> Snapshot {
-        let mut waiting = Tasks::NONE;
-        for task in Task::ALL {
-            if self.waiting[task.index()].load(Ordering::Relaxed) {
-                waiting = waiting.with(task);
-            }
-        }
-        Snapshot {
-            counts: core::array::from_fn(|i| self.counts[i].load(Ordering::Relaxed)),
-            waiting,
-        }
-    }
-}
-
-/// What the watchdog task does after a check.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Verdict {
-    /// Every task beat since the last pet: pet now.
-    Pet,
-    /// Do not pet: these tasks have not beaten since the last pet, for this
-    /// many checks in a row (≥ 1).
-    Wait {
-        /// The tasks still to beat.
-        stalled: Tasks,
-        /// Checks without a pet.
-        checks: u16,
-    },
-}
-
-/// The watchdog task's rule: pet only when every task's counter moved since
-/// the last pet, or the task waits for work. A working task parked forever
-/// stops its counter, the pets stop, and the watchdog resets the board.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct WatchdogGate {
-    at_last_pet: [u32; Task::ALL.len()],
-    checks_since_pet: u16,
-}
-
-impl WatchdogGate {
-    /// Starts from the counters now (every task must beat, or wait, before
-    /// the first pet).
-    pub fn new(start: impl Into<Snapshot>) -> Self {
-        Self {
-            at_last_pet: start.into().counts,
-            checks_since_pet: 0,
-        }
-    }
-
-    /// One check with the heartbeats `now` ([`Heartbeats::snapshot`]).
-    pub fn check(&mut self, now: impl Into<Snapshot>) -> Verdict {
-        let now = now.into();
-        let mut stalled = Tasks::NONE;
-        for task in Task::ALL {
-            if now.counts[task.index()] == self.at_last_pet[task.index()]
-                && !now.waiting.contains(task)
-            {
-                stalled = stalled.with(task);
-            }
-        }
-        if stalled.is_empty() {
-            self.at_last_pet = now.counts;
-            self.checks_since_pet = 0;
-            Verdict::Pet
-        } else {
-            self.checks_since_pet = self.checks_since_pet.saturating_add(1);
-            Verdict::Wait {
-                stalled,
-                checks: self.checks_since_pet,
-            }
-        }
-    }
-}

@@ -22,11 +22,11 @@
 //! (`source/types/CoordinateSystem.cpp`), which gives the documented
 //! micro:bit frame `m = (−E_y, E_x, E_z)`. So the NXP chips read
 //! `m = (−c_x, −c_y, c_z)` and the LSM303 `m = (c_x, −c_y, c_z)` (the v2's
-//! LSM303AGR has the same, `board::microbit::AXIS_MAP`). The game's board
-//! frame is `(−m_x, −m_z, −m_y)` (`board::microbit::AXIS_MAP`'s doc derives
+//! LSM303AGR has the same, `board::accel_link::AXIS_MAP`). The game's board
+//! frame is `(−m_x, −m_z, −m_y)` (`board::accel_link::AXIS_MAP`'s doc derives
 //! it); hence the maps below.
 
-use crate::board::microbit::AXIS_MAP as V2_LSM303AGR_AXIS_MAP;
+use crate::board::accel_link::AXIS_MAP as V2_LSM303AGR_AXIS_MAP;
 use crate::input::sensor::{AccelMg, Axis, AxisMap, AxisSource};
 
 /// The accelerometers a micro:bit v1 may carry.
@@ -300,7 +300,7 @@ impl NxpChip {
 pub(crate) const NXP_ODR_HZ: u32 = 200;
 
 // The LSM303AGR path runs at the same rate (input::lsm303 checks its own).
-const _: () = assert!(NXP_ODR_HZ == crate::board::microbit::ACCEL_ODR_HZ);
+const _: () = assert!(NXP_ODR_HZ == crate::input::accel_timing::ACCEL_ODR_HZ);
 
 #[cfg(test)]
 mod tests {

@@ -18,7 +18,8 @@
 //!   [`FLASH_PAGE_BYTES`]).
 //! * [`sensor`]: the accelerometer's poll loop (probe, configure, poll,
 //!   faults, bus clear), generic over the bus: the firmware runs it on its
-//!   TWI, the host tests on the virtual chips ([`virtual_nxp`]).
+//!   TWI, the host tests on the virtual chips ([`virtual_nxp`]) on a
+//!   virtual TWI ([`virtual_twi`]).
 //!
 //! # Memory map
 //!
@@ -34,6 +35,7 @@ pub mod nxp_driver;
 pub mod sensor;
 pub mod twi;
 pub mod virtual_nxp;
+pub mod virtual_twi;
 
 pub use accel::{identify, Accelerometer, Probe, PROBES};
 
@@ -43,7 +45,7 @@ use leds::{out_word, COLS, LED_MAP, ROWS, SIZE};
 /// The logical display: 5 × 5 pixels.
 pub type Picture = Frame<SIZE, SIZE>;
 /// The electrical matrix: `COLS` (9) column lines wide, `ROWS` (3) rows high.
-pub type Electrical = Frame<COLS, ROWS>;
+pub(crate) type Electrical = Frame<COLS, ROWS>;
 
 /// Display width, pixels.
 pub const WIDTH: usize = SIZE;

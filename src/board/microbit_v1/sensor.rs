@@ -30,8 +30,9 @@ use embedded_hal_async::i2c::I2c;
 use super::accel::{Accelerometer, NxpChip};
 use super::nxp_driver;
 use super::twi::{Pause, TwiError};
+use crate::board::accel_link::SUPERVISOR;
 use crate::board::i2c::{ClearBus, Recovering};
-use crate::board::microbit::SUPERVISOR;
+use crate::input::event::Tilt;
 use crate::input::sensor::{AccelMg, Action, AxisMap, Fault, Read, TiltPipeline, Transition};
 
 /// The bus the poll loop needs: async I²C with the v1 TWI's errors, a bus
@@ -133,6 +134,11 @@ impl<B: Bus> PollLoop<B> {
     /// milli-g.
     pub const fn tilt(&self) -> AccelMg {
         self.pipeline.tilt()
+    }
+
+    /// [`PollLoop::tilt`] as the app's reading ([`TiltPipeline::reading`]).
+    pub const fn reading(&self) -> Tilt {
+        self.pipeline.reading()
     }
 
     /// The supervision.

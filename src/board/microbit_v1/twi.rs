@@ -3,7 +3,7 @@
 //! chip needs ([`Pause`]). The bus clears through the boards' shared rule,
 //! [`Recovering`], after every failed transfer: the TWI has no error that
 //! stays off the wire. The host tests run it against a virtual bus that
-//! stays stuck until it is cleared (`super::virtual_nxp`).
+//! stays stuck until it is cleared (`super::virtual_twi`).
 
 use embedded_hal_async::i2c::{ErrorKind, NoAcknowledgeSource};
 

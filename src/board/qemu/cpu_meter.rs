@@ -20,7 +20,7 @@
 
 /// Ticks per instruction × 1000 that `-icount shift=`[`ICOUNT_SHIFT`](super::ICOUNT_SHIFT)
 /// should give: `SYSCLK_HZ × 2^shift / 10^6` (3200).
-pub const EXPECTED_MILLITICKS_PER_INSTRUCTION: u64 =
+pub(crate) const EXPECTED_MILLITICKS_PER_INSTRUCTION: u64 =
     super::SYSCLK_HZ as u64 * (1 << super::ICOUNT_SHIFT) / 1_000_000;
 
 /// Reference core clock for the load percentage: the nRF52833's 64 MHz M4F.

@@ -8,7 +8,7 @@
 //! tracked here exactly as [`KeyDecoder`](crate::input::keys::KeyDecoder)
 //! tracks it.
 
-use super::virtual_lsm303agr::InjectedFault;
+use crate::board::virtual_lsm303agr::InjectedFault;
 use crate::input::event::InputEvent;
 use crate::input::keys::KeyTilt;
 

@@ -18,11 +18,15 @@ pub mod fault_keys;
 #[cfg(feature = "records")]
 pub mod ram_flash;
 pub mod virtual_i2c;
-pub mod virtual_lsm303agr;
+/// The virtual chip the board carries (shared: the v1's virtual bus carries it
+/// too).
+pub use crate::board::virtual_lsm303agr;
 #[cfg(feature = "app")]
 pub mod virtual_matrix;
 
-use crate::game::endless::Reach;
+use crate::board::accel_link;
+use crate::game::endless::{Reach, MOST_STOREYS};
+use crate::input::accel_timing;
 use crate::input::sensor::{AxisMap, SupervisorConfig};
 use virtual_i2c::RamRange;
 
@@ -46,12 +50,12 @@ pub const TIMER0_BASE: usize = 0x4000_0000;
 pub const TIMER0_IRQ: u16 = 8;
 /// The `-icount shift=N` the runner uses for headless runs: every
 /// instruction advances virtual time by `2^N` ns.
-pub const ICOUNT_SHIFT: u32 = 7;
+pub(crate) const ICOUNT_SHIFT: u32 = 7;
 
 /// Start of RAM (memory.x): with flip-link the stack grows down towards it.
 pub const RAM_BASE: usize = 0x2000_0000;
 /// One past the end of RAM (memory.x: 128 KiB).
-pub const RAM_END: usize = 0x2002_0000;
+pub(crate) const RAM_END: usize = 0x2002_0000;
 /// RAM for the virtual TWIM's DMA rule: what its DMA could reach.
 pub const QEMU_RAM: RamRange = RamRange {
     start: RAM_BASE,
@@ -62,23 +66,23 @@ pub const QEMU_RAM: RamRange = RamRange {
 // rate and supervision, so the QEMU board runs the micro:bit's input stack.
 
 /// The axis table the QEMU board's input reads through: the micro:bit's
-/// [`AXIS_MAP`](crate::board::microbit::AXIS_MAP). The virtual chip has its own
+/// [`AXIS_MAP`](crate::board::accel_link::AXIS_MAP). The virtual chip has its own
 /// placement ([`virtual_lsm303agr::MICROBIT_V2`]), so a sign error here shows.
-pub const SENSOR_AXIS_MAP: AxisMap = crate::board::microbit::AXIS_MAP;
+pub const SENSOR_AXIS_MAP: AxisMap = accel_link::AXIS_MAP;
 /// Sensor polling period, ms (the micro:bit's).
-pub const INPUT_PERIOD_MS: u64 = crate::board::microbit::INPUT_PERIOD_MS;
+pub const INPUT_PERIOD_MS: u64 = accel_link::INPUT_PERIOD_MS;
 /// Accelerometer output data rate, Hz (the micro:bit's).
-pub const ACCEL_ODR_HZ: u32 = crate::board::microbit::ACCEL_ODR_HZ;
+pub const ACCEL_ODR_HZ: u32 = accel_timing::ACCEL_ODR_HZ;
 /// Wait after (re)configuring the accelerometer, ms (the micro:bit's).
-pub const ACCEL_SETTLE_MS: u64 = crate::board::microbit::ACCEL_SETTLE_MS;
+pub const ACCEL_SETTLE_MS: u64 = accel_timing::ACCEL_SETTLE_MS;
 /// Fault supervision (the micro:bit's).
-pub const SUPERVISOR: SupervisorConfig = crate::board::microbit::SUPERVISOR;
+pub const SUPERVISOR: SupervisorConfig = accel_link::SUPERVISOR;
 /// The longest one I²C transfer may take before it counts as a hung bus,
-/// ms (the micro:bit's [`I2C_TIMEOUT_MS`](crate::board::microbit::I2C_TIMEOUT_MS)).
-pub const TRANSFER_TIMEOUT_MS: u64 = crate::board::microbit::I2C_TIMEOUT_MS;
+/// ms (the micro:bit's [`I2C_TIMEOUT_MS`](accel_link::I2C_TIMEOUT_MS)).
+pub const TRANSFER_TIMEOUT_MS: u64 = accel_link::I2C_TIMEOUT_MS;
 /// The virtual TWIM's copy buffer for write buffers outside RAM, bytes (the
-/// micro:bit's [`TWIM_COPY_BUFFER_BYTES`](crate::board::microbit::TWIM_COPY_BUFFER_BYTES)).
-pub const DEFAULT_COPY_BUFFER: usize = crate::board::microbit::TWIM_COPY_BUFFER_BYTES;
+/// micro:bit's [`TWIM_COPY_BUFFER_BYTES`](accel_link::TWIM_COPY_BUFFER_BYTES)).
+pub const DEFAULT_COPY_BUFFER: usize = accel_link::TWIM_COPY_BUFFER_BYTES;
 /// The word the firmware paints its free stack with at boot, to measure the
 /// stack's high-water mark at the end of the demo.
 pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
@@ -173,7 +177,19 @@ impl Options {
 /// runs on the same Cortex-M4 code in QEMU, where its stack is measured (there
 /// is no nRF52 emulator). The virtual matrix follows the marble and the storey
 /// maps show a window of a maze too wide for the terminal.
-pub const MAZE_REACH: Reach = crate::board::microbit::MAZE_REACH;
+pub const MAZE_REACH: Reach = Reach {
+    size: 10,
+    storeys: MOST_STOREYS,
+};
+
+/// The ghosts' region, bytes: four 4 KiB pages, the micro:bit v2's
+/// (`board::microbit::GHOSTS`), in a RAM image of a flash.
+pub const GHOSTS_BYTES: usize = 4 * 4096;
+
+/// The longest run kept as a ghost, bytes: the micro:bit v2's
+/// (`board::microbit::GHOST_BYTES`), so that QEMU keeps and drops the runs the
+/// v2 does.
+pub const GHOST_BYTES: usize = 2048;
 #[cfg(test)]
 mod tests {
     use super::*;

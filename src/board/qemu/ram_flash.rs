@@ -19,7 +19,7 @@ use embedded_storage_async::nor_flash::{
 /// The v2's NVMC page.
 pub const PAGE: usize = 4096;
 /// The v2's NVMC word.
-pub const WORD: usize = 4;
+pub(crate) const WORD: usize = 4;
 
 /// A flash of `N` bytes (whole pages) in RAM.
 pub struct RamFlash<const N: usize> {

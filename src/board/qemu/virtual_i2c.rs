@@ -11,8 +11,7 @@
 //! `Error::RAMBufferTooSmall` — before anything reaches the bus — when that
 //! buffer is shorter than the write. The `lsm303agr` driver reads a register
 //! with `write_read(address, &[REGISTER], ..)`: a promoted constant, in
-//! flash. Without a copy buffer every read fails; that was the micro:bit's
-//! bug. [`VirtualTwim`] applies the same rule with the same test (embassy's
+//! flash. Without a copy buffer every read fails. [`VirtualTwim`] applies the same rule with the same test (embassy's
 //! `slice_in_ram`: an empty slice passes, else `start >= RAM start` and
 //! `start + len < RAM end`) against a [`Ram`]: [`RamRange`] on a target
 //! ([`QEMU_RAM`](super::QEMU_RAM) on QEMU), a predicate on the host.
@@ -45,8 +44,8 @@
 
 use embedded_hal_async::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 
-use super::virtual_lsm303agr::{ChipControl, InjectedFault, SampleSource, VirtualLsm303agr};
-use crate::board::microbit::{clear_bus, BusClear, BusLines};
+use crate::board::i2c::{clear_bus, BusClear, BusLines};
+use crate::board::virtual_lsm303agr::{ChipControl, InjectedFault, SampleSource, VirtualLsm303agr};
 
 /// The largest transfer the TWIM's EasyDMA takes (nRF52833, embassy-nrf's
 /// `EASY_DMA_SIZE`).

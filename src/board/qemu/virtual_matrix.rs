@@ -50,7 +50,7 @@ pub use storey_maps::{map_window, MapWindow, MAPS_COLUMNS, MAP_ROWS};
 type DisplayFrame = Frame<WIDTH, HEIGHT>;
 
 /// Terminal redraws per second (at most; only changes are drawn).
-pub const DRAW_HZ: u32 = 20;
+pub(crate) const DRAW_HZ: u32 = 20;
 
 /// Base ticks in one full refresh.
 const TICKS_PER_REFRESH: u32 = Scanner::<WIDTH, HEIGHT>::TICKS_PER_REFRESH;

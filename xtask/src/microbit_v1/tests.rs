@@ -1,4 +1,7 @@
+use std::path::Path;
+
 use super::gpio_trace::{parse_trace_line, TraceEvent};
+use super::log::{module_of, parse_cpu, parse_profile, parse_ram, parse_watchdog};
 use super::*;
 
 #[test]

@@ -5,7 +5,7 @@
 //! The QEMU board has no accelerometer, so without this its input stack
 //! (driver, [`TiltPipeline`](crate::input::sensor::TiltPipeline) supervision)
 //! would run nowhere but on a micro:bit. The chip sits on a virtual I²C bus,
-//! [`VirtualTwim`](super::virtual_i2c::VirtualTwim), which adds the bus
+//! [`VirtualTwim`](crate::board::qemu::virtual_i2c::VirtualTwim), which adds the bus
 //! behaviour (address acknowledge, a stuck bus, the nRF TWIM's DMA rule).
 //!
 //! # What is modelled
@@ -37,7 +37,7 @@
 //!   axes by the chip's own [`Placement`] on the board (where each of its
 //!   axes points: [`MICROBIT_V2`]), then quantised (rounded to the nearest
 //!   LSB, saturated at full scale). The firmware turns raw axes back with its
-//!   own table, `board::microbit::AXIS_MAP`; the two are written apart, so a
+//!   own table, `board::accel_link::AXIS_MAP`; the two are written apart, so a
 //!   sign or axis wrong in either reads a wrong tilt in the tests and in QEMU.
 //! * Power-on values: `CTRL_REG1_A` = 0x07 (power-down, axes enabled), the
 //!   other control registers 0, no data ready; [`VirtualLsm303agr::power_on_reset`]
@@ -82,7 +82,7 @@ use crate::input::sensor::AxisMap;
 /// Where new samples come from.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SampleSource {
+pub(crate) enum SampleSource {
     /// The set tilt.
     Tilt,
     /// None: conversions stall ([`InjectedFault::FrozenData`]).
@@ -97,7 +97,7 @@ const MAG_FIRST: u8 = 0x40;
 const MAG_COUNT: usize = 0x30;
 
 /// The virtual chip: registers, sampling clock, output latch. Transfers come
-/// from its bus ([`VirtualTwim`](super::virtual_i2c::VirtualTwim)), which
+/// from its bus ([`VirtualTwim`](crate::board::qemu::virtual_i2c::VirtualTwim)), which
 /// also feeds it the time ([`VirtualLsm303agr::advance_to`]), the tilt and
 /// the sample source; host tests can drive it directly too.
 #[derive(Clone, Debug)]
@@ -185,12 +185,12 @@ impl VirtualLsm303agr {
     }
 
     /// Sets the tilt (board frame, milli-g) the next samples take.
-    pub fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
+    pub(crate) fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
         self.tilt_mg = tilt_mg;
     }
 
     /// Sets where the next samples come from.
-    pub fn set_source(&mut self, source: SampleSource) {
+    pub(crate) fn set_source(&mut self, source: SampleSource) {
         self.source = source;
     }
 
@@ -362,7 +362,7 @@ impl VirtualLsm303agr {
     /// are written from there (auto-increment: bit 7 of the sub-address on
     /// the accelerometer, always on the magnetometer). Writes to read-only
     /// or reserved registers are ignored. An empty write only addresses.
-    pub fn i2c_write(&mut self, address: u8, bytes: &[u8]) {
+    pub(crate) fn i2c_write(&mut self, address: u8, bytes: &[u8]) {
         let Some((&sub, data)) = bytes.split_first() else {
             return;
         };
@@ -386,7 +386,7 @@ impl VirtualLsm303agr {
     }
 
     /// An I²C read from `address`, from the register pointer on.
-    pub fn i2c_read(&mut self, address: u8, buffer: &mut [u8]) {
+    pub(crate) fn i2c_read(&mut self, address: u8, buffer: &mut [u8]) {
         match address {
             ACCEL_ADDRESS => {
                 for byte in buffer.iter_mut() {

@@ -2,7 +2,7 @@
 //! reset requests) and what its bus counts, shared between whoever injects
 //! (terminal keys, the fault script, a test) and the virtual bus that
 //! applies them: the QEMU board's [`VirtualTwim`] and the v1's virtual TWI
-//! (`board::microbit_v1::virtual_nxp`) alike.
+//! (`board::microbit_v1::virtual_twi`) alike.
 //!
 //! [`VirtualTwim`]: crate::board::qemu::virtual_i2c::VirtualTwim
 
@@ -49,7 +49,7 @@ impl InjectedFault {
     ];
 
     /// The fault with this number (its key), if any.
-    pub const fn from_u8(value: u8) -> Option<InjectedFault> {
+    pub(crate) const fn from_u8(value: u8) -> Option<InjectedFault> {
         if (value as usize) < Self::ALL.len() {
             Some(Self::ALL[value as usize])
         } else {
@@ -143,7 +143,7 @@ impl ChipControl {
     }
 
     /// Chip resets asked for so far.
-    pub fn reset_requests(&self) -> u32 {
+    pub(crate) fn reset_requests(&self) -> u32 {
         self.reset_requests.load(Ordering::Relaxed)
     }
 
