@@ -36,13 +36,13 @@ use log::{parse_budget_cuts, parse_cpu_load, parse_worst_frames};
 /// The worst physics frame of each level against `bound` instructions (`what`:
 /// the board's CPU): a level's frame over it is a problem. The stress scenes
 /// (`game::stress`) and the top-difficulty mazes (every other `profile` line)
-/// are measured and reported against the same bound, but not yet enforced: with
-/// the flight budget they take up to 1.4 times it (docs/performance.md has the
-/// figures).
+/// are held to `cap`, what the flight budget guarantees (docs/physics.md, "A
+/// frame's work is bounded"), and reported against `bound`, which they do not
+/// all meet yet (docs/performance.md has the figures).
 fn check_worst_frames(
     log: &str,
     levels: &[String],
-    bound: u64,
+    (bound, cap): (u64, u64),
     what: &str,
     problems: &mut Problems,
 ) {
@@ -52,17 +52,28 @@ fn check_worst_frames(
     }
     for (name, max) in frames {
         let level = levels.contains(&name);
-        match (max > bound, level) {
-            (true, true) => problems.report(format!(
+        if level && max > bound {
+            problems.report(format!(
                 "{name}: worst physics frame {max} {what} instructions, over the bound of {bound}"
-            )),
-            (true, false) => say!(
-                "scene {name}: worst physics frame {max} {what} instructions, over the bound of {bound} (reported, not enforced yet)"
-            ),
-            (false, _) => say!("{name}: worst physics frame {max} {what} instructions"),
+            ));
+        } else if max > cap {
+            problems.report(format!(
+                "scene {name}: worst physics frame {max} {what} instructions, over the flight budget's bound of {cap}"
+            ));
+        } else if max > bound {
+            say!(
+                "scene {name}: worst physics frame {max} {what} instructions, over the goal of {bound} (within the flight budget's bound of {cap})"
+            );
+        } else {
+            say!("{name}: worst physics frame {max} {what} instructions");
         }
     }
 }
+
+/// What the flight budget bounds a frame to on the Cortex-M4, every scene with
+/// up to four marbles (docs/physics.md: 30 units of at most 7 000 M4
+/// instructions).
+const BUDGET_BOUND_M4: u64 = 210_000;
 
 /// The flight budget (`physics::world::FLIGHT_BUDGET`) is for the scenes built to
 /// reach it: a built-in level it cuts is a problem; the stress scenes and the
@@ -158,7 +169,7 @@ pub fn run() -> Outcome {
 
     let bound = workspace::env_number("WORST_FRAME_M4", 64_000)?;
     let names: Vec<String> = levels.iter().map(|l| l.name.clone()).collect();
-    check_worst_frames(&text, &names, bound, "M4", &mut problems);
+    check_worst_frames(&text, &names, (bound, BUDGET_BOUND_M4), "M4", &mut problems);
     check_budget_cuts(&text, &names, &mut problems);
 
     if problems.0 {
@@ -216,16 +227,28 @@ INFO  demo summary: 13/13 levels won
         );
         let levels = ["first-roll".to_string()];
         let mut problems = Problems::default();
-        check_worst_frames(log, &levels, 1_900, "M4", &mut problems);
+        check_worst_frames(log, &levels, (1_900, 40_000), "M4", &mut problems);
         assert!(problems.0, "a level's 1 934 is over 1 900");
         let mut problems = Problems::default();
-        check_worst_frames(log, &levels, 30_000, "M4", &mut problems);
+        check_worst_frames(log, &levels, (30_000, 40_000), "M4", &mut problems);
         assert!(
             !problems.0,
-            "a stress scene over the bound is reported only"
+            "a stress scene over the goal, within the budget's bound, is reported only"
         );
         let mut problems = Problems::default();
-        check_worst_frames("no profile here", &levels, 64_000, "M4", &mut problems);
+        check_worst_frames(log, &levels, (30_000, 30_100), "M4", &mut problems);
+        assert!(
+            problems.0,
+            "a stress scene over the budget's bound is a problem"
+        );
+        let mut problems = Problems::default();
+        check_worst_frames(
+            "no profile here",
+            &levels,
+            (64_000, 210_000),
+            "M4",
+            &mut problems,
+        );
         assert!(problems.0, "a log without profiles is a problem");
     }
 
