@@ -408,6 +408,104 @@ fn the_board_check_reports_a_crossing() {
     );
 }
 
+/// The longest a source file outside `tests/` may be, in lines: a file over
+/// it holds more than one concept.
+const MAX_LINES: usize = 600;
+
+/// Files still over [`MAX_LINES`], each with the length it may not pass until
+/// it is split: the list only shrinks.
+const LONG_FILES: &[(&str, usize)] = &[
+    ("src/game/generate.rs", 673),
+    ("src/game/ghost.rs", 639),
+    ("src/physics/world/events.rs", 619),
+    ("src/render/mod.rs", 608),
+];
+
+/// Every `.rs` file under `dir`, as a path relative to `root`, `target/` left out.
+fn rust_files(root: &Path, dir: &str, out: &mut Vec<String>) {
+    let mut stack = vec![root.join(dir)];
+    while let Some(dir) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                if path.file_name().is_some_and(|n| n != "target") {
+                    stack.push(path);
+                }
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                let rel = path.strip_prefix(root).expect("under the root");
+                out.push(rel.to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+}
+
+/// The files of `files` (path, lines) over the bound: [`MAX_LINES`], or a
+/// [`LONG_FILES`] entry's own length.
+fn too_long(files: &[(String, usize)]) -> Vec<String> {
+    files
+        .iter()
+        .filter_map(|(path, lines)| {
+            let bound = LONG_FILES
+                .iter()
+                .find(|(long, _)| long == path)
+                .map_or(MAX_LINES, |&(_, at)| at);
+            (*lines > bound).then(|| format!("{path}: {lines} lines, over {bound}"))
+        })
+        .collect()
+}
+
+#[test]
+fn no_source_file_outside_tests_is_over_600_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut paths = Vec::new();
+    for dir in [
+        "src",
+        "boards",
+        "xtask/src",
+        "web/src",
+        "study/src",
+        "study/bench-m0/src",
+        "benches",
+    ] {
+        rust_files(root, dir, &mut paths);
+    }
+    assert!(paths.iter().any(|p| p == "src/lib.rs"), "the tree was read");
+    let files: Vec<(String, usize)> = paths
+        .into_iter()
+        .map(|path| {
+            let text = std::fs::read_to_string(root.join(&path)).expect("source readable");
+            let lines = text.lines().count();
+            (path, lines)
+        })
+        .collect();
+    let errors = too_long(&files);
+    assert!(
+        errors.is_empty(),
+        "split by concept:\n{}",
+        errors.join("\n")
+    );
+}
+
+#[test]
+fn the_length_check_reports_a_long_file() {
+    let files = [
+        ("src/a.rs".to_string(), 601),
+        ("src/b.rs".to_string(), 600),
+        ("src/render/mod.rs".to_string(), 608),
+        ("src/game/ghost.rs".to_string(), 640),
+    ];
+    assert_eq!(
+        too_long(&files),
+        [
+            "src/a.rs: 601 lines, over 600",
+            "src/game/ghost.rs: 640 lines, over 639"
+        ]
+    );
+}
+
 /// Each layer is a whole folder (or file) of `src/`: no module takes a layer
 /// other than its folder's, so the floors can be read off the tree.
 #[test]
