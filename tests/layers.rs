@@ -340,27 +340,17 @@ fn board_crossings(
 /// Every `.rs` file under `boards/NAME/src`, as (NAME, source).
 fn firmware_sources(root: &Path) -> Vec<(String, String)> {
     let mut out = Vec::new();
-    for entry in std::fs::read_dir(root).expect("boards/ readable") {
-        let dir = entry.expect("entry").path();
-        let name = dir
+    for entry in std::fs::read_dir(root.join("boards")).expect("boards/ readable") {
+        let name = entry
+            .expect("entry")
             .file_name()
-            .expect("name")
             .to_string_lossy()
             .into_owned();
-        let mut stack = vec![dir.join("src")];
-        while let Some(dir) = stack.pop() {
-            let Ok(entries) = std::fs::read_dir(&dir) else {
-                continue;
-            };
-            for entry in entries {
-                let path = entry.expect("entry").path();
-                if path.is_dir() {
-                    stack.push(path);
-                } else if path.extension().is_some_and(|e| e == "rs") {
-                    let text = std::fs::read_to_string(&path).expect("source readable");
-                    out.push((name.clone(), text));
-                }
-            }
+        let mut paths = Vec::new();
+        rust_files(root, &format!("boards/{name}/src"), &mut paths);
+        for path in paths {
+            let text = std::fs::read_to_string(root.join(path)).expect("source readable");
+            out.push((name.clone(), text));
         }
     }
     out
@@ -373,7 +363,7 @@ fn no_board_imports_another() {
     for (board, _) in BOARDS {
         assert!(sources.contains_key(*board), "{board} is no module of src/");
     }
-    let errors = board_crossings(&sources, &firmware_sources(&root.join("boards")));
+    let errors = board_crossings(&sources, &firmware_sources(root));
     assert!(errors.is_empty(), "board crossings:\n{}", errors.join("\n"));
 }
 
