@@ -367,6 +367,48 @@ fn no_board_imports_another() {
     assert!(errors.is_empty(), "board crossings:\n{}", errors.join("\n"));
 }
 
+/// The virtual chips (models of a board's parts that host tests and QEMU run
+/// the real drivers against) know the input's frames and faults, never the
+/// game: the same model serves any game.
+const VIRTUAL_CHIPS: &[&str] = &[
+    "board::virtual_lsm303agr",
+    "board::qemu::virtual_i2c",
+    "board::microbit_v1::virtual_nxp",
+    "board::microbit_v1::virtual_twi",
+];
+
+/// What the virtual chips may not reach.
+const ABOVE_THE_CHIPS: &[&str] = &["game", "player", "render", "sound", "records", "app"];
+
+#[test]
+fn the_virtual_chips_import_no_game() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let sources = sources(&root);
+    let modules: BTreeSet<String> = sources.keys().cloned().collect();
+    let mut errors = Vec::new();
+    for chip in VIRTUAL_CHIPS {
+        assert!(sources.contains_key(*chip), "{chip} is no module of src/");
+        for (module, text) in sources
+            .iter()
+            .filter(|(m, _)| *m == chip || m.starts_with(&format!("{chip}::")))
+        {
+            for target in reaches(module, text, &modules) {
+                if ABOVE_THE_CHIPS
+                    .iter()
+                    .any(|up| target == *up || target.starts_with(&format!("{up}::")))
+                {
+                    errors.push(format!("{module} → {target}"));
+                }
+            }
+        }
+    }
+    assert!(
+        errors.is_empty(),
+        "virtual chips reaching the game:\n{}",
+        errors.join("\n")
+    );
+}
+
 /// The check can fail: a board's module or a board's firmware crate reaching
 /// another board is reported; a shared part of `board` is not.
 #[test]
