@@ -340,27 +340,17 @@ fn board_crossings(
 /// Every `.rs` file under `boards/NAME/src`, as (NAME, source).
 fn firmware_sources(root: &Path) -> Vec<(String, String)> {
     let mut out = Vec::new();
-    for entry in std::fs::read_dir(root).expect("boards/ readable") {
-        let dir = entry.expect("entry").path();
-        let name = dir
+    for entry in std::fs::read_dir(root.join("boards")).expect("boards/ readable") {
+        let name = entry
+            .expect("entry")
             .file_name()
-            .expect("name")
             .to_string_lossy()
             .into_owned();
-        let mut stack = vec![dir.join("src")];
-        while let Some(dir) = stack.pop() {
-            let Ok(entries) = std::fs::read_dir(&dir) else {
-                continue;
-            };
-            for entry in entries {
-                let path = entry.expect("entry").path();
-                if path.is_dir() {
-                    stack.push(path);
-                } else if path.extension().is_some_and(|e| e == "rs") {
-                    let text = std::fs::read_to_string(&path).expect("source readable");
-                    out.push((name.clone(), text));
-                }
-            }
+        let mut paths = Vec::new();
+        rust_files(root, &format!("boards/{name}/src"), &mut paths);
+        for path in paths {
+            let text = std::fs::read_to_string(root.join(path)).expect("source readable");
+            out.push((name.clone(), text));
         }
     }
     out
@@ -373,8 +363,50 @@ fn no_board_imports_another() {
     for (board, _) in BOARDS {
         assert!(sources.contains_key(*board), "{board} is no module of src/");
     }
-    let errors = board_crossings(&sources, &firmware_sources(&root.join("boards")));
+    let errors = board_crossings(&sources, &firmware_sources(root));
     assert!(errors.is_empty(), "board crossings:\n{}", errors.join("\n"));
+}
+
+/// The virtual chips (models of a board's parts that host tests and QEMU run
+/// the real drivers against) know the input's frames and faults, never the
+/// game: the same model serves any game.
+const VIRTUAL_CHIPS: &[&str] = &[
+    "board::virtual_lsm303agr",
+    "board::qemu::virtual_i2c",
+    "board::microbit_v1::virtual_nxp",
+    "board::microbit_v1::virtual_twi",
+];
+
+/// What the virtual chips may not reach.
+const ABOVE_THE_CHIPS: &[&str] = &["game", "player", "render", "sound", "records", "app"];
+
+#[test]
+fn the_virtual_chips_import_no_game() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let sources = sources(&root);
+    let modules: BTreeSet<String> = sources.keys().cloned().collect();
+    let mut errors = Vec::new();
+    for chip in VIRTUAL_CHIPS {
+        assert!(sources.contains_key(*chip), "{chip} is no module of src/");
+        for (module, text) in sources
+            .iter()
+            .filter(|(m, _)| *m == chip || m.starts_with(&format!("{chip}::")))
+        {
+            for target in reaches(module, text, &modules) {
+                if ABOVE_THE_CHIPS
+                    .iter()
+                    .any(|up| target == *up || target.starts_with(&format!("{up}::")))
+                {
+                    errors.push(format!("{module} → {target}"));
+                }
+            }
+        }
+    }
+    assert!(
+        errors.is_empty(),
+        "virtual chips reaching the game:\n{}",
+        errors.join("\n")
+    );
 }
 
 /// The check can fail: a board's module or a board's firmware crate reaching
@@ -404,6 +436,104 @@ fn the_board_check_reports_a_crossing() {
         [
             "board::qemu → board::microbit (board::microbit)",
             "boards/microbit-v1 → board::microbit (board::microbit)",
+        ]
+    );
+}
+
+/// The longest a source file outside `tests/` may be, in lines: a file over
+/// it holds more than one concept.
+const MAX_LINES: usize = 600;
+
+/// Files still over [`MAX_LINES`], each with the length it may not pass until
+/// it is split: the list only shrinks.
+const LONG_FILES: &[(&str, usize)] = &[
+    ("src/game/generate.rs", 673),
+    ("src/game/ghost.rs", 639),
+    ("src/physics/world/events.rs", 619),
+    ("src/render/mod.rs", 608),
+];
+
+/// Every `.rs` file under `dir`, as a path relative to `root`, `target/` left out.
+fn rust_files(root: &Path, dir: &str, out: &mut Vec<String>) {
+    let mut stack = vec![root.join(dir)];
+    while let Some(dir) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                if path.file_name().is_some_and(|n| n != "target") {
+                    stack.push(path);
+                }
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                let rel = path.strip_prefix(root).expect("under the root");
+                out.push(rel.to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+}
+
+/// The files of `files` (path, lines) over the bound: [`MAX_LINES`], or a
+/// [`LONG_FILES`] entry's own length.
+fn too_long(files: &[(String, usize)]) -> Vec<String> {
+    files
+        .iter()
+        .filter_map(|(path, lines)| {
+            let bound = LONG_FILES
+                .iter()
+                .find(|(long, _)| long == path)
+                .map_or(MAX_LINES, |&(_, at)| at);
+            (*lines > bound).then(|| format!("{path}: {lines} lines, over {bound}"))
+        })
+        .collect()
+}
+
+#[test]
+fn no_source_file_outside_tests_is_over_600_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut paths = Vec::new();
+    for dir in [
+        "src",
+        "boards",
+        "xtask/src",
+        "web/src",
+        "study/src",
+        "study/bench-m0/src",
+        "benches",
+    ] {
+        rust_files(root, dir, &mut paths);
+    }
+    assert!(paths.iter().any(|p| p == "src/lib.rs"), "the tree was read");
+    let files: Vec<(String, usize)> = paths
+        .into_iter()
+        .map(|path| {
+            let text = std::fs::read_to_string(root.join(&path)).expect("source readable");
+            let lines = text.lines().count();
+            (path, lines)
+        })
+        .collect();
+    let errors = too_long(&files);
+    assert!(
+        errors.is_empty(),
+        "split by concept:\n{}",
+        errors.join("\n")
+    );
+}
+
+#[test]
+fn the_length_check_reports_a_long_file() {
+    let files = [
+        ("src/a.rs".to_string(), 601),
+        ("src/b.rs".to_string(), 600),
+        ("src/render/mod.rs".to_string(), 608),
+        ("src/game/ghost.rs".to_string(), 640),
+    ];
+    assert_eq!(
+        too_long(&files),
+        [
+            "src/a.rs: 601 lines, over 600",
+            "src/game/ghost.rs: 640 lines, over 639"
         ]
     );
 }

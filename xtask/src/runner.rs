@@ -102,9 +102,24 @@ pub fn headless(
 ) -> Outcome {
     let mut qemu = mps2(&tools.qemu, elf, "--headless", args);
     qemu.args(ICOUNT).args(["-serial", "null"]);
+    decoded(qemu, tools, elf, output, limit).map(|(status, _)| status)
+}
+
+/// Runs `qemu`, a headless QEMU command line of any machine, killed after
+/// `limit`, its defmt log (semihosting, on QEMU's stdout) through defmt-print
+/// to `output`: the status (QEMU's when it failed, else defmt-print's) and the
+/// host time QEMU ran.
+pub fn decoded(
+    mut qemu: Command,
+    tools: &Qemu,
+    elf: &Path,
+    output: Output,
+    limit: Duration,
+) -> Result<(u8, Duration), Failure> {
     qemu.stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(output.stdio()?);
+    let started = Instant::now();
     let mut qemu_child = process::spawn(&mut qemu)?;
     let mut decoder = decoder(
         tools,
@@ -118,7 +133,10 @@ pub fn headless(
     let qemu_status = qemu_status?;
     let decoder_status =
         decoder_status.map_err(|e| Failure::new(format!("waiting for defmt-print: {e}")))?;
-    Ok(pipeline_status(qemu_status, decoder_status))
+    Ok((
+        pipeline_status(qemu_status, decoder_status),
+        started.elapsed(),
+    ))
 }
 
 /// The interactive mps2-an386 run: UART0 on the terminal (raw mode), real time

@@ -498,8 +498,8 @@ pub mod executor {
 /// (`board::microbit_v1::WATCHDOG_TIMEOUT_TICKS` says why) (the WDT starts the
 /// RC oscillator itself), paused while a debugger halts the core, running
 /// while it sleeps; one reload register. Petted by the watchdog task only
-/// when every task's heartbeat moved (`board::microbit::WatchdogGate`, the
-/// v2's rule and its host tests). QEMU's `microbit` machine has no WDT (its
+/// when every task's heartbeat moved (`board::watchdog::WatchdogGate`, the
+/// rule the v2 runs too, and its host tests). QEMU's `microbit` machine has no WDT (its
 /// registers are unimplemented: writes ignored): there it never resets.
 pub mod watchdog {
     use marble_rolling::board::microbit_v1::WATCHDOG_TIMEOUT_TICKS;

@@ -67,7 +67,7 @@ use marble_rolling::input::tilt::TiltConfig;
 /// The links between the tasks.
 static LINKS: Links<WIDTH, HEIGHT> = Links::new();
 
-/// Each task's heartbeat, for the watchdog (the v2's rule: input beats per
+/// Each task's heartbeat, for the watchdog (`board::watchdog`: input beats per
 /// poll, the game each time it is polled, the display per refresh).
 pub static HEARTBEATS: Heartbeats = Heartbeats::new();
 

@@ -268,7 +268,7 @@ impl Pause for AsyncTwi {
 }
 
 /// The accelerometer as the app's tilt input, polled every
-/// `INPUT_PERIOD_MS` (the v2's period and supervision) by the library's poll
+/// `INPUT_PERIOD_MS` (the micro:bit's, `board::accel_link`) by the library's poll
 /// loop (`board::microbit_v1::sensor::PollLoop`), which holds the logic; this
 /// is its wiring: the TWI, the ticker, the logs, the events to the app.
 pub struct Input {

@@ -74,8 +74,8 @@ pub const FLASH_BUDGET_BYTES: u32 = 128 * 1024;
 /// frame (`cargo microbit-v1 -- --demo --profile`), and the game task runs
 /// late frames back to back: in QEMU (about half a real M0's speed) every
 /// task but the game stalled for half a second in grand-tour. A second of
-/// margin over that; the pets follow the v2's rule
-/// (`board::microbit::WatchdogGate`).
+/// margin over that; the pets follow the rule every board shares
+/// (`board::watchdog::WatchdogGate`).
 pub const WATCHDOG_TIMEOUT_TICKS: u32 = 2 * 32_768;
 
 /// Budget: the demo's CPU load, hundredths of a percent of [`CPU_HZ`].

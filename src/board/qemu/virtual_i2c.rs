@@ -33,7 +33,7 @@
 //! the caller's timeout must end it; dropping it is safe, nothing was
 //! applied) and leaves the bus stuck, as a slave holding SDA low leaves a
 //! real one: every later transfer hangs too, the fault lifted or not, until
-//! the firmware runs its bus clear ([`VirtualTwim::clear_bus`], the v2's
+//! the firmware runs its bus clear ([`VirtualTwim::clear_bus`], the shared
 //! [`clear_bus`] on the virtual lines: nine clocks free the slave once the
 //! fault is lifted, none while it is in force) or the chip is reset (a
 //! brown-out resets its I²C state machine too); frozen data, garbage and a
@@ -157,7 +157,7 @@ impl<'a, C: FnMut() -> u64, R: Ram> VirtualTwim<'a, C, R> {
         self.clears
     }
 
-    /// The I²C bus clear on the bus lines (the v2's [`clear_bus`]): frees a
+    /// The I²C bus clear on the bus lines (the shared [`clear_bus`]): frees a
     /// stuck bus unless the stuck-bus fault is still in force.
     pub fn clear_bus(&mut self) -> BusClear {
         let mut lines = Lines {

@@ -3,32 +3,16 @@
 
 use std::fs::File;
 use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 use super::BIN;
 use crate::error::Failure;
-use crate::process;
 use crate::runner;
 use crate::setup;
 
-/// Where a QEMU run's decoded log goes.
-pub enum Sink<'a> {
-    Terminal,
-    File(&'a File),
-}
-
-impl Sink<'_> {
-    fn stdio(&self) -> Result<Stdio, Failure> {
-        match self {
-            Sink::Terminal => Ok(Stdio::inherit()),
-            Sink::File(file) => Ok(file
-                .try_clone()
-                .map_err(|e| Failure::new(format!("cannot share the log file: {e}")))?
-                .into()),
-        }
-    }
-}
+/// Where a QEMU run's decoded log goes (the runner's [`runner::Output`]).
+pub type Sink<'a> = runner::Output<'a>;
 
 /// The QEMU command line (without the trace options).
 pub fn qemu_command(qemu: &Path, elf: &Path, args: &[String]) -> Command {
@@ -119,32 +103,5 @@ pub fn qemu_run_with(
             .arg("-D")
             .arg(trace);
     }
-    qemu.stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(sink.stdio()?);
-    let started = Instant::now();
-    let mut child = process::spawn(&mut qemu)?;
-    let Some(pipe) = child.stdout.take() else {
-        return Err(Failure::new("QEMU's stdout was not piped"));
-    };
-    let mut decode = Command::new(&tools.defmt_print);
-    decode
-        .arg("-e")
-        .arg(elf)
-        .stdin(pipe)
-        .stdout(sink.stdio()?)
-        .stderr(sink.stdio()?);
-    let mut decoder = process::spawn(&mut decode).inspect_err(|_| {
-        let _ = child.kill();
-    })?;
-    let qemu_status = runner::wait_at_most(&mut child, limit);
-    let decoder_status = decoder
-        .wait()
-        .map_err(|e| Failure::new(format!("waiting for defmt-print: {e}")))?;
-    let qemu_status = qemu_status?;
-    let status = match process::code(qemu_status) {
-        0 => process::code(decoder_status),
-        code => code,
-    };
-    Ok((status, started.elapsed()))
+    runner::decoded(qemu, tools, elf, sink, limit)
 }
