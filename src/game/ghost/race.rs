@@ -1,0 +1,236 @@
+//! Racing a stored ghost: its replay checked against its hash (whole, or a
+//! stretch at a time on a board), and played beside the live attempt on the
+//! level clock (see the parent module's "Racing from the first tilt").
+
+use crate::input::tilt::TiltConfig;
+use crate::physics::world::SetupError;
+use crate::physics::{Fx, Scalar};
+
+use super::super::level::LevelView;
+use super::super::rules::{Game, GameConfig, Phase};
+use super::super::session::Session;
+use super::{Ghost, GhostError, Readings};
+
+/// Plays `ghost` into `session` (a fresh session of the ghost's level, game
+/// configuration and tilt settings) with the ghost's calibration, frame by frame
+/// until the readings end or the attempt does; returns how it ended, and whether
+/// the state hash is the ghost's.
+pub fn replay<S: Scalar>(
+    session: &mut Session<'_, S>,
+    ghost: &Ghost<'_>,
+) -> Result<(Phase, bool), GhostError> {
+    replay_by(session, ghost, Session::frame)
+}
+
+/// [`replay`] and [`replay_in`]: the ghost's readings fed to `frame`.
+fn replay_by<'a, S: Scalar>(
+    session: &mut Session<'a, S>,
+    ghost: &Ghost<'_>,
+    mut frame: impl FnMut(&mut Session<'a, S>, [i32; 3]) -> Phase,
+) -> Result<(Phase, bool), GhostError> {
+    session.tilt_mut().set_calibration(ghost.calibration);
+    let mut phase = session.game().phase();
+    for r in ghost.readings() {
+        if phase != Phase::Playing {
+            break;
+        }
+        phase = frame(session, r?);
+    }
+    Ok((phase, session.state_hash() == ghost.state_hash))
+}
+
+/// How many frames of a ghost's run to have played beside `live`, an attempt
+/// at the same level (see the module doc): its `idle` frames, those before its
+/// own clock started ([`Game::frames`] − [`Game::clock_frames`] at the end of
+/// its replay), then as many as `live` has on its clock. Fewer than the ghost
+/// has played means that `live` started over: replay from the start.
+pub fn race_frame<S: Scalar>(idle: u32, live: &Game<'_, S>) -> u32 {
+    idle.saturating_add(live.clock_frames())
+}
+
+/// [`replay`] with the stepper fixed at compile time (firmware: a board links
+/// only its own stepper, [`Session::frame_in`]).
+pub fn replay_in<const EVENTS: bool>(
+    session: &mut Session<'_, Fx>,
+    ghost: &Ghost<'_>,
+) -> Result<(Phase, bool), GhostError> {
+    replay_by(session, ghost, Session::frame_in::<EVENTS>)
+}
+
+/// Why a stored ghost is not raced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RaceError {
+    /// Its bytes are not a ghost.
+    Ghost(GhostError),
+    /// The level cannot be set up.
+    Setup(SetupError),
+    /// Its replay does not win the level.
+    NotWon,
+    /// Its replay wins on another state hash (another build's physics, or
+    /// another level under the same key).
+    Hash,
+}
+
+impl core::fmt::Display for RaceError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            RaceError::Ghost(e) => write!(f, "{e}"),
+            RaceError::Setup(e) => write!(f, "the level cannot be set up: {e:?}"),
+            RaceError::NotWon => f.write_str("its replay does not win the level"),
+            RaceError::Hash => f.write_str("its replay does not end on its state hash"),
+        }
+    }
+}
+
+/// A stored ghost raced beside the live attempt on a board: its own session,
+/// stepped to [`race_frame`] each frame, its readings read from the stored
+/// bytes as it goes (no copy of the run in RAM).
+#[derive(Clone, Debug)]
+pub struct Racer<'a, 'g, const EVENTS: bool> {
+    session: Session<'a, Fx>,
+    ghost: Ghost<'g>,
+    readings: Readings<'g>,
+    idle: u32,
+}
+
+/// A stored ghost's replay played a stretch at a time ([`Checking::play`]),
+/// so that a board can let its other tasks run between stretches: a long run
+/// replayed at once would hold the CPU for as long as the physics of every
+/// frame of it takes. [`Racer::new`] plays it whole.
+#[derive(Clone, Debug)]
+pub struct Checking<'a, 'g, const EVENTS: bool> {
+    session: Session<'a, Fx>,
+    ghost: Ghost<'g>,
+    readings: Readings<'g>,
+    phase: Phase,
+    /// The replay is over: the attempt ended, the readings did, or one of
+    /// them was not a reading (`error`).
+    ended: bool,
+    error: Option<GhostError>,
+}
+
+impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
+    /// The replay of the ghost in `bytes` on `level` (game configuration
+    /// `config`, tilt path `tilt`), at its start.
+    pub fn new(
+        bytes: &'g [u8],
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> Result<Self, RaceError> {
+        let ghost = Ghost::parse(bytes).map_err(RaceError::Ghost)?;
+        let mut session = Session::new(level, config, tilt).map_err(RaceError::Setup)?;
+        session.tilt_mut().set_calibration(ghost.calibration);
+        let phase = session.game().phase();
+        Ok(Checking {
+            session,
+            readings: ghost.readings(),
+            ghost,
+            phase,
+            ended: false,
+            error: None,
+        })
+    }
+
+    /// Plays up to `frames` more frames of the run; whether the replay is
+    /// over (then [`Checking::finish`] says how it ended).
+    pub fn play(&mut self, frames: u32) -> bool {
+        for _ in 0..frames {
+            if self.ended || self.phase != Phase::Playing {
+                self.ended = true;
+                break;
+            }
+            match self.readings.next() {
+                Some(Ok(r)) => self.phase = self.session.frame_in::<EVENTS>(r),
+                Some(Err(e)) => {
+                    self.error = Some(e);
+                    self.ended = true;
+                }
+                None => self.ended = true,
+            }
+        }
+        self.ended || self.phase != Phase::Playing
+    }
+
+    /// The racer, once the replay (played to its end here if it was not)
+    /// won the level on the ghost's own state hash; or why not.
+    pub fn finish(mut self) -> Result<Racer<'a, 'g, EVENTS>, RaceError> {
+        while !self.play(u32::MAX) {}
+        if let Some(e) = self.error {
+            return Err(RaceError::Ghost(e));
+        }
+        match (
+            self.phase,
+            self.session.state_hash() == self.ghost.state_hash,
+        ) {
+            (Phase::Won, true) => {}
+            (Phase::Won, false) => return Err(RaceError::Hash),
+            _ => return Err(RaceError::NotWon),
+        }
+        let game = self.session.game();
+        let idle = game.frames() - game.clock_frames();
+        // A restart keeps the calibration the replay set.
+        self.session.restart();
+        Ok(Racer {
+            session: self.session,
+            readings: self.ghost.readings(),
+            ghost: self.ghost,
+            idle,
+        })
+    }
+}
+
+impl<'a, 'g, const EVENTS: bool> Racer<'a, 'g, EVENTS> {
+    /// The ghost in `bytes` on `level` (game configuration `config`, tilt
+    /// path `tilt`), once its whole replay has won the level on its own state
+    /// hash (played at once; a board plays it a stretch at a time with
+    /// [`Checking`]).
+    pub fn new(
+        bytes: &'g [u8],
+        level: LevelView<'a>,
+        config: GameConfig,
+        tilt: TiltConfig,
+    ) -> Result<Self, RaceError> {
+        Checking::<EVENTS>::new(bytes, level, config, tilt)?.finish()
+    }
+
+    /// The ghost's time: its frames on the level clock.
+    pub fn clock(&self) -> u32 {
+        self.ghost.frames - self.idle
+    }
+
+    /// The ghost's run in frames, and its end state hash.
+    pub fn run(&self) -> (u32, u64) {
+        (self.ghost.frames, self.ghost.state_hash)
+    }
+
+    /// Plays the ghost up to where it is beside `live` ([`race_frame`]; from
+    /// the start again when `live` started over).
+    pub fn follow(&mut self, live: &Game<'_, Fx>) {
+        let target = race_frame(self.idle, live).min(self.ghost.frames);
+        if target < self.session.game().frames() {
+            self.session.restart();
+            self.readings = self.ghost.readings();
+        }
+        while self.session.game().frames() < target {
+            match self.readings.next() {
+                Some(Ok(r)) => {
+                    self.session.frame_in::<EVENTS>(r);
+                }
+                // Checked whole in `new`: not reached.
+                _ => break,
+            }
+        }
+    }
+
+    /// The ghost's game where it is.
+    pub fn game(&self) -> &Game<'a, Fx> {
+        self.session.game()
+    }
+
+    /// Its state hash where it is (at the end of its run: the ghost's own).
+    pub fn state_hash(&self) -> u64 {
+        self.session.state_hash()
+    }
+}
