@@ -71,9 +71,9 @@ fn check_worst_frames(
 }
 
 /// What the flight budget bounds a frame to on the Cortex-M4, every scene with
-/// up to four marbles (docs/physics.md: 30 units of at most 7 000 M4
-/// instructions).
-const BUDGET_BOUND_M4: u64 = 210_000;
+/// up to four marbles (docs/physics.md: 30 units of at most 6 200 host
+/// instructions, the M4 at 1.2 times the host).
+const BUDGET_BOUND_M4: u64 = 225_000;
 
 /// The flight budget (`physics::world::FLIGHT_BUDGET`) is for the scenes built to
 /// reach it: a built-in level it cuts is a problem; the stress scenes and the
@@ -245,7 +245,7 @@ INFO  demo summary: 13/13 levels won
         check_worst_frames(
             "no profile here",
             &levels,
-            (64_000, 210_000),
+            (64_000, 225_000),
             "M4",
             &mut problems,
         );
