@@ -19,5 +19,6 @@ pub mod lsm303;
 pub mod buttons;
 pub mod idle;
 pub mod pacing;
+pub mod race_setup;
 pub mod sensor;
 pub mod tilt;

@@ -54,6 +54,7 @@
 //! plus, per marble, a handful of [`Scalar`] shifts and compares: no division,
 //! no floating point (with a fixed-point `S`), no allocation, no panics.
 
+pub mod race;
 pub mod screens;
 
 use crate::game::level::LevelView;

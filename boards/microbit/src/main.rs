@@ -28,6 +28,7 @@ use defmt_rtt as _;
 use panic_probe as _;
 
 mod hw;
+mod radio;
 mod sensor;
 mod sleep;
 
@@ -53,12 +54,23 @@ use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, 
 use marble_rolling::game::endless::{MazeSlot, Seeds};
 use marble_rolling::input::buttons::Buttons;
 use marble_rolling::input::event::{Command, InputEvent};
+use marble_rolling::input::race_setup;
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::matrix::Frame;
 
 bind_interrupts!(pub struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
+    RADIO => embassy_nrf::radio::InterruptHandler<peripherals::RADIO>;
 });
+
+/// The race task's packets to and from the radio task.
+static AIR: app::Air = app::Air::new();
+
+/// The radio (racing only: A held at power-on).
+#[embassy_executor::task]
+async fn radio(radio: embassy_nrf::radio::ieee802154::Radio<'static>) -> ! {
+    radio::run(radio, &AIR).await
+}
 
 /// The links between the tasks.
 static LINKS: Links<{ board::WIDTH }, { board::HEIGHT }> = Links::new();
@@ -119,9 +131,11 @@ type Mazes = MazeSlot<{ board::MAZE_REACH.words() }, { board::MAZE_REACH.text_by
 
 /// The game; first the self-test when B was held at power-on
 /// (`board::power_on`), until A. The generated mazes after the built-in
-/// levels take their seeds from `seed`, drawn at power-up.
+/// levels take their seeds from `seed`, drawn at power-up. With `race` (A
+/// held at power-on) the race task instead, for ever (its maze in the same
+/// slot, its link of the lean sizes: the 16 KiB RAM budget).
 #[embassy_executor::task]
-async fn game(self_test: bool, level: u8, seed: u32) {
+async fn game(self_test: bool, level: u8, seed: u32, race: bool) {
     if self_test {
         let test = pin!(run_self_test());
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
@@ -131,6 +145,21 @@ async fn game(self_test: bool, level: u8, seed: u32) {
     // why it is ignored.
     let region = levels_region::at_boot(hw::levels_region());
     let mut mazes = Mazes::new(board::MAZE_REACH).with_region(region);
+    if race {
+        use marble_rolling::race::stream::{
+            LEAN_EARLY_BLOCKS, LEAN_INBOX_READINGS, LEAN_OUT_BLOCKS,
+        };
+        let race = pin!(app::race_task::<
+            { board::WIDTH },
+            { board::HEIGHT },
+            LEAN_OUT_BLOCKS,
+            LEAN_INBOX_READINGS,
+            LEAN_EARLY_BLOCKS,
+            _,
+            _,
+        >(&LINKS, &AIR, &mut mazes, seed));
+        poll_beating(|| HEARTBEATS.beat(Task::Game), race).await;
+    }
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         let mode = app::GameMode::Play {
@@ -303,6 +332,14 @@ async fn main(spawner: Spawner) {
     );
     let choice = power_on::power_on(button_a.is_low(), button_b.is_low());
     defmt::info!("power-on: {}", choice);
+    let race = race_setup::race_at_power_on(
+        button_a.is_low(),
+        button_b.is_low(),
+        radio::woke_from_system_off(),
+    );
+    if race {
+        radio::released(&button_a, &mut wdt).await;
+    }
 
     // The best times: the last 16 KiB of flash (board::RECORDS).
     let flash = hw::WatchedFlash::new(BlockingAsync::new(Nvmc::new(p.NVMC)), &HEARTBEATS);
@@ -335,9 +372,18 @@ async fn main(spawner: Spawner) {
         choice == PowerOn::SelfTest,
         sleep::level_after_reset(),
         seed,
+        race,
     ) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
+    }
+    if race {
+        defmt::info!("power-on: A held: racing (A counts, B chooses: channel, then group)");
+        let air = embassy_nrf::radio::ieee802154::Radio::new(p.RADIO, Irqs);
+        match radio(air) {
+            Ok(token) => spawner.spawn(token),
+            Err(_) => defmt::error!("radio task already running"),
+        }
     }
     match sound(speaker) {
         Ok(token) => spawner.spawn(token),
