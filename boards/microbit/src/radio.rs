@@ -1,6 +1,6 @@
 //! The radio for racing a friend (`app::race_task`): the nRF52833's RADIO
 //! through embassy-nrf's `radio::ieee802154` driver, moving the race's packets
-//! between the air and the race task ([`app::Air`]). Wiring only: the
+//! between the air and the race task ([`Air`]). Wiring only: the
 //! framing (a group byte before each packet) is `race::air`, the protocol
 //! `race`, both host-tested.
 //!
