@@ -27,7 +27,7 @@ use crate::input::event::{Command, InputEvent};
 use crate::input::race_setup::{RaceSetup, Tuning};
 use crate::input::sensor::Calibration;
 use crate::physics::Fx;
-use crate::race::{offer, race_id, LinkStage, MazeSpec, Race, RaceLink, Status, MAX_PACKET};
+use crate::race::{offer, race_id, MazeSpec, Race, RaceLink, Status, MAX_PACKET};
 use crate::render::race::{race_frame, searching_frame, setup_frame};
 use crate::render::Renderer;
 
@@ -259,8 +259,8 @@ async fn race_once<
         }
         let status = race.status();
         if status != shown {
+            report(race, shown, status, links);
             shown = status;
-            report(race, status, links);
         }
         if race.link().silent() != silent {
             silent = !silent;
@@ -285,17 +285,17 @@ fn send(air: &Air, packet: &[u8]) {
     }
 }
 
-/// Logs the race's new `status` (and sounds its start and verdict).
+/// Logs the race's new `status` after `before` (and sounds its start and
+/// verdict).
 fn report<const W: usize, const H: usize, const O: usize, const I: usize, const E: usize>(
     race: &Race<'_, Fx, O, I, E>,
+    before: Status,
     status: Status,
     links: &Links<W, H>,
 ) {
     let _ = links;
-    match status {
-        Status::Racing
-            if race.link().stage() == LinkStage::Racing && race.own_run().frames == 0 =>
-        {
+    match (before, status) {
+        (Status::Countdown(_), Status::Racing) => {
             #[cfg(feature = "defmt")]
             defmt::info!("race: go");
             #[cfg(feature = "sound")]
@@ -303,7 +303,7 @@ fn report<const W: usize, const H: usize, const O: usize, const I: usize, const 
                 .sounds
                 .try_send(crate::sound::Sound::Click { loudness: 255 });
         }
-        Status::Decided(_verdict) => {
+        (_, Status::Decided(_verdict)) => {
             let (own, opp) = (race.own_run(), race.opponent().run());
             #[cfg(feature = "defmt")]
             defmt::info!(
