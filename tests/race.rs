@@ -10,6 +10,7 @@
 use std::num::NonZeroU32;
 
 use marble_rolling::game::autopilot::Autopilot;
+use marble_rolling::game::endless::{MazeError, MazeSlot, Reach};
 use marble_rolling::game::level::{parse, Level, LevelView};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::Session;
@@ -19,6 +20,7 @@ use marble_rolling::input::race_setup::{
 };
 use marble_rolling::input::sensor::Calibration;
 use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
+use marble_rolling::player::race::{RaceRound, RoundEvent, RoundExit};
 use marble_rolling::race::air::{self, AirDrop, AIR_FRAME};
 use marble_rolling::race::packet::{self, Drop, End, MazeSpec, Writer, BLOCK_BYTES, MAX_PACKET};
 use marble_rolling::race::replay::{decide, Run, Verdict};
@@ -1466,4 +1468,170 @@ fn a_silent_opponent_is_not_drawn() {
         blinks > 0 && blinks < silent,
         "the corner lit on {blinks} of {silent} frames"
     );
+}
+
+// The round a board's race task plays (`player::race::RaceRound`).
+
+const V2_REACH: Reach = marble_rolling::board::microbit::MAZE_REACH;
+type V2Slot = MazeSlot<{ V2_REACH.words() }, { V2_REACH.text_bytes() }>;
+type V2Round<'a> = RaceRound<
+    'a,
+    Fx,
+    LEAN_OUT_BLOCKS,
+    LEAN_INBOX_READINGS,
+    LEAN_EARLY_BLOCKS,
+    { V2_REACH.words() },
+    { V2_REACH.text_bytes() },
+    5,
+    5,
+>;
+
+/// Two rounds linked directly: they pair, count down, race (the autopilots;
+/// the second looks for 40 frames first) and report the verdict; the
+/// buttons do nothing during the run, then A and B end the rounds.
+#[test]
+fn a_round_looks_pairs_races_and_ends_on_a_button() {
+    let (mut slot_a, mut slot_b) = (V2Slot::new(V2_REACH), V2Slot::new(V2_REACH));
+    let mut rounds = [
+        V2Round::new(NonZeroU32::new(7).unwrap(), &mut slot_a),
+        V2Round::new(NonZeroU32::new(9).unwrap(), &mut slot_b),
+    ];
+    let mut pilots: [Option<Autopilot>; 2] = [None, None];
+    let mut events: [Vec<RoundEvent>; 2] = [Vec::new(), Vec::new()];
+    let mut exits = [None, None];
+    let mut buf = [0u8; MAX_PACKET];
+    for now in 0..60 * HZ {
+        for i in 0..2 {
+            if exits[i].is_some() {
+                continue;
+            }
+            let looking = rounds[i].race().is_none();
+            if looking {
+                let now = rounds[i].link().unwrap().now();
+                assert_eq!(rounds[i].picture(), searching_frame(now));
+            }
+            let over = rounds[i]
+                .race()
+                .is_some_and(|r| r.own().game().phase() != Phase::Playing);
+            // During the run the buttons do nothing; once it is over and
+            // both boards are done, A on one and B on the other.
+            let finished = rounds.iter().all(|r| r.race().is_some_and(Race::finished));
+            let command = match (over, finished) {
+                (true, true) => Some([Command::Restart, Command::NextLevel][i]),
+                (false, _) if !looking => Some([Command::NextLevel, Command::Restart][i]),
+                _ => None,
+            };
+            let pilot = &mut pilots[i];
+            match rounds[i].frame(command, |s| {
+                let p = pilot.get_or_insert_with(|| Autopilot::new(s.game().level()));
+                if i == 1 && s.game().frames() < 40 {
+                    [0, 1000, 0]
+                } else {
+                    p.reading_mg(s.game())
+                }
+            }) {
+                Ok(Some(e)) => events[i].push(e),
+                Ok(None) => {}
+                Err(exit) => exits[i] = Some(exit),
+            }
+            if let Some(p) = rounds[i].transmit(&mut buf) {
+                let _ = rounds[1 - i].receive(p);
+            }
+            let _ = rounds[i].picture();
+        }
+        if exits.iter().all(Option::is_some) {
+            println!("both rounds over after {now} frames");
+            break;
+        }
+    }
+    assert_eq!(exits, [Some(RoundExit::Again), Some(RoundExit::Choose)]);
+    let verdicts: Vec<Verdict> = events
+        .iter()
+        .map(|e| {
+            assert!(matches!(e[0], RoundEvent::Paired { .. }), "{e:?}");
+            assert_eq!(e[1], RoundEvent::Go, "{e:?}");
+            // Decided as soon as no frame to come can change it: maybe
+            // before the replay reaches the opponent's end.
+            match e.last() {
+                Some(RoundEvent::Verdict { verdict, .. }) => *verdict,
+                other => panic!("no verdict: {other:?}"),
+            }
+        })
+        .collect();
+    assert_eq!(verdicts, [Verdict::Won, Verdict::Lost]);
+    for (me, them) in [(0, 1), (1, 0)] {
+        let (me, them) = (rounds[me].race().unwrap(), rounds[them].race().unwrap());
+        assert_eq!(me.opponent().verified(), Some(true));
+        assert_eq!(
+            me.opponent().session().state_hash(),
+            them.own().state_hash()
+        );
+    }
+    let RoundEvent::Paired { peer, maze } = events[1][0] else {
+        unreachable!()
+    };
+    assert_eq!((peer, maze), (7, offer(NonZeroU32::new(7).unwrap())));
+}
+
+#[test]
+fn b_while_looking_ends_the_round_for_the_chooser() {
+    let mut slot = V2Slot::new(V2_REACH);
+    let mut round = V2Round::new(NonZeroU32::new(3).unwrap(), &mut slot);
+    assert_eq!(
+        round.frame(Some(Command::Restart), |_| [0, 1000, 0]),
+        Ok(None)
+    );
+    assert_eq!(round.frame(None, |_| [0, 1000, 0]), Ok(None));
+    assert_eq!(
+        round.frame(Some(Command::NextLevel), |_| [0, 1000, 0]),
+        Err(RoundExit::Choose)
+    );
+}
+
+/// The opponent's maze is larger than this board keeps: the round says so
+/// and ends, to look for another race; nothing panics.
+#[test]
+fn a_maze_beyond_the_boards_reach_ends_the_round() {
+    const SMALL: Reach = Reach {
+        size: 4,
+        storeys: 1,
+    };
+    let mut small = MazeSlot::<{ SMALL.words() }, { SMALL.text_bytes() }>::new(SMALL);
+    let mut big = V2Slot::new(V2_REACH);
+    // The lower id proposes its offer (5 cells a side): the higher cannot hold it.
+    let mut proposer = V2Round::new(NonZeroU32::new(2).unwrap(), &mut big);
+    let mut refuser = RaceRound::<
+        Fx,
+        LEAN_OUT_BLOCKS,
+        LEAN_INBOX_READINGS,
+        LEAN_EARLY_BLOCKS,
+        { SMALL.words() },
+        { SMALL.text_bytes() },
+        5,
+        5,
+    >::new(NonZeroU32::new(8).unwrap(), &mut small);
+    let mut buf = [0u8; MAX_PACKET];
+    let mut refused = None;
+    for _ in 0..10 * HZ {
+        let _ = proposer.frame(None, |_| [0, 1000, 0]);
+        if let Some(p) = proposer.transmit(&mut buf) {
+            let _ = refuser.receive(p);
+        }
+        match refuser.frame(None, |_| [0, 1000, 0]) {
+            Ok(Some(RoundEvent::Refused(e))) => refused = Some(e),
+            Ok(_) => {}
+            Err(exit) => {
+                assert_eq!(exit, RoundExit::Again);
+                break;
+            }
+        }
+        if let Some(p) = refuser.transmit(&mut buf) {
+            let _ = proposer.receive(p);
+        }
+    }
+    assert!(
+        matches!(refused, Some(MazeError::BeyondReach(_))),
+        "{refused:?}"
+    );
+    assert_eq!(refuser.picture(), Frame::<5, 5>::new());
 }

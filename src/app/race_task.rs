@@ -1,8 +1,8 @@
 //! The race task: racing a friend's board over a radio ([`crate::race`]), in
 //! place of the game task. The board's radio task moves the packets
 //! ([`Air`]); this task chooses the channel and group with the buttons
-//! ([`RaceSetup`]), finds an opponent, plays the race on the tilt at the
-//! game's frame rate and draws it ([`crate::render::race`]).
+//! ([`RaceSetup`]), then plays rounds ([`RaceRound`]: the search, the race on
+//! the tilt, its picture) at the game's frame rate.
 //!
 //! Its buttons: while choosing, **A** counts up and **B** chooses (the
 //! channel, then the group); while looking for an opponent, **B** goes back
@@ -21,15 +21,13 @@ use heapless::Vec;
 
 use super::links::Links;
 use super::FRAME_HZ;
-use crate::game::endless::{MazeArgs, MazeSlot};
-use crate::game::rules::Phase;
+use crate::game::endless::MazeSlot;
 use crate::input::event::{Command, InputEvent};
 use crate::input::race_setup::{RaceSetup, Tuning};
-use crate::input::sensor::Calibration;
 use crate::physics::Fx;
-use crate::race::{offer, race_id, MazeSpec, Race, RaceLink, Status, MAX_PACKET};
-use crate::render::race::{race_frame, searching_frame, setup_frame};
-use crate::render::Renderer;
+use crate::player::race::{RaceRound, RoundEvent, RoundExit};
+use crate::race::{race_id, MAX_PACKET};
+use crate::render::race::setup_frame;
 
 /// A race packet on its way to or from the radio.
 pub type AirPacket = Vec<u8, MAX_PACKET>;
@@ -64,14 +62,6 @@ impl Default for Air {
     }
 }
 
-/// What ended a race on the board.
-enum Next {
-    /// Race again on the same channel and group.
-    Again,
-    /// Back to the chooser.
-    Choose,
-}
-
 /// The buttons' command since the last frame, if any (the last one wins).
 fn command<const W: usize, const H: usize>(links: &Links<W, H>) -> Option<Command> {
     let mut last = None;
@@ -84,7 +74,7 @@ fn command<const W: usize, const H: usize>(links: &Links<W, H>) -> Option<Comman
 }
 
 /// Races for ever: the chooser, then races on its channel and group, with the
-/// link sizes `O`, `I`, `E` ([`RaceLink`]); each race's maze is made in
+/// link sizes `O`, `I`, `E` ([`crate::race::RaceLink`]); each race's maze is made in
 /// `mazes` (a maze beyond its reach is refused, and the board looks for
 /// another opponent). Board ids come from `seed` ([`race_id`]).
 pub async fn race_task<
@@ -116,9 +106,9 @@ pub async fn race_task<
         loop {
             let id = race_id(seed, n);
             n = n.wrapping_add(1);
-            let next =
+            let exit =
                 race_once::<W, H, O, I, E, WORDS, TEXT>(links, air, &mut ticker, mazes, id).await;
-            if let Next::Choose = next {
+            if exit == RoundExit::Choose {
                 break;
             }
         }
@@ -143,50 +133,8 @@ async fn choose<const W: usize, const H: usize>(
     }
 }
 
-/// Looks for an opponent as board `id`: the link once paired, with the
-/// agreed maze; `None` if B asked for the chooser.
-async fn search<const W: usize, const H: usize, const O: usize, const I: usize, const E: usize>(
-    links: &Links<W, H>,
-    air: &Air,
-    ticker: &mut Ticker,
-    id: NonZeroU32,
-) -> Option<(RaceLink<O, I, E>, MazeSpec)> {
-    let mut link = RaceLink::<O, I, E>::sized(id, offer(id), Calibration::NONE);
-    let mut packet = [0u8; MAX_PACKET];
-    #[cfg(feature = "defmt")]
-    defmt::info!("race: board {=u32} looking for an opponent", id.get());
-    loop {
-        ticker.next().await;
-        if command(links) == Some(Command::NextLevel) {
-            return None;
-        }
-        while let Ok(p) = air.incoming.try_receive() {
-            let _ = link.receive(&p);
-        }
-        link.tick();
-        if let Some(p) = link.transmit(&mut packet) {
-            send(air, p);
-        }
-        if let Some((_peer, spec)) = link.paired() {
-            #[cfg(feature = "defmt")]
-            defmt::info!(
-                "race: paired with board {=u32}, maze {=u32} size {=u8} storeys {=u8} difficulty {=u8}",
-                _peer,
-                spec.seed,
-                spec.size,
-                spec.storeys,
-                spec.difficulty
-            );
-            return Some((link, spec));
-        }
-        if !links.frames.signaled() {
-            links.frames.signal(searching_frame(link.now()));
-        }
-    }
-}
-
-/// One race as board `id`: the search, the race, the verdict on show until
-/// a button says what next.
+/// One race as board `id` ([`RaceRound`]): until a button (or a maze that
+/// cannot be played here) ends it.
 async fn race_once<
     const W: usize,
     const H: usize,
@@ -201,78 +149,27 @@ async fn race_once<
     ticker: &mut Ticker,
     mazes: &mut MazeSlot<WORDS, TEXT>,
     id: NonZeroU32,
-) -> Next {
-    // The search is a future of its own: its link, borrowed across its
-    // awaits, is kept in this future only until the race takes it, not
-    // beside the race (the race alone is 5.6 KB on the micro:bit v2).
-    let Some((link, spec)) = search::<W, H, O, I, E>(links, air, ticker, id).await else {
-        return Next::Choose;
-    };
-    let args = MazeArgs {
-        seed: spec.seed,
-        size: spec.size,
-        storeys: spec.storeys,
-        difficulty: spec.difficulty,
-    };
-    let level = match mazes.make(args) {
-        Ok(level) => level,
-        Err(_e) => {
-            // The opponent offered a maze this board cannot hold: look for
-            // another race (the opponent hears this board fall silent).
-            #[cfg(feature = "defmt")]
-            defmt::warn!("race: the agreed maze cannot be played here: {}", _e);
-            return Next::Again;
-        }
-    };
-    // The call's result is the local the future keeps, borrowed from here
-    // on (matched into a local of its own, the race would be kept twice).
-    let mut made = Race::<Fx, O, I, E>::new(link, level);
-    let race = match &mut made {
-        Ok(race) => race,
-        Err(_e) => {
-            #[cfg(feature = "defmt")]
-            defmt::warn!("race: {}", _e);
-            return Next::Again;
-        }
-    };
+) -> RoundExit {
+    let mut round = RaceRound::<Fx, O, I, E, WORDS, TEXT, W, H>::new(id, mazes);
     let mut packet = [0u8; MAX_PACKET];
-    let mut renderer = Renderer::<W, H>::new();
-    let mut shown = race.status();
-    let mut silent = false;
+    #[cfg(feature = "defmt")]
+    defmt::info!("race: board {=u32} looking for an opponent", id.get());
     loop {
         ticker.next().await;
-        let command = command(links);
-        if race.own().game().phase() != Phase::Playing {
-            match command {
-                Some(Command::Restart) => return Next::Again,
-                Some(Command::NextLevel) => return Next::Choose,
-                _ => {}
-            }
-        }
         while let Ok(p) = air.incoming.try_receive() {
-            let _ = race.receive(&p);
+            let _ = round.receive(&p);
         }
         let reading = links.tilt.get().reading_mg();
-        race.frame(|_| reading);
-        if let Some(p) = race.transmit(&mut packet) {
+        match round.frame(command(links), |_| reading) {
+            Ok(Some(event)) => report(event, links),
+            Ok(None) => {}
+            Err(exit) => return exit,
+        }
+        if let Some(p) = round.transmit(&mut packet) {
             send(air, p);
         }
-        let status = race.status();
-        if status != shown {
-            report(race, shown, status, links);
-            shown = status;
-        }
-        if race.link().silent() != silent {
-            silent = !silent;
-            #[cfg(feature = "defmt")]
-            if silent {
-                defmt::warn!("race: opponent silent: racing alone");
-            } else {
-                defmt::info!("race: the opponent is back");
-            }
-        }
         if !links.frames.signaled() {
-            links.frames.signal(race_frame(&mut renderer, race));
+            links.frames.signal(round.picture());
         }
     }
 }
@@ -285,43 +182,52 @@ fn send(air: &Air, packet: &[u8]) {
     }
 }
 
-/// Logs the race's new `status` after `before` (and sounds its start and
-/// verdict).
-fn report<const W: usize, const H: usize, const O: usize, const I: usize, const E: usize>(
-    race: &Race<'_, Fx, O, I, E>,
-    before: Status,
-    status: Status,
-    links: &Links<W, H>,
-) {
-    let _ = links;
-    match (before, status) {
-        (Status::Countdown(_), Status::Racing) => {
-            #[cfg(feature = "defmt")]
-            defmt::info!("race: go");
-            #[cfg(feature = "sound")]
+/// Logs what happened (and sounds the start and the verdict).
+fn report<const W: usize, const H: usize>(event: RoundEvent, links: &Links<W, H>) {
+    #[cfg(feature = "defmt")]
+    match event {
+        RoundEvent::Paired { peer, maze } => defmt::info!(
+            "race: paired with board {=u32}, maze {=u32} size {=u8} storeys {=u8} difficulty {=u8}",
+            peer,
+            maze.seed,
+            maze.size,
+            maze.storeys,
+            maze.difficulty
+        ),
+        RoundEvent::Refused(e) => defmt::warn!("race: the agreed maze cannot be played here: {}", e),
+        RoundEvent::Unplayable(e) => defmt::error!("race: {}", e),
+        RoundEvent::Go => defmt::info!("race: go"),
+        RoundEvent::Silent => defmt::warn!("race: opponent silent: racing alone"),
+        RoundEvent::Back => defmt::info!("race: the opponent is back"),
+        RoundEvent::Verdict {
+            verdict,
+            own,
+            opponent,
+            verified,
+        } => defmt::info!(
+            "race: verdict {}; own {=str} in {=u32} frames; opponent {=str} in {=u32} frames, verified {}",
+            verdict,
+            own.1.as_str(),
+            own.0,
+            opponent.1.as_str(),
+            opponent.0,
+            verified
+        ),
+    }
+    #[cfg(feature = "sound")]
+    match event {
+        RoundEvent::Go => {
             let _ = links
                 .sounds
                 .try_send(crate::sound::Sound::Click { loudness: 255 });
         }
-        (_, Status::Decided(_verdict)) => {
-            let (own, opp) = (race.own_run(), race.opponent().run());
-            #[cfg(feature = "defmt")]
-            defmt::info!(
-                "race: verdict {}; own {=str} in {=u32} frames; opponent {=str} in {=u32} frames, verified {}",
-                _verdict,
-                own.phase.as_str(),
-                own.frames,
-                opp.phase.as_str(),
-                opp.frames,
-                race.opponent().verified()
-            );
-            #[cfg(feature = "sound")]
-            let _ = links.sounds.try_send(match _verdict {
+        RoundEvent::Verdict { verdict, .. } => {
+            let _ = links.sounds.try_send(match verdict {
                 crate::race::Verdict::Won => crate::sound::Sound::Win,
                 _ => crate::sound::Sound::Loss,
             });
-            let _ = (own, opp);
         }
         _ => {}
     }
+    let _ = (event, links);
 }
