@@ -7,7 +7,8 @@
 //!
 //! Executors:
 //! * thread mode: input (accelerometer + buttons, 100 Hz), the game
-//!   (`app::game_task`), and the watchdog task;
+//!   (`app::game_task`, or `app::race_task` with A held at power-on, and then
+//!   the radio task, `src/radio.rs`), and the watchdog task;
 //! * EGU0_SWI0 interrupt (priority P6, above thread mode): the display, so
 //!   game computation can never stretch a BCM slice.
 //!
@@ -335,13 +336,10 @@ async fn main(spawner: Spawner) {
         sensor::MicrobitInput::button_pin(p.P0_14),
         sensor::MicrobitInput::button_pin(p.P0_23),
     );
-    let choice = power_on::power_on(button_a.is_low(), button_b.is_low());
+    let held = (button_a.is_low(), button_b.is_low());
+    let choice = power_on::power_on(held.0, held.1);
     defmt::info!("power-on: {}", choice);
-    let race = race_setup::race_at_power_on(
-        button_a.is_low(),
-        button_b.is_low(),
-        radio::woke_from_system_off(),
-    );
+    let race = race_setup::race_at_power_on(held.0, held.1, radio::woke_from_system_off());
     if race {
         radio::released(&button_a, &mut wdt).await;
     }
