@@ -106,7 +106,7 @@ pub async fn run(mut radio: Radio<'static>, air: &'static Air) -> ! {
             Either3::First(Ok(())) => received(&rx, tuning.group, air, &mut counters),
             Either3::First(Err(_)) => counters.crc = counters.crc.saturating_add(1),
             Either3::Second(packet) => {
-                send(
+                let sent = send(
                     &mut radio,
                     &mut tx,
                     &mut out,
@@ -115,7 +115,7 @@ pub async fn run(mut radio: Radio<'static>, air: &'static Air) -> ! {
                     &mut counters,
                 )
                 .await;
-                if counters.sent % LOG_EVERY == 0 && counters.sent > 0 {
+                if sent && counters.sent.is_multiple_of(LOG_EVERY) {
                     defmt::info!("radio: {}", counters);
                 }
             }
@@ -150,7 +150,7 @@ fn received(rx: &Packet, group: u8, air: &Air, counters: &mut AirCounters) {
     }
 }
 
-/// Sends `packet` as a frame of `group`.
+/// Sends `packet` as a frame of `group`; whether it went.
 async fn send(
     radio: &mut Radio<'static>,
     tx: &mut Packet,
@@ -158,16 +158,22 @@ async fn send(
     group: u8,
     packet: &[u8],
     counters: &mut AirCounters,
-) {
+) -> bool {
     let Some(frame) = air::frame(group, packet, out) else {
         counters.not_sent = counters.not_sent.saturating_add(1);
-        return;
+        return false;
     };
     // `frame` is at most AIR_FRAME, the driver's capacity.
     tx.copy_from_slice(frame);
     match radio.try_send(tx).await {
-        Ok(()) => counters.sent = counters.sent.saturating_add(1),
-        Err(_) => counters.not_sent = counters.not_sent.saturating_add(1),
+        Ok(()) => {
+            counters.sent = counters.sent.saturating_add(1);
+            true
+        }
+        Err(_) => {
+            counters.not_sent = counters.not_sent.saturating_add(1);
+            false
+        }
     }
 }
 
