@@ -10,15 +10,28 @@
 use std::num::NonZeroU32;
 
 use marble_rolling::game::autopilot::Autopilot;
+use marble_rolling::game::endless::{MazeError, MazeSlot, Reach};
 use marble_rolling::game::level::{parse, Level, LevelView};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::Session;
+use marble_rolling::input::event::Command;
+use marble_rolling::input::race_setup::{
+    race_at_power_on, Field, RaceSetup, Tuning, FIRST_CHANNEL, GROUPS, LAST_CHANNEL,
+};
 use marble_rolling::input::sensor::Calibration;
+use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
+use marble_rolling::player::race::{RaceRound, RoundEvent, RoundExit};
+use marble_rolling::race::air::{self, AirDrop, AIR_FRAME};
 use marble_rolling::race::packet::{self, Drop, End, MazeSpec, Writer, BLOCK_BYTES, MAX_PACKET};
 use marble_rolling::race::replay::{decide, Run, Verdict};
 use marble_rolling::race::session::{COUNTDOWN_FRAMES, SILENCE_FRAMES};
+use marble_rolling::race::stream::{LEAN_EARLY_BLOCKS, LEAN_INBOX_READINGS, LEAN_OUT_BLOCKS};
 use marble_rolling::race::wire::{self, Unframed, Unframer, MAX_FRAME};
-use marble_rolling::race::{maze, LinkStage, Race, RaceLink, Status};
+use marble_rolling::race::{maze, offer, race_id, LeanLink, LinkStage, Race, RaceLink, Status};
+use marble_rolling::render::race::{
+    countdown_frame, race_frame, searching_frame, setup_frame, verdict_frame, OPPONENT,
+};
+use marble_rolling::render::{Renderer, GHOST};
 use proptest::prelude::*;
 
 type Fx = fixed::types::I8F24;
@@ -1081,4 +1094,544 @@ proptest! {
             }
         }
     }
+}
+
+// The micro:bit v2's race: its links of the lean sizes over a radio of groups
+// (`race::air`), the chooser of channel and group, and the race on its matrix.
+
+type LeanRace = Race<'static, Fx, LEAN_OUT_BLOCKS, LEAN_INBOX_READINGS, LEAN_EARLY_BLOCKS>;
+
+/// A board of the lean sizes in a group: looking for an opponent, or racing
+/// with the autopilot at its tilt (flat for `looks` frames first).
+enum LeanBoard {
+    Linking(Box<LeanLink>),
+    Racing(Box<(LeanRace, Autopilot)>),
+}
+
+struct OnAir {
+    board: LeanBoard,
+    group: u8,
+    looks: u32,
+    /// Frames dropped before the protocol: another group's.
+    other_group: u32,
+}
+
+impl OnAir {
+    fn new(id: u32, group: u8, looks: u32) -> OnAir {
+        let id = NonZeroU32::new(id).unwrap();
+        OnAir {
+            board: LeanBoard::Linking(Box::new(LeanLink::sized(id, offer(id), Calibration::NONE))),
+            group,
+            looks,
+            other_group: 0,
+        }
+    }
+
+    fn race(&self) -> Option<&LeanRace> {
+        match &self.board {
+            LeanBoard::Racing(r) => Some(&r.0),
+            LeanBoard::Linking(_) => None,
+        }
+    }
+
+    fn hear(&mut self, frame: &[u8]) {
+        match air::unframe(self.group, frame) {
+            Ok(p) => {
+                let _ = match &mut self.board {
+                    LeanBoard::Linking(l) => l.receive(p),
+                    LeanBoard::Racing(r) => r.0.receive(p),
+                };
+            }
+            Err(AirDrop::OtherGroup) => self.other_group += 1,
+            Err(AirDrop::Length) => panic!("a frame of a wrong length on the air"),
+        }
+    }
+
+    /// One frame; the frame to put on the air, if any.
+    fn frame(&mut self) -> Option<Vec<u8>> {
+        let mut buf = [0u8; MAX_PACKET];
+        let mut out = [0u8; AIR_FRAME];
+        let packet = match &mut self.board {
+            LeanBoard::Linking(l) => {
+                l.tick();
+                let p = l.transmit(&mut buf).map(<[u8]>::to_vec);
+                if let Some((_, spec)) = l.paired() {
+                    let text: &'static str =
+                        Box::leak(maze(spec).unwrap().to_string().into_boxed_str());
+                    let level: &'static Level<'static, WORDS> =
+                        Box::leak(Box::new(parse::<WORDS>(text).unwrap()));
+                    let view = level.view();
+                    let race = Race::new((**l).clone(), view).unwrap();
+                    self.board = LeanBoard::Racing(Box::new((race, Autopilot::new(&view))));
+                }
+                p
+            }
+            LeanBoard::Racing(racing) => {
+                let (r, autopilot) = &mut **racing;
+                let looks = self.looks;
+                r.frame(|s| {
+                    if s.game().frames() < looks {
+                        [0, 1000, 0]
+                    } else {
+                        autopilot.reading_mg(s.game())
+                    }
+                });
+                r.transmit(&mut buf).map(<[u8]>::to_vec)
+            }
+        };
+        packet.map(|p| {
+            assert!(p.len() <= MAX_PACKET);
+            air::frame(self.group, &p, &mut out).unwrap().to_vec()
+        })
+    }
+}
+
+/// Two boards of the lean sizes race in group 3 through a radio that loses
+/// a third of the frames, repeats one in five and delays each copy up to a
+/// quarter second, while a third board in group 5 on the same channel calls
+/// for an opponent: the two agree, each replay on the other's hash, and the
+/// third hears none of them (nor they it) past the group byte.
+#[test]
+fn lean_links_race_over_a_lossy_radio_beside_another_group() {
+    for seed in 1..=3u64 {
+        let mut boards = vec![
+            OnAir::new(7, 3, 0),
+            OnAir::new(9, 3, 40),
+            OnAir::new(11, 5, 0),
+        ];
+        let mut dice = Dice(seed);
+        let mut flying: Vec<(u64, usize, Vec<u8>)> = Vec::new();
+        let mut now = 0u64;
+        let done = |b: &[OnAir]| b[..2].iter().all(|b| b.race().is_some_and(Race::finished));
+        while now < 60 * HZ && !done(&boards) {
+            now += 1;
+            let (arrived, rest): (Vec<_>, Vec<_>) = flying.drain(..).partition(|f| f.0 <= now);
+            flying = rest;
+            for (_, to, bytes) in arrived {
+                boards[to].hear(&bytes);
+            }
+            for from in 0..boards.len() {
+                let Some(frame) = boards[from].frame() else {
+                    continue;
+                };
+                for to in (0..boards.len()).filter(|&t| t != from) {
+                    if dice.chance(0.33) {
+                        continue;
+                    }
+                    let copies = if dice.chance(0.2) { 2 } else { 1 };
+                    for _ in 0..copies {
+                        flying.push((now + 1 + dice.below(32), to, frame.clone()));
+                    }
+                }
+            }
+        }
+        assert!(done(&boards), "seed {seed}: not settled in a minute");
+        let (a, b) = (boards[0].race().unwrap(), boards[1].race().unwrap());
+        assert_eq!(a.verdict().unwrap(), b.verdict().unwrap().mirrored());
+        for (me, them) in [(a, b), (b, a)] {
+            assert_eq!(me.opponent().verified(), Some(true));
+            assert_eq!(me.opponent().run(), them.own_run());
+            assert_eq!(
+                me.opponent().session().state_hash(),
+                them.own().state_hash()
+            );
+        }
+        let third = &boards[2];
+        assert!(third.race().is_none(), "the other group's board raced");
+        assert!(third.other_group > 0 && boards[0].other_group > 0);
+        println!(
+            "seed {seed}: {:?} in {} frames; group 5's board dropped {} frames, group 3's {} and {}",
+            a.verdict().unwrap(),
+            now,
+            third.other_group,
+            boards[0].other_group,
+            boards[1].other_group
+        );
+    }
+}
+
+#[test]
+fn a_packet_on_the_air_carries_its_group() {
+    let mut buf = [0u8; MAX_PACKET];
+    let mut w = Writer::race(&mut buf, 1, 2, 0, SPEC, Calibration::NONE, 0, false, None);
+    assert!(w.block(0, &[0, 0, 5, 0]));
+    let packet = w.finish().to_vec();
+    let mut out = [0u8; AIR_FRAME];
+    let frame = air::frame(9, &packet, &mut out).unwrap().to_vec();
+    assert_eq!(frame[0], 9);
+    assert_eq!(air::unframe(9, &frame), Ok(&packet[..]));
+    assert_eq!(air::unframe(8, &frame), Err(AirDrop::OtherGroup));
+    assert_eq!(air::unframe(9, &[]), Err(AirDrop::Length));
+    assert_eq!(
+        air::unframe(9, &[9; AIR_FRAME + 1]),
+        Err(AirDrop::Length),
+        "longer than a radio frame"
+    );
+    let longest = [0u8; MAX_PACKET];
+    assert_eq!(
+        air::frame(1, &longest, &mut out).map(<[u8]>::len),
+        Some(AIR_FRAME)
+    );
+    assert_eq!(air::frame(1, &[0u8; MAX_PACKET + 1], &mut out), None);
+}
+
+/// A counts up, B chooses: the channel, then the group; both wrap round, and
+/// the long presses choose nothing.
+#[test]
+fn the_chooser_counts_with_a_and_chooses_with_b() {
+    let lit = |s: &RaceSetup| {
+        let d = s.dots();
+        let count = d[..4].iter().flatten().filter(|&&x| x).count();
+        let marker: Vec<usize> = (0..5).filter(|&x| d[4][x]).collect();
+        (count, marker)
+    };
+    let mut s = RaceSetup::new(Tuning::DEFAULT);
+    assert_eq!((s.field(), s.count()), (Field::Channel, 1));
+    assert_eq!(lit(&s), (1, vec![0]));
+    for _ in 0..3 {
+        assert_eq!(s.command(Command::Restart), None);
+    }
+    assert_eq!(s.tuning().channel, 14);
+    assert_eq!(lit(&s), (4, vec![0]));
+    for c in [
+        Command::Calibrate,
+        Command::ToggleMute,
+        Command::ToggleAutopilot,
+        Command::Quit,
+    ] {
+        assert_eq!(s.command(c), None);
+    }
+    assert_eq!((s.field(), s.tuning().channel), (Field::Channel, 14));
+    assert_eq!(s.command(Command::NextLevel), None);
+    assert_eq!((s.field(), s.count()), (Field::Group, 1));
+    assert_eq!(lit(&s), (1, vec![4]));
+    for _ in 0..17 {
+        s.command(Command::Restart);
+    }
+    assert_eq!(s.tuning().group, 1, "16 groups, wrapping");
+    assert_eq!(
+        s.command(Command::NextLevel),
+        Some(Tuning {
+            channel: 14,
+            group: 1
+        })
+    );
+    // The channel wraps from 26 to 11; its sixteen values take the four rows.
+    let mut s = RaceSetup::new(Tuning::new(26, 15).unwrap());
+    assert_eq!(lit(&s), (16, vec![0]));
+    s.command(Command::Restart);
+    assert_eq!(s.tuning().channel, FIRST_CHANNEL);
+    assert_eq!(Tuning::new(LAST_CHANNEL + 1, 0), None);
+    assert_eq!(Tuning::new(FIRST_CHANNEL, GROUPS), None);
+    // A start out of range starts from the default's value for that field.
+    let s = RaceSetup::new(Tuning {
+        channel: 3,
+        group: 2,
+    });
+    assert_eq!(s.tuning(), Tuning::new(11, 2).unwrap());
+    let s = RaceSetup::new(Tuning {
+        channel: 200,
+        group: 200,
+    });
+    assert_eq!(s.tuning(), Tuning::DEFAULT);
+}
+
+#[test]
+fn a_alone_at_power_on_asks_for_a_race_unless_waking() {
+    assert!(race_at_power_on(true, false, false));
+    assert!(
+        !race_at_power_on(true, false, true),
+        "the wake-up resumes the game"
+    );
+    assert!(!race_at_power_on(true, true, false), "A+B: the records");
+    assert!(!race_at_power_on(false, true, false), "B: the self-test");
+    assert!(!race_at_power_on(false, false, false));
+}
+
+#[test]
+fn each_race_of_a_board_has_a_new_id_and_maze() {
+    let ids: std::collections::BTreeSet<u32> =
+        (0..1000).map(|n| race_id(0xDEAD_BEEF, n).get()).collect();
+    assert_eq!(ids.len(), 1000);
+    assert_ne!(race_id(1, 0), race_id(2, 0));
+    let id = race_id(5, 0);
+    assert_eq!(offer(id).seed, id.get());
+    assert!(maze(offer(id)).is_ok(), "the offer is a maze");
+}
+
+/// The race on a 5×5 matrix: bars counting down, then the maze with the
+/// opponent's marble added at OPPONENT brightness (or, while the opponent is
+/// silent, the bottom-right pixel blinking instead), then the verdict.
+#[test]
+fn the_race_on_a_matrix_draws_the_opponent_dimmer() {
+    assert_eq!(OPPONENT, GHOST);
+    let bars = |f: &Frame<5, 5>| (0..5).filter(|&x| f.get(x, 0) > 0).count();
+    assert_eq!(bars(&countdown_frame::<5, 5>(COUNTDOWN_FRAMES)), 3);
+    assert_eq!(bars(&countdown_frame::<5, 5>(200)), 2);
+    assert_eq!(bars(&countdown_frame::<5, 5>(1)), 1);
+    assert_ne!(
+        verdict_frame::<5, 5>(Verdict::Won),
+        verdict_frame(Verdict::Lost)
+    );
+    let lit = |f: Frame<5, 5>| f.iter().filter(|p| p.2 > 0).count();
+    assert_eq!(lit(searching_frame(0)), 1);
+    assert_ne!(searching_frame::<5, 5>(0), searching_frame(16));
+    assert_eq!(lit(setup_frame(&RaceSetup::new(Tuning::DEFAULT))), 2);
+
+    let mut boards = [OnAir::new(7, 0, 0), OnAir::new(9, 0, 40)];
+    // The race's renderer, and one that draws the maze alone: both follow
+    // the same marble through the same frames.
+    let (mut renderer, mut plain_renderer) = (Renderer::<5, 5>::new(), Renderer::<5, 5>::new());
+    let (mut countdown, mut with_opponent, mut verdicts) = (0, 0, 0);
+    for now in 0..40 * HZ {
+        for from in 0..2 {
+            if let Some(f) = boards[from].frame() {
+                boards[1 - from].hear(&f);
+            }
+        }
+        let Some(r) = boards[1].race() else {
+            continue;
+        };
+        let frame = race_frame(&mut renderer, r);
+        match r.status() {
+            Status::Countdown(left) => {
+                assert_eq!(frame, countdown_frame(left));
+                countdown += 1;
+            }
+            Status::Decided(v) if r.own().game().phase() != Phase::Playing => {
+                assert_eq!(frame, verdict_frame(v));
+                verdicts += 1;
+            }
+            _ => {
+                // The maze as the game draws it, and the opponent on top.
+                let plain = plain_renderer.render(r.own().game());
+                let added: i32 = frame
+                    .iter()
+                    .map(|(x, y, b)| i32::from(b) - i32::from(plain.get(x, y)))
+                    .sum();
+                assert!(frame.iter().all(|(x, y, b)| b >= plain.get(x, y)));
+                assert!(added <= i32::from(OPPONENT), "at {now}: {added}");
+                if added > 0 {
+                    with_opponent += 1;
+                }
+            }
+        }
+        if boards.iter().all(|b| b.race().is_some_and(Race::finished)) {
+            break;
+        }
+    }
+    assert!(countdown > 0 && verdicts > 0, "{countdown} {verdicts}");
+    assert!(
+        with_opponent > 100,
+        "the opponent drawn on {with_opponent} frames"
+    );
+}
+
+/// A silent opponent is not drawn: the bottom-right pixel blinks.
+#[test]
+fn a_silent_opponent_is_not_drawn() {
+    let mut boards = [OnAir::new(7, 0, 0), OnAir::new(9, 0, 0)];
+    let (mut renderer, mut plain_renderer) = (Renderer::<5, 5>::new(), Renderer::<5, 5>::new());
+    let (mut silent, mut blinks) = (0, 0);
+    for _ in 0..20 * HZ {
+        // Board 1 goes on alone once the race starts: nothing reaches it.
+        let started = boards[1]
+            .race()
+            .is_some_and(|r| r.link().stage() == LinkStage::Racing);
+        for from in 0..2 {
+            if let Some(f) = boards[from].frame() {
+                if !started {
+                    boards[1 - from].hear(&f);
+                }
+            }
+        }
+        let Some(r) = boards[1].race() else {
+            continue;
+        };
+        if !r.link().silent() || r.own().game().phase() != Phase::Playing {
+            continue;
+        }
+        let frame = race_frame(&mut renderer, r);
+        let plain = plain_renderer.render(r.own().game());
+        for (x, y, b) in frame.iter() {
+            if (x, y) != (4, 4) {
+                assert_eq!(b, plain.get(x, y));
+            }
+        }
+        if frame.get(4, 4) == MAX_BRIGHTNESS && plain.get(4, 4) < MAX_BRIGHTNESS {
+            blinks += 1;
+        }
+        silent += 1;
+    }
+    assert!(silent > HZ as i32, "silent for {silent} frames");
+    assert!(
+        blinks > 0 && blinks < silent,
+        "the corner lit on {blinks} of {silent} frames"
+    );
+}
+
+// The round a board's race task plays (`player::race::RaceRound`).
+
+const V2_REACH: Reach = marble_rolling::board::microbit::MAZE_REACH;
+type V2Slot = MazeSlot<{ V2_REACH.words() }, { V2_REACH.text_bytes() }>;
+type V2Round<'a> = RaceRound<
+    'a,
+    Fx,
+    LEAN_OUT_BLOCKS,
+    LEAN_INBOX_READINGS,
+    LEAN_EARLY_BLOCKS,
+    { V2_REACH.words() },
+    { V2_REACH.text_bytes() },
+    5,
+    5,
+>;
+
+/// Two rounds linked directly: they pair, count down, race (the autopilots;
+/// the second looks for 40 frames first) and report the verdict; the
+/// buttons do nothing during the run, then A and B end the rounds.
+#[test]
+fn a_round_looks_pairs_races_and_ends_on_a_button() {
+    let (mut slot_a, mut slot_b) = (V2Slot::new(V2_REACH), V2Slot::new(V2_REACH));
+    let mut rounds = [
+        V2Round::new(NonZeroU32::new(7).unwrap(), &mut slot_a),
+        V2Round::new(NonZeroU32::new(9).unwrap(), &mut slot_b),
+    ];
+    let mut pilots: [Option<Autopilot>; 2] = [None, None];
+    let mut events: [Vec<RoundEvent>; 2] = [Vec::new(), Vec::new()];
+    let mut exits = [None, None];
+    let mut buf = [0u8; MAX_PACKET];
+    for now in 0..60 * HZ {
+        for i in 0..2 {
+            if exits[i].is_some() {
+                continue;
+            }
+            let looking = rounds[i].race().is_none();
+            if looking {
+                let now = rounds[i].link().unwrap().now();
+                assert_eq!(rounds[i].picture(), searching_frame(now));
+            }
+            let over = rounds[i]
+                .race()
+                .is_some_and(|r| r.own().game().phase() != Phase::Playing);
+            // During the run the buttons do nothing; once it is over and
+            // both boards are done, A on one and B on the other.
+            let finished = rounds.iter().all(|r| r.race().is_some_and(Race::finished));
+            let command = match (over, finished) {
+                (true, true) => Some([Command::Restart, Command::NextLevel][i]),
+                (false, _) if !looking => Some([Command::NextLevel, Command::Restart][i]),
+                _ => None,
+            };
+            let pilot = &mut pilots[i];
+            match rounds[i].frame(command, |s| {
+                let p = pilot.get_or_insert_with(|| Autopilot::new(s.game().level()));
+                if i == 1 && s.game().frames() < 40 {
+                    [0, 1000, 0]
+                } else {
+                    p.reading_mg(s.game())
+                }
+            }) {
+                Ok(Some(e)) => events[i].push(e),
+                Ok(None) => {}
+                Err(exit) => exits[i] = Some(exit),
+            }
+            if let Some(p) = rounds[i].transmit(&mut buf) {
+                let _ = rounds[1 - i].receive(p);
+            }
+            let _ = rounds[i].picture();
+        }
+        if exits.iter().all(Option::is_some) {
+            println!("both rounds over after {now} frames");
+            break;
+        }
+    }
+    assert_eq!(exits, [Some(RoundExit::Again), Some(RoundExit::Choose)]);
+    let verdicts: Vec<Verdict> = events
+        .iter()
+        .map(|e| {
+            assert!(matches!(e[0], RoundEvent::Paired { .. }), "{e:?}");
+            assert_eq!(e[1], RoundEvent::Go, "{e:?}");
+            // Decided as soon as no frame to come can change it: maybe
+            // before the replay reaches the opponent's end.
+            match e.last() {
+                Some(RoundEvent::Verdict { verdict, .. }) => *verdict,
+                other => panic!("no verdict: {other:?}"),
+            }
+        })
+        .collect();
+    assert_eq!(verdicts, [Verdict::Won, Verdict::Lost]);
+    for (me, them) in [(0, 1), (1, 0)] {
+        let (me, them) = (rounds[me].race().unwrap(), rounds[them].race().unwrap());
+        assert_eq!(me.opponent().verified(), Some(true));
+        assert_eq!(
+            me.opponent().session().state_hash(),
+            them.own().state_hash()
+        );
+    }
+    let RoundEvent::Paired { peer, maze } = events[1][0] else {
+        unreachable!()
+    };
+    assert_eq!((peer, maze), (7, offer(NonZeroU32::new(7).unwrap())));
+}
+
+#[test]
+fn b_while_looking_ends_the_round_for_the_chooser() {
+    let mut slot = V2Slot::new(V2_REACH);
+    let mut round = V2Round::new(NonZeroU32::new(3).unwrap(), &mut slot);
+    assert_eq!(
+        round.frame(Some(Command::Restart), |_| [0, 1000, 0]),
+        Ok(None)
+    );
+    assert_eq!(round.frame(None, |_| [0, 1000, 0]), Ok(None));
+    assert_eq!(
+        round.frame(Some(Command::NextLevel), |_| [0, 1000, 0]),
+        Err(RoundExit::Choose)
+    );
+}
+
+/// The opponent's maze is larger than this board keeps: the round says so
+/// and ends, to look for another race; nothing panics.
+#[test]
+fn a_maze_beyond_the_boards_reach_ends_the_round() {
+    const SMALL: Reach = Reach {
+        size: 4,
+        storeys: 1,
+    };
+    let mut small = MazeSlot::<{ SMALL.words() }, { SMALL.text_bytes() }>::new(SMALL);
+    let mut big = V2Slot::new(V2_REACH);
+    // The lower id proposes its offer (5 cells a side): the higher cannot hold it.
+    let mut proposer = V2Round::new(NonZeroU32::new(2).unwrap(), &mut big);
+    let mut refuser = RaceRound::<
+        Fx,
+        LEAN_OUT_BLOCKS,
+        LEAN_INBOX_READINGS,
+        LEAN_EARLY_BLOCKS,
+        { SMALL.words() },
+        { SMALL.text_bytes() },
+        5,
+        5,
+    >::new(NonZeroU32::new(8).unwrap(), &mut small);
+    let mut buf = [0u8; MAX_PACKET];
+    let mut refused = None;
+    for _ in 0..10 * HZ {
+        let _ = proposer.frame(None, |_| [0, 1000, 0]);
+        if let Some(p) = proposer.transmit(&mut buf) {
+            let _ = refuser.receive(p);
+        }
+        match refuser.frame(None, |_| [0, 1000, 0]) {
+            Ok(Some(RoundEvent::Refused(e))) => refused = Some(e),
+            Ok(_) => {}
+            Err(exit) => {
+                assert_eq!(exit, RoundExit::Again);
+                break;
+            }
+        }
+        if let Some(p) = refuser.transmit(&mut buf) {
+            let _ = proposer.receive(p);
+        }
+    }
+    assert!(
+        matches!(refused, Some(MazeError::BeyondReach(_))),
+        "{refused:?}"
+    );
+    assert_eq!(refuser.picture(), Frame::<5, 5>::new());
 }

@@ -29,6 +29,8 @@
 //! * `SoundOutput` (feature `sound`): how a [`crate::sound::Sound`] is played (QEMU: a log line, the
 //!   terminal's bell on a win), from the game's queue by `sound_task`.
 //! * [`Console`]: a blocking byte sink for an interactive terminal.
+//! * [`race_task`] races a friend's board in place of the game task, its
+//!   packets carried by the board's radio task through an [`Air`].
 //!
 //! The display size `W`×`H` and whether the autopilot is linked (`PILOT`) are
 //! the board binary's choice, passed as const generics: the micro:bit's 5×5
@@ -44,6 +46,7 @@ mod ghosts;
 mod input_task;
 mod links;
 mod mode;
+mod race_task;
 #[cfg(feature = "records")]
 mod records_task;
 #[cfg(feature = "sound")]
@@ -62,6 +65,7 @@ pub use input_task::{input_task, TiltInput};
 pub use links::{Bests, Win};
 pub use links::{Latest, Links, Meter};
 pub use mode::{DemoSummary, GameExit, GameMode};
+pub use race_task::{race_task, Air, AirPacket};
 #[cfg(feature = "records")]
 pub use records_task::records_task;
 #[cfg(feature = "sound")]

@@ -40,5 +40,6 @@ pub mod buttons;
 pub mod idle;
 pub mod pacing;
 pub mod plausible;
+pub mod race_setup;
 pub mod sensor;
 pub mod tilt;

@@ -20,7 +20,7 @@
 //! n-2 CRC-16/IBM-3740    u16 LE over bytes 0 .. n-2
 //! ```
 //!
-//! A packet is at most [`MAX_PACKET`] (125) bytes. The checks, in order: length,
+//! A packet is at most [`MAX_PACKET`] (124) bytes. The checks, in order: length,
 //! CRC (garbled), magic (another protocol), version, kind, then the body's
 //! framing; every failure is a [`Drop`] and nothing else happens. A block's
 //! tokens are decoded only when the block is taken (`stream`).
@@ -31,11 +31,11 @@ use crate::input::sensor::Calibration;
 
 /// The longest packet (bytes, CRC included): the payload of an IEEE 802.15.4
 /// frame, the one mode embassy-nrf 0.11 drives the nRF52833's radio in
-/// (`radio::ieee802154::Packet::CAPACITY`), so a packet is one radio frame.
-/// It holds the fixed fields and three blocks of [`BLOCK_BYTES`]: the oldest
+/// (`radio::ieee802154::Packet::CAPACITY`, 125 bytes), less the group byte in
+/// front of it ([`super::air`]), so a packet is one radio frame. It holds the fixed fields and three blocks of [`BLOCK_BYTES`]: the oldest
 /// block the opponent lacks and two more in turn (with room for one, a lossy
 /// link would deliver one block a round trip).
-pub const MAX_PACKET: usize = 125;
+pub const MAX_PACKET: usize = 124;
 /// The protocol's version: a packet of any other is dropped.
 pub const VERSION: u8 = 1;
 /// The most token bytes in a block: three blocks and their heads fit a packet

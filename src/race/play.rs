@@ -8,8 +8,11 @@ use crate::physics::world::SetupError;
 use crate::physics::Scalar;
 
 use super::packet::{Drop, End, MAX_PACKET};
-use super::replay::{decide, Opponent, Run, Verdict, CATCH_UP, RACE_CONFIG, RACE_TILT};
+use super::replay::{
+    decide, Opponent, Run, Verdict, CATCH_UP, RACE_CONFIG, RACE_EVENTS, RACE_TILT,
+};
 use super::session::{Heard, LinkStage, RaceLink};
+use super::stream::{EARLY_BLOCKS, INBOX_READINGS, OUT_BLOCKS};
 
 /// Why a race could not start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,20 +47,27 @@ pub enum Status {
     Decided(Verdict),
 }
 
-/// A race under way on one board.
+/// A race under way on one board, its link of the sizes `O`, `I`, `E`
+/// ([`RaceLink`]).
 #[derive(Clone, Debug)]
-pub struct Race<'a, S: Scalar> {
-    link: RaceLink,
+pub struct Race<
+    'a,
+    S: Scalar,
+    const O: usize = OUT_BLOCKS,
+    const I: usize = INBOX_READINGS,
+    const E: usize = EARLY_BLOCKS,
+> {
+    link: RaceLink<O, I, E>,
     own: Session<'a, S>,
     opponent: Opponent<'a, S>,
     /// This board's run can no longer reach the opponent whole.
     lost: bool,
 }
 
-impl<'a, S: Scalar> Race<'a, S> {
+impl<'a, S: Scalar, const O: usize, const I: usize, const E: usize> Race<'a, S, O, I, E> {
     /// The race on `level`, the maze `link` agreed on (the caller generates
-    /// and parses it: `super::generate`).
-    pub fn new(link: RaceLink, level: LevelView<'a>) -> Result<Self, RaceError> {
+    /// and parses it: `super::maze`).
+    pub fn new(link: RaceLink<O, I, E>, level: LevelView<'a>) -> Result<Self, RaceError> {
         if link.paired().is_none() {
             return Err(RaceError::NotPaired);
         }
@@ -81,7 +91,7 @@ impl<'a, S: Scalar> Race<'a, S> {
         self.link.tick();
         if self.link.stage() == LinkStage::Racing && self.own.game().phase() == Phase::Playing {
             let reading = reading(&self.own);
-            let phase = self.own.frame(reading);
+            let phase = self.own.frame_in::<RACE_EVENTS>(reading);
             if self.link.push_own(reading).is_err() {
                 self.lost = true;
             }
@@ -110,7 +120,7 @@ impl<'a, S: Scalar> Race<'a, S> {
     }
 
     /// The link.
-    pub fn link(&self) -> &RaceLink {
+    pub fn link(&self) -> &RaceLink<O, I, E> {
         &self.link
     }
 

@@ -13,7 +13,7 @@ use crate::game::level::LevelView;
 use crate::game::rules::{GameConfig, Phase};
 use crate::game::session::{Session, SYNTHETIC_TILT};
 use crate::input::tilt::TiltConfig;
-use crate::physics::world::SetupError;
+use crate::physics::world::{SetupError, Stepping};
 use crate::physics::Scalar;
 
 use super::session::RaceLink;
@@ -21,6 +21,9 @@ use super::session::RaceLink;
 /// The game's configuration in a race: both boards play with it (event
 /// stepping, the firmware's default).
 pub const RACE_CONFIG: GameConfig = GameConfig::EVENTS;
+/// [`RACE_CONFIG`]'s stepper, fixed at compile time: a board links only the
+/// stepper it races with (the other is about 18 KiB of flash on the v2).
+pub const RACE_EVENTS: bool = matches!(RACE_CONFIG.stepping, Stepping::Events);
 /// The tilt path's settings in a race, the same on both boards: the replay
 /// must filter the readings as their board did. The stuck-sensor check is off
 /// (keys repeat a reading, a sensor's supervision is the input layer's).
@@ -124,7 +127,11 @@ impl<'a, S: Scalar> Opponent<'a, S> {
     }
 
     /// Plays up to `max` of the readings `link` holds; returns how many.
-    pub fn step(&mut self, link: &mut RaceLink, max: u32) -> u32 {
+    pub fn step<const O: usize, const I: usize, const E: usize>(
+        &mut self,
+        link: &mut RaceLink<O, I, E>,
+        max: u32,
+    ) -> u32 {
         let mut n = 0;
         if !self.calibrated {
             // The calibration comes with every race packet, before any reading.
@@ -138,7 +145,7 @@ impl<'a, S: Scalar> Opponent<'a, S> {
             let Some(r) = link.pop_opponent() else {
                 break;
             };
-            self.session.frame(r);
+            self.session.frame_in::<RACE_EVENTS>(r);
             n += 1;
         }
         if self.verified.is_none() {

@@ -10,7 +10,10 @@
 
 use super::handshake::{Handshake, Stage};
 use super::packet::{self, Drop, End, MazeSpec, Writer, MAX_PACKET};
-use super::stream::{Inbox, Outbox, Overflow, Taken};
+use super::stream::{
+    Inbox, Outbox, Overflow, Taken, EARLY_BLOCKS, INBOX_READINGS, LEAN_EARLY_BLOCKS,
+    LEAN_INBOX_READINGS, LEAN_OUT_BLOCKS, OUT_BLOCKS,
+};
 use crate::input::sensor::Calibration;
 
 /// Frames between two hellos while searching (4 a second).
@@ -144,9 +147,19 @@ impl SeqWindow {
     }
 }
 
-/// One board's side of the race protocol.
+/// One board's side of the race protocol, keeping up to `O` blocks of its own
+/// run until acknowledged, `I` of the opponent's readings until replayed and
+/// `E` of its blocks that came after a gap (the defaults, [`OUT_BLOCKS`],
+/// [`INBOX_READINGS`] and [`EARLY_BLOCKS`], are the host's and QEMU's; a board
+/// with less RAM to give keeps fewer: [`RaceLink::sized`]). Fewer blocks out
+/// is a shorter silence the run outlives; fewer readings in, a replay that
+/// takes a late burst of blocks in more turns.
 #[derive(Clone, Debug)]
-pub struct RaceLink {
+pub struct RaceLink<
+    const O: usize = OUT_BLOCKS,
+    const I: usize = INBOX_READINGS,
+    const E: usize = EARLY_BLOCKS,
+> {
     hs: Handshake,
     calibration: Calibration,
     now: u32,
@@ -154,8 +167,8 @@ pub struct RaceLink {
     next_send: u32,
     last_heard: u32,
     window: SeqWindow,
-    out: Outbox,
-    inbox: Inbox,
+    out: Outbox<O>,
+    inbox: Inbox<I, E>,
     peer_calibration: Option<Calibration>,
     reply: bool,
     counters: Counters,
@@ -164,8 +177,19 @@ pub struct RaceLink {
 impl RaceLink {
     /// Board `me` (any id but 0: a board draws one at random when it powers
     /// on, so a restarted board is a new one) offering `offer`, its tilt path
-    /// calibrated by `calibration` for the whole race.
+    /// calibrated by `calibration` for the whole race; the default sizes.
     pub fn new(me: core::num::NonZeroU32, offer: MazeSpec, calibration: Calibration) -> Self {
+        Self::sized(me, offer, calibration)
+    }
+}
+
+/// A [`RaceLink`] of the lean sizes ([`super::stream::LEAN_OUT_BLOCKS`] and
+/// the others), for a board with little RAM to give.
+pub type LeanLink = RaceLink<LEAN_OUT_BLOCKS, LEAN_INBOX_READINGS, LEAN_EARLY_BLOCKS>;
+
+impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
+    /// As [`RaceLink::new`], with the sizes of the type.
+    pub fn sized(me: core::num::NonZeroU32, offer: MazeSpec, calibration: Calibration) -> Self {
         let me = me.get();
         RaceLink {
             hs: Handshake::new(me, offer),
@@ -257,12 +281,12 @@ impl RaceLink {
     }
 
     /// This board's stream.
-    pub fn outbox(&self) -> &Outbox {
+    pub fn outbox(&self) -> &Outbox<O> {
         &self.out
     }
 
     /// The opponent's stream.
-    pub fn inbox(&self) -> &Inbox {
+    pub fn inbox(&self) -> &Inbox<I, E> {
         &self.inbox
     }
 
@@ -279,7 +303,7 @@ impl RaceLink {
     }
 
     /// This board's next reading of its run. After an [`Overflow`] (the
-    /// opponent unheard for the outbox's 8 s) the run cannot reach it.
+    /// opponent unheard while the outbox filled) the run cannot reach it.
     pub fn push_own(&mut self, reading: [i32; 3]) -> Result<(), Overflow> {
         self.out.push(reading)
     }

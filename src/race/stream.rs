@@ -30,6 +30,16 @@ pub const EARLY_BLOCKS: usize = 16;
 /// The opponent's readings taken and not yet replayed: 2 s at 128 frames/s,
 /// 3 KiB.
 pub const INBOX_READINGS: usize = 256;
+/// [`OUT_BLOCKS`] on a board with less RAM to give (the micro:bit v2, whose
+/// static RAM budget is 16 KiB): 48 blocks, about 4.5 s of the autopilot's
+/// play, 6 s if the tilt rests, longer than the 3 s of silence after which
+/// a board says it is alone. 1.7 KiB.
+pub const LEAN_OUT_BLOCKS: usize = 48;
+/// [`INBOX_READINGS`] on such a board: 96 readings, 0.75 s, 1.1 KiB; a burst
+/// of blocks after a silence is taken over more turns.
+pub const LEAN_INBOX_READINGS: usize = 96;
+/// [`EARLY_BLOCKS`] on such a board.
+pub const LEAN_EARLY_BLOCKS: usize = 8;
 /// The reading before a run's first frame: a flat board (the ghost's).
 pub const FLAT: [i32; 3] = [0, 1000, 0];
 
@@ -42,11 +52,12 @@ struct Block {
     tokens: [u8; BLOCK_BYTES],
 }
 
-/// This board's run, cut into blocks, until the opponent holds them.
+/// This board's run, cut into blocks, until the opponent holds them: up to
+/// `N` blocks ([`OUT_BLOCKS`] unless the board has less RAM to give).
 #[derive(Clone, Debug)]
-pub struct Outbox {
+pub struct Outbox<const N: usize = OUT_BLOCKS> {
     /// Cut and not acknowledged, oldest first.
-    blocks: Deque<Block, OUT_BLOCKS>,
+    blocks: Deque<Block, N>,
     /// Readings not cut into a block yet.
     pending: Vec<[i32; 3], BLOCK_FRAMES>,
     /// The reading before `pending`'s first.
@@ -62,19 +73,19 @@ pub struct Outbox {
     overflowed: bool,
 }
 
-/// The outbox has no room: the opponent has not acknowledged
-/// [`OUT_BLOCKS`] blocks.
+/// The outbox has no room: the opponent has not acknowledged as many blocks
+/// as it keeps ([`OUT_BLOCKS`] by default).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Overflow;
 
-impl Default for Outbox {
+impl<const N: usize> Default for Outbox<N> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl Outbox {
+impl<const N: usize> Outbox<N> {
     /// Empty, before the first frame.
     pub const fn new() -> Self {
         Outbox {
@@ -269,12 +280,14 @@ pub enum Taken {
     Bad,
 }
 
-/// The opponent's run as received: readings in order, waiting for the replay.
+/// The opponent's run as received: up to `R` readings in order, waiting for
+/// the replay, and up to `E` blocks that came after a gap ([`INBOX_READINGS`]
+/// and [`EARLY_BLOCKS`] unless the board has less RAM to give).
 #[derive(Clone, Debug)]
-pub struct Inbox {
-    readings: Deque<[i32; 3], INBOX_READINGS>,
+pub struct Inbox<const R: usize = INBOX_READINGS, const E: usize = EARLY_BLOCKS> {
+    readings: Deque<[i32; 3], R>,
     /// Blocks after a gap.
-    early: Vec<Block, EARLY_BLOCKS>,
+    early: Vec<Block, E>,
     /// Frames taken (in order).
     have: u32,
     /// The reading of frame `have - 1` (the flat board before the first).
@@ -282,13 +295,13 @@ pub struct Inbox {
     end: Option<End>,
 }
 
-impl Default for Inbox {
+impl<const R: usize, const E: usize> Default for Inbox<R, E> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl Inbox {
+impl<const R: usize, const E: usize> Inbox<R, E> {
     /// Empty.
     pub const fn new() -> Self {
         Inbox {

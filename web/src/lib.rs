@@ -69,7 +69,8 @@
 //! [`maze`]: generated mazes; [`ghost`]: the ghost's recording and replay;
 //! [`download`]: the editor's level written into the micro:bit's universal
 //! hex ([`universal_hex`]), the file the page offers as "Download for
-//! micro:bit".
+//! micro:bit"; [`race`]: a race against another page through `cargo web`'s
+//! relay.
 #![cfg_attr(target_arch = "wasm32", no_std)]
 
 pub mod download;
@@ -78,6 +79,7 @@ pub mod ghost;
 pub mod ghost_run;
 pub mod maze;
 pub mod page_state;
+pub mod race;
 pub mod storage;
 pub mod universal_hex;
 

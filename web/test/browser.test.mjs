@@ -31,7 +31,9 @@
 // ghost is drawn dimmer and replays to the record's hash; a ghost waits for
 // the player's first tilt and races on the player's clock; it writes
 // screenshots (two-floors after the drop, a ghost, a phone's viewport) and
-// measures the per-frame cost with performance.now(), with a ghost too.
+// measures the per-frame cost with performance.now(), with a ghost too; two
+// pages race through the server's relay to mirrored verdicts, each replay on
+// the other's state hash, each naming the other on its ghost line.
 
 import { spawn, spawnSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync, mkdirSync } from 'node:fs';
@@ -1097,6 +1099,43 @@ async function main() {
       await phone.screenshot({ path: PHONE_SHOT });
       console.log(`screenshot: ${PHONE_SHOT}`);
       await phone.close();
+    }
+
+    // 6b. A race between two pages through the server's relay (GET /race):
+    // both autopilots, the second after 40 frames of a flat board; each page
+    // names the other on its ghost line while they race, both reach mirrored
+    // verdicts, and each replay of the opponent ends on the opponent's own
+    // state hash (checked in the page too: verified).
+    {
+      const racers = [await context.newPage(), await context.newPage()];
+      for (const p of racers) {
+        p.on('pageerror', (e) => errors.push(e.message));
+        p.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+        await p.goto(url);
+        await p.waitForSelector('body[data-ready="true"]', { timeout: 20000 });
+      }
+      await racers[0].evaluate(() => window.marbleRace.start(3, 0));
+      await racers[1].evaluate(() => window.marbleRace.start(3, 40));
+      const start = Date.now();
+      let states = [];
+      let named = false;
+      while (Date.now() - start < 90000) {
+        states = await Promise.all(racers.map((p) => p.evaluate(() => window.marbleRace.state())));
+        named ||= states.every((r, i) => r.state === 'racing'
+          && r.ghostLine.startsWith(`race: board ${states[1 - i].id.toString(16)}`));
+        if (states.every((r) => ['won', 'lost', 'draw'].includes(r.state) && r.verified !== 'no')) break;
+        await new Promise((ok) => setTimeout(ok, 100));
+      }
+      const [a, b] = states;
+      const mirrored = { won: 'lost', lost: 'won', draw: 'draw' };
+      console.log(`race: ${JSON.stringify(a)} / ${JSON.stringify(b)} after ${((Date.now() - start) / 1000).toFixed(1)} s`);
+      check(named, 'race: while two pages race, each one\'s ghost line names the other board');
+      check(mirrored[a?.state] === b?.state && a.state === 'won',
+        `race: mirrored verdicts, the page whose autopilot did not wait won (${a?.state} / ${b?.state})`);
+      check(a?.verified === 'yes' && b?.verified === 'yes' && a.replayHash === b.hash && b.replayHash === a.hash
+        && a.opponent === b.id && b.opponent === a.id,
+        'race: each replay of the opponent ends on its own state hash, verified in the page', JSON.stringify(states));
+      await Promise.all(racers.map((p) => p.close()));
     }
 
     // 7. The per-frame cost: the autopilot playing the levels over and over

@@ -5,7 +5,7 @@
 // the page only moves numbers and pixels. This file starts it; its parts are
 // ES modules in js/, loaded by the browser as they are (no bundler): core (the
 // module, loaded by hand: web/src/lib.rs says why there is no wasm-bindgen
-// glue), input, loop, attempt, draw, ghost, maze, editor and hooks.
+// glue), input, loop, attempt, draw, ghost, maze, editor, race and hooks.
 
 import { $, answer, loadModule, setUp, status, w } from './js/core.js';
 import { keys, onKey, setupStick, toggleOrientation } from './js/input.js';
@@ -14,6 +14,7 @@ import { mazeFromUrl } from './js/maze.js';
 import { newAttempt, newMaze, nextLevel, playMaze, restart, setStepping, toggleAutopilot } from './js/attempt.js';
 import { downloadHex, setupEditor, toggleEditor } from './js/editor.js';
 import { testHooks } from './js/hooks.js';
+import { raceCommand, racing, toggleRace } from './js/race.js';
 
 async function main() {
   try {
@@ -41,14 +42,18 @@ async function main() {
   });
   $('editor-toggle').addEventListener('click', () => toggleEditor());
   $('download-hex').addEventListener('click', downloadHex);
-  $('restart').addEventListener('click', restart);
-  $('next').addEventListener('click', nextLevel);
+  // While racing, Restart and Next level are the board's A and B.
+  const restartOrA = () => (racing() ? raceCommand(1) : restart());
+  const nextOrB = () => (racing() ? raceCommand(2) : nextLevel());
+  $('restart').addEventListener('click', restartOrA);
+  $('next').addEventListener('click', nextOrB);
+  $('race').addEventListener('click', toggleRace);
   $('autopilot').addEventListener('click', toggleAutopilot);
   $('new-maze').addEventListener('click', () => { newMaze(); $('new-maze').blur(); });
   $('maze-storeys').addEventListener('change', () => $('maze-storeys').blur());
   $('orientation').addEventListener('click', toggleOrientation);
   // The keys' commands: R restart, N next level, P autopilot, M a new maze.
-  const commands = { KeyR: restart, KeyN: nextLevel, KeyP: toggleAutopilot, KeyM: newMaze };
+  const commands = { KeyR: restartOrA, KeyN: nextOrB, KeyP: toggleAutopilot, KeyM: newMaze };
   window.addEventListener('keydown', (e) => onKey(e, true, commands));
   window.addEventListener('keyup', (e) => onKey(e, false, commands));
   // Keys held while the window loses focus never see their keyup.

@@ -16,6 +16,7 @@ mod process;
 mod profile;
 mod properties;
 mod race;
+mod race_relay;
 mod runner;
 mod setup;
 mod size;

@@ -62,6 +62,11 @@ struct Report {
     opponent: (String, u32, String),
     verified: bool,
     lag: String,
+    /// Frames with both runs going on, and those with the opponent on the
+    /// board's matrix picture.
+    drawn: Option<(u32, u32)>,
+    /// The matrix mid-race, a row of hex brightness digits a line.
+    picture: Vec<String>,
 }
 
 /// `cargo qemu -- --race [--demo]`.
@@ -156,6 +161,30 @@ pub fn run() -> Outcome {
         return Err(Failure::new("a board's log has no race report"));
     };
     check(&a, &b)?;
+    for (id, r) in IDS.iter().zip([&a, &b]) {
+        match r.drawn {
+            Some((frames, drawn)) if drawn > 0 => say!(
+                "board {id}'s matrix: the opponent drawn dimmer on {drawn} of the {frames} \
+                 frames both ran"
+            ),
+            _ => {
+                return Err(Failure::new(format!(
+                    "board {id} never drew its opponent on its matrix ({:?})",
+                    r.drawn
+                )))
+            }
+        }
+    }
+    if !a.picture.is_empty() {
+        say!(
+            "board {}'s matrix mid-race (brightness 0-f: the marble f, the opponent {}, walls 3):",
+            IDS[0],
+            marble_rolling::render::race::OPPONENT
+        );
+        for row in &a.picture {
+            say!("    {row}");
+        }
+    }
     let host = host_hash(MAZE)?;
     if a.own.2 != host.1 || a.own.1 != host.0 {
         return Err(Failure::new(format!(
@@ -285,6 +314,8 @@ fn read_report(log: &Path) -> Option<Report> {
     let file = std::fs::File::open(log).ok()?;
     let mut report: Option<Report> = None;
     let mut lag = String::new();
+    let mut drawn = None;
+    let mut picture = Vec::new();
     for line in BufReader::new(file).lines().map_while(Result::ok) {
         if let Some(rest) = line.split("race: verdict ").nth(1) {
             report = parse_report(rest);
@@ -292,8 +323,43 @@ fn read_report(log: &Path) -> Option<Report> {
         if let Some(rest) = line.split("race lag: ").nth(1) {
             lag = rest.to_string();
         }
+        if let Some(rest) = line.split("race matrix: the opponent drawn on ").nth(1) {
+            drawn = parse_drawn(rest);
+        }
+        if let Some(rest) = line.split("race matrix at ").nth(1) {
+            picture = parse_picture(rest);
+        }
     }
-    report.map(|r| Report { lag, ..r })
+    report.map(|r| Report {
+        lag,
+        drawn,
+        picture,
+        ..r
+    })
+}
+
+/// `12 of 500 frames while both ran`: (500, 12).
+fn parse_drawn(rest: &str) -> Option<(u32, u32)> {
+    let (drawn, rest) = rest.split_once(" of ")?;
+    let (frames, _) = rest.split_once(' ')?;
+    Some((frames.parse().ok()?, drawn.parse().ok()?))
+}
+
+/// `frame 256, opponent at frame 200: [[0, 3, …], […]]`: each row as hex
+/// digits.
+fn parse_picture(rest: &str) -> Vec<String> {
+    let Some((_, rows)) = rest.split_once(": ") else {
+        return Vec::new();
+    };
+    rows.split("], [")
+        .map(|row| {
+            row.trim_matches(|c| c == '[' || c == ']')
+                .split(", ")
+                .filter_map(|n| n.trim().parse::<u32>().ok())
+                .filter_map(|n| char::from_digit(n, 16))
+                .collect()
+        })
+        .collect()
 }
 
 /// `won; own won in 563 frames, state_hash=…; opponent won in 597 frames,
@@ -316,7 +382,7 @@ fn parse_report(rest: &str) -> Option<Report> {
         own,
         opponent,
         verified: opp_text.ends_with("verified true"),
-        lag: String::new(),
+        ..Report::default()
     })
 }
 
@@ -385,7 +451,7 @@ mod tests {
             own: a.opponent.clone(),
             opponent: a.own.clone(),
             verified: true,
-            lag: String::new(),
+            ..Report::default()
         };
         assert!(check(&a, &b).is_ok());
         let wrong = Report {
@@ -398,6 +464,17 @@ mod tests {
             ..b
         };
         assert!(check(&a, &other_hash).is_err(), "a replay off the run");
+    }
+
+    #[test]
+    fn the_matrix_lines_read_back() {
+        assert_eq!(
+            parse_drawn("412 of 520 frames while both ran"),
+            Some((520, 412))
+        );
+        assert_eq!(parse_drawn("many"), None);
+        let picture = parse_picture("frame 256, opponent at frame 201: [[0, 3, 15], [1, 5, 20]]");
+        assert_eq!(picture, vec!["03f".to_string(), "15".to_string()]);
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! (`flate2`, the crate the workspace already builds). `cargo xtask web-test` runs the browser test (web/test) against the
 //! same server in Debian's Chromium, installing Chromium and Node.js with
 //! apt-get when it can (root) and the test's npm packages with `npm ci`.
+//! `GET /race?…` is the race's relay between pages ([`crate::race_relay`]).
 
 use std::io::{BufRead, BufReader, Read, Write};
 
@@ -20,6 +21,7 @@ use std::time::Duration;
 use crate::error::{say, Failure, Outcome};
 use crate::hex_files;
 use crate::process;
+use crate::race_relay;
 use crate::setup;
 use crate::workspace;
 
@@ -216,6 +218,19 @@ fn serve(listener: TcpListener, www: PathBuf, wasm: PathBuf, hex: PathBuf) -> ! 
 fn respond(mut stream: TcpStream, www: &Path, wasm: &Path, hex: &Path) -> std::io::Result<()> {
     stream.set_read_timeout(Some(Duration::from_secs(10)))?;
     let head = read_head(&mut stream)?;
+    if let Some(query) = race_relay::query(&head) {
+        let (status, body) = race_relay::answer(query);
+        let header = format!(
+            "HTTP/1.1 {status}\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: {}\r\n\
+             Cache-Control: no-store\r\nCross-Origin-Opener-Policy: same-origin\r\n\
+             Cross-Origin-Embedder-Policy: require-corp\r\nX-Content-Type-Options: nosniff\r\n\
+             Connection: close\r\n\r\n",
+            body.len()
+        );
+        stream.write_all(header.as_bytes())?;
+        stream.write_all(body.as_bytes())?;
+        return stream.flush();
+    }
     let takes_gzip = accepts_gzip(&head);
     let (status, content_type, body, head_only) = match request_path(&head) {
         Err(status) => (status, "text/plain; charset=utf-8", Vec::new(), false),

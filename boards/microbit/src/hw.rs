@@ -216,6 +216,7 @@ impl<F> WatchedFlash<F> {
     }
 
     /// `flash`, no task's heartbeat.
+    #[cfg(feature = "ghosts")]
     pub fn unwatched(flash: F) -> Self {
         Self {
             flash,

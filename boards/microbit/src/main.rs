@@ -7,7 +7,8 @@
 //!
 //! Executors:
 //! * thread mode: input (accelerometer + buttons, 100 Hz), the game
-//!   (`app::game_task`), and the watchdog task;
+//!   (`app::play_task`, or `app::race_task` with A held at power-on, and then
+//!   the radio task, `src/radio.rs`), and the watchdog task;
 //! * EGU0_SWI0 interrupt (priority P6, above thread mode): the display, so
 //!   game computation can never stretch a BCM slice.
 //!
@@ -28,6 +29,7 @@ use defmt_rtt as _;
 use panic_probe as _;
 
 mod hw;
+mod radio;
 mod sensor;
 mod sleep;
 mod storage;
@@ -51,12 +53,23 @@ use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, 
 use marble_rolling::game::endless::{MazeSlot, Seeds};
 use marble_rolling::input::buttons::Buttons;
 use marble_rolling::input::event::{Command, InputEvent};
+use marble_rolling::input::race_setup;
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::matrix::Frame;
 
 bind_interrupts!(pub struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
+    RADIO => embassy_nrf::radio::InterruptHandler<peripherals::RADIO>;
 });
+
+/// The race task's packets to and from the radio task.
+static AIR: app::Air = app::Air::new();
+
+/// The radio (racing only: A held at power-on).
+#[embassy_executor::task]
+async fn radio(radio: embassy_nrf::radio::ieee802154::Radio<'static>) -> ! {
+    radio::run(radio, &AIR).await
+}
 
 /// The links between the tasks.
 static LINKS: Links<{ board::WIDTH }, { board::HEIGHT }> = Links::new();
@@ -121,14 +134,19 @@ type Mazes = MazeSlot<{ board::MAZE_REACH.words() }, { board::MAZE_REACH.text_by
 /// The game; first the self-test when B was held at power-on
 /// (`board::power_on`), until A. The generated mazes after the built-in
 /// levels take their seeds from `seed`, drawn at power-up; each level's
-/// ghost is raced from `ghosts`.
+/// ghost is raced from `ghosts`. With `race` (A held at power-on) the race
+/// task instead, for ever (its maze in the same slot, its link of the lean
+/// sizes: the 16 KiB RAM budget).
 #[embassy_executor::task]
 async fn game(
     self_test: bool,
     level: u8,
     seed: u32,
     mut ghosts: Option<&'static mut storage::Kit>,
+    race: bool,
 ) {
+    #[cfg(not(feature = "ghosts"))]
+    let _ = &mut ghosts;
     if self_test {
         let test = pin!(run_self_test());
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
@@ -138,26 +156,62 @@ async fn game(
     // why it is ignored.
     let region = levels_region::at_boot(hw::levels_region());
     let mut mazes = Mazes::new(board::MAZE_REACH).with_region(region);
+    if race {
+        use marble_rolling::race::stream::{
+            LEAN_EARLY_BLOCKS, LEAN_INBOX_READINGS, LEAN_OUT_BLOCKS,
+        };
+        let race = pin!(app::race_task::<
+            { board::WIDTH },
+            { board::HEIGHT },
+            LEAN_OUT_BLOCKS,
+            LEAN_INBOX_READINGS,
+            LEAN_EARLY_BLOCKS,
+            _,
+            _,
+        >(&LINKS, &AIR, &mut mazes, seed));
+        poll_beating(|| HEARTBEATS.beat(Task::Game), race).await;
+    }
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         // The game loop is app's (play only: the v2 has no demo); being
         // polled (every frame tick, paused or not) is its heartbeat.
-        let game = pin!(app::play_task::<
-            { board::WIDTH },
-            { board::HEIGHT },
-            PILOT,
-            EVENTS,
-            _,
-            _,
-        >(
-            &LINKS,
-            TiltConfig::DEFAULT,
-            level,
-            Seeds::Drawn(seed),
-            &mut mazes,
-            ghosts.as_deref_mut()
-        ));
-        let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
+        // In a block of its own: gone before the sleep's await below, the
+        // game's future is live at one await only, so it shares its room in
+        // this task with the race's (else 2.4 KB more of static RAM).
+        let exit = {
+            #[cfg(feature = "ghosts")]
+            let game = pin!(app::play_task::<
+                { board::WIDTH },
+                { board::HEIGHT },
+                PILOT,
+                EVENTS,
+                _,
+                _,
+            >(
+                &LINKS,
+                TiltConfig::DEFAULT,
+                level,
+                Seeds::Drawn(seed),
+                &mut mazes,
+                ghosts.as_deref_mut()
+            ));
+            #[cfg(not(feature = "ghosts"))]
+            let game = pin!(app::play_task::<
+                { board::WIDTH },
+                { board::HEIGHT },
+                PILOT,
+                EVENTS,
+                _,
+                _,
+            >(
+                &LINKS,
+                TiltConfig::DEFAULT,
+                level,
+                Seeds::Drawn(seed),
+                &mut mazes
+            ));
+            poll_beating(|| HEARTBEATS.beat(Task::Game), game).await
+        };
         if let app::GameExit::Asleep { level } = exit {
             // The input task powers the accelerometer down and enters
             // System OFF (sleep::system_off).
@@ -309,8 +363,13 @@ async fn main(spawner: Spawner) {
         sensor::MicrobitInput::button_pin(p.P0_14),
         sensor::MicrobitInput::button_pin(p.P0_23),
     );
-    let choice = power_on::power_on(button_a.is_low(), button_b.is_low());
+    let held = (button_a.is_low(), button_b.is_low());
+    let choice = power_on::power_on(held.0, held.1);
     defmt::info!("power-on: {}", choice);
+    let race = race_setup::race_at_power_on(held.0, held.1, radio::woke_from_system_off());
+    if race {
+        radio::released(&button_a, &mut wdt).await;
+    }
 
     // The best times (board::RECORDS) and the ghosts (board::GHOSTS), one
     // NVMC shared (storage).
@@ -344,9 +403,18 @@ async fn main(spawner: Spawner) {
         sleep::level_after_reset(),
         seed,
         storage::kit(stores.ghosts),
+        race,
     ) {
         Ok(token) => spawner.spawn(token),
         Err(_) => defmt::error!("game task already running"),
+    }
+    if race {
+        defmt::info!("power-on: A held: racing (A counts, B chooses: channel, then group)");
+        let air = embassy_nrf::radio::ieee802154::Radio::new(p.RADIO, Irqs);
+        match radio(air) {
+            Ok(token) => spawner.spawn(token),
+            Err(_) => defmt::error!("radio task already running"),
+        }
     }
     match sound(speaker) {
         Ok(token) => spawner.spawn(token),

@@ -2,108 +2,169 @@
 //! game task): one mutex over the flash, a partition for each store
 //! ([`marble_rolling::board::microbit::storage`], host-tested there). Wiring
 //! only.
+//!
+//! Without the `ghosts` feature (the default: with the radio race the ghost
+//! passes the v2's flash and RAM budgets) the records have the NVMC to
+//! themselves and there is no ghost: the same names, a store that is never
+//! there.
 
-use embassy_embedded_hal::adapter::BlockingAsync;
-use embassy_embedded_hal::flash::partition::Partition;
-use embassy_nrf::nvmc::Nvmc;
-use embassy_nrf::{peripherals, Peri};
-use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
-use embassy_sync::mutex::Mutex;
-use marble_rolling::app::GhostKit;
-use marble_rolling::board::microbit::storage::{self, local, Paced};
-use marble_rolling::board::microbit::{self as board, Heartbeats};
-use marble_rolling::records::{Ghosts, Records};
+#[cfg(feature = "ghosts")]
+mod shared {
+    use embassy_embedded_hal::adapter::BlockingAsync;
+    use embassy_embedded_hal::flash::partition::Partition;
+    use embassy_nrf::nvmc::Nvmc;
+    use embassy_nrf::{peripherals, Peri};
+    use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+    use embassy_sync::mutex::Mutex;
+    use marble_rolling::app::GhostKit;
+    use marble_rolling::board::microbit::storage::{self, local, Paced};
+    use marble_rolling::board::microbit::{self as board, Heartbeats};
+    use marble_rolling::records::{Ghosts, Records};
 
-use crate::hw::WatchedFlash;
+    use crate::hw::WatchedFlash;
 
-/// The NVMC, blocking (the CPU waits on a page erase, about 85 ms, between
-/// levels only), as the async NOR flash the stores take.
-type Nvm = BlockingAsync<Nvmc<'static>>;
+    /// The NVMC, blocking (the CPU waits on a page erase, about 85 ms, between
+    /// levels only), as the async NOR flash the stores take.
+    type Nvm = BlockingAsync<Nvmc<'static>>;
 
-/// One store's region of the NVMC, its task yielding after each erase and
-/// write.
-pub type Part = Paced<Partition<'static, CriticalSectionRawMutex, Nvm>>;
+    /// One store's region of the NVMC, its task yielding after each erase and
+    /// write.
+    pub type Part = Paced<Partition<'static, CriticalSectionRawMutex, Nvm>>;
 
-/// The records' flash, each operation a heartbeat of the records task
-/// ([`WatchedFlash`]).
-pub type RecordsFlash = WatchedFlash<Part>;
+    /// The records' flash, each operation a heartbeat of the records task
+    /// ([`WatchedFlash`]).
+    pub type RecordsFlash = WatchedFlash<Part>;
 
-/// The ghosts' flash: the records' type, unwatched.
-pub type GhostsFlash = WatchedFlash<Part>;
+    /// The ghosts' flash: the records' type, unwatched.
+    pub type GhostsFlash = WatchedFlash<Part>;
 
-/// The ghosts and the game task's two run buffers of
-/// [`board::GHOST_BYTES`].
-pub type Kit = GhostKit<GhostsFlash, { board::GHOST_BYTES }>;
+    /// The ghosts and the game task's two run buffers of
+    /// [`board::GHOST_BYTES`].
+    pub type Kit = GhostKit<GhostsFlash, { board::GHOST_BYTES }>;
 
-/// The stores over the NVMC; a store whose region is not whole pages is
-/// `None` (logged).
-pub struct Stores {
-    /// The best times in [`board::RECORDS`].
-    pub records: Option<Records<RecordsFlash>>,
-    /// The ghosts in [`board::GHOSTS`].
-    pub ghosts: Option<Ghosts<GhostsFlash>>,
-}
+    /// The stores over the NVMC; a store whose region is not whole pages is
+    /// `None` (logged).
+    pub struct Stores {
+        /// The best times in [`board::RECORDS`].
+        pub records: Option<Records<RecordsFlash>>,
+        /// The ghosts in [`board::GHOSTS`].
+        pub ghosts: Option<Ghosts<GhostsFlash>>,
+    }
 
-/// Opens both stores over the NVMC.
-pub fn open(nvmc: Peri<'static, peripherals::NVMC>, heartbeats: &'static Heartbeats) -> Stores {
-    let none = Stores {
-        records: None,
-        ghosts: None,
-    };
-    // The mutex lives as long as the tasks that lock it: a static, filled
-    // once here (the NVMC peripheral can be taken only once).
-    let Some(flash) = cortex_m::singleton!(
-        : Mutex<CriticalSectionRawMutex, Nvm> = Mutex::new(BlockingAsync::new(Nvmc::new(nvmc)))
-    ) else {
-        defmt::error!("flash: the NVMC is already shared");
-        return none;
-    };
-    let Some(shared) = storage::share(&*flash) else {
-        defmt::error!("flash: the records' or the ghosts' region is not whole pages");
-        return none;
-    };
-    let records = Records::new(
-        WatchedFlash::new(shared.records, heartbeats),
-        local(&board::RECORDS),
-    );
-    let ghosts = Ghosts::new(
-        WatchedFlash::unwatched(shared.ghosts),
-        local(&board::GHOSTS),
-    );
-    if records.is_none() || ghosts.is_none() {
-        defmt::error!(
-            "flash: records {=bool}, ghosts {=bool}: a region is not a map",
-            records.is_some(),
-            ghosts.is_some()
+    /// Opens both stores over the NVMC.
+    pub fn open(nvmc: Peri<'static, peripherals::NVMC>, heartbeats: &'static Heartbeats) -> Stores {
+        let none = Stores {
+            records: None,
+            ghosts: None,
+        };
+        // The mutex lives as long as the tasks that lock it: a static, filled
+        // once here (the NVMC peripheral can be taken only once).
+        let Some(flash) = cortex_m::singleton!(
+            : Mutex<CriticalSectionRawMutex, Nvm> = Mutex::new(BlockingAsync::new(Nvmc::new(nvmc)))
+        ) else {
+            defmt::error!("flash: the NVMC is already shared");
+            return none;
+        };
+        let Some(shared) = storage::share(&*flash) else {
+            defmt::error!("flash: the records' or the ghosts' region is not whole pages");
+            return none;
+        };
+        let records = Records::new(
+            WatchedFlash::new(shared.records, heartbeats),
+            local(&board::RECORDS),
         );
+        let ghosts = Ghosts::new(
+            WatchedFlash::unwatched(shared.ghosts),
+            local(&board::GHOSTS),
+        );
+        if records.is_none() || ghosts.is_none() {
+            defmt::error!(
+                "flash: records {=bool}, ghosts {=bool}: a region is not a map",
+                records.is_some(),
+                ghosts.is_some()
+            );
+        }
+        Stores { records, ghosts }
     }
-    Stores { records, ghosts }
-}
 
-/// Forgets every best time and every ghost (A+B at power-on, answered A).
-pub async fn clear(stores: &mut Stores) {
-    if let Some(records) = &mut stores.records {
-        match records.clear().await {
-            Ok(()) => defmt::info!("records cleared"),
-            Err(e) => defmt::error!("records: {=str}", e.as_str()),
+    /// Forgets every best time and every ghost (A+B at power-on, answered A).
+    pub async fn clear(stores: &mut Stores) {
+        if let Some(records) = &mut stores.records {
+            match records.clear().await {
+                Ok(()) => defmt::info!("records cleared"),
+                Err(e) => defmt::error!("records: {=str}", e.as_str()),
+            }
+        }
+        if let Some(ghosts) = &mut stores.ghosts {
+            match ghosts.clear().await {
+                Ok(()) => defmt::info!("ghosts cleared"),
+                Err(e) => defmt::error!("ghosts: {=str}", e.as_str()),
+            }
         }
     }
-    if let Some(ghosts) = &mut stores.ghosts {
-        match ghosts.clear().await {
-            Ok(()) => defmt::info!("ghosts cleared"),
-            Err(e) => defmt::error!("ghosts: {=str}", e.as_str()),
+
+    /// The ghosts with their buffers, in a static of their own (a task's
+    /// argument would be moved through the game task's stack frame, which lies
+    /// under the game's deepest call); `None` without a store.
+    pub fn kit(ghosts: Option<Ghosts<GhostsFlash>>) -> Option<&'static mut Kit> {
+        let store = ghosts?;
+        let kit = cortex_m::singleton!(: Kit = GhostKit::new(store, |_| {}));
+        if kit.is_none() {
+            defmt::error!("ghosts: the kit is already taken");
+        }
+        kit
+    }
+}
+#[cfg(feature = "ghosts")]
+pub use shared::*;
+
+#[cfg(not(feature = "ghosts"))]
+mod records_only {
+    use embassy_embedded_hal::adapter::BlockingAsync;
+    use embassy_nrf::nvmc::Nvmc;
+    use embassy_nrf::{peripherals, Peri};
+    use marble_rolling::board::microbit::{self as board, Heartbeats};
+    use marble_rolling::records::Records;
+
+    use crate::hw::WatchedFlash;
+
+    /// The records' flash: the NVMC, blocking (the CPU waits on a page erase,
+    /// about 85 ms, between levels only), each operation a heartbeat of the
+    /// records task ([`WatchedFlash`]).
+    pub type RecordsFlash = WatchedFlash<BlockingAsync<Nvmc<'static>>>;
+
+    /// No ghost is kept: the game task's kit is never there.
+    pub enum Kit {}
+
+    /// The best times' store; no ghosts.
+    pub struct Stores {
+        pub records: Option<Records<RecordsFlash>>,
+        pub ghosts: Option<Kit>,
+    }
+
+    /// The records over the whole NVMC (board::RECORDS).
+    pub fn open(nvmc: Peri<'static, peripherals::NVMC>, heartbeats: &'static Heartbeats) -> Stores {
+        let flash = WatchedFlash::new(BlockingAsync::new(Nvmc::new(nvmc)), heartbeats);
+        Stores {
+            records: Records::new(flash, board::RECORDS),
+            ghosts: None,
         }
     }
-}
 
-/// The ghosts with their buffers, in a static of their own (a task's
-/// argument would be moved through the game task's stack frame, which lies
-/// under the game's deepest call); `None` without a store.
-pub fn kit(ghosts: Option<Ghosts<GhostsFlash>>) -> Option<&'static mut Kit> {
-    let store = ghosts?;
-    let kit = cortex_m::singleton!(: Kit = GhostKit::new(store, |_| {}));
-    if kit.is_none() {
-        defmt::error!("ghosts: the kit is already taken");
+    /// Clears the best times.
+    pub async fn clear(stores: &mut Stores) {
+        if let Some(records) = &mut stores.records {
+            match records.clear().await {
+                Ok(()) => defmt::info!("records cleared"),
+                Err(e) => defmt::error!("records: {=str}", e.as_str()),
+            }
+        }
     }
-    kit
+
+    /// No kit without the feature.
+    pub fn kit(_: Option<Kit>) -> Option<&'static mut Kit> {
+        None
+    }
 }
+#[cfg(not(feature = "ghosts"))]
+pub use records_only::*;

@@ -5,6 +5,11 @@
 //! flat board); the board logs its verdict, its own run and its replay of the
 //! opponent's, then exits 0 (1 if the race did not finish in time).
 //!
+//! Each frame it also draws the race as QEMU's 19 × 9 matrix would show it
+//! (`render::race::race_frame`: this board's marble, the opponent's replay at
+//! the ghost's brightness) and counts the frames the opponent's marble is on
+//! it; a picture of the matrix mid-race goes to the log for the xtask to show.
+//!
 //! The frame loop is paced at 128 frames/s on TIMER0 (virtual time under
 //! `-icount`); everything between the UART and the race is `race::wire` and
 //! `race::Race`, host-tested in `tests/race.rs`. UART1 is polled once a frame:
@@ -18,12 +23,15 @@ use core::num::NonZeroU32;
 
 use defmt_semihosting as _;
 use marble_qemu as hw;
+use marble_rolling::board::qemu::{HEIGHT, WIDTH};
 use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::level::parse;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::input::sensor::Calibration;
 use marble_rolling::race::wire::{self, Unframer, MAX_FRAME};
 use marble_rolling::race::{self, MazeSpec, Race, RaceLink, Status, Verdict, MAX_PACKET};
+use marble_rolling::render::race::race_frame;
+use marble_rolling::render::Renderer;
 
 /// CMSDK APB UART1 of the an386 image (UART0 is the terminal).
 mod uart1 {
@@ -127,6 +135,9 @@ const FRAME_TICKS: u64 = 25_000_000 / 128;
 /// Frames to keep answering after the verdict, so that the opponent hears
 /// the acknowledgements it still needs.
 const LINGER_FRAMES: u32 = 256;
+/// The matrix picture goes to the log once this board's run is this many
+/// frames old (and the opponent's marble is on it).
+const PICTURE_AT: u32 = 256;
 /// Level text and grid for the largest race maze this board accepts.
 const TEXT: usize = race_text_bytes();
 const WORDS: usize = 2048;
@@ -210,6 +221,15 @@ fn main() -> ! {
     let mut linger = 0;
     // Frames the opponent's replay is behind: sum, samples, most.
     let mut lag = (0u64, 0u32, 0u32);
+    // The race's picture, and the maze alone through a renderer that follows
+    // the same marble: where they differ, the opponent is drawn.
+    let (mut renderer, mut plain) = (
+        Renderer::<WIDTH, HEIGHT>::new(),
+        Renderer::<WIDTH, HEIGHT>::new(),
+    );
+    // Frames with both runs going on, and those with the opponent drawn.
+    let mut drawn = (0u32, 0u32);
+    let mut pictured = false;
     loop {
         pace(&mut next, |b| {
             if let Ok(p) = unframer.push(b) {
@@ -229,6 +249,30 @@ fn main() -> ! {
             uart1::write_bytes(wire::frame(p, &mut framed));
         }
         let (own, opp) = (race.own_run(), race.opponent().run());
+        let picture = race_frame(&mut renderer, &race);
+        let maze_shown = match race.status() {
+            Status::Countdown(_) => false,
+            Status::Decided(_) => own.phase == Phase::Playing,
+            _ => true,
+        };
+        if maze_shown {
+            let maze = plain.render(race.own().game());
+            if own.frames > 0 && own.phase == Phase::Playing && opp.phase == Phase::Playing {
+                drawn.0 += 1;
+                if picture != maze {
+                    drawn.1 += 1;
+                    if !pictured && own.frames >= PICTURE_AT {
+                        pictured = true;
+                        defmt::info!(
+                            "race matrix at frame {=u32}, opponent at frame {=u32}: {}",
+                            own.frames,
+                            opp.frames,
+                            picture.rows()
+                        );
+                    }
+                }
+            }
+        }
         if own.frames > 0 && own.phase == Phase::Playing && opp.phase == Phase::Playing {
             // How far behind the opponent's marble is drawn.
             let behind = own.frames.saturating_sub(opp.frames);
@@ -248,6 +292,11 @@ fn main() -> ! {
         }
     }
     report(&race);
+    defmt::info!(
+        "race matrix: the opponent drawn on {=u32} of {=u32} frames while both ran",
+        drawn.1,
+        drawn.0
+    );
     defmt::info!(
         "race lag: the opponent drawn {=u64} frames behind on average, {=u32} at most ({=u32} frames sampled)",
         lag.0 / u64::from(lag.1.max(1)),

@@ -1,6 +1,7 @@
 //! What the owner asks for at power-on, by the buttons held while the board
 //! starts: nothing (the game), **B** (the self-test), **A+B** (clear the best
-//! times, after a confirmation). Pure: the v2's `main` samples the pins, feeds
+//! times, after a confirmation); **A** alone races a friend's board
+//! ([`crate::input::race_setup::race_at_power_on`]). Pure: the v2's `main` samples the pins, feeds
 //! these functions and shows their frames.
 //!
 //! # The self-test
@@ -43,7 +44,8 @@ pub enum PowerOn {
 }
 
 /// The choice for buttons A and B held (`true`) at power-on. A alone is the
-/// game: a short A is "restart", harmless if the press was still going on.
+/// game here: a race, unless the board is waking from its sleep, is
+/// [`race_at_power_on`](crate::input::race_setup::race_at_power_on)'s to say.
 pub const fn power_on(a_held: bool, b_held: bool) -> PowerOn {
     match (a_held, b_held) {
         (true, true) => PowerOn::ClearRecords,

@@ -5,6 +5,7 @@ import { $, hz, w } from './core.js';
 import { stick, STICK_MAX_MG, STICK_RADIUS_PX, tilt } from './input.js';
 import { meanCost } from './cost.js';
 import { drop, kindsOf, level, placements, storeyFloorMm } from './level.js';
+import { drawRace, racing } from './race.js';
 
 let boardCache = null; // the storeys on show drawn at the canvas's size: { key, canvas }
 
@@ -229,6 +230,10 @@ function drawHud() {
 }
 
 export function draw() {
+  if (racing()) {
+    drawRace();
+    return;
+  }
   if (!level) return;
   drawBoard();
   drawLeds();

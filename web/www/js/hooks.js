@@ -10,6 +10,7 @@ import { newAttempt, playMaze, restart, setStepping } from './attempt.js';
 import { kindsOf, level, placements } from './level.js';
 import { draw, mazeCanvas, view } from './draw.js';
 import { toggleEditor } from './editor.js';
+import { raceState, startRace, stopRace } from './race.js';
 
 // Read-only views and a fast-forward for the browser test (web/test); the
 // fast-forward runs the same `frame()` as the animation loop.
@@ -56,6 +57,8 @@ export function testHooks() {
       stick: stick.active, keys: [...keys],
     },
   });
+  // A race through the relay, the autopilot playing after `looks` frames: started, read, stopped.
+  window.marbleRace = { start: (channel, looks = 0) => startRace(channel, looks), state: raceState, stop: stopRace };
   window.marbleTest = {
     levels: () => Array.from({ length: w.level_count() }, (_, i) => answer(w.builtin_name(i))),
     setRunning,

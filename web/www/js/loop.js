@@ -9,6 +9,7 @@ import { newAttempt } from './attempt.js';
 import { draw } from './draw.js';
 import { recordCost } from './cost.js';
 import { bestKey, followStorey } from './level.js';
+import { raceFrame, racing } from './race.js';
 
 // Frames one animation frame may catch up on (at 128 frames/s, 62 ms): after a
 // longer stall (a hidden tab, a slow machine) the game slows down rather than
@@ -19,6 +20,10 @@ let running = true; // the rAF loop steps the game (the browser test stops it)
 
 // One game frame: the step the animation loop and the test's fast-forward share.
 export function frame() {
+  if (racing()) {
+    raceFrame();
+    return 0;
+  }
   const [right, up] = tilt();
   w.set_tilt(right, up);
   const t0 = performance.now();
