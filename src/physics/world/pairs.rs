@@ -19,7 +19,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 
     /// One pair of [`World::collide_marbles`]: pushed apart when they overlap, eq. 1
     /// between them, then the tile passes for both. Returns whether they touched.
+    #[inline]
     pub(super) fn collide_pair<const SPACE: bool>(&mut self, a: usize, b: usize) -> bool {
+        self.collide_pair_in(a, b, SPACE)
+    }
+
+    /// [`World::collide_pair`] with the kind of world a value: one copy for both
+    /// (the micro:bit v1's flash; the pair is rare, the branch costs nothing).
+    #[inline(never)]
+    fn collide_pair_in(&mut self, a: usize, b: usize, space: bool) -> bool {
         let p = self.params;
         let r2 = p.radius + p.radius;
         let (ma, mb) = (self.marbles[a], self.marbles[b]);
@@ -77,10 +85,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // The passes themselves (what `collide_tiles` comes to), without its
         // inline shortcut for the common case: this one is rare.
         let pushed = (na.pos, nb.pos);
-        na.supported = self.contact_passes::<SPACE>(&mut na, &still, ma.pos) || na.supported;
-        nb.supported = self.contact_passes::<SPACE>(&mut nb, &still, mb.pos) || nb.supported;
+        na.supported = self.passes(space, &mut na, &still, ma.pos) || na.supported;
+        nb.supported = self.passes(space, &mut nb, &still, mb.pos) || nb.supported;
         if !p.events() && bounce == S::ZERO {
-            self.settle_on::<SPACE>(&mut na, &mut nb, n, pushed, &still);
+            self.settle_on(space, &mut na, &mut nb, n, pushed, &still);
         }
         self.marbles[a] = na;
         self.marbles[b] = nb;
@@ -97,8 +105,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// the marble out of it without its velocity would add energy. The event
     /// stepper's pair slices are short enough for that share to stay under
     /// `2^-12·r`; they are left as they are.
-    fn settle_on<const SPACE: bool>(
+    fn settle_on(
         &mut self,
+        space: bool,
         na: &mut Marble<S>,
         nb: &mut Marble<S>,
         n: Vec3<S>,
@@ -117,11 +126,20 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if towards_a >= towards_b {
             let from = na.pos;
             na.pos -= n.scale(closed);
-            na.supported = self.contact_passes::<SPACE>(na, still, from) || na.supported;
+            na.supported = self.passes(space, na, still, from) || na.supported;
         } else {
             let from = nb.pos;
             nb.pos += n.scale(closed);
-            nb.supported = self.contact_passes::<SPACE>(nb, still, from) || nb.supported;
+            nb.supported = self.passes(space, nb, still, from) || nb.supported;
+        }
+    }
+
+    /// The contact passes for either kind of world.
+    fn passes(&mut self, space: bool, m: &mut Marble<S>, still: &Solver<S>, from: Vec3<S>) -> bool {
+        if space {
+            self.contact_passes::<true>(m, still, from)
+        } else {
+            self.contact_passes::<false>(m, still, from)
         }
     }
 }
