@@ -1,7 +1,7 @@
 //! The NVMC shared by the best times (the records task) and the ghosts (the
 //! game task): one mutex over the flash, a partition for each store
-//! ([`marble_rolling::board::microbit::storage`], host-tested there). Wiring
-//! only.
+//! (`marble_rolling::board::microbit::storage`, the library's feature
+//! `shared-flash`, host-tested there). Wiring only.
 //!
 //! Without the `ghosts` feature (the default: with the radio race the ghost
 //! passes the v2's flash and RAM budgets) the records have the NVMC to
