@@ -89,6 +89,20 @@ pub trait Scalar:
             x
         }
     }
+    /// A tilt sample's kick `(a·dt, ½·a·dt²)` from `mg` milli-g and a pull's
+    /// `scale ≥ 0`: `mg · scale · 2^-dv_shift` rounded to nearest and `mg · scale ·
+    /// 2^-dp_shift` rounded away from zero, each as [`Scalar::from_scaled`] rounds.
+    /// Fixed point forms the 95-bit product once, from two 32 × 32 → 64 multiplies,
+    /// where `from_scaled` takes a 128-bit one (on the Cortex-M0 a 128-bit product
+    /// is six library multiplies): every tilt sample pays for it, on every axis
+    /// it moves.
+    fn from_pull(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self) {
+        let n = mg as i128 * scale as i128;
+        (
+            Self::from_scaled(n, dv_shift, false),
+            Self::from_scaled(n, dp_shift, true),
+        )
+    }
     /// The value as `f64` (exact for every implemented type except `f64` itself,
     /// which is the identity).
     fn to_f64(self) -> f64;

@@ -67,11 +67,7 @@ impl PullScale {
     /// short of the pull would add `a·ε` of energy every step (measured: +4·10⁻⁴ over
     /// 10⁴ elastic bounces in I32F32), while one rounded past it only loses it.
     pub fn kick<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
-        let n = mg as i128 * self.0 as i128;
-        (
-            S::from_scaled(n, SCALE_SHIFT + k, false),
-            S::from_scaled(n, SCALE_SHIFT + 2 * k + 1, true),
-        )
+        S::from_pull(mg, self.0, SCALE_SHIFT + k, SCALE_SHIFT + 2 * k + 1)
     }
 }
 

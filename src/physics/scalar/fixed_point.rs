@@ -67,6 +67,66 @@ pub(super) fn mul_shr_halves<const FRAC: u32>(a: i32, b: i32) -> i32 {
     (((high << 32) + (cross << 16) + low) >> FRAC) as i32
 }
 
+/// The exact product `a · b` of two 32-bit words. One `umull` where the core
+/// has a 32 × 32 → 64 multiply.
+#[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+#[inline(always)]
+fn mul_wide(a: u32, b: u32) -> u64 {
+    a as u64 * b as u64
+}
+
+/// The exact product `a · b` on ARMv6-M, from four 16 × 16 → 32 products
+/// ([`mul_wide_halves`]): LLVM would call the 64 × 64 library multiply.
+#[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+#[inline(always)]
+fn mul_wide(a: u32, b: u32) -> u64 {
+    mul_wide_halves(a, b)
+}
+
+/// `a · b` from the products of their 16-bit halves: `ah·bh·2³² + (ah·bl +
+/// al·bh)·2¹⁶ + al·bl`, each partial product below 2³², their sums in 64 bits.
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+pub(super) fn mul_wide_halves(a: u32, b: u32) -> u64 {
+    let (ah, al) = (a >> 16, a & 0xffff);
+    let (bh, bl) = (b >> 16, b & 0xffff);
+    let cross = (ah * bl) as u64 + (al * bh) as u64;
+    (((ah * bh) as u64) << 32) + (cross << 16) + (al * bl) as u64
+}
+
+/// `|mg| · scale`, exact, as its low 32 bits and the rest: with `scale = sh·2³²
+/// + sl` (`sh < 2³¹`, a non-negative i64), `|mg|·sl < 2⁶⁴` and `|mg|·sh < 2⁶²`.
+#[inline(always)]
+fn pull_product(mg: i32, scale: u64) -> (u32, u64) {
+    let m = mg.unsigned_abs();
+    let low_product = mul_wide(m, scale as u32);
+    let high_product = mul_wide(m, (scale >> 32) as u32);
+    (low_product as u32, high_product + (low_product >> 32))
+}
+
+/// `from_scaled`'s rounding of a kick's product `(low, high)` (see
+/// [`pull_product`]) by `2^-s`, `s` in `32..64`, on 64-bit words: the bias's low
+/// word carries into the high one, which stays below 2⁶³, so the quotient fits
+/// an i64 and its negation too.
+#[inline(always)]
+fn pull_quotient((low, high): (u32, u64), negative: bool, s: u32, away: bool) -> i64 {
+    let bias = if away {
+        (1u64 << s) - 1
+    } else {
+        1u64 << (s - 1)
+    };
+    let carry = (low as u64 + (bias as u32) as u64) >> 32;
+    let q = ((high + (bias >> 32) + carry) >> (s - 32)) as i64;
+    if negative {
+        -q
+    } else {
+        q
+    }
+}
+
 macro_rules! fixed_scalar {
     ($t:ty, $wide:ty, $name:literal) => {
         impl Scalar for $t {
@@ -208,6 +268,28 @@ macro_rules! fixed_scalar {
                     return <$t>::from_bits(bits.clamp(lo, hi) as _);
                 }
                 <$t>::from_bits(scaled_bits(n, shift, away, frac, lo, hi) as _)
+            }
+            // Out of line: one copy for every tilt sample's kicks (the v1's flash).
+            #[inline(never)]
+            fn from_pull(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self) {
+                let frac = <$t>::FRAC_NBITS;
+                let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
+                    && (32..64).contains(&dp_shift.wrapping_sub(frac));
+                if scale < 0 || !words {
+                    let n = mg as i128 * scale as i128;
+                    return (
+                        Self::from_scaled(n, dv_shift, false),
+                        Self::from_scaled(n, dp_shift, true),
+                    );
+                }
+                let product = pull_product(mg, scale as u64);
+                let (lo, hi) = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
+                let dv = pull_quotient(product, mg < 0, dv_shift - frac, false);
+                let dp = pull_quotient(product, mg < 0, dp_shift - frac, true);
+                (
+                    <$t>::from_bits(dv.clamp(lo, hi) as _),
+                    <$t>::from_bits(dp.clamp(lo, hi) as _),
+                )
             }
             fn rsqrt(self) -> Self {
                 let bits = self.to_bits();

@@ -1,6 +1,6 @@
 //! The backends against each other and against exact arithmetic.
 
-use super::fixed_point::{mul_shr_halves, scaled_bits};
+use super::fixed_point::{mul_shr_halves, mul_wide_halves, scaled_bits};
 use super::rsqrt::RSQRT_SEED;
 use super::*;
 
@@ -57,7 +57,6 @@ fn fixed_rsqrt_is_within_an_lsb() {
     assert_eq!(I8F24::from_f64(4.0).rsqrt(), I8F24::from_f64(0.5));
 }
 
-/// A small deterministic generator (xorshift64*) for the equivalence sweeps.
 /// The Cortex-M0's product from 16-bit halves against the 64-bit one, bit for
 /// bit: every sign and carry combination of the halves, the extremes, and
 /// random operands (the M0 end-state hashes in the study check it on the chip).
@@ -96,6 +95,67 @@ fn halves_product_is_the_wide_product() {
     }
 }
 
+/// The Cortex-M0's full product from 16-bit halves against the native one.
+#[test]
+fn halves_wide_product_is_the_wide_product() {
+    let edges = [0, 1, 0xffff, 0x1_0000, 0x7fff_ffff, 0x8000_0000, u32::MAX];
+    for a in edges {
+        for b in edges {
+            assert_eq!(mul_wide_halves(a, b), a as u64 * b as u64, "{a} · {b}");
+        }
+    }
+    let mut state = 0x2545_f491_4f6c_dd1d;
+    for _ in 0..200_000 {
+        let (a, b) = (rng(&mut state) as u32, rng(&mut state) as u32);
+        assert_eq!(mul_wide_halves(a, b), a as u64 * b as u64, "{a} · {b}");
+    }
+}
+
+/// A tilt sample's kick on 64-bit words ([`Scalar::from_pull`]) against the
+/// 128-bit product it replaces, bit for bit, in each fixed-point format: every
+/// shift the kicks use and beyond, both roundings, the extremes of `mg` and of
+/// the scale (a pull's scale is below 2⁶³).
+#[test]
+fn pull_kicks_are_the_128_bit_kicks() {
+    fn check<S: Scalar>(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) {
+        let n = mg as i128 * scale as i128;
+        assert_eq!(
+            S::from_pull(mg, scale, dv_shift, dp_shift),
+            (
+                S::from_scaled(n, dv_shift, false),
+                S::from_scaled(n, dp_shift, true)
+            ),
+            "{} {mg} · {scale} >> {dv_shift}, {dp_shift}",
+            S::NAME
+        );
+    }
+    fn all(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) {
+        check::<I8F24>(mg, scale, dv_shift, dp_shift);
+        check::<I16F16>(mg, scale, dv_shift, dp_shift);
+        check::<I32F32>(mg, scale, dv_shift, dp_shift);
+    }
+    let mgs = [i32::MIN, -8_000, -1_000, -1, 0, 1, 981, 8_000, i32::MAX];
+    let scales = [0, 1, 0xffff_ffff, 1 << 32, 3 << 40, i64::MAX >> 8, i64::MAX];
+    for mg in mgs {
+        for scale in scales {
+            for shift in 40..=110 {
+                all(mg, scale, shift, shift);
+                all(mg, scale, shift, shift + 8);
+                all(mg, scale, shift, 2 * shift - 55);
+            }
+        }
+    }
+    let mut state = 0x9e37_79b9_7f4a_7c15;
+    for _ in 0..100_000 {
+        let mg = rng(&mut state) as i32 >> (rng(&mut state) % 32);
+        let scale = (rng(&mut state) >> 1) as i64 >> (rng(&mut state) % 63);
+        let dv_shift = 40 + (rng(&mut state) % 70) as u32;
+        let dp_shift = 40 + (rng(&mut state) % 70) as u32;
+        all(mg, scale, dv_shift, dp_shift);
+    }
+}
+
+/// A small deterministic generator (xorshift64*) for the equivalence sweeps.
 fn rng(state: &mut u64) -> u64 {
     *state ^= *state >> 12;
     *state ^= *state << 25;
