@@ -71,7 +71,7 @@ pub(super) fn mul_shr_halves<const FRAC: u32>(a: i32, b: i32) -> i32 {
 /// has a 32 × 32 → 64 multiply.
 #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
 #[inline(always)]
-fn mul_wide(a: u32, b: u32) -> u64 {
+pub(super) fn mul_wide(a: u32, b: u32) -> u64 {
     a as u64 * b as u64
 }
 
@@ -79,7 +79,7 @@ fn mul_wide(a: u32, b: u32) -> u64 {
 /// ([`mul_wide_halves`]): LLVM would call the 64 × 64 library multiply.
 #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
 #[inline(always)]
-fn mul_wide(a: u32, b: u32) -> u64 {
+pub(super) fn mul_wide(a: u32, b: u32) -> u64 {
     mul_wide_halves(a, b)
 }
 

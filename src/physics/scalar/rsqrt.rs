@@ -1,5 +1,7 @@
 //! The inverse square root on a fixed-point format's bits, without a division.
 
+use super::fixed_point::mul_wide;
+
 /// `1/√x` for a fixed-point `x = bits·2^-frac > 0`, as bits of the same format,
 /// rounded to nearest (within 1 LSB).
 ///
@@ -8,7 +10,8 @@
 /// on the per-step path of rolling resistance and of every edge contact. `x` is
 /// scaled by a power of four into `m ∈ [1, 4)`, a 96-entry table (by `m`'s top
 /// bits) seeds `1/√m` to within 0.8 %, and Newton steps `y ← y·(3 − m·y²)/2` in
-/// Q31 with 32×32→64-bit products (one instruction each on a Cortex-M3/M4) take it
+/// Q31 with 32×32→64-bit products (one instruction each on a Cortex-M3/M4, four
+/// 16-bit multiplies on a Cortex-M0: [`mul_wide`]) take it
 /// to 10⁻⁴, then 1.5·10⁻⁸ — enough for 24 fraction bits — and a third step for
 /// wider formats.
 pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
@@ -35,11 +38,11 @@ pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
     let steps = if frac <= 24 { 2 } else { 3 };
     for _ in 0..steps {
         // y·(3 − m·y²)/2 with y in Q31, m in Q30.
-        let y2 = ((y as u64 * y as u64) >> 31) as u32; // Q31
-        let my2 = ((m as u64 * y2 as u64) >> 30) as u32; // Q31, ≈ 1
-                                                         // (3 − m·y²)/2 in Q31 is (3·2^31 − my2)/2 = 3·2^30 − my2/2.
+        // (3 − m·y²)/2 in Q31 is (3·2^31 − my2)/2 = 3·2^30 − my2/2.
+        let y2 = (mul_wide(y, y) >> 31) as u32; // Q31
+        let my2 = (mul_wide(m, y2) >> 30) as u32; // Q31, ≈ 1
         let t = (3u32 << 30).wrapping_sub(my2 >> 1);
-        y = ((y as u64 * t as u64) >> 31) as u32;
+        y = (mul_wide(y, t) >> 31) as u32;
     }
     // 1/√x = y·2^-k: from Q31 to `frac` bits.
     let out = frac as i32 - 31 - k;
