@@ -52,7 +52,12 @@ fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
 /// (`ah` signed, `al` in `0..2¹⁶`) and `b` likewise, `a·b = ah·bh·2³² +
 /// (ah·bl + al·bh)·2¹⁶ + al·bl`, and every partial product fits 32 bits:
 /// `|ah·bh| ≤ 2³⁰`, `ah·bl` and `al·bh` lie in `[−2³¹ + 2¹⁵, 2³¹)`, `al·bl < 2³²`
-/// unsigned. Only their sums need 64 bits, which are adds with carry.
+/// unsigned. The product is kept as two words, `ah·bh : al·bl`, and each cross
+/// product added in at bit 16 as its own two words (`c >> 16 : c << 16`) with
+/// a carry: the `adds`/`adcs` pairs a Cortex-M0 has, where a 64-bit sum of the
+/// cross products first would take a third word and a spill to the stack
+/// (the function: 30 instructions that way, 27 this way; LLVM reassociates a
+/// sum of sign-extended 64-bit terms back into the first form).
 #[cfg_attr(
     not(all(target_arch = "arm", not(target_has_atomic = "32"))),
     allow(dead_code)
@@ -61,10 +66,16 @@ fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
 pub(super) fn mul_shr_halves<const FRAC: u32>(a: i32, b: i32) -> i32 {
     let (ah, al) = (a >> 16, a & 0xffff);
     let (bh, bl) = (b >> 16, b & 0xffff);
-    let low = (al as u32 * bl as u32) as i64;
-    let cross = (ah * bl) as i64 + (al * bh) as i64;
-    let high = (ah * bh) as i64;
-    (((high << 32) + (cross << 16) + low) >> FRAC) as i32
+    let (c1, c2) = (ah * bl, al * bh);
+    let (lo, carry) = (al as u32 * bl as u32).overflowing_add((c1 << 16) as u32);
+    let hi = (ah * bh).wrapping_add(c1 >> 16).wrapping_add(carry as i32);
+    let (lo, carry) = lo.overflowing_add((c2 << 16) as u32);
+    let hi = hi.wrapping_add(c2 >> 16).wrapping_add(carry as i32);
+    if FRAC == 0 {
+        lo as i32
+    } else {
+        (hi << (32 - FRAC)) | (lo >> FRAC) as i32
+    }
 }
 
 /// The exact product `a · b` of two 32-bit words. One `umull` where the core
