@@ -124,6 +124,11 @@ enum Task {
         /// bounce, maze, corner), backend i8f24, event stepping.
         #[arg(long, value_name = "SCENE", value_parser = clap::builder::PossibleValuesParser::new(profile::SCENES))]
         bench: Option<String>,
+        /// Count only a window of the run in the second and by-source tables:
+        /// calls FROM to TO (1-based) of FUNCTION, e.g. `step_events:1933-2230`
+        /// (one call a physics step).
+        #[arg(long, value_name = "FUNCTION:FROM-TO")]
+        window: Option<String>,
     },
     /// Build the game for the browser (wasm32-unknown-unknown) and serve the
     /// page on 127.0.0.1 (`cargo web`).
@@ -198,7 +203,12 @@ impl Task {
             Task::CheckGhosts => demo::check_ghosts(),
             Task::SizeReport { no_build, elf } => size::run(no_build, elf),
             Task::Properties { cases } => properties::run(cases),
-            Task::QemuProfile { top, v1, bench } => {
+            Task::QemuProfile {
+                top,
+                v1,
+                bench,
+                window,
+            } => {
                 let subject = match bench {
                     Some(scene) => profile::Subject::Bench(
                         profile::SCENES
@@ -209,7 +219,7 @@ impl Task {
                     None if v1 => profile::Subject::DemoV1,
                     None => profile::Subject::Demo,
                 };
-                profile::run(top, subject)
+                profile::run(top, subject, window.as_deref())
             }
             Task::Web { port, no_serve } => web::run(port, no_serve),
             Task::WebTest { screenshot } => web::test(screenshot),
@@ -316,12 +326,13 @@ mod tests {
             Task::QemuProfile {
                 top: 20,
                 v1: false,
-                bench: None
+                bench: None,
+                window: None
             }
         ));
         assert!(matches!(
             parse(&["qemu-profile", "--bench", "maze"]),
-            Task::QemuProfile { top: 40, v1: false, bench: Some(scene) } if scene == "maze"
+            Task::QemuProfile { top: 40, v1: false, bench: Some(scene), window: None } if scene == "maze"
         ));
         assert!(Cli::try_parse_from(["xtask", "qemu-profile", "--bench", "mazes"]).is_err());
         assert!(matches!(

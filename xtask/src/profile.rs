@@ -26,7 +26,7 @@ use crate::process;
 use crate::runner;
 use crate::setup::{self, M0, M4};
 use crate::symbols::{self, Symbols};
-use crate::trace::{Profile, Tally};
+use crate::trace::{Profile, Tally, Window};
 use crate::workspace;
 
 /// The study's scenes, in `study::SceneId` order (the benchmark's
@@ -45,8 +45,12 @@ pub enum Subject {
     Bench(usize),
 }
 
-/// Runs, attributes, prints the tables on stdout.
-pub fn run(top: usize, subject: Subject) -> Outcome {
+/// Runs, attributes, prints the tables on stdout. With `window`
+/// (`FUNCTION:FROM-TO`), the second table and the by-source tables count only
+/// the calls FROM to TO (1-based) of FUNCTION and what runs until its next call:
+/// `step_events:1933-2230` is grand-tour's frames in the v1 demo (the frames of
+/// the levels before it summed, as `check-microbit-v1` lists them).
+pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
     let v1 = subject == Subject::DemoV1;
     let qemu = setup::qemu()?;
     let elf = if let Subject::Bench(_) = subject {
@@ -113,7 +117,16 @@ pub fn run(top: usize, subject: Subject) -> Outcome {
         .map_err(|e| Failure::new(format!("cannot read {}: {e}", elf.display())))?;
     let symbols = symbols::code_symbols(&data)
         .map_err(|e| Failure::new(format!("cannot read the symbols of {}: {e}", elf.display())))?;
-    let mut profile = Profile::new(Symbols::new(&symbols));
+    let symbols = Symbols::new(&symbols);
+    let window = match window {
+        Some(text) => Some(parse_window(text, &symbols)?),
+        None => None,
+    };
+    let counted = usize::from(window.is_some());
+    let mut profile = Profile::new(symbols);
+    if let Some(window) = window {
+        profile = profile.with_window(window);
+    }
     say!("attributing the trace to functions…");
     let file = File::open(&trace)
         .map_err(|e| Failure::new(format!("cannot read {}: {e}", trace.display())))?;
@@ -128,11 +141,40 @@ pub fn run(top: usize, subject: Subject) -> Outcome {
         }
     }
     print!("{}", profile.report(top));
-    print!("{}", by_source(&elf, &profile.instruction_counts(0), top)?);
+    print!(
+        "{}",
+        by_source(&elf, &profile.instruction_counts(counted), top)?
+    );
     if std::env::var("KEEP_TRACE").as_deref() != Ok("1") {
         let _ = std::fs::remove_file(&trace);
     }
     Ok(0)
+}
+
+/// `FUNCTION:FROM-TO` as a [`Window`] on the entries of every function named
+/// `…::FUNCTION`.
+fn parse_window(text: &str, symbols: &Symbols) -> Result<Window, Failure> {
+    let bad = || {
+        Failure::new(format!(
+            "--window {text}: expected FUNCTION:FROM-TO (say step_events:1933-2230), FROM ≥ 1, TO ≥ FROM"
+        ))
+    };
+    let (function, range) = text.rsplit_once(':').ok_or_else(bad)?;
+    let (from, to) = range.split_once('-').ok_or_else(bad)?;
+    let (from, to): (u64, u64) = (
+        from.trim().parse().map_err(|_| bad())?,
+        to.trim().parse().map_err(|_| bad())?,
+    );
+    if from == 0 || to < from {
+        return Err(bad());
+    }
+    let entries = symbols.entries_of(function);
+    if entries.is_empty() {
+        return Err(Failure::new(format!(
+            "--window {text}: no function named …::{function} in the firmware"
+        )));
+    }
+    Ok(Window::new(entries, from, to))
 }
 
 /// The areas of the firmware, by what the name of the function an instruction
@@ -301,6 +343,31 @@ mod tests {
         ] {
             assert!(!is_library(name), "{name}");
         }
+    }
+
+    #[test]
+    fn windows_name_a_function_and_a_range_of_its_calls() {
+        let symbols = Symbols::new(&[symbols::Symbol {
+            address: 0x401,
+            size: 0x10,
+            mangled: "_ZN4game11step_events17h0000000000000001E".into(),
+        }]);
+        let w = parse_window("step_events:3-7", &symbols).expect("a window");
+        assert_eq!((w.entries.as_slice(), w.from, w.to), (&[0x400][..], 3, 7));
+        for bad in [
+            "step_events",
+            "step_events:0-3",
+            "step_events:5-4",
+            "step_events:a-4",
+        ] {
+            let e = parse_window(bad, &symbols).err().expect(bad).message;
+            assert!(e.contains("FUNCTION:FROM-TO"), "{bad}: {e}");
+        }
+        let e = parse_window("step:1-2", &symbols)
+            .err()
+            .expect("no such function")
+            .message;
+        assert!(e.contains("no function named …::step"), "{e}");
     }
 
     #[test]

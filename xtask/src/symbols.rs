@@ -197,6 +197,17 @@ impl Symbols {
         &self.names[id]
     }
 
+    /// The entry addresses of every function named `…::name` (each of a
+    /// generic function's instances).
+    pub fn entries_of(&self, name: &str) -> Vec<u64> {
+        let tail = format!("::{name}");
+        self.entries
+            .iter()
+            .filter(|&&(_, _, id)| self.names[id].ends_with(&tail))
+            .map(|&(address, ..)| address & !1)
+            .collect()
+    }
+
     /// The address range of the lowest-addressed symbol whose name is `path`
     /// or inside it (`path::…`).
     pub fn range_of(&self, path: &str) -> Option<(u64, u64)> {

@@ -94,8 +94,31 @@ fn hex(digits: &[u8]) -> Option<u64> {
     u64::from_str_radix(std::str::from_utf8(digits).ok()?, 16).ok()
 }
 
+/// A window of the demo counted on its own: from the `from`-th to the `to`-th
+/// entry into one of `entries` (1-based, inclusive), up to that function's
+/// next entry.
+pub struct Window {
+    pub entries: Vec<u64>,
+    pub from: u64,
+    pub to: u64,
+    calls: u64,
+}
+
+impl Window {
+    pub fn new(entries: Vec<u64>, from: u64, to: u64) -> Self {
+        Window {
+            entries,
+            from,
+            to,
+            calls: 0,
+        }
+    }
+}
+
 /// The running attribution.
 pub struct Profile {
+    /// Counted as the replay instead of `qemu::profile`, when given.
+    window: Option<Window>,
     symbols: Symbols,
     /// `qemu::profile`'s address range (empty when there is none).
     replay: (u64, u64),
@@ -119,6 +142,7 @@ impl Profile {
     pub fn new(symbols: Symbols) -> Self {
         let replay = symbols.range_of("qemu::profile").unwrap_or((1, 0));
         Profile {
+            window: None,
             symbols,
             replay,
             sizes: HashMap::new(),
@@ -132,6 +156,12 @@ impl Profile {
             prev: 0,
             helper: HashMap::new(),
         }
+    }
+
+    /// Counts `window` as the second table (`profile`) instead of the replay.
+    pub fn with_window(mut self, window: Window) -> Self {
+        self.window = Some(window);
+        self
     }
 
     fn is_helper(&mut self, id: usize) -> bool {
@@ -156,7 +186,12 @@ impl Profile {
                             .insert(host, std::mem::take(&mut self.listing));
                     }
                 }
-                if self.phase == 0 && self.replay.0 <= pc && pc < self.replay.1 {
+                if let Some(w) = self.window.as_mut() {
+                    if w.entries.contains(&pc) {
+                        w.calls += 1;
+                        self.phase = usize::from(w.from <= w.calls && w.calls <= w.to);
+                    }
+                } else if self.phase == 0 && self.replay.0 <= pc && pc < self.replay.1 {
                     self.phase = 1;
                 }
                 self.runs[self.phase].add(host, 1);
@@ -208,7 +243,12 @@ impl Profile {
     /// the callers of helper routines during the demo.
     pub fn report(&mut self, top: usize) -> String {
         let mut out = String::new();
-        for (phase, name) in ["demo", "profile"].into_iter().enumerate() {
+        let window = self
+            .window
+            .as_ref()
+            .map(|w| format!("calls {}..={} of the window's function", w.from, w.to));
+        let second = window.as_deref().unwrap_or("profile");
+        for (phase, name) in ["demo", second].into_iter().enumerate() {
             let mut per = Tally::new();
             let blocks: Vec<(u64, u64)> = self.runs[phase].items().to_vec();
             for (host, n) in blocks {
@@ -283,6 +323,49 @@ mod tests {
             size,
             mangled: mangled.into(),
         }
+    }
+
+    /// The second table counts from the 2nd to the 3rd entry into `step`
+    /// (`Window`), up to its 4th: the blocks of the 1st and 4th calls are the
+    /// demo's.
+    #[test]
+    fn a_window_counts_the_calls_it_names() {
+        let symbols = Symbols::new(&[
+            symbol(0x400, 0x10, "_ZN4game4step17h0000000000000001E"),
+            symbol(0x500, 0x10, "_ZN4game4draw17h0000000000000002E"),
+        ]);
+        let entries = symbols.entries_of("step");
+        assert_eq!(entries, [0x400]);
+        assert!(symbols.entries_of("tep").is_empty());
+        let mut profile = Profile::new(symbols).with_window(Window::new(entries, 2, 3));
+        let listing = "IN: step
+0x00000400:  b580       push     {r7, lr}
+0x00000402:  af00       add      r7, sp, #0
+
+Trace 0: 0x10 [00000000/00000400/00000000/ff200000] 
+IN: draw
+0x00000500:  4770       bx       lr
+
+Trace 0: 0x20 [00000000/00000500/00000000/ff200000] 
+";
+        let call = "Trace 0: 0x10 [00000000/00000400/00000000/ff200000] \n\
+                    Trace 0: 0x20 [00000000/00000500/00000000/ff200000] \n";
+        for line in listing
+            .split_inclusive('\n')
+            .chain(call.split_inclusive('\n').cycle().take(6))
+        {
+            profile.line(line.trim_start().as_bytes());
+        }
+        let report = profile.report(5);
+        assert!(
+            report.starts_with(
+                "== demo: 6 instructions\n\
+                 \x20         4  66.7%  game::step\n\
+                 \x20         2  33.3%  game::draw\n\
+                 == calls 2..=3 of the window's function: 6 instructions\n"
+            ),
+            "{report}"
+        );
     }
 
     #[test]
