@@ -17,6 +17,30 @@ impl FracProduct for i32 {
     }
 }
 
+/// The fixed-point quotient on a format's bits: `fixed`'s `saturating_div`
+/// (`rhs != 0`).
+trait FracQuotient {
+    fn div_frac<const FRAC: u32>(self, rhs: Self) -> Self;
+}
+
+impl FracQuotient for i32 {
+    #[inline(always)]
+    fn div_frac<const FRAC: u32>(self, rhs: i32) -> i32 {
+        super::quotient::div_frac::<FRAC>(self, rhs)
+    }
+}
+
+impl FracQuotient for i64 {
+    #[inline(always)]
+    fn div_frac<const FRAC: u32>(self, rhs: i64) -> i64 {
+        use fixed::{types::extra::U32, FixedI64};
+        debug_assert_eq!(FRAC, 32, "the one 64-bit format is I32F32");
+        FixedI64::<U32>::from_bits(self)
+            .saturating_div(FixedI64::<U32>::from_bits(rhs))
+            .to_bits()
+    }
+}
+
 impl FracProduct for i64 {
     #[inline(always)]
     fn mul_shr<const FRAC: u32>(self, rhs: i64) -> i64 {
@@ -247,7 +271,10 @@ macro_rules! fixed_scalar {
                 if rhs == <$t>::ZERO {
                     <$t>::ZERO
                 } else {
-                    self.saturating_div(rhs)
+                    <$t>::from_bits(
+                        self.to_bits()
+                            .div_frac::<{ <$t>::FRAC_NBITS }>(rhs.to_bits()),
+                    )
                 }
             }
             // Inlined: at its callers the product (i32 × i64) is known to be narrow,

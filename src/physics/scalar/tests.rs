@@ -1,6 +1,7 @@
 //! The backends against each other and against exact arithmetic.
 
 use super::fixed_point::{mul_shr_halves, mul_wide_halves, scaled_bits};
+use super::quotient::{div_frac, divide_words};
 use super::rsqrt::RSQRT_SEED;
 use super::*;
 
@@ -154,6 +155,106 @@ fn pull_kicks_are_the_128_bit_kicks() {
         let dv_shift = 40 + (rng(&mut state) % 70) as u32;
         let dp_shift = 40 + (rng(&mut state) % 70) as u32;
         all(mg, scale, dv_shift, dp_shift);
+    }
+}
+
+/// The two-digit long division against the 64-bit one: every shift of the
+/// divisor, quotients at both ends, random words.
+#[test]
+fn word_division_is_the_64_bit_division() {
+    fn check(high: u32, low: u32, d: u32) {
+        let n = (high as u64) << 32 | low as u64;
+        assert_eq!(divide_words(high, low, d) as u64, n / d as u64, "{n} / {d}");
+    }
+    let mut state = 0x51_7cc1_b727_220a;
+    for shift in 0..32 {
+        for _ in 0..2_000 {
+            let d = ((rng(&mut state) as u32) | 1 << 31) >> shift;
+            let high = rng(&mut state) as u32 % d;
+            check(high, rng(&mut state) as u32, d);
+            check(d - 1, u32::MAX, d);
+            check(0, rng(&mut state) as u32, d);
+        }
+    }
+    for d in [
+        1,
+        2,
+        3,
+        0xffff,
+        0x1_0000,
+        0x1_0001,
+        0x7fff_ffff,
+        0x8000_0000,
+        u32::MAX,
+    ] {
+        for high in [0, 1, d / 2, d - 1] {
+            for low in [0, 1, 0xffff, 0x8000_0000, u32::MAX] {
+                check(high.min(d - 1), low, d);
+            }
+        }
+    }
+}
+
+/// The fixed-point quotient ([`Scalar::div`]) bit for bit `fixed`'s
+/// `saturating_div`, in each format: signs, saturation both ways, `MIN`,
+/// quotients at the edges of the range, random operands of every size.
+#[test]
+fn quotients_are_fixed_s_saturating_quotients() {
+    fn check<const FRAC: u32>(a: i32, b: i32) {
+        use fixed::types::extra::{U16, U24};
+        use fixed::FixedI32;
+        let want = match FRAC {
+            24 => FixedI32::<U24>::from_bits(a)
+                .saturating_div(FixedI32::<U24>::from_bits(b))
+                .to_bits(),
+            16 => FixedI32::<U16>::from_bits(a)
+                .saturating_div(FixedI32::<U16>::from_bits(b))
+                .to_bits(),
+            _ => unreachable!(),
+        };
+        assert_eq!(div_frac::<FRAC>(a, b), want, "{a} / {b} ({FRAC})");
+    }
+    let edges = [
+        i32::MIN,
+        i32::MIN + 1,
+        -(1 << 24),
+        -3,
+        -1,
+        0,
+        1,
+        2,
+        3,
+        1 << 16,
+        1 << 24,
+        (1 << 24) + 1,
+        i32::MAX - 1,
+        i32::MAX,
+    ];
+    for a in edges {
+        for b in edges.into_iter().filter(|&b| b != 0) {
+            check::<24>(a, b);
+            check::<16>(a, b);
+        }
+    }
+    let mut state = 0x2b99_2ddf_a232_49d6;
+    for _ in 0..300_000 {
+        let a = rng(&mut state) as i32 >> (rng(&mut state) % 32);
+        let b = rng(&mut state) as i32 >> (rng(&mut state) % 32);
+        if b != 0 {
+            check::<24>(a, b);
+            check::<16>(a, b);
+        }
+    }
+    // Through the trait, I32F32 included (`fixed`'s own quotient there).
+    for (a, b) in [(3.0, 7.0), (-1.5, 0.25), (100.0, -0.001), (1e-6, 1e3)] {
+        assert_eq!(
+            I8F24::from_f64(a).div(I8F24::from_f64(b)),
+            I8F24::from_f64(a).saturating_div(I8F24::from_f64(b))
+        );
+        assert_eq!(
+            I32F32::from_f64(a).div(I32F32::from_f64(b)),
+            I32F32::from_f64(a).saturating_div(I32F32::from_f64(b))
+        );
     }
 }
 
