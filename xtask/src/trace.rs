@@ -102,6 +102,8 @@ pub struct Window {
     pub from: u64,
     pub to: u64,
     calls: u64,
+    /// Instructions from each call in the window to the next, by call.
+    per_call: Tally<u64>,
 }
 
 impl Window {
@@ -111,6 +113,7 @@ impl Window {
             from,
             to,
             calls: 0,
+            per_call: Tally::new(),
         }
     }
 }
@@ -195,6 +198,10 @@ impl Profile {
                     self.phase = 1;
                 }
                 self.runs[self.phase].add(host, 1);
+                if let Some(w) = self.window.as_mut().filter(|_| self.phase == 1) {
+                    let size = self.sizes.get(&host).map_or(0, |&(_, k)| k);
+                    w.per_call.add(w.calls, size);
+                }
                 if self.phase == 0 {
                     let callee = self.symbols.id(pc);
                     if self.is_helper(callee) {
@@ -260,6 +267,12 @@ impl Profile {
             for (id, n) in per.most_common(top) {
                 let share = 100.0 * n as f64 / total.max(1) as f64;
                 out += &format!("{n:11} {share:5.1}%  {}\n", cut(self.symbols.name(id), 120));
+            }
+        }
+        if let Some(w) = &self.window {
+            out += "== the window's costliest calls (call: instructions to the next)\n";
+            for (call, n) in w.per_call.most_common(5) {
+                out += &format!("{call:11}: {n}\n");
             }
         }
         out += "== helper calls during the demo, by caller\n";
@@ -363,6 +376,14 @@ Trace 0: 0x20 [00000000/00000500/00000000/ff200000]
                  \x20         4  66.7%  game::step\n\
                  \x20         2  33.3%  game::draw\n\
                  == calls 2..=3 of the window's function: 6 instructions\n"
+            ),
+            "{report}"
+        );
+        assert!(
+            report.contains(
+                "== the window's costliest calls (call: instructions to the next)\n\
+                 \x20         2: 3\n\
+                 \x20         3: 3\n"
             ),
             "{report}"
         );
