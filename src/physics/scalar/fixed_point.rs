@@ -41,6 +41,28 @@ impl FracQuotient for i64 {
     }
 }
 
+/// The fixed-point square root on a format's bits, rounded down: `fixed`'s
+/// `sqrt` (`self > 0`).
+trait FracRoot {
+    fn sqrt_frac<const FRAC: u32>(self) -> Self;
+}
+
+impl FracRoot for i32 {
+    #[inline(always)]
+    fn sqrt_frac<const FRAC: u32>(self) -> i32 {
+        super::rsqrt::sqrt_bits::<FRAC>(self as u32) as i32
+    }
+}
+
+impl FracRoot for i64 {
+    #[inline(always)]
+    fn sqrt_frac<const FRAC: u32>(self) -> i64 {
+        use fixed::{types::extra::U32, FixedI64};
+        debug_assert_eq!(FRAC, 32, "the one 64-bit format is I32F32");
+        FixedI64::<U32>::from_bits(self).sqrt().to_bits()
+    }
+}
+
 impl FracProduct for i64 {
     #[inline(always)]
     fn mul_shr<const FRAC: u32>(self, rhs: i64) -> i64 {
@@ -264,7 +286,7 @@ macro_rules! fixed_scalar {
                 if self <= <$t>::ZERO {
                     <$t>::ZERO
                 } else {
-                    <$t>::sqrt(self)
+                    <$t>::from_bits(self.to_bits().sqrt_frac::<{ <$t>::FRAC_NBITS }>())
                 }
             }
             fn div(self, rhs: Self) -> Self {

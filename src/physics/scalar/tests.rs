@@ -2,7 +2,7 @@
 
 use super::fixed_point::{mul_shr_halves, mul_wide_halves, scaled_bits};
 use super::quotient::{div_frac, divide_words};
-use super::rsqrt::RSQRT_SEED;
+use super::rsqrt::{sqrt_bits, RSQRT_SEED};
 use super::*;
 
 #[test]
@@ -255,6 +255,58 @@ fn quotients_are_fixed_s_saturating_quotients() {
             I32F32::from_f64(a).div(I32F32::from_f64(b)),
             I32F32::from_f64(a).saturating_div(I32F32::from_f64(b))
         );
+    }
+}
+
+/// The square root ([`Scalar::sqrt`]) bit for bit `fixed`'s, rounded down, in
+/// I8F24 and I16F16: the smallest values, every power of two and its
+/// neighbours, squares and their neighbours, the largest, random values of
+/// every size.
+#[test]
+fn roots_are_fixed_s_roots() {
+    fn check(bits: i32) {
+        use fixed::types::extra::{U16, U24};
+        use fixed::FixedI32;
+        let want24 = FixedI32::<U24>::from_bits(bits).sqrt().to_bits();
+        let want16 = FixedI32::<U16>::from_bits(bits).sqrt().to_bits();
+        assert_eq!(sqrt_bits::<24>(bits as u32) as i32, want24, "√{bits} (24)");
+        assert_eq!(sqrt_bits::<16>(bits as u32) as i32, want16, "√{bits} (16)");
+    }
+    for bits in 1..5_000 {
+        check(bits);
+    }
+    for p in 0..31 {
+        for d in -2..=2 {
+            check(((1i64 << p) + d).clamp(1, i32::MAX as i64) as i32);
+        }
+    }
+    for r in [3u64, 4_095, 4_096, 46_340, 1 << 15, 3 << 13] {
+        for d in -1..=1 {
+            check(((r * r) as i64 + d).clamp(1, i32::MAX as i64) as i32);
+        }
+    }
+    check(i32::MAX);
+    let mut state = 0x1d8e_4e27_c47d_124f;
+    for _ in 0..500_000 {
+        check(((rng(&mut state) as u32 >> (rng(&mut state) % 32)) as i32 & i32::MAX).max(1));
+    }
+    // Through the trait (the inherent `sqrt` panics below zero).
+    assert_eq!(Scalar::sqrt(I8F24::ZERO), I8F24::ZERO);
+    assert_eq!(Scalar::sqrt(I8F24::from_f64(-4.0)), I8F24::ZERO);
+    assert_eq!(Scalar::sqrt(I8F24::from_f64(2.25)), I8F24::from_f64(1.5));
+    assert_eq!(Scalar::sqrt(I32F32::from_f64(2.25)), I32F32::from_f64(1.5));
+}
+
+/// [`roots_are_fixed_s_roots`] over every positive I8F24 value (about two
+/// minutes in release: `cargo test --release --lib every_root -- --ignored`).
+#[test]
+#[ignore]
+fn every_root_is_fixed_s_root() {
+    use fixed::types::extra::U24;
+    use fixed::FixedI32;
+    for bits in 1..=i32::MAX {
+        let want = FixedI32::<U24>::from_bits(bits).sqrt().to_bits();
+        assert_eq!(sqrt_bits::<24>(bits as u32) as i32, want, "√{bits}");
     }
 }
 
