@@ -201,6 +201,7 @@ pub trait Scalar:
 mod fixed_point;
 mod float;
 mod micro;
+mod product;
 mod quotient;
 mod rsqrt;
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! The inverse square root and the square root on a fixed-point format's bits,
 //! without a division.
 
-use super::fixed_point::mul_wide;
+use super::product::mul_wide;
 
 /// `1/√x` for a fixed-point `x = bits·2^-frac > 0`, as bits of the same format,
 /// rounded to nearest (within 1 LSB).

@@ -1,6 +1,7 @@
 //! The backends against each other and against exact arithmetic.
 
-use super::fixed_point::{mul_shr_halves, mul_wide_halves, scaled_bits};
+use super::fixed_point::scaled_bits;
+use super::product::{mul_shr_halves, mul_wide_halves};
 use super::quotient::{div_frac, divide_words};
 use super::rsqrt::{sqrt_bits, RSQRT_SEED};
 use super::*;
