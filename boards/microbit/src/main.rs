@@ -189,7 +189,7 @@ async fn game(
                 _,
             >(
                 &LINKS,
-                TiltConfig::DEFAULT,
+                TiltConfig::SENSOR,
                 level,
                 Seeds::Drawn(seed),
                 &mut mazes,
@@ -205,7 +205,7 @@ async fn game(
                 _,
             >(
                 &LINKS,
-                TiltConfig::DEFAULT,
+                TiltConfig::SENSOR,
                 level,
                 Seeds::Drawn(seed),
                 &mut mazes

@@ -37,7 +37,7 @@ use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
 use marble_rolling::board::qemu::{
-    Options, GHOSTS_BYTES, GHOST_BYTES, HEIGHT, MAZE_REACH, QEMU_RAM, WIDTH,
+    Options, GHOSTS_BYTES, GHOST_BYTES, HEIGHT, MAZE_REACH, PLAY_TILT, QEMU_RAM, WIDTH,
 };
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
@@ -266,7 +266,7 @@ async fn game(options: Options) {
     // demo.
     let mode = if options.interactive {
         GameMode::Play {
-            tilt: SYNTHETIC_TILT,
+            tilt: PLAY_TILT,
             level: 0,
             seeds: Seeds::Count,
         }
@@ -313,7 +313,7 @@ async fn game(options: Options) {
     while let GameExit::Asleep { level } = exit {
         sleep_until_touched().await;
         let mode = GameMode::Play {
-            tilt: SYNTHETIC_TILT,
+            tilt: PLAY_TILT,
             level,
             seeds: Seeds::Count,
         };
