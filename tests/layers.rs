@@ -373,6 +373,7 @@ fn no_board_imports_another() {
 const VIRTUAL_CHIPS: &[&str] = &[
     "board::virtual_lsm303agr",
     "board::qemu::virtual_i2c",
+    "board::qemu::virtual_matrix",
     "board::microbit_v1::virtual_nxp",
     "board::microbit_v1::virtual_twi",
 ];

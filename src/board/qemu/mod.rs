@@ -2,9 +2,10 @@
 //!
 //! This part is plain, host-testable code: memory map constants, the
 //! firmware's command-line options, the CPU-load arithmetic
-//! ([`cpu_meter`]), the virtual LED matrix that shows the scanned frames on
-//! an ANSI terminal (`virtual_matrix`, with feature `app` only: it needs
-//! embassy), and the virtual accelerometer the firmware reads its tilt from:
+//! ([`cpu_meter`]), the virtual LED matrix that integrates the scanned frames
+//! (`virtual_matrix`, with feature `app` only: it needs embassy) and the ANSI
+//! terminal screen that shows them with the game's status (`terminal`), and
+//! the virtual accelerometer the firmware reads its tilt from:
 //! a [`virtual_lsm303agr`] on a [`virtual_i2c`] bus that behaves like the
 //! micro:bit's TWIM, driven by the terminal's keys ([`fault_keys`]) or the
 //! fault script; and the records' flash, a RAM image with NOR rules
@@ -21,6 +22,8 @@ pub mod virtual_i2c;
 /// The virtual chip the board carries (shared: the v1's virtual bus carries it
 /// too).
 pub use crate::board::virtual_lsm303agr;
+#[cfg(feature = "app")]
+pub mod terminal;
 #[cfg(feature = "app")]
 pub mod virtual_matrix;
 
