@@ -24,7 +24,7 @@ pub(crate) const DRAW_HZ: u32 = 20;
 /// Base ticks in one full refresh.
 const TICKS_PER_REFRESH: u32 = Scanner::<WIDTH, HEIGHT>::TICKS_PER_REFRESH;
 
-/// Where a virtual matrix shows what a viewer would see, at most [`DRAW_HZ`]
+/// Where a virtual matrix shows what a viewer would see, at most `DRAW_HZ`
 /// times a second: the board's terminal.
 pub trait Screen {
     /// Shows `frame`, the brightness a viewer perceives; whether to draw it
