@@ -16,9 +16,10 @@
 //! the keys' tilt, the autopilot's, a trace's and a ghost's. One rule says which
 //! readings are believed ([`plausible::Plausibility::judge`]), asked once of each
 //! reading (a sensor's sample by its supervision, which counts a refused one as
-//! a fault; any other on entry to the filter), and no stage clamps: a believed reading keeps to ±[`plausible::MAX_READING_MG`] per axis,
-//! so its gravity is within the physics' range as it is (the world holds it to
-//! its level's bound). What a source skips is said here and set in one place:
+//! a fault; any other on entry to the filter), and no stage clamps: a believed
+//! reading keeps to ±[`plausible::MAX_READING_MG`] per axis, so its gravity is
+//! within the physics' range as it is (the world holds it to its level's
+//! bound). What a source skips is said here and set in one place:
 //!
 //! | stage | sensor | keys, autopilot, trace, ghost | where it is set |
 //! |---|---|---|---|

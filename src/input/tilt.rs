@@ -64,8 +64,8 @@
 //! ([`Plausibility::judge`]) the sensor's
 //! [`TiltPipeline`](crate::input::sensor::TiltPipeline) applies: a filter fed
 //! the pipeline's samples ([`TiltConfig::SENSOR`]) judges them no more, one fed
-//! anything else judges on entry, by the same rule; the "level" offset is a [`Calibration`], applied here and nowhere
-//! else (a board's buttons and the keys send `Command::Calibrate` to the game). A
+//! anything else judges on entry, by the same rule; the "level" offset is a
+//! [`Calibration`], applied here and nowhere else (a board's buttons and the keys send `Command::Calibrate` to the game). A
 //! [`TiltError`] converts into a [`Fault`](crate::input::event::Fault) (`Stuck`
 //! → `Fault::NoData`, the rest → `Fault::Implausible`), so a [`SensorSupervisor`](crate::input::sensor::SensorSupervisor)
 //! over gravity can run the re-init / fault-display policy:
@@ -152,7 +152,8 @@ impl TiltConfig {
         calibration: Calibration::NONE,
     };
 
-    /// For a sensor's samples ([`TiltPipeline::reading`](crate::input::sensor::TiltPipeline::reading)):
+    /// For a sensor's samples
+    /// ([`TiltPipeline::reading`](crate::input::sensor::TiltPipeline::reading)):
     /// [`TiltConfig::DEFAULT`] but not judged again, since the pipeline's
     /// supervision judged them by the same rule and bounds
     /// ([`Plausibility::DEFAULT`]) and kept only believed ones.
