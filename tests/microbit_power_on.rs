@@ -3,11 +3,11 @@
 //! frames and the tilt dot's direction (the owner's check of `AXIS_MAP`).
 
 use marble_rolling::board::microbit::power_on::{
-    confirm, confirm_frame, dot, dot_from, power_on, self_test_frame, PowerOn,
+    confirm, confirm_frame, dot, dot_from, power_on, self_test_frame, Confirm, PowerOn, SelfTest,
     CONFIRM_TIMEOUT_SAMPLES, LEVEL_FRAMES, SWEEP_FRAMES,
 };
 use marble_rolling::board::microbit::{AXIS_MAP, BUTTONS};
-use marble_rolling::input::buttons::Buttons;
+use marble_rolling::input::event::{Command, Fault, InputEvent, Tilt};
 use marble_rolling::input::sensor::AccelMg;
 use marble_rolling::matrix::MAX_BRIGHTNESS;
 
@@ -19,15 +19,11 @@ fn buttons_held_at_power_on() {
     assert_eq!(power_on(true, true), PowerOn::ClearRecords);
 }
 
-/// Feeds the buttons state machine 10 ms samples and asks the confirmation.
+/// Feeds the confirmation the v2's `main` runs 10 ms samples until it
+/// answers.
 fn answer(samples: &[(bool, bool)]) -> Option<bool> {
-    let mut buttons = Buttons::new(BUTTONS);
-    for (n, &(a, b)) in samples.iter().enumerate() {
-        if let Some(yes) = confirm(buttons.update(a, b), n as u32 + 1) {
-            return Some(yes);
-        }
-    }
-    None
+    let mut question = Confirm::new(BUTTONS);
+    samples.iter().find_map(|&(a, b)| question.sample(a, b))
 }
 
 fn held(a: bool, b: bool, n: usize) -> Vec<(bool, bool)> {
@@ -102,6 +98,42 @@ fn self_test_lights_each_led_alone_then_each_level() {
     assert!((0..25).all(|p| blank.get(p % 5, p / 5) == 0));
     let f = self_test_frame(dot_from() + 1000, Some([0, 1000, 0]));
     assert_eq!(f.get(2, 2), MAX_BRIGHTNESS);
+}
+
+/// The self-test as the v2's `main` runs it: a frame each tick, the dot only
+/// while the sensor is up, and A (the buttons' `Restart`) ends it; other
+/// events change nothing.
+#[test]
+fn the_self_test_flow_follows_the_events() {
+    let mut test = SelfTest::new();
+    let level = [0, 1000, 0];
+    for n in 0..dot_from() {
+        assert_eq!(
+            test.next_frame(level),
+            self_test_frame(n, None),
+            "frame {n}"
+        );
+    }
+    let right = [-1000, 0, 0];
+    assert_eq!(test.next_frame(right).get(4, 2), MAX_BRIGHTNESS, "the dot");
+    for event in [
+        InputEvent::Tilt(Tilt::FLAT),
+        InputEvent::Command(Command::NextLevel),
+    ] {
+        assert!(!test.event(event), "{event:?} does not end it");
+    }
+    assert!(!test.event(InputEvent::SensorDown(Fault::Bus)));
+    let down = test.next_frame(right);
+    assert!(
+        (0..25).all(|p| down.get(p % 5, p / 5) == 0),
+        "no dot while down"
+    );
+    assert!(!test.event(InputEvent::SensorUp));
+    assert_eq!(test.next_frame(right).get(4, 2), MAX_BRIGHTNESS, "back up");
+    assert!(
+        test.event(InputEvent::Command(Command::Restart)),
+        "A ends it"
+    );
 }
 
 /// The dot goes where the marble would roll. With `AXIS_MAP` as shipped, the

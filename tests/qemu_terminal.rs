@@ -1,14 +1,14 @@
-//! QEMU's terminal (`board::qemu::virtual_matrix::draw`): a level with
+//! QEMU's terminal (`board::qemu::terminal::draw`): a level with
 //! storeys is drawn with every storey as a map below the status lines, side
 //! by side, top storey first, the marbles on their own storey's map; a
 //! one-storey level draws no maps, and the screen is cleared below what was
 //! drawn so that a level before's maps do not linger.
 //!
-//! `cargo test --features app --test qemu_terminal` (the virtual matrix needs
-//! the firmware tasks, feature `app`).
+//! `cargo test --features app --test qemu_terminal` (the terminal, like the
+//! virtual matrix, is built with the firmware tasks, feature `app`).
 
 use marble_rolling::app::Console;
-use marble_rolling::board::qemu::virtual_matrix::{
+use marble_rolling::board::qemu::terminal::{
     draw, grey, map_window, shade, MapWindow, MAPS_COLUMNS, MAP_ROWS,
 };
 use marble_rolling::board::qemu::{self, HEIGHT, WIDTH};

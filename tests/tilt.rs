@@ -24,11 +24,11 @@ fn settle(f: &mut TiltFilter, r: [i32; 3], n: usize) -> [i32; 3] {
 /// No dead zone, no stuck check, ±16 g accepted: the bare low-pass.
 fn bare(shift: u8) -> TiltFilter {
     TiltFilter::new(TiltConfig {
-        plausibility: Plausibility {
+        plausibility: Some(Plausibility {
             max_axis_mg: 16_000,
             min_total_mg: 300,
             max_total_mg: 30_000,
-        },
+        }),
         filter_shift: shift,
         dead_zone_mg: 0,
         stuck_samples: 0,
@@ -385,7 +385,7 @@ fn saturated_full_scale_readings_are_consistent() {
         max_total_mg: 3000,
     };
     let mut f = TiltFilter::new(TiltConfig {
-        plausibility: p,
+        plausibility: Some(p),
         filter_shift: 0,
         dead_zone_mg: 0,
         ..TiltConfig::DEFAULT
@@ -417,7 +417,7 @@ fn saturated_full_scale_readings_are_consistent() {
         max_total_mg: u32::MAX,
     };
     let mut f = TiltFilter::new(TiltConfig {
-        plausibility: wide,
+        plausibility: Some(wide),
         filter_shift: 0,
         ..TiltConfig::DEFAULT
     });
@@ -486,11 +486,11 @@ fn any_config() -> impl Strategy<Value = TiltConfig> {
         any::<i32>(),
     )
         .prop_map(|(ax, lo, hi, k, dz, stuck, cx, cz)| TiltConfig {
-            plausibility: Plausibility {
+            plausibility: Some(Plausibility {
                 max_axis_mg: ax,
                 min_total_mg: lo,
                 max_total_mg: hi,
-            },
+            }),
             filter_shift: k,
             dead_zone_mg: dz,
             stuck_samples: stuck,

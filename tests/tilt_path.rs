@@ -297,3 +297,81 @@ fn rolling_resistance_holds_a_marble_on_a_near_level_board() {
     println!("0.5° steady, no friction: moved {d:.1} mm in 10 s");
     assert!(d > 100.0, "0.5°, no friction: {d} mm");
 }
+
+/// One plausibility check from the sensor to the world, and no clamp: a sample
+/// just past the bounds is refused once, by the sensor's supervision (a fault it
+/// counts), and the board's session (`TiltConfig::SENSOR`) judges nothing again;
+/// a sample at the bounds reaches the world's gravity exactly, nothing clamped
+/// on the way.
+#[test]
+fn a_reading_is_judged_once_and_reaches_the_world_unclamped() {
+    use marble_rolling::input::event::Fault;
+    use marble_rolling::input::sensor::{
+        AccelMg, Action, AxisMap, Read, SupervisorConfig, TiltPipeline,
+    };
+    use marble_rolling::input::tilt::{Plausibility, TiltError, TiltFilter};
+
+    let src = open_floor("rolling", "0.01");
+    let level = parse::<W>(&src).expect("parses");
+    let mut pipeline = TiltPipeline::new(AxisMap::IDENTITY, SupervisorConfig::DEFAULT);
+    // The stuck check off: this sensor's samples are noise-free, so they repeat.
+    let sensor = TiltConfig {
+        stuck_samples: 0,
+        ..TiltConfig::SENSOR
+    };
+    let mut session =
+        Session::<I8F24>::new(level.view(), GameConfig::DEFAULT, sensor).expect("sets up");
+    let bound = Plausibility::DEFAULT.max_total_mg as i32;
+    assert!(
+        session.game().world().params().mg_max >= bound,
+        "the level takes a believed reading's pull whole"
+    );
+
+    // Just past the total magnitude a hand-held toy feels: the supervision
+    // refuses it as implausible, once, and keeps the last good sample (level).
+    let step = pipeline.feed(Read::Sample(AccelMg::new(-(bound + 1), 0, 0)));
+    assert_eq!(step.action, Action::KeepLast(AccelMg::LEVEL));
+    assert_eq!(pipeline.supervisor().last_fault(), Some(Fault::Implausible));
+    assert_eq!(pipeline.supervisor().total_faults(), 1);
+    session.frame(pipeline.reading().reading_mg());
+    assert_eq!(
+        session.tilt_errors(),
+        (0, None),
+        "the session judges no more"
+    );
+    assert_eq!(session.game().world().gravity_mg(), [0, -1000, 0]);
+
+    // At the bound: believed, and once the low-pass has settled (it reaches
+    // the reading exactly) the world's pull is the reading, negated, to the
+    // milli-g.
+    let step = pipeline.feed(Read::Sample(AccelMg::new(-bound, 0, 0)));
+    assert_eq!(step.action, Action::Use(AccelMg::new(-bound, 0, 0)));
+    assert_eq!(pipeline.supervisor().total_faults(), 1);
+    for _ in 0..SETTLE_FRAMES {
+        session.frame(pipeline.reading().reading_mg());
+    }
+    assert_eq!(session.tilt_errors(), (0, None));
+    assert_eq!(session.game().world().gravity_mg(), [bound, 0, 0]);
+
+    // The check the session leaves out is the same rule, made where a reading
+    // comes from anything but a sensor: a filter that judges on entry refuses
+    // that sample too, a filter fed the sensor's samples does not ask.
+    let past = [-(bound + 1), 0, 0];
+    assert!(matches!(
+        TiltFilter::new(TiltConfig::DEFAULT).push(past),
+        Err(TiltError::Magnitude { .. })
+    ));
+    assert_eq!(
+        TiltFilter::new(TiltConfig::SENSOR).push(past),
+        Ok([bound + 1, 0, 0])
+    );
+    assert_eq!(TiltConfig::SENSOR.plausibility, None);
+    assert_eq!(
+        TiltConfig {
+            plausibility: None,
+            ..TiltConfig::DEFAULT
+        },
+        TiltConfig::SENSOR,
+        "the sensor's tilt path differs from the default only in the check it leaves out"
+    );
+}

@@ -24,7 +24,7 @@ use crate::render::{draw_ghost, Viewport};
 /// QEMU's worst frame (51 840 Cortex-M4 instructions) 64 frames are 52 ms of
 /// a 64 MHz CPU, far from the watchdog's second, where a whole run of a
 /// 2 KiB ghost (over a thousand frames) might not be.
-pub const REPLAY_STRETCH: u32 = 64;
+pub(crate) const REPLAY_STRETCH: u32 = 64;
 
 /// The ghost in `bytes` replayed on `live`'s level, game configuration and
 /// tilt path to its end a stretch at a time, the task yielding between
@@ -213,7 +213,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
     /// The raced ghost, at the end of its run, on its own state hash (the
     /// board replayed it bit-exactly): its frames and hash. `None`: no ghost,
     /// or not at its end.
-    pub fn raced_to_its_end(&self) -> Option<(u32, u64)> {
+    pub(crate) fn raced_to_its_end(&self) -> Option<(u32, u64)> {
         let racer = self.racer.as_ref()?;
         let (frames, hash) = racer.run();
         (racer.game().frames() == frames && racer.state_hash() == hash).then_some((frames, hash))

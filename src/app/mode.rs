@@ -11,7 +11,8 @@ use crate::physics::world::SetupError;
 pub enum GameMode {
     /// A player with a tilt input: endless, levels in order, commands ([`Links::events`](super::Links::events))
     /// obeyed. `tilt` configures the game's tilt path:
-    /// [`TiltConfig::DEFAULT`] for a real accelerometer, [`SYNTHETIC_TILT`](crate::game::session::SYNTHETIC_TILT)
+    /// [`TiltConfig::SENSOR`] for a real accelerometer (its samples come
+    /// judged by the sensor's supervision), [`SYNTHETIC_TILT`](crate::game::session::SYNTHETIC_TILT)
     /// for keys.
     Play {
         /// The tilt path's configuration.

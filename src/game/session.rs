@@ -80,7 +80,7 @@ impl<'a, S: Scalar> Session<'a, S> {
     }
     /// The tilt path's configuration (the calibration it started with, not
     /// the one in force: [`TiltFilter::calibration`]).
-    pub fn tilt_config(&self) -> TiltConfig {
+    pub(crate) fn tilt_config(&self) -> TiltConfig {
         self.tilt_config
     }
     /// Readings the tilt path rejected so far, and the last reason.

@@ -47,9 +47,9 @@ fn parse_seed(s: &str) -> Result<u32, String> {
 }
 
 /// `--size` when not given.
-pub const DEFAULT_SIZE: u8 = 6;
+pub(crate) const DEFAULT_SIZE: u8 = 6;
 /// `--difficulty` when not given.
-pub const DEFAULT_DIFFICULTY: u8 = 2;
+pub(crate) const DEFAULT_DIFFICULTY: u8 = 2;
 
 impl GenerateArgs {
     /// The generated maze's level text and the level parsed from it, when

@@ -37,7 +37,7 @@ pub const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
 
 /// A level chosen on the command line.
 #[derive(Clone, Copy, Debug)]
-pub struct Loaded {
+pub(crate) struct Loaded {
     /// The level.
     pub view: LevelView<'static>,
     /// Its index in [`LEVELS`] when it is a built-in one.
@@ -45,7 +45,7 @@ pub struct Loaded {
 }
 
 /// Names of the built-in levels, comma separated (for messages).
-pub fn builtin_names() -> String {
+pub(crate) fn builtin_names() -> String {
     LEVELS
         .iter()
         .map(|l| l.info.name)
@@ -66,7 +66,7 @@ pub fn parse_runtime(src: String) -> Result<LevelView<'static>, crate::game::lev
 /// A built-in level by name, or else a level file. The error names the file with
 /// `FILE:line:column: message` for a malformed level (bytes that are not UTF-8
 /// included).
-pub fn load_level(arg: &str) -> Result<Loaded, String> {
+pub(crate) fn load_level(arg: &str) -> Result<Loaded, String> {
     if let Some((i, view)) = by_name(arg) {
         return Ok(Loaded {
             view,
@@ -181,7 +181,7 @@ impl Backend {
     }
 
     /// The backend called `name`, or a message listing the known ones.
-    pub fn from_name(name: &str) -> Result<Backend, String> {
+    pub(crate) fn from_name(name: &str) -> Result<Backend, String> {
         Backend::ALL
             .iter()
             .copied()
@@ -228,7 +228,7 @@ pub trait WithScalar {
 
 /// Drops one leading `--` from the arguments: the cargo aliases end in `--`, so
 /// `cargo sim -- --level x` hands the binary `-- --level x`.
-pub fn args_without_separator() -> Vec<std::ffi::OsString> {
+pub(crate) fn args_without_separator() -> Vec<std::ffi::OsString> {
     let mut args: Vec<_> = std::env::args_os().collect();
     if args.get(1).is_some_and(|a| a == "--") {
         args.remove(1);
@@ -253,7 +253,7 @@ pub fn parse_args<A: clap::Parser>() -> Result<A, i32> {
 }
 
 /// `s` as a JSON string literal.
-pub fn json_string(s: &str) -> String {
+pub(crate) fn json_string(s: &str) -> String {
     let mut out = String::with_capacity(s.len() + 2);
     out.push('"');
     for c in s.chars() {
@@ -272,7 +272,7 @@ pub fn json_string(s: &str) -> String {
 }
 
 /// A finite `f64` as a JSON number (`null` otherwise).
-pub fn json_number(x: f64) -> String {
+pub(crate) fn json_number(x: f64) -> String {
     if x.is_finite() {
         x.to_string()
     } else {

@@ -56,7 +56,7 @@ use crate::render::{blink_on, follow_axis, render_world, tile_point, Viewport};
 /// The firmware's player. The terminal draws its own picture, sized to the
 /// terminal, so the player's own renderer is a single pixel that is never
 /// asked for.
-pub type TerminalPlayer = Player<'static, 1, 1, true, true>;
+pub(crate) type TerminalPlayer = Player<'static, 1, 1, true, true>;
 /// Frames between two screen updates (128 / 4 = 32 updates per second).
 const DRAW_EVERY: u32 = 4;
 /// Lines under the matrix (status, tilt, help).

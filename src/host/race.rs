@@ -36,7 +36,7 @@ use crate::race::{self, LinkStage, MazeSpec, Race, RaceLink, Status, Verdict, MA
 use crate::render::tile_point;
 
 /// The first port of channel 0.
-pub const BASE_PORT: u16 = 47_400;
+pub(crate) const BASE_PORT: u16 = 47_400;
 
 /// The ports of `channel`: the pair (`BASE_PORT + 2 channel`, the next).
 pub fn channel_ports(channel: u16) -> Result<(u16, u16), String> {
@@ -67,7 +67,7 @@ pub fn channel_socket(channel: u16) -> Result<(UdpSocket, SocketAddr), String> {
 }
 
 /// A board id for this run: any non-zero number, different each start.
-pub fn fresh_id() -> core::num::NonZeroU32 {
+pub(crate) fn fresh_id() -> core::num::NonZeroU32 {
     let t = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_nanos() as u64);
@@ -76,7 +76,7 @@ pub fn fresh_id() -> core::num::NonZeroU32 {
 }
 
 /// The generated maze of `spec`, parsed (leaked: one per race).
-pub fn race_level(spec: MazeSpec) -> Result<LevelView<'static>, String> {
+pub(crate) fn race_level(spec: MazeSpec) -> Result<LevelView<'static>, String> {
     let maze = race::maze(spec).map_err(|e| format!("the race's maze: {e}"))?;
     super::parse_runtime(maze.to_string())
         .map_err(|e| format!("internal error: the race's maze does not parse: {e}"))

@@ -152,7 +152,7 @@ fn parse_stepping(s: &str) -> Result<Stepping, String> {
 }
 
 /// A stepping mode's name in the JSON and the summary.
-pub fn stepping_name(s: Stepping) -> &'static str {
+pub(crate) fn stepping_name(s: Stepping) -> &'static str {
     match s {
         Stepping::Fixed => "fixed",
         Stepping::Events => "events",

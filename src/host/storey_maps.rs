@@ -109,7 +109,7 @@ pub fn compose(
 /// every tile (goals lit when `blink`), then every marble of `world` still in
 /// play whose storey is `storey`, drawn by [`draw_marble`] at [`MARBLE`].
 /// Storey 0 is the lowest.
-pub fn storey_map<S: Scalar, const M: usize>(
+pub(crate) fn storey_map<S: Scalar, const M: usize>(
     level: &LevelView<'_>,
     world: &World<'_, S, M>,
     storey: i32,

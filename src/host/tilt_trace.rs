@@ -166,7 +166,7 @@ impl TiltTrace {
     /// The reading in force at `t` seconds: the last sample at or before `t`, or a
     /// flat board before the first one. Calls must come with non-decreasing `t`
     /// (the simulator's frames); an earlier `t` starts the search over.
-    pub fn reading_at(&mut self, t: f64) -> [i32; 3] {
+    pub(crate) fn reading_at(&mut self, t: f64) -> [i32; 3] {
         if self.next > 0 && self.samples[self.next - 1].0 > t {
             self.next = 0;
         }

@@ -4,7 +4,7 @@
 //! accelerometer ─► sensor: axis map, plausibility, fault supervision ─┐
 //! buttons ───────► buttons: debounce, A / B / A+B hold ───────────────┼─► events ─► game
 //! terminal keys ─► keys: decoding, key tilt ──────────────────────────┘
-//!                          (in the game's session) tilt: plausibility, stuck check, low-pass,
+//!                          (in the game's session) tilt: [plausibility], stuck check, low-pass,
 //!                                                  calibration ─► physics
 //! ```
 //!
@@ -14,15 +14,17 @@
 //! physics through the game's session and its [`tilt::TiltFilter`]: a sensor's
 //! sample (as the app's [`event::Tilt`], [`sensor::TiltPipeline::reading`]),
 //! the keys' tilt, the autopilot's, a trace's and a ghost's. One rule says which
-//! readings are believed ([`plausible::Plausibility::judge`]), and no stage
-//! clamps: a believed reading keeps to ±[`plausible::MAX_READING_MG`] per axis,
-//! so its gravity is within the physics' range as it is (the world holds it to
-//! its level's bound). What a source skips is said here and set in one place:
+//! readings are believed ([`plausible::Plausibility::judge`]), asked once of each
+//! reading (a sensor's sample by its supervision, which counts a refused one as
+//! a fault; any other on entry to the filter), and no stage clamps: a believed
+//! reading keeps to ±[`plausible::MAX_READING_MG`] per axis, so its gravity is
+//! within the physics' range as it is (the world holds it to its level's
+//! bound). What a source skips is said here and set in one place:
 //!
 //! | stage | sensor | keys, autopilot, trace, ghost | where it is set |
 //! |---|---|---|---|
 //! | axis map | yes | no: made in the board frame | [`sensor::TiltPipeline`] |
-//! | plausibility | yes, for the supervision, and again on entry | yes, on entry | [`tilt::TiltConfig::plausibility`] |
+//! | plausibility | yes, once: by the supervision (not again on entry: [`tilt::TiltConfig::SENSOR`]) | yes, on entry (an autopilot on a board's sensor session is not judged: its readings are 1 g by construction) | [`tilt::TiltConfig::plausibility`] |
 //! | supervision | yes | no: nothing to re-initialise | [`sensor::TiltPipeline`] |
 //! | stuck check | yes (the QEMU board's keys and virtual chip share one setting: no) | no: repeats are normal | [`tilt::TiltConfig::stuck_samples`] (0 in `game::session::SYNTHETIC_TILT`) |
 //! | low-pass, calibration | yes | yes | [`tilt::TiltConfig`] |

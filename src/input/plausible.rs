@@ -4,8 +4,11 @@
 //! full scale and its total magnitude is that of a hand-held toy. The sensor's
 //! supervision ([`super::sensor::TiltPipeline`]) asks it of every sample, to
 //! count an implausible one as a fault; the tilt filter
-//! ([`super::tilt::TiltFilter`]) asks it of every reading it is pushed. Both ask
-//! [`Plausibility::judge`], so both accept exactly the same readings.
+//! ([`super::tilt::TiltFilter`]) asks it of every reading that comes from
+//! anything else (keys, the autopilot, a trace, a ghost), on entry. Each
+//! reading is judged once, by [`Plausibility::judge`]: a filter fed a
+//! pipeline's samples ([`TiltConfig::SENSOR`](super::tilt::TiltConfig::SENSOR))
+//! does not judge them again.
 //!
 //! # The range a believed reading keeps to
 //!

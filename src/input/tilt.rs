@@ -2,8 +2,14 @@
 //! apparent gravity the physics consumes ([`crate::physics::world::World::set_gravity_mg`]).
 //!
 //! ```text
-//! reading ─▶ plausibility ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ [dead zone (x, z), off by default] ─▶ negate
+//! reading ─▶ [plausibility, on entry] ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ [dead zone (x, z), off by default] ─▶ negate
 //! ```
+//!
+//! A reading is judged plausible once on its way: a sensor's sample by its
+//! supervision ([`TiltPipeline`](crate::input::sensor::TiltPipeline)), which
+//! must count a refused one as a fault; every other reading (keys, the
+//! autopilot, a trace, a ghost) here, on entry. [`TiltConfig::plausibility`] says
+//! which: [`TiltConfig::SENSOR`] takes the sensor's samples as judged.
 //!
 //! Nothing is clamped here: a believed reading keeps to ±[`MAX_READING_MG`]
 //! per axis ([`super::plausible`]), so its gravity is within the physics'
@@ -56,9 +62,10 @@
 //!
 //! The plausibility bounds are a [`Plausibility`], judged by the one rule
 //! ([`Plausibility::judge`]) the sensor's
-//! [`TiltPipeline`](crate::input::sensor::TiltPipeline) applies, so both accept
-//! the same samples; the "level" offset is a [`Calibration`], applied here and nowhere
-//! else (a board's buttons and the keys send `Command::Calibrate` to the game). A
+//! [`TiltPipeline`](crate::input::sensor::TiltPipeline) applies: a filter fed
+//! the pipeline's samples ([`TiltConfig::SENSOR`]) judges them no more, one fed
+//! anything else judges on entry, by the same rule; the "level" offset is a
+//! [`Calibration`], applied here and nowhere else (a board's buttons and the keys send `Command::Calibrate` to the game). A
 //! [`TiltError`] converts into a [`Fault`](crate::input::event::Fault) (`Stuck`
 //! → `Fault::NoData`, the rest → `Fault::Implausible`), so a [`SensorSupervisor`](crate::input::sensor::SensorSupervisor)
 //! over gravity can run the re-init / fault-display policy:
@@ -90,12 +97,19 @@ pub const MAX_FILTER_SHIFT: u8 = 15;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TiltConfig {
-    /// Which samples are believed. Default [`Plausibility::DEFAULT`]: per axis
-    /// ±4000 mg (twice the firmware's ±2 g range, whose saturated readings,
-    /// ±2048 at most, are therefore always accepted per axis), total
-    /// 300..=3000 mg (a held toy feels about 1 g; beyond 3 g is a knock, not a
-    /// tilt). `max_axis_mg` is capped at [`MAX_READING_MG`].
-    pub plausibility: Plausibility,
+    /// Which readings are believed, judged on entry: `Some(bounds)` for
+    /// readings nothing judged before (keys, the autopilot, traces, ghosts);
+    /// `None` for a sensor's samples, which its supervision
+    /// ([`TiltPipeline`](crate::input::sensor::TiltPipeline)) judged already
+    /// with the same rule ([`TiltConfig::SENSOR`]): each reading is judged
+    /// once. With `None` the readings must be believed ones, within
+    /// ±[`MAX_READING_MG`] per axis (a pipeline's are). Default
+    /// `Some(`[`Plausibility::DEFAULT`]`)`: per axis ±4000 mg (twice the
+    /// firmware's ±2 g range, whose saturated readings, ±2048 at most, are
+    /// therefore always accepted per axis), total 300..=3000 mg (a held toy
+    /// feels about 1 g; beyond 3 g is a knock, not a tilt). `max_axis_mg` is
+    /// capped at [`MAX_READING_MG`].
+    pub plausibility: Option<Plausibility>,
     /// Low-pass shift `k`: each sample moves the state by 2^−k of the way to
     /// it. Time constant τ ≈ 2^k − ½ samples (exactly −1 / ln(1 − 2^−k));
     /// see [`TiltConfig::time_constant_us`]. Default 3: τ ≈ 7.5 samples =
@@ -131,11 +145,21 @@ pub struct TiltConfig {
 impl TiltConfig {
     /// The defaults (see each field).
     pub const DEFAULT: Self = Self {
-        plausibility: Plausibility::DEFAULT,
+        plausibility: Some(Plausibility::DEFAULT),
         filter_shift: 3,
         dead_zone_mg: 0,
         stuck_samples: 50,
         calibration: Calibration::NONE,
+    };
+
+    /// For a sensor's samples
+    /// ([`TiltPipeline::reading`](crate::input::sensor::TiltPipeline::reading)):
+    /// [`TiltConfig::DEFAULT`] but not judged again, since the pipeline's
+    /// supervision judged them by the same rule and bounds
+    /// ([`Plausibility::DEFAULT`]) and kept only believed ones.
+    pub const SENSOR: Self = Self {
+        plausibility: None,
+        ..Self::DEFAULT
     };
 
     /// The low-pass time constant in µs for samples `sample_period_us`
@@ -197,12 +221,15 @@ impl TiltFilter {
     ///
     /// A rejected reading returns why and leaves the filter — and so
     /// [`TiltFilter::gravity_mg`], the last good gravity — unchanged (only the
-    /// stuck detector notes it). Checks, first failure wins:
+    /// stuck detector notes it). Checks, first failure wins (the first three
+    /// only when [`TiltConfig::plausibility`] judges on entry):
     /// [`TiltError::AllZero`], [`TiltError::OutOfRange`],
     /// [`TiltError::Magnitude`], [`TiltError::Stuck`].
     pub fn push(&mut self, reading_mg: [i32; 3]) -> Result<[i32; 3], TiltError> {
         let stuck = self.note_repeat(reading_mg);
-        self.config.plausibility.judge(reading_mg)?;
+        if let Some(bounds) = self.config.plausibility {
+            bounds.judge(reading_mg)?;
+        }
         if stuck {
             return Err(TiltError::Stuck);
         }
@@ -212,7 +239,8 @@ impl TiltFilter {
                 *s = lowpass(*s, r << FRAC_BITS, k);
             }
         } else {
-            // |r| ≤ MAX_READING_MG < 2^13 once judged: the shift fits.
+            // |r| ≤ MAX_READING_MG < 2^13 once judged (here or by the
+            // sensor's supervision): the shift fits.
             self.state = reading_mg.map(|r| r << FRAC_BITS);
             self.primed = true;
         }
@@ -267,11 +295,14 @@ impl TiltFilter {
     /// calibration and takes effect at once; the low-pass state and the stuck
     /// detector are untouched.
     ///
-    /// An implausible reading is refused (the calibration unchanged). Stuck
-    /// runs are not checked here: pass a reading the filter accepted, or
+    /// An implausible reading is refused (the calibration unchanged), by the
+    /// bounds of [`TiltConfig::plausibility`], or the sensor's
+    /// ([`Plausibility::DEFAULT`]) when the readings come judged. Stuck runs
+    /// are not checked here: pass a reading the filter accepted, or
     /// [`TiltFilter::filtered_reading_mg`].
     pub fn calibrate(&mut self, current_reading_mg: [i32; 3]) -> Result<Calibration, TiltError> {
-        self.config.plausibility.judge(current_reading_mg)?;
+        let bounds = self.config.plausibility.unwrap_or(Plausibility::DEFAULT);
+        bounds.judge(current_reading_mg)?;
         let [x, y, z] = current_reading_mg;
         self.calibration = Calibration::from_reference(AccelMg::new(x, y, z));
         Ok(self.calibration)

@@ -216,8 +216,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     }
 
     /// Sets the apparent gravity in the tile frame, in milli-g (a flat board is
-    /// `(0, -1000, 0)`: down). Clamped to ±[`MAX_MG`] per axis. Computes the kicks
-    /// once, so the steps that follow only add.
+    /// `(0, -1000, 0)`: down). Clamped to the level's bound per axis
+    /// ([`Params::mg_max`]: [`MAX_MG`], or less with events on a fine pitch):
+    /// the one clamp on the tilt path, here because only the world knows its
+    /// level's bound, and because tools and tests hand the world gravities
+    /// directly. Computes the kicks once, so the steps that follow only add.
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
         let lim = self.params.mg_max;
         // max then min, not `clamp`: its `min <= max` assertion would link core::fmt.

@@ -46,7 +46,7 @@ pub enum Stage {
 
 /// One board's side of the handshake.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Handshake {
+pub(crate) struct Handshake {
     me: u32,
     offer: MazeSpec,
     stage: Stage,

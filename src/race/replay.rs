@@ -23,7 +23,7 @@ use super::session::RaceLink;
 pub const RACE_CONFIG: GameConfig = GameConfig::EVENTS;
 /// [`RACE_CONFIG`]'s stepper, fixed at compile time: a board links only the
 /// stepper it races with (the other is about 18 KiB of flash on the v2).
-pub const RACE_EVENTS: bool = matches!(RACE_CONFIG.stepping, Stepping::Events);
+pub(crate) const RACE_EVENTS: bool = matches!(RACE_CONFIG.stepping, Stepping::Events);
 /// The tilt path's settings in a race, the same on both boards: the replay
 /// must filter the readings as their board did. The stuck-sensor check is off
 /// (keys repeat a reading, a sensor's supervision is the input layer's).

@@ -17,9 +17,9 @@ use super::stream::{
 use crate::input::sensor::Calibration;
 
 /// Frames between two hellos while searching (4 a second).
-pub const HELLO_EVERY: u32 = 32;
+pub(crate) const HELLO_EVERY: u32 = 32;
 /// Frames between two race packets while a stream is under way (32 a second).
-pub const SEND_EVERY: u32 = 4;
+pub(crate) const SEND_EVERY: u32 = 4;
 /// Frames without a packet from the opponent before the board says it is
 /// alone: 3 s.
 pub const SILENCE_FRAMES: u32 = 384;
@@ -253,7 +253,7 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
     }
 
     /// The opponent's calibration, once heard (before any of its readings).
-    pub fn peer_calibration(&self) -> Option<Calibration> {
+    pub(crate) fn peer_calibration(&self) -> Option<Calibration> {
         self.peer_calibration
     }
 
@@ -309,12 +309,12 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
     }
 
     /// This board's run is over.
-    pub fn end_own(&mut self, end: End) -> Result<(), Overflow> {
+    pub(crate) fn end_own(&mut self, end: End) -> Result<(), Overflow> {
         self.out.end(end)
     }
 
     /// The opponent's next reading, in order.
-    pub fn pop_opponent(&mut self) -> Option<[i32; 3]> {
+    pub(crate) fn pop_opponent(&mut self) -> Option<[i32; 3]> {
         self.inbox.pop()
     }
 

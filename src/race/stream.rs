@@ -117,7 +117,7 @@ impl<const N: usize> Outbox<N> {
     }
 
     /// The opponent holds every frame and the end.
-    pub fn delivered(&self) -> bool {
+    pub(crate) fn delivered(&self) -> bool {
         self.end.is_some() && self.end_acked && self.acked == self.frames
     }
 
@@ -127,7 +127,7 @@ impl<const N: usize> Outbox<N> {
     }
 
     /// Frames pushed and not cut into a block yet.
-    pub fn unsent(&self) -> u32 {
+    pub(crate) fn unsent(&self) -> u32 {
         self.pending.len() as u32
     }
 
@@ -418,7 +418,7 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
 
     /// Keeps the opponent's end; `false` if it contradicts one received
     /// before or the frames already held.
-    pub fn set_end(&mut self, end: End) -> bool {
+    pub(crate) fn set_end(&mut self, end: End) -> bool {
         match self.end {
             Some(e) => e == end,
             None if end.frames < self.have => false,

@@ -389,7 +389,7 @@ const _: () = assert!(GHOST < MARBLE && GHOST > WALL);
 /// Draws `ghost`'s marbles still in play (the ghost's game, on `live`'s level)
 /// at [`GHOST`] brightness on top of `frame`, a picture of `live` through
 /// `viewport`: only those on the storey on show.
-pub fn draw_ghost<S: Scalar, const W: usize, const H: usize>(
+pub(crate) fn draw_ghost<S: Scalar, const W: usize, const H: usize>(
     frame: &mut Frame<W, H>,
     live: &Game<'_, S>,
     ghost: &Game<'_, S>,

@@ -240,7 +240,7 @@ async fn game(options: Options) {
         // No random source is used here: the mazes' seeds are the level
         // count, as in the demo.
         GameMode::Play {
-            tilt: TiltConfig::DEFAULT,
+            tilt: TiltConfig::SENSOR,
             seeds: Seeds::Count,
         }
     };

@@ -51,8 +51,6 @@ use marble_rolling::board::levels_region;
 use marble_rolling::board::microbit::power_on::{self, PowerOn};
 use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, WatchdogGate};
 use marble_rolling::game::endless::{MazeSlot, Seeds};
-use marble_rolling::input::buttons::Buttons;
-use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::input::race_setup;
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::matrix::Frame;
@@ -189,7 +187,7 @@ async fn game(
                 _,
             >(
                 &LINKS,
-                TiltConfig::DEFAULT,
+                TiltConfig::SENSOR,
                 level,
                 Seeds::Drawn(seed),
                 &mut mazes,
@@ -205,7 +203,7 @@ async fn game(
                 _,
             >(
                 &LINKS,
-                TiltConfig::DEFAULT,
+                TiltConfig::SENSOR,
                 level,
                 Seeds::Drawn(seed),
                 &mut mazes
@@ -226,21 +224,17 @@ async fn game(
 async fn run_self_test() {
     defmt::info!("self-test: LEDs one by one, brightness levels, then the tilt dot; A to play");
     let mut ticker = Ticker::every(Duration::from_hz(u64::from(app::FRAME_HZ)));
-    let mut sensor_up = true;
-    let mut n = 0u32;
+    let mut test = power_on::SelfTest::new();
     loop {
         ticker.next().await;
         while let Ok(event) = LINKS.events.try_receive() {
-            match event {
-                InputEvent::Command(Command::Restart) => return,
-                InputEvent::SensorDown(_) => sensor_up = false,
-                InputEvent::SensorUp => sensor_up = true,
-                _ => {}
+            if test.event(event) {
+                return;
             }
         }
-        let reading = sensor_up.then(|| LINKS.tilt.get().reading_mg());
-        LINKS.frames.signal(power_on::self_test_frame(n, reading));
-        n = n.saturating_add(1);
+        LINKS
+            .frames
+            .signal(test.next_frame(LINKS.tilt.get().reading_mg()));
     }
 }
 
@@ -255,17 +249,14 @@ async fn confirm_clear(
 ) {
     defmt::info!("A+B at power-on: clear the best times? A yes, B no");
     LINKS.frames.signal(power_on::confirm_frame());
-    let mut buttons = Buttons::new(board::BUTTONS);
+    let mut question = power_on::Confirm::new(board::BUTTONS);
     let mut ticker = Ticker::every(Duration::from_millis(board::INPUT_PERIOD_MS));
-    let mut samples = 0u32;
     let clear = loop {
         ticker.next().await;
         if let Some(handle) = wdt {
             handle.pet();
         }
-        samples = samples.saturating_add(1);
-        let event = buttons.update(a.is_low(), b.is_low());
-        if let Some(answer) = power_on::confirm(event, samples) {
+        if let Some(answer) = question.sample(a.is_low(), b.is_low()) {
             break answer;
         }
     };

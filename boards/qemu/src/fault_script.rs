@@ -31,9 +31,8 @@ use embassy_time::{Duration, Ticker};
 
 use marble_rolling::app::{Links, FRAME_HZ};
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
-use marble_rolling::board::qemu::{HEIGHT, WIDTH};
+use marble_rolling::board::qemu::{HEIGHT, PLAY_TILT, WIDTH};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::event::{InputEvent, Tilt};
 use marble_rolling::input::sensor::Fault;
 use marble_rolling::matrix::Frame;
@@ -396,7 +395,7 @@ pub async fn run(
     report: &'static SensorReport,
     copy_buffer: usize,
 ) -> Verdict {
-    let new = || ScriptPlayer::new(&LEVELS, LEVEL, SYNTHETIC_TILT, false);
+    let new = || ScriptPlayer::new(&LEVELS, LEVEL, PLAY_TILT, false);
     let (player, reference) = match (new(), new()) {
         (Ok(player), Ok(reference)) => (player, reference),
         _ => {

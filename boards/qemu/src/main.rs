@@ -33,11 +33,12 @@ use marble_rolling::app::GhostKit;
 use marble_rolling::app::{self, GameExit, GameMode, Links, SensorTotals, TerminalSound};
 use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
+use marble_rolling::board::qemu::terminal::{restore_terminal, Terminal};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
-use marble_rolling::board::qemu::virtual_matrix::{restore_terminal, VirtualMatrix};
+use marble_rolling::board::qemu::virtual_matrix::VirtualMatrix;
 use marble_rolling::board::qemu::{
-    Options, GHOSTS_BYTES, GHOST_BYTES, HEIGHT, MAZE_REACH, QEMU_RAM, WIDTH,
+    Options, GHOSTS_BYTES, GHOST_BYTES, HEIGHT, MAZE_REACH, PLAY_TILT, QEMU_RAM, WIDTH,
 };
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
@@ -191,12 +192,11 @@ async fn display(interactive: bool) -> ! {
     if interactive {
         app::display_task(
             &LINKS,
-            &mut VirtualMatrix::new(|| LINKS.status.get(), Some(UartConsole), 0),
+            &mut VirtualMatrix::new(Some(Terminal::new(UartConsole, || LINKS.status.get())), 0),
         )
         .await
     } else {
-        let mut matrix =
-            VirtualMatrix::<UartConsole>::new(|| LINKS.status.get(), None, LOG_MATRIX_EVERY);
+        let mut matrix = VirtualMatrix::<Terminal<UartConsole>>::new(None, LOG_MATRIX_EVERY);
         app::display_task(&LINKS, &mut matrix).await
     }
 }
@@ -266,7 +266,7 @@ async fn game(options: Options) {
     // demo.
     let mode = if options.interactive {
         GameMode::Play {
-            tilt: SYNTHETIC_TILT,
+            tilt: PLAY_TILT,
             level: 0,
             seeds: Seeds::Count,
         }
@@ -313,7 +313,7 @@ async fn game(options: Options) {
     while let GameExit::Asleep { level } = exit {
         sleep_until_touched().await;
         let mode = GameMode::Play {
-            tilt: SYNTHETIC_TILT,
+            tilt: PLAY_TILT,
             level,
             seeds: Seeds::Count,
         };

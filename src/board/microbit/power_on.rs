@@ -2,7 +2,9 @@
 //! starts: nothing (the game), **B** (the self-test), **A+B** (clear the best
 //! times, after a confirmation); **A** alone races a friend's board
 //! ([`crate::input::race_setup::race_at_power_on`]). Pure: the v2's `main` samples the pins, feeds
-//! these functions and shows their frames.
+//! these functions and shows their frames; the two flows, [`SelfTest`] and
+//! [`Confirm`], are states here that `main` only ticks, so that what they do is
+//! what the host tests run.
 //!
 //! # The self-test
 //!
@@ -28,7 +30,8 @@
 //! and so does doing nothing for [`CONFIRM_TIMEOUT_SAMPLES`] (a board that
 //! starts with both buttons stuck down never loses its records).
 
-use crate::input::buttons::ButtonEvent;
+use crate::input::buttons::{ButtonConfig, ButtonEvent, Buttons};
+use crate::input::event::{Command, InputEvent};
 use crate::matrix::{Brightness, Frame, MAX_BRIGHTNESS};
 
 /// What the buttons held at power-on ask for.
@@ -69,6 +72,33 @@ pub const fn confirm(event: Option<ButtonEvent>, samples: u32) -> Option<bool> {
         Some(ButtonEvent::NextLevel) => Some(false),
         _ if samples >= CONFIRM_TIMEOUT_SAMPLES => Some(false),
         _ => None,
+    }
+}
+
+/// The confirmation under way (see the module doc): the buttons' debouncing
+/// and the samples so far. `main` shows [`confirm_frame`] and feeds it the
+/// buttons every sample until it answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Confirm {
+    buttons: Buttons,
+    samples: u32,
+}
+
+impl Confirm {
+    /// A confirmation that has seen no sample, with the board's button timing.
+    pub const fn new(buttons: ButtonConfig) -> Self {
+        Self {
+            buttons: Buttons::new(buttons),
+            samples: 0,
+        }
+    }
+
+    /// One sample of the buttons (`true`: pressed): [`confirm`]'s answer,
+    /// once there is one.
+    pub fn sample(&mut self, a_pressed: bool, b_pressed: bool) -> Option<bool> {
+        self.samples = self.samples.saturating_add(1);
+        let event = self.buttons.update(a_pressed, b_pressed);
+        confirm(event, self.samples)
     }
 }
 
@@ -113,6 +143,52 @@ pub fn self_test_frame(n: u32, reading_mg: Option<[i32; 3]>) -> Frame<5, 5> {
         frame.set(col, row, MAX_BRIGHTNESS);
     }
     frame
+}
+
+/// The self-test under way (see the module doc): the frame it is at, and
+/// whether the sensor is up (the dot is shown only then). `main` hands it the
+/// input events and, once a frame, the latest reading.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SelfTest {
+    frame: u32,
+    sensor_up: bool,
+}
+
+impl Default for SelfTest {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SelfTest {
+    /// The self-test's first frame, the sensor taken as up.
+    pub const fn new() -> Self {
+        Self {
+            frame: 0,
+            sensor_up: true,
+        }
+    }
+
+    /// Takes one input event: `true` when it ends the self-test (**A**, which
+    /// the buttons send as [`Command::Restart`]). The sensor going down hides
+    /// the dot until it is up again.
+    pub fn event(&mut self, event: InputEvent) -> bool {
+        match event {
+            InputEvent::Command(Command::Restart) => return true,
+            InputEvent::SensorDown(_) => self.sensor_up = false,
+            InputEvent::SensorUp => self.sensor_up = true,
+            _ => {}
+        }
+        false
+    }
+
+    /// The next frame ([`self_test_frame`]), the dot from `reading_mg`, the
+    /// latest reading in the board frame, while the sensor is up.
+    pub fn next_frame(&mut self, reading_mg: [i32; 3]) -> Frame<5, 5> {
+        let frame = self_test_frame(self.frame, self.sensor_up.then_some(reading_mg));
+        self.frame = self.frame.saturating_add(1);
+        frame
+    }
 }
 
 /// Where the dot goes for a board-frame reading: the way the marble rolls

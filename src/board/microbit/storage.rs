@@ -133,10 +133,10 @@ pub const fn local(region: &Range<u32>) -> Range<u32> {
 
 /// The nRF52833's page erase at most, ms (Product Specification, NVMC
 /// electrical specification, t_ERASEPAGE).
-pub const PAGE_ERASE_MS: u64 = 85;
+pub(crate) const PAGE_ERASE_MS: u64 = 85;
 
 /// The nRF52833's write of one 32-bit word at most, µs (t_WRITE).
-pub const WORD_WRITE_US: u64 = 41;
+pub(crate) const WORD_WRITE_US: u64 = 41;
 
 /// The longest the NVMC may hold the CPU in one go, ms: the watchdog's
 /// period less two of its checks (a pet may come a check late, and after

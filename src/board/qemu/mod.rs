@@ -2,9 +2,10 @@
 //!
 //! This part is plain, host-testable code: memory map constants, the
 //! firmware's command-line options, the CPU-load arithmetic
-//! ([`cpu_meter`]), the virtual LED matrix that shows the scanned frames on
-//! an ANSI terminal (`virtual_matrix`, with feature `app` only: it needs
-//! embassy), and the virtual accelerometer the firmware reads its tilt from:
+//! ([`cpu_meter`]), the virtual LED matrix that integrates the scanned frames
+//! (`virtual_matrix`, with feature `app` only: it needs embassy) and the ANSI
+//! terminal screen that shows them with the game's status (`terminal`), and
+//! the virtual accelerometer the firmware reads its tilt from:
 //! a [`virtual_lsm303agr`] on a [`virtual_i2c`] bus that behaves like the
 //! micro:bit's TWIM, driven by the terminal's keys ([`fault_keys`]) or the
 //! fault script; and the records' flash, a RAM image with NOR rules
@@ -22,12 +23,15 @@ pub mod virtual_i2c;
 /// too).
 pub use crate::board::virtual_lsm303agr;
 #[cfg(feature = "app")]
+pub mod terminal;
+#[cfg(feature = "app")]
 pub mod virtual_matrix;
 
 use crate::board::accel_link;
 use crate::game::endless::{Reach, MOST_STOREYS};
 use crate::input::accel_timing;
 use crate::input::sensor::{AxisMap, SupervisorConfig};
+use crate::input::tilt::TiltConfig;
 use virtual_i2c::RamRange;
 
 /// Virtual matrix width in pixels: as wide as the widest built-in maze
@@ -77,6 +81,13 @@ pub const ACCEL_ODR_HZ: u32 = accel_timing::ACCEL_ODR_HZ;
 pub const ACCEL_SETTLE_MS: u64 = accel_timing::ACCEL_SETTLE_MS;
 /// Fault supervision (the micro:bit's).
 pub const SUPERVISOR: SupervisorConfig = accel_link::SUPERVISOR;
+/// The game's tilt path for what the virtual chip reads: its samples come
+/// judged by the supervision ([`TiltConfig::SENSOR`]), and no stuck check, since
+/// the keys tilt the chip and a held key repeats the same reading.
+pub const PLAY_TILT: TiltConfig = TiltConfig {
+    stuck_samples: 0,
+    ..TiltConfig::SENSOR
+};
 /// The longest one I²C transfer may take before it counts as a hung bus,
 /// ms (the micro:bit's [`I2C_TIMEOUT_MS`](accel_link::I2C_TIMEOUT_MS)).
 pub const TRANSFER_TIMEOUT_MS: u64 = accel_link::I2C_TIMEOUT_MS;

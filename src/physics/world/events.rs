@@ -14,17 +14,19 @@
 //!    closed-form update — the same sums as one fixed step. A search that finds
 //!    nothing leaves the marble a *free region* (`events/free.rs`): later flights
 //!    whose swept box stays inside it skip the test.
-//! 2. Otherwise **the earliest event**: for every tile in reach, the time of
-//!    impact ([`toi`](crate::physics::dynamics::toi): exact for faces, converging separating planes for edges and
-//!    corners; the ghost-bump rule of eq. 8's narrowphase decides who owns a
-//!    contact on a seam), the lid, the instant a held face's tile runs out under the
-//!    contact point, the instant rolling resistance stops the marble.
-//! 3. **Fly there and handle it**: a touch is eq. 1 at that instant, with the
-//!    normal speed at impact taken from the energy along the normal (so rounding
-//!    cannot add energy); slower than the restitution threshold it is a contact,
-//!    and a face the pull presses the marble against is then *held* (the pull's
-//!    normal part dropped) until its support ends. A marble between two close walls
-//!    bounces from one to the other in time order and never sinks into either.
+//! 2. Otherwise **the earliest event** (`events/search.rs`): for every tile in
+//!    reach, the time of impact ([`toi`](crate::physics::dynamics::toi): exact for
+//!    faces, converging separating planes for edges and corners; the ghost-bump
+//!    rule of eq. 8's narrowphase decides who owns a contact on a seam), the lid,
+//!    the instant a held face's tile runs out under the contact point, the instant
+//!    rolling resistance stops the marble.
+//! 3. **Fly there and handle it** (`events/touch.rs`): a touch is eq. 1 at that
+//!    instant, with the normal speed at impact taken from the energy along the
+//!    normal (so rounding cannot add energy); slower than the restitution threshold
+//!    it is a contact, and a face the pull presses the marble against is then
+//!    *held* (the pull's normal part dropped) until its support ends. A marble
+//!    between two close walls bounces from one to the other in time order and
+//!    never sinks into either.
 //!
 //! **Effects whose acceleration is not piecewise constant** get an interval of
 //! their own: rolling resistance opposes the velocity, which the pull turns, so its
@@ -63,11 +65,15 @@
 //! it. (Past twice the bound, slices finish the step: unreachable once impacts are
 //! inelastic, kept so the step always ends.)
 //!
-//! **The speed limit** is the number format's: velocities saturate at 128 pitch/s per
-//! axis (I8F24's range; 1.54 m/s at a 12 mm pitch), and a pull is limited to what a
-//! step can add within that range (`Params::mg_max`: 8 g down to a 9.8 mm pitch at
-//! 128 steps/s). A saturated velocity loses energy; it never overflows and never
-//! tunnels.
+//! **The speed limit** (`events/speed.rs`) is the number format's: velocities
+//! saturate at 128 pitch/s per axis (I8F24's range; 1.54 m/s at a 12 mm pitch), and
+//! a pull is limited to what a step can add within that range (`Params::mg_max`:
+//! 8 g down to a 9.8 mm pitch at 128 steps/s). A saturated velocity loses energy;
+//! it never overflows and never tunnels.
+//!
+//! Here the step itself, in the order of the work; what a marble carries from
+//! one flight to the next (its `Flight`, the slice under way, the `Event` that
+//! ends a flight) is `events/flight.rs`.
 
 use super::super::dynamics::integrate::Kick;
 use super::super::dynamics::respond::T_LOG2;
@@ -81,10 +87,16 @@ pub(super) use free::FreeRegion;
 
 use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
 
+use flight::{Around, Event, Flight, Slice, EVERY, LID};
+pub(crate) use speed::cap_speed;
+use speed::{max_abs, no_faster};
+
 mod budget;
+mod flight;
 mod free;
 mod pivot;
 mod search;
+mod speed;
 mod together;
 mod touch;
 
@@ -115,196 +127,6 @@ pub trait StepObserver<S> {
 impl<S> StepObserver<S> for () {
     #[inline(always)]
     fn flight(&mut self, _: usize, _: S, _: S, _: &Segment<S>) {}
-}
-
-/// What ends a flight.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Event<S> {
-    /// The flight's interval ends (the step's, or an effect's interval).
-    End,
-    /// A slice ends: the fixed step's contact passes push the marble out.
-    SliceEnd,
-    /// Touching tile `.1` (or the lid, [`LID`]).
-    Touch(Contact<S>, TileIndex),
-    /// Inside tile `.0` (it started there, or another marble pushed it there).
-    Inside(TileIndex),
-    /// Held face `bit` runs out of tile under the contact point.
-    Release(u8),
-    /// Rolling resistance brings the speed along its direction to zero.
-    Stop,
-    /// A search stopped short of a contact: search again from here.
-    Later,
-}
-
-/// The lid, where a tile index is asked for.
-const LID: TileIndex = TileIndex::new(i32::MIN, 0, 0);
-/// No tile: a blind slice (every tile left to the passes at its end).
-const EVERY: TileIndex = TileIndex::new(i32::MAX, 0, 0);
-
-/// A slice under way (see the module doc).
-#[derive(Clone, Copy, Debug)]
-struct Slice<S> {
-    /// The tile its events leave out: the one the marble rolls around or is in.
-    skip: TileIndex,
-    /// Where it started (the passes undo a step back to there, as fixed steps do).
-    start: Vec3<S>,
-    /// When it started and ends (fractions of the step).
-    from: S,
-    to: S,
-    /// A pivot slice (`pivot.rs`): `skip` is an edge the marble rolls around.
-    pivot: bool,
-    /// A rail slice (`pivot.rs`): the marble rests on `skip` and another edge
-    /// along the same axis.
-    rail: bool,
-}
-
-/// How a slice asked for around a tile begins.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Around {
-    /// A plain slice.
-    Slice,
-    /// A slow touch on an edge: a pivot slice if the edge holds the marble, else
-    /// a plain slice.
-    Touched,
-    /// A pivot slice ended: another while the edge holds, else free flight.
-    Rolling,
-}
-
-/// One marble's way through the step.
-#[derive(Clone, Copy, Debug)]
-struct Flight<S> {
-    /// How far into the step (steps, `0 ..= 1`).
-    t: S,
-    /// The closed form from `t` on.
-    seg: Segment<S>,
-    /// How long its acceleration holds (steps from `t`, at most `1 − t`).
-    len: S,
-    /// When rolling resistance stops it (steps from `t`).
-    stop: Option<S>,
-    /// Whether the pull alone cannot beat static friction.
-    holds: bool,
-    /// Rolling resistance's direction (x', z').
-    dir: (S, S),
-    /// Events so far in this step.
-    events: u32,
-    /// Out of events at full restitution: impacts are inelastic.
-    inelastic: bool,
-    /// Events in a row with no time passing.
-    idle: u32,
-    /// A slice asked for (around this tile), started at the next flight.
-    want: Option<TileIndex>,
-    /// The edge a pivot slice rolled round when a second edge ended it: the
-    /// slice asked for may be a rail slice on both (`pivot.rs`).
-    rail: Option<TileIndex>,
-    /// How the slice asked for begins.
-    around: Around,
-    /// The slice under way.
-    slice: Option<Slice<S>>,
-    /// Where `seg` puts the marble at the last search's limit (steps from `t`):
-    /// a flight that ends there, as most do, takes it instead of the closed form
-    /// again (`set_seg` and `fly` forget it).
-    end: Option<(S, Vec3<S>)>,
-}
-
-impl<S: Scalar> Flight<S> {
-    fn start() -> Self {
-        Flight {
-            t: S::ZERO,
-            seg: Segment::still(Vec3::ZERO),
-            len: S::ONE,
-            stop: None,
-            holds: false,
-            dir: (S::ZERO, S::ZERO),
-            events: 0,
-            inelastic: false,
-            idle: 0,
-            want: None,
-            rail: None,
-            around: Around::Slice,
-            slice: None,
-            end: None,
-        }
-    }
-
-    /// A new closed form from `t` on.
-    #[inline]
-    fn set_seg(&mut self, seg: Segment<S>) {
-        self.seg = seg;
-        self.end = None;
-    }
-
-    /// The step's time after `s` more steps (exactly 1 at the end).
-    #[inline]
-    fn after(&self, s: S) -> S {
-        if s == S::ONE - self.t {
-            S::ONE
-        } else {
-            self.t + s
-        }
-    }
-}
-
-/// Whether the box `b` lies behind a face the marble is held on (then it cannot be
-/// touched: the centre stays a radius in front of that face).
-#[inline]
-fn behind_held<S: Scalar>(m: &Marble<S>, b: &Aabb<S>) -> bool {
-    let mut bits = m.rest_mask;
-    while bits != 0 {
-        let bit = bits.trailing_zeros() as usize;
-        bits &= bits - 1;
-        let (axis, up) = (bit / 2, bit % 2 == 1);
-        let plane = m.rest_plane[axis];
-        if (up && b.max.axis(axis) <= plane) || (!up && b.min.axis(axis) >= plane) {
-            return true;
-        }
-    }
-    false
-}
-
-/// The event step's speed limit, the number format's range: `|v| ≤ 127 pitch/s`
-/// (I8F24 holds ±128, and a velocity's component along any direction must fit, not
-/// only its axes). Faster is scaled back along its own direction (energy is lost,
-/// nothing overflows).
-#[inline(always)]
-pub(crate) fn cap_speed<S: Scalar>(v: Vec3<S>) -> Vec3<S> {
-    // Under 127/√3 on every axis: under 127 whatever the direction. Compared
-    // without `abs` (I8F24's MIN has none), so that this test, the one almost
-    // every flight takes, stays inline where the rest is not.
-    let quick = S::from_int(73);
-    if v.x < quick && v.x > -quick && v.y < quick && v.y > -quick && v.z < quick && v.z > -quick {
-        return v;
-    }
-    cap_speed_far(v)
-}
-
-/// [`cap_speed`] past the quick test.
-fn cap_speed_far<S: Scalar>(v: Vec3<S>) -> Vec3<S> {
-    // A saturated axis (I8F24's MIN) first back to −MAX, whose magnitude exists.
-    let v = v.clamp_abs(S::from_int(128));
-    // In pitch/T (1/32 s): components ≤ 4, squares ≤ 48.
-    let top = S::from_int(127).shr(T_LOG2);
-    let s2 = v.shr(T_LOG2).length_sq();
-    if s2 <= top.times(top) {
-        return v;
-    }
-    v.scale(top.times(s2.rsqrt_fine()))
-}
-
-/// `v`, scaled down if need be so that it is no faster than `than` (compared in
-/// pitch/T, squares in range): `|v|·(1 − x)` with `x` the relative excess of the
-/// squares is at most `|than|`.
-#[inline]
-fn no_faster<S: Scalar>(v: Vec3<S>, than: Vec3<S>) -> Vec3<S> {
-    let (a, b) = (v.shr(T_LOG2).length_sq(), than.shr(T_LOG2).length_sq());
-    if a <= b {
-        return v;
-    }
-    let keep = S::ONE - (a - b).div(a);
-    v.scale(keep.max(S::ZERO))
-}
-
-fn max_abs<S: Scalar>(v: Vec3<S>) -> S {
-    v.x.abs().max(v.y.abs()).max(v.z.abs())
 }
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {

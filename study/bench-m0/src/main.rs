@@ -26,6 +26,8 @@
 #![no_main]
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
+use marble_board_runtime::args::number_option as mask_option;
+use marble_board_runtime::nop::{time_nop_loops, Stopwatch};
 use marble_rolling::study::{bench_one_in, bench_plan, Scene, BACKENDS};
 
 /// The backends this benchmark is built with (bit `n` for `BACKENDS[n]`): with
@@ -86,51 +88,26 @@ mod timer {
     }
 }
 
-/// Runs `iterations` (≥ 1) of a loop of exactly 8 instructions.
-#[inline(never)]
-fn nop_loop(iterations: u32) {
-    let iterations = iterations.max(1);
-    // SAFETY: touches only the register it declares.
-    unsafe {
-        core::arch::asm!(
-            "2:",
-            "nop", "nop", "nop", "nop", "nop", "nop",
-            "subs {n}, {n}, #1",
-            "bne 2b",
-            n = inout(reg) iterations => _,
-            options(nomem, nostack),
-        );
-    }
-}
-
 fn time<R>(f: impl FnOnce() -> R) -> (R, u32) {
     let before = timer::now();
     let r = f();
     (r, timer::now().wrapping_sub(before))
 }
 
-/// Calibration: `(instructions, ticks, overhead ticks)`.
-fn calibrate() -> (u32, u32, u32) {
-    const SHORT: u32 = 1_000;
-    const LONG: u32 = 11_000;
-    let (_, short) = time(|| nop_loop(SHORT));
-    let (_, long) = time(|| nop_loop(LONG));
-    let (_, overhead) = time(|| core::hint::black_box(()));
-    (8 * (LONG - SHORT), long.wrapping_sub(short), overhead)
+/// TIMER0 as the runtime's stopwatch, for the NOP loops' calibration.
+struct Timer0;
+
+impl Stopwatch for Timer0 {
+    fn time(&self, f: impl FnOnce()) -> u32 {
+        time(f).1
+    }
 }
 
-fn mask_option(name: &str, default: u32) -> u32 {
-    let Ok(args) = semihosting::experimental::env::args::<256>() else {
-        return default;
-    };
-    for arg in (&args).filter_map(Result::ok) {
-        if let Some(v) = arg.strip_prefix(name).and_then(|v| v.strip_prefix('=')) {
-            if let Ok(m) = v.parse::<u32>() {
-                return m;
-            }
-        }
-    }
-    default
+/// Calibration: `(instructions, ticks, overhead ticks)`, from the NOP loops
+/// the boards' CPU meters use (`marble_board_runtime::nop`).
+fn calibrate() -> (u32, u32, u32) {
+    let t = time_nop_loops(&Timer0);
+    (t.instructions, t.ticks, t.overhead_ticks)
 }
 
 #[entry]

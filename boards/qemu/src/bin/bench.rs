@@ -31,21 +31,8 @@
 use defmt_semihosting as _;
 use marble_rolling::study::{bench_one, bench_plan, Scene, BACKENDS};
 
+use marble_board_runtime::args::number_option as mask_option;
 use marble_qemu as hw;
-
-fn mask_option(name: &str, default: u32) -> u32 {
-    let Ok(args) = semihosting::experimental::env::args::<256>() else {
-        return default;
-    };
-    for arg in (&args).filter_map(Result::ok) {
-        if let Some(v) = arg.strip_prefix(name).and_then(|v| v.strip_prefix('=')) {
-            if let Ok(m) = v.parse::<u32>() {
-                return m;
-            }
-        }
-    }
-    default
-}
 
 #[cortex_m_rt::entry]
 fn main() -> ! {

@@ -3,8 +3,8 @@
 //! a slice leaves out.
 
 use super::{
-    behind_held, entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Event, Flight,
-    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
+    entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Event, Flight, Marble, Scalar,
+    Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -283,4 +283,21 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         first
     }
+}
+
+/// Whether the box `b` lies behind a face the marble is held on (then it cannot be
+/// touched: the centre stays a radius in front of that face).
+#[inline]
+fn behind_held<S: Scalar>(m: &Marble<S>, b: &Aabb<S>) -> bool {
+    let mut bits = m.rest_mask;
+    while bits != 0 {
+        let bit = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        let (axis, up) = (bit / 2, bit % 2 == 1);
+        let plane = m.rest_plane[axis];
+        if (up && b.max.axis(axis) <= plane) || (!up && b.min.axis(axis) >= plane) {
+            return true;
+        }
+    }
+    false
 }

@@ -1,0 +1,133 @@
+//! A marble's way through an event step: the state the stepper keeps for it
+//! ([`Flight`]) between one event and the next, the slice under way, and the
+//! events that end a flight. Apart from the step (`events.rs`) so that the step
+//! reads as the order of the work and this as what the work carries.
+
+use super::{Contact, Scalar, Segment, TileIndex, Vec3};
+
+/// What ends a flight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Event<S> {
+    /// The flight's interval ends (the step's, or an effect's interval).
+    End,
+    /// A slice ends: the fixed step's contact passes push the marble out.
+    SliceEnd,
+    /// Touching tile `.1` (or the lid, [`LID`]).
+    Touch(Contact<S>, TileIndex),
+    /// Inside tile `.0` (it started there, or another marble pushed it there).
+    Inside(TileIndex),
+    /// Held face `bit` runs out of tile under the contact point.
+    Release(u8),
+    /// Rolling resistance brings the speed along its direction to zero.
+    Stop,
+    /// A search stopped short of a contact: search again from here.
+    Later,
+}
+
+/// The lid, where a tile index is asked for.
+pub(super) const LID: TileIndex = TileIndex::new(i32::MIN, 0, 0);
+/// No tile: a blind slice (every tile left to the passes at its end).
+pub(super) const EVERY: TileIndex = TileIndex::new(i32::MAX, 0, 0);
+
+/// A slice under way (see the module doc).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Slice<S> {
+    /// The tile its events leave out: the one the marble rolls around or is in.
+    pub(super) skip: TileIndex,
+    /// Where it started (the passes undo a step back to there, as fixed steps do).
+    pub(super) start: Vec3<S>,
+    /// When it started and ends (fractions of the step).
+    pub(super) from: S,
+    pub(super) to: S,
+    /// A pivot slice (`pivot.rs`): `skip` is an edge the marble rolls around.
+    pub(super) pivot: bool,
+    /// A rail slice (`pivot.rs`): the marble rests on `skip` and another edge
+    /// along the same axis.
+    pub(super) rail: bool,
+}
+
+/// How a slice asked for around a tile begins.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Around {
+    /// A plain slice.
+    Slice,
+    /// A slow touch on an edge: a pivot slice if the edge holds the marble, else
+    /// a plain slice.
+    Touched,
+    /// A pivot slice ended: another while the edge holds, else free flight.
+    Rolling,
+}
+
+/// One marble's way through the step.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Flight<S> {
+    /// How far into the step (steps, `0 ..= 1`).
+    pub(super) t: S,
+    /// The closed form from `t` on.
+    pub(super) seg: Segment<S>,
+    /// How long its acceleration holds (steps from `t`, at most `1 − t`).
+    pub(super) len: S,
+    /// When rolling resistance stops it (steps from `t`).
+    pub(super) stop: Option<S>,
+    /// Whether the pull alone cannot beat static friction.
+    pub(super) holds: bool,
+    /// Rolling resistance's direction (x', z').
+    pub(super) dir: (S, S),
+    /// Events so far in this step.
+    pub(super) events: u32,
+    /// Out of events at full restitution: impacts are inelastic.
+    pub(super) inelastic: bool,
+    /// Events in a row with no time passing.
+    pub(super) idle: u32,
+    /// A slice asked for (around this tile), started at the next flight.
+    pub(super) want: Option<TileIndex>,
+    /// The edge a pivot slice rolled round when a second edge ended it: the
+    /// slice asked for may be a rail slice on both (`pivot.rs`).
+    pub(super) rail: Option<TileIndex>,
+    /// How the slice asked for begins.
+    pub(super) around: Around,
+    /// The slice under way.
+    pub(super) slice: Option<Slice<S>>,
+    /// Where `seg` puts the marble at the last search's limit (steps from `t`):
+    /// a flight that ends there, as most do, takes it instead of the closed form
+    /// again (`set_seg` and `fly` forget it).
+    pub(super) end: Option<(S, Vec3<S>)>,
+}
+
+impl<S: Scalar> Flight<S> {
+    pub(super) fn start() -> Self {
+        Flight {
+            t: S::ZERO,
+            seg: Segment::still(Vec3::ZERO),
+            len: S::ONE,
+            stop: None,
+            holds: false,
+            dir: (S::ZERO, S::ZERO),
+            events: 0,
+            inelastic: false,
+            idle: 0,
+            want: None,
+            rail: None,
+            around: Around::Slice,
+            slice: None,
+            end: None,
+        }
+    }
+
+    /// A new closed form from `t` on.
+    #[inline]
+    pub(super) fn set_seg(&mut self, seg: Segment<S>) {
+        self.seg = seg;
+        self.end = None;
+    }
+
+    /// The step's time after `s` more steps (exactly 1 at the end).
+    #[inline]
+    pub(super) fn after(&self, s: S) -> S {
+        if s == S::ONE - self.t {
+            S::ONE
+        } else {
+            self.t + s
+        }
+    }
+}
