@@ -42,7 +42,7 @@
 
 use embedded_storage_async::nor_flash::NorFlash;
 use sequential_storage::cache::{Cache, Uncached};
-use sequential_storage::map::{MapConfig, MapStorage};
+use sequential_storage::map::{Key, MapConfig, MapStorage, SerializationError};
 use sequential_storage::Error;
 
 /// The longest time a record may hold, in frames: an hour at 128 frames/s. A
@@ -52,6 +52,88 @@ pub const MAX_RECORD_FRAMES: u32 = 3600 * 128;
 /// Room for one item's key and value (1 + 4 bytes), rounded up to the words of
 /// any flash this runs on (up to 8 bytes).
 const BUFFER: usize = 16;
+
+/// The key of an item in either store's map: a level's record or a ghost.
+/// One type for both, so that a firmware with both stores links one
+/// instantiation of sequential-storage's map (its code is generic over the
+/// key: a second one cost the micro:bit v2 3.6 KB of flash).
+///
+/// On flash a record's key is the level's index, one byte, as it has always
+/// been; a ghost's is its 32-bit [`ghost_key`] (little-endian) with
+/// [`GHOST_TAG`] set in its first byte. The first byte tells the two apart:
+/// the map hands the key's reader the item's bytes, not their length. So a
+/// record's level is below 128 ([`Slot::level`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub struct Slot(
+    // The key's four bytes as a number (little-endian): a record's level is
+    // below 128 (its three upper bytes zero), a ghost's has GHOST_TAG set in
+    // its first byte. One word, so that comparing keys is one compare.
+    u32,
+);
+
+/// The bit set in the first byte of every ghost's key on flash, clear in a
+/// record's.
+pub const GHOST_TAG: u8 = 0x80;
+
+impl Slot {
+    /// The record of the level `index`; `None` from 128 on (a byte with
+    /// [`GHOST_TAG`] would read back as a ghost's key).
+    pub const fn level(index: u8) -> Option<Slot> {
+        if index & GHOST_TAG == 0 {
+            Some(Slot(index as u32))
+        } else {
+            None
+        }
+    }
+
+    /// The ghost of the level named `name`: [`ghost_key`] with
+    /// [`GHOST_TAG`] set.
+    pub const fn ghost(name: &str) -> Slot {
+        Slot(ghost_key(name) | GHOST_TAG as u32)
+    }
+
+    /// Whether this is a ghost's key.
+    pub const fn is_ghost(self) -> bool {
+        self.0 & GHOST_TAG as u32 != 0
+    }
+
+    /// The key's length on flash.
+    const fn len(self) -> usize {
+        if self.is_ghost() {
+            4
+        } else {
+            1
+        }
+    }
+}
+
+impl Key for Slot {
+    fn serialize_into(&self, buffer: &mut [u8]) -> Result<usize, SerializationError> {
+        let len = self.len();
+        let out = buffer
+            .get_mut(..len)
+            .ok_or(SerializationError::BufferTooSmall)?;
+        out.copy_from_slice(&self.0.to_le_bytes()[..len]);
+        Ok(len)
+    }
+
+    fn deserialize_from(buffer: &[u8]) -> Result<(Self, usize), SerializationError> {
+        let first = *buffer.first().ok_or(SerializationError::BufferTooSmall)?;
+        let slot = if first & GHOST_TAG == 0 {
+            Slot(u32::from(first))
+        } else {
+            let bytes: [u8; 4] = buffer
+                .get(..4)
+                .and_then(|b| b.try_into().ok())
+                .ok_or(SerializationError::BufferTooSmall)?;
+            Slot(u32::from_le_bytes(bytes))
+        };
+        Ok((slot, slot.len()))
+    }
+}
+
+/// The map both stores keep (one instantiation: [`Slot`]).
+type Map<F> = MapStorage<Slot, F, Cache<Uncached, Uncached, Uncached, Slot>>;
 
 /// What a finished level's time did to its record.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -85,6 +167,8 @@ pub enum RecordError {
     Full,
     /// A time of zero frames or over [`MAX_RECORD_FRAMES`] was offered.
     BadTime,
+    /// A level from 128 on was offered: no key holds it ([`Slot::level`]).
+    BadLevel,
 }
 
 impl RecordError {
@@ -96,13 +180,14 @@ impl RecordError {
             RecordError::Unrecoverable => "records corrupted: erase failed",
             RecordError::Full => "records region full",
             RecordError::BadTime => "time out of range",
+            RecordError::BadLevel => "level index out of range (128 or more)",
         }
     }
 }
 
 /// The sequential-storage map of records over the flash `F`, in its region.
 pub struct Records<F: NorFlash> {
-    map: MapStorage<u8, F, Cache<Uncached, Uncached, Uncached, u8>>,
+    map: Map<F>,
     buffer: Buffer,
 }
 
@@ -147,7 +232,10 @@ impl<F: NorFlash> Records<F> {
 
     /// Level `level`'s record in frames, if it has one.
     pub async fn best(&mut self, level: u8) -> Result<Option<u32>, RecordError> {
-        let fetched = self.map.fetch_item::<u32>(&mut self.buffer.0, &level).await;
+        let Some(key) = Slot::level(level) else {
+            return Ok(None);
+        };
+        let fetched = self.map.fetch_item::<u32>(&mut self.buffer.0, &key).await;
         match fetched {
             Ok(value) => Ok(value.filter(|&frames| plausible(frames))),
             Err(e) => Err(self.recover(e).await),
@@ -161,6 +249,9 @@ impl<F: NorFlash> Records<F> {
         if !plausible(frames) {
             return Err(RecordError::BadTime);
         }
+        let Some(key) = Slot::level(level) else {
+            return Err(RecordError::BadLevel);
+        };
         let previous = match self.best(level).await {
             Ok(previous) => previous,
             // The region was erased: this win is the first record in it.
@@ -173,11 +264,7 @@ impl<F: NorFlash> Records<F> {
                 best: previous.unwrap_or(frames),
             });
         }
-        match self
-            .map
-            .store_item(&mut self.buffer.0, &level, &frames)
-            .await
-        {
+        match self.map.store_item(&mut self.buffer.0, &key, &frames).await {
             Ok(()) => Ok(Offer::New { previous }),
             Err(e) => Err(self.recover(e).await),
         }
@@ -201,8 +288,8 @@ impl<F: NorFlash> Records<F> {
     }
 }
 
-/// Where a level's ghost lives in the ghosts' map: the FNV-1a hash (32 bits)
-/// of the level's name (a built-in level's name, or a generated maze's, which
+/// Where a level's ghost lives in the ghosts' map (with [`GHOST_TAG`] set:
+/// [`Slot::ghost`]): the FNV-1a hash (32 bits) of the level's name (a built-in level's name, or a generated maze's, which
 /// holds its arguments). Two names on one key would share a slot; a ghost is
 /// used only once its replay wins the level on its own state hash, so the
 /// other level's ghost is never shown on the wrong maze, only replaced.
@@ -257,6 +344,9 @@ pub enum GhostStoreError {
     Corrupted,
     /// The region was corrupted and could not even be erased.
     Unrecoverable,
+    /// The region held ghosts an older firmware kept under keys of another
+    /// form: it has been erased (once; every ghost is lost).
+    OlderFormat,
 }
 
 impl GhostStoreError {
@@ -269,6 +359,7 @@ impl GhostStoreError {
             GhostStoreError::Flash => "flash error",
             GhostStoreError::Corrupted => "ghosts corrupted: region erased",
             GhostStoreError::Unrecoverable => "ghosts corrupted: erase failed",
+            GhostStoreError::OlderFormat => "ghosts of an older firmware: region cleared",
         }
     }
 }
@@ -303,8 +394,16 @@ const MOST_EVICTIONS: u8 = 16;
 /// forward) gives way — an empty item under its key, which the next
 /// migration drops — up to `MOST_EVICTIONS` of them; a ghost longer than one item may be
 /// ([`max_ghost_bytes`]) is refused before anything is written.
+///
+/// Ghosts an older firmware kept under untagged keys (before [`Slot`]: a key
+/// whose first byte lacks [`GHOST_TAG`] reads back as a record's) would sit
+/// in the region for ever, never loaded nor evicted: the first load or keep
+/// after a power-up looks for them, and finding one erases the region
+/// ([`GhostStoreError::OlderFormat`], said once).
 pub struct Ghosts<F: NorFlash> {
-    map: MapStorage<u32, F, Cache<Uncached, Uncached, Uncached, u32>>,
+    map: Map<F>,
+    /// The region was looked at for an older firmware's ghosts.
+    checked: bool,
 }
 
 impl<F: NorFlash> Ghosts<F> {
@@ -314,6 +413,7 @@ impl<F: NorFlash> Ghosts<F> {
         let config = MapConfig::try_new(region).ok()?;
         Some(Ghosts {
             map: MapStorage::new(flash, config, Cache::new_uncached()),
+            checked: false,
         })
     }
 
@@ -336,7 +436,8 @@ impl<F: NorFlash> Ghosts<F> {
         name: &str,
         buf: &'b mut [u8],
     ) -> Result<Option<&'b [u8]>, GhostStoreError> {
-        let key = ghost_key(name);
+        self.check_format(buf).await?;
+        let key = Slot::ghost(name);
         let fetched = self.map.fetch_item::<&[u8]>(buf, &key).await;
         match fetched {
             Ok(Some(bytes)) => {
@@ -372,7 +473,12 @@ impl<F: NorFlash> Ghosts<F> {
         if work.len() < needs {
             return Err(GhostStoreError::Buffer { needs });
         }
-        let key = ghost_key(name);
+        match self.check_format(work).await {
+            // Said by the load before; the region is empty now.
+            Ok(()) | Err(GhostStoreError::OlderFormat) => {}
+            Err(e) => return Err(e),
+        }
+        let key = Slot::ghost(name);
         let mut evicted = 0;
         loop {
             match self.map.store_item(work, &key, &ghost).await {
@@ -405,21 +511,69 @@ impl<F: NorFlash> Ghosts<F> {
         self.map
             .erase_all()
             .await
-            .map_err(|_| GhostStoreError::Flash)
+            .map_err(|_| GhostStoreError::Flash)?;
+        self.checked = true;
+        Ok(())
+    }
+
+    /// Once a power-up: erases the region if it holds an item whose key is
+    /// not a ghost's (an older firmware's ghost, see [`Ghosts`]), reading
+    /// the items through `work`.
+    async fn check_format(&mut self, work: &mut [u8]) -> Result<(), GhostStoreError> {
+        if self.checked {
+            return Ok(());
+        }
+        let (_, older) = self.survey(None, work).await?;
+        if !older {
+            self.checked = true;
+            return Ok(());
+        }
+        match self.map.erase_all().await {
+            Ok(()) => {
+                self.checked = true;
+                Err(GhostStoreError::OlderFormat)
+            }
+            Err(_) => Err(GhostStoreError::Unrecoverable),
+        }
     }
 
     /// The oldest ghost in the region of a key other than `keep` gets an
     /// empty item (no ghost); `false` when there is none to evict.
-    async fn evict_oldest(&mut self, keep: u32, work: &mut [u8]) -> Result<bool, GhostStoreError> {
+    async fn evict_oldest(&mut self, keep: Slot, work: &mut [u8]) -> Result<bool, GhostStoreError> {
+        let (oldest, _) = self.survey(Some(keep), work).await?;
+        let Some(key) = oldest else {
+            return Ok(false);
+        };
+        match self.map.store_item::<&[u8]>(work, &key, &&[][..]).await {
+            Ok(()) => Ok(true),
+            Err(Error::FullStorage) => Ok(false),
+            Err(e) => Err(self.recover(e).await),
+        }
+    }
+
+    /// Every item of the region, read through `work`: the key of the ghost
+    /// sitting oldest other than `keep`'s, and whether an item's key is not
+    /// a ghost's (an older firmware's). One walk for both, so that the
+    /// map's walk is linked once.
+    async fn survey(
+        &mut self,
+        keep: Option<Slot>,
+        work: &mut [u8],
+    ) -> Result<(Option<Slot>, bool), GhostStoreError> {
         // The items come oldest first, a key's newest last: the keys with a
         // ghost, in the order of their newest item (an empty one is a ghost
         // already gone).
-        let mut live: heapless::Vec<u32, 32> = heapless::Vec::new();
+        let mut live: heapless::Vec<Slot, 32> = heapless::Vec::new();
+        let mut older = false;
         let found = async {
             let mut items = self.map.fetch_all_items(work).await?;
             while let Some((key, value)) = items.next::<&[u8]>(work).await? {
+                if !key.is_ghost() {
+                    older = true;
+                    continue;
+                }
                 live.retain(|&k| k != key);
-                if key != keep && !value.is_empty() {
+                if Some(key) != keep && !value.is_empty() {
                     // More live ghosts than the list holds: the newest wait.
                     let _ = live.push(key);
                 }
@@ -427,15 +581,9 @@ impl<F: NorFlash> Ghosts<F> {
             Ok::<_, Error<F::Error>>(())
         }
         .await;
-        if let Err(e) = found {
-            return Err(self.recover(e).await);
-        }
-        let Some(&key) = live.first() else {
-            return Ok(false);
-        };
-        match self.map.store_item::<&[u8]>(work, &key, &&[][..]).await {
-            Ok(()) => Ok(true),
-            Err(Error::FullStorage) => Ok(false),
+        match found {
+            Ok(()) => Ok((live.first().copied(), older)),
+            Err(Error::BufferTooSmall(needs)) => Err(GhostStoreError::Buffer { needs }),
             Err(e) => Err(self.recover(e).await),
         }
     }

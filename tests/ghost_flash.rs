@@ -12,8 +12,10 @@ use embassy_futures::block_on;
 use marble_rolling::game::ghost::{Ghost, GhostError, GhostWriter};
 use marble_rolling::input::sensor::Calibration;
 use marble_rolling::records::{
-    ghost_key, ghost_work_bytes, max_ghost_bytes, GhostStoreError, Ghosts, Kept,
+    ghost_key, ghost_work_bytes, max_ghost_bytes, GhostStoreError, Ghosts, Kept, Slot,
 };
+use sequential_storage::cache::Cache;
+use sequential_storage::map::{MapConfig, MapStorage};
 use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
 
 const PAGES: usize = 8;
@@ -305,6 +307,68 @@ fn a_stored_item_that_is_not_a_ghost_is_no_ghost() {
     ghost[4] = ghost[4].wrapping_add(1);
     keep(&mut g, "corner", &ghost).unwrap();
     assert_eq!(load(&g.into_flash(), "corner"), Ok(None));
+}
+
+/// On flash a ghost's key is its name's FNV-1a hash with the tag bit set in
+/// its first byte (little-endian), which a record's key (a level below 128)
+/// never has: the two stores share one key type (`records::Slot`).
+#[test]
+fn a_ghosts_key_on_flash_is_tagged() {
+    assert_eq!(Slot::ghost("a"), Slot::ghost("a"));
+    assert_ne!(Slot::ghost("a"), Slot::ghost("foobar"));
+    assert!(Slot::ghost("a").is_ghost() && !Slot::level(3).unwrap().is_ghost());
+    assert_eq!(Slot::level(128), None);
+    let mut g = ghosts(flash());
+    let ghost = ghost_of(300, 4);
+    keep(&mut g, "a", &ghost).unwrap();
+    let f = g.into_flash();
+    // The raw map reads the item back under the tagged hash: 0xe40c_292c
+    // with 0x80 in its low byte.
+    let mut old = MapStorage::<u32, _, _>::new(f, MapConfig::new(REGION), Cache::new_uncached());
+    let mut buf = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    let got = block_on(old.fetch_item::<&[u8]>(&mut buf, &0xe40c_29ac)).unwrap();
+    assert_eq!(got, Some(&ghost[..]));
+}
+
+/// Ghosts an older firmware kept under the bare hash (no tag bit) read back
+/// as records' keys: the first load after a power-up finds them, erases the
+/// region and says so once; the region then works as new. A ghost whose
+/// bare hash already had the bit is the same key as before.
+#[test]
+fn ghosts_of_an_older_firmware_are_cleared_once_and_said() {
+    let old_ghost = ghost_of(500, 2);
+    let mut old =
+        MapStorage::<u32, _, _>::new(flash(), MapConfig::new(REGION), Cache::new_uncached());
+    let mut work = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    // "a": 0xe40c_292c, the tag bit clear.
+    block_on(old.store_item(&mut work, &ghost_key("a"), &&old_ghost[..])).unwrap();
+    let f = old.destroy().0;
+    let mut g = ghosts(f.clone());
+    let mut buf = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    assert_eq!(
+        block_on(g.load("corner", &mut buf)),
+        Err(GhostStoreError::OlderFormat)
+    );
+    assert_eq!(
+        GhostStoreError::OlderFormat.as_str(),
+        "ghosts of an older firmware: region cleared"
+    );
+    assert_eq!(block_on(g.load("a", &mut buf)), Ok(None));
+    let new = ghost_of(600, 3);
+    keep(&mut g, "a", &new).unwrap();
+    assert_eq!(load(&g.into_flash(), "a"), Ok(Some(new.clone())));
+    // A keep first clears the region too, and keeps its ghost.
+    let mut g = ghosts(f);
+    keep(&mut g, "b", &new).unwrap();
+    let f = g.into_flash();
+    assert_eq!(load(&f, "b"), Ok(Some(new.clone())));
+    assert_eq!(load(&f, "a"), Ok(None));
+    // "": 0x811c_9dc5, the tag bit set: an older firmware's ghost of that
+    // name is this firmware's, and nothing is cleared.
+    let mut old =
+        MapStorage::<u32, _, _>::new(flash(), MapConfig::new(REGION), Cache::new_uncached());
+    block_on(old.store_item(&mut work, &ghost_key(""), &&old_ghost[..])).unwrap();
+    assert_eq!(load(&old.destroy().0, ""), Ok(Some(old_ghost)));
 }
 
 /// QEMU's RAM flash (the NVMC's rules) keeps a ghost across a save and reload
