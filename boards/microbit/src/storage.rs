@@ -42,6 +42,9 @@ mod shared {
     /// [`board::GHOST_BYTES`].
     pub type Kit = GhostKit<GhostsFlash, { board::GHOST_BYTES }>;
 
+    /// The ghosts' store, which the game task makes its [`Kit`] of.
+    pub type GhostsStore = Ghosts<GhostsFlash>;
+
     /// The stores over the NVMC; a store whose region is not whole pages is
     /// `None` (logged).
     pub struct Stores {
@@ -103,16 +106,11 @@ mod shared {
         }
     }
 
-    /// The ghosts with their buffers, in a static of their own (a task's
-    /// argument would be moved through the game task's stack frame, which lies
-    /// under the game's deepest call); `None` without a store.
-    pub fn kit(ghosts: Option<Ghosts<GhostsFlash>>) -> Option<&'static mut Kit> {
-        let store = ghosts?;
-        let kit = cortex_m::singleton!(: Kit = GhostKit::new(store, |_| {}));
-        if kit.is_none() {
-            defmt::error!("ghosts: the kit is already taken");
-        }
-        kit
+    /// The ghosts with their buffers (`None` without a store), for the game
+    /// task to keep in its future where the race's never is: made there,
+    /// it is written in place, never moved through a stack frame.
+    pub fn kit(ghosts: Option<GhostsStore>) -> Option<Kit> {
+        ghosts.map(|store| GhostKit::new(store, |_| {}))
     }
 }
 #[cfg(feature = "ghosts")]
@@ -136,10 +134,13 @@ mod records_only {
     /// No ghost is kept: the game task's kit is never there.
     pub enum Kit {}
 
+    /// No ghosts' store either.
+    pub enum GhostsStore {}
+
     /// The best times' store; no ghosts.
     pub struct Stores {
         pub records: Option<Records<RecordsFlash>>,
-        pub ghosts: Option<Kit>,
+        pub ghosts: Option<GhostsStore>,
     }
 
     /// The records over the whole NVMC (board::RECORDS).
@@ -162,7 +163,7 @@ mod records_only {
     }
 
     /// No kit without the feature.
-    pub fn kit(_: Option<Kit>) -> Option<&'static mut Kit> {
+    pub fn kit(_: Option<GhostsStore>) -> Option<Kit> {
         None
     }
 }
