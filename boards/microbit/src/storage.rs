@@ -1,35 +1,29 @@
 //! The NVMC shared by the best times (the records task) and the ghosts (the
-//! game task): one mutex over the flash, a partition for each store
+//! game task): one `RefCell` over the flash, a region for each store
 //! (`marble_rolling::board::microbit::storage`, the library's feature
 //! `shared-flash`, host-tested there). Wiring only.
 //!
-//! Without the `ghosts` feature (the default: with the radio race the ghost
-//! passes the v2's flash and RAM budgets) the records have the NVMC to
-//! themselves and there is no ghost: the same names, a store that is never
-//! there.
+//! Without the `ghosts` feature (on by default; `--no-default-features`
+//! builds the v2 of before, best times and no ghost) the records have the
+//! NVMC to themselves: the same names, a store that is never there.
 
 #[cfg(feature = "ghosts")]
 mod shared {
-    use embassy_embedded_hal::adapter::BlockingAsync;
-    use embassy_embedded_hal::flash::partition::Partition;
+    use core::cell::RefCell;
+
     use embassy_nrf::nvmc::Nvmc;
     use embassy_nrf::{peripherals, Peri};
-    use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
-    use embassy_sync::mutex::Mutex;
     use marble_rolling::app::GhostKit;
-    use marble_rolling::board::microbit::storage::{self, local, Paced};
+    use marble_rolling::board::microbit::storage::{self, local, Region};
     use marble_rolling::board::microbit::{self as board, Heartbeats};
     use marble_rolling::records::{Ghosts, Records};
 
     use crate::hw::WatchedFlash;
 
-    /// The NVMC, blocking (the CPU waits on a page erase, about 85 ms, between
-    /// levels only), as the async NOR flash the stores take.
-    type Nvm = BlockingAsync<Nvmc<'static>>;
-
-    /// One store's region of the NVMC, its task yielding after each erase and
-    /// write.
-    pub type Part = Paced<Partition<'static, CriticalSectionRawMutex, Nvm>>;
+    /// One store's region of the NVMC, blocking (the CPU waits on a page
+    /// erase, about 85 ms, between levels only), its task yielding after
+    /// each erase and write.
+    pub type Part = Region<'static, Nvmc<'static>>;
 
     /// The records' flash, each operation a heartbeat of the records task
     /// ([`WatchedFlash`]).
@@ -60,10 +54,10 @@ mod shared {
             records: None,
             ghosts: None,
         };
-        // The mutex lives as long as the tasks that lock it: a static, filled
+        // The cell lives as long as the tasks that borrow it: a static, filled
         // once here (the NVMC peripheral can be taken only once).
         let Some(flash) = cortex_m::singleton!(
-            : Mutex<CriticalSectionRawMutex, Nvm> = Mutex::new(BlockingAsync::new(Nvmc::new(nvmc)))
+            : RefCell<Nvmc<'static>> = RefCell::new(Nvmc::new(nvmc))
         ) else {
             defmt::error!("flash: the NVMC is already shared");
             return none;
