@@ -157,8 +157,8 @@ const fn fits_pages(region: &Range<u32>, read: usize, write: usize, page: usize)
         && write > 0
         && start % page == 0
         && end % page == 0
-        && page % read == 0
-        && page % write == 0
+        && page.is_multiple_of(read)
+        && page.is_multiple_of(write)
 }
 
 /// Whether two regions share a byte.
