@@ -53,6 +53,13 @@ pub const MAX_RECORD_FRAMES: u32 = 3600 * 128;
 /// any flash this runs on (up to 8 bytes).
 const BUFFER: usize = 16;
 
+mod slot;
+
+pub use slot::{Slot, GHOST_TAG};
+
+/// The map both stores keep (one instantiation: [`Slot`]).
+type Map<F> = MapStorage<Slot, F, Cache<Uncached, Uncached, Uncached, Slot>>;
+
 /// What a finished level's time did to its record.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -85,6 +92,8 @@ pub enum RecordError {
     Full,
     /// A time of zero frames or over [`MAX_RECORD_FRAMES`] was offered.
     BadTime,
+    /// A level from 128 on was offered: no key holds it ([`Slot::level`]).
+    BadLevel,
 }
 
 impl RecordError {
@@ -96,13 +105,14 @@ impl RecordError {
             RecordError::Unrecoverable => "records corrupted: erase failed",
             RecordError::Full => "records region full",
             RecordError::BadTime => "time out of range",
+            RecordError::BadLevel => "level index out of range (128 or more)",
         }
     }
 }
 
 /// The sequential-storage map of records over the flash `F`, in its region.
 pub struct Records<F: NorFlash> {
-    map: MapStorage<u8, F, Cache<Uncached, Uncached, Uncached, u8>>,
+    map: Map<F>,
     buffer: Buffer,
 }
 
@@ -147,7 +157,10 @@ impl<F: NorFlash> Records<F> {
 
     /// Level `level`'s record in frames, if it has one.
     pub async fn best(&mut self, level: u8) -> Result<Option<u32>, RecordError> {
-        let fetched = self.map.fetch_item::<u32>(&mut self.buffer.0, &level).await;
+        let Some(key) = Slot::level(level) else {
+            return Ok(None);
+        };
+        let fetched = self.map.fetch_item::<u32>(&mut self.buffer.0, &key).await;
         match fetched {
             Ok(value) => Ok(value.filter(|&frames| plausible(frames))),
             Err(e) => Err(self.recover(e).await),
@@ -161,6 +174,9 @@ impl<F: NorFlash> Records<F> {
         if !plausible(frames) {
             return Err(RecordError::BadTime);
         }
+        let Some(key) = Slot::level(level) else {
+            return Err(RecordError::BadLevel);
+        };
         let previous = match self.best(level).await {
             Ok(previous) => previous,
             // The region was erased: this win is the first record in it.
@@ -173,11 +189,7 @@ impl<F: NorFlash> Records<F> {
                 best: previous.unwrap_or(frames),
             });
         }
-        match self
-            .map
-            .store_item(&mut self.buffer.0, &level, &frames)
-            .await
-        {
+        match self.map.store_item(&mut self.buffer.0, &key, &frames).await {
             Ok(()) => Ok(Offer::New { previous }),
             Err(e) => Err(self.recover(e).await),
         }
@@ -201,8 +213,8 @@ impl<F: NorFlash> Records<F> {
     }
 }
 
-/// Where a level's ghost lives in the ghosts' map: the FNV-1a hash (32 bits)
-/// of the level's name (a built-in level's name, or a generated maze's, which
+/// Where a level's ghost lives in the ghosts' map (with [`GHOST_TAG`] set:
+/// [`Slot::ghost`]): the FNV-1a hash (32 bits) of the level's name (a built-in level's name, or a generated maze's, which
 /// holds its arguments). Two names on one key would share a slot; a ghost is
 /// used only once its replay wins the level on its own state hash, so the
 /// other level's ghost is never shown on the wrong maze, only replaced.
@@ -257,6 +269,9 @@ pub enum GhostStoreError {
     Corrupted,
     /// The region was corrupted and could not even be erased.
     Unrecoverable,
+    /// The region held ghosts an older firmware kept under keys of another
+    /// form: it has been erased (once; every ghost is lost).
+    OlderFormat,
 }
 
 impl GhostStoreError {
@@ -269,6 +284,7 @@ impl GhostStoreError {
             GhostStoreError::Flash => "flash error",
             GhostStoreError::Corrupted => "ghosts corrupted: region erased",
             GhostStoreError::Unrecoverable => "ghosts corrupted: erase failed",
+            GhostStoreError::OlderFormat => "ghosts of an older firmware: region cleared",
         }
     }
 }
@@ -303,8 +319,16 @@ const MOST_EVICTIONS: u8 = 16;
 /// forward) gives way — an empty item under its key, which the next
 /// migration drops — up to `MOST_EVICTIONS` of them; a ghost longer than one item may be
 /// ([`max_ghost_bytes`]) is refused before anything is written.
+///
+/// Ghosts an older firmware kept under untagged keys (before [`Slot`]: a key
+/// whose first byte lacks [`GHOST_TAG`] reads back as a record's) would sit
+/// in the region for ever, never loaded nor evicted: the first load or keep
+/// after a power-up looks for them, and finding one erases the region
+/// ([`GhostStoreError::OlderFormat`], said once).
 pub struct Ghosts<F: NorFlash> {
-    map: MapStorage<u32, F, Cache<Uncached, Uncached, Uncached, u32>>,
+    map: Map<F>,
+    /// The region was looked at for an older firmware's ghosts.
+    checked: bool,
 }
 
 impl<F: NorFlash> Ghosts<F> {
@@ -314,6 +338,7 @@ impl<F: NorFlash> Ghosts<F> {
         let config = MapConfig::try_new(region).ok()?;
         Some(Ghosts {
             map: MapStorage::new(flash, config, Cache::new_uncached()),
+            checked: false,
         })
     }
 
@@ -336,7 +361,8 @@ impl<F: NorFlash> Ghosts<F> {
         name: &str,
         buf: &'b mut [u8],
     ) -> Result<Option<&'b [u8]>, GhostStoreError> {
-        let key = ghost_key(name);
+        self.check_format(buf).await?;
+        let key = Slot::ghost(name);
         let fetched = self.map.fetch_item::<&[u8]>(buf, &key).await;
         match fetched {
             Ok(Some(bytes)) => {
@@ -372,7 +398,12 @@ impl<F: NorFlash> Ghosts<F> {
         if work.len() < needs {
             return Err(GhostStoreError::Buffer { needs });
         }
-        let key = ghost_key(name);
+        match self.check_format(work).await {
+            // Said by the load before; the region is empty now.
+            Ok(()) | Err(GhostStoreError::OlderFormat) => {}
+            Err(e) => return Err(e),
+        }
+        let key = Slot::ghost(name);
         let mut evicted = 0;
         loop {
             match self.map.store_item(work, &key, &ghost).await {
@@ -405,21 +436,69 @@ impl<F: NorFlash> Ghosts<F> {
         self.map
             .erase_all()
             .await
-            .map_err(|_| GhostStoreError::Flash)
+            .map_err(|_| GhostStoreError::Flash)?;
+        self.checked = true;
+        Ok(())
+    }
+
+    /// Once a power-up: erases the region if it holds an item whose key is
+    /// not a ghost's (an older firmware's ghost, see [`Ghosts`]), reading
+    /// the items through `work`.
+    async fn check_format(&mut self, work: &mut [u8]) -> Result<(), GhostStoreError> {
+        if self.checked {
+            return Ok(());
+        }
+        let (_, older) = self.survey(None, work).await?;
+        if !older {
+            self.checked = true;
+            return Ok(());
+        }
+        match self.map.erase_all().await {
+            Ok(()) => {
+                self.checked = true;
+                Err(GhostStoreError::OlderFormat)
+            }
+            Err(_) => Err(GhostStoreError::Unrecoverable),
+        }
     }
 
     /// The oldest ghost in the region of a key other than `keep` gets an
     /// empty item (no ghost); `false` when there is none to evict.
-    async fn evict_oldest(&mut self, keep: u32, work: &mut [u8]) -> Result<bool, GhostStoreError> {
+    async fn evict_oldest(&mut self, keep: Slot, work: &mut [u8]) -> Result<bool, GhostStoreError> {
+        let (oldest, _) = self.survey(Some(keep), work).await?;
+        let Some(key) = oldest else {
+            return Ok(false);
+        };
+        match self.map.store_item::<&[u8]>(work, &key, &&[][..]).await {
+            Ok(()) => Ok(true),
+            Err(Error::FullStorage) => Ok(false),
+            Err(e) => Err(self.recover(e).await),
+        }
+    }
+
+    /// Every item of the region, read through `work`: the key of the ghost
+    /// sitting oldest other than `keep`'s, and whether an item's key is not
+    /// a ghost's (an older firmware's). One walk for both, so that the
+    /// map's walk is linked once.
+    async fn survey(
+        &mut self,
+        keep: Option<Slot>,
+        work: &mut [u8],
+    ) -> Result<(Option<Slot>, bool), GhostStoreError> {
         // The items come oldest first, a key's newest last: the keys with a
         // ghost, in the order of their newest item (an empty one is a ghost
         // already gone).
-        let mut live: heapless::Vec<u32, 32> = heapless::Vec::new();
+        let mut live: heapless::Vec<Slot, 32> = heapless::Vec::new();
+        let mut older = false;
         let found = async {
             let mut items = self.map.fetch_all_items(work).await?;
             while let Some((key, value)) = items.next::<&[u8]>(work).await? {
+                if !key.is_ghost() {
+                    older = true;
+                    continue;
+                }
                 live.retain(|&k| k != key);
-                if key != keep && !value.is_empty() {
+                if Some(key) != keep && !value.is_empty() {
                     // More live ghosts than the list holds: the newest wait.
                     let _ = live.push(key);
                 }
@@ -427,15 +506,9 @@ impl<F: NorFlash> Ghosts<F> {
             Ok::<_, Error<F::Error>>(())
         }
         .await;
-        if let Err(e) = found {
-            return Err(self.recover(e).await);
-        }
-        let Some(&key) = live.first() else {
-            return Ok(false);
-        };
-        match self.map.store_item::<&[u8]>(work, &key, &&[][..]).await {
-            Ok(()) => Ok(true),
-            Err(Error::FullStorage) => Ok(false),
+        match found {
+            Ok(()) => Ok((live.first().copied(), older)),
+            Err(Error::BufferTooSmall(needs)) => Err(GhostStoreError::Buffer { needs }),
             Err(e) => Err(self.recover(e).await),
         }
     }

@@ -12,8 +12,10 @@ use embassy_futures::block_on;
 use marble_rolling::game::ghost::{Ghost, GhostError, GhostWriter};
 use marble_rolling::input::sensor::Calibration;
 use marble_rolling::records::{
-    ghost_key, ghost_work_bytes, max_ghost_bytes, GhostStoreError, Ghosts, Kept,
+    ghost_key, ghost_work_bytes, max_ghost_bytes, GhostStoreError, Ghosts, Kept, Slot,
 };
+use sequential_storage::cache::Cache;
+use sequential_storage::map::{MapConfig, MapStorage};
 use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
 
 const PAGES: usize = 8;
@@ -307,6 +309,68 @@ fn a_stored_item_that_is_not_a_ghost_is_no_ghost() {
     assert_eq!(load(&g.into_flash(), "corner"), Ok(None));
 }
 
+/// On flash a ghost's key is its name's FNV-1a hash with the tag bit set in
+/// its first byte (little-endian), which a record's key (a level below 128)
+/// never has: the two stores share one key type (`records::Slot`).
+#[test]
+fn a_ghosts_key_on_flash_is_tagged() {
+    assert_eq!(Slot::ghost("a"), Slot::ghost("a"));
+    assert_ne!(Slot::ghost("a"), Slot::ghost("foobar"));
+    assert!(Slot::ghost("a").is_ghost() && !Slot::level(3).unwrap().is_ghost());
+    assert_eq!(Slot::level(128), None);
+    let mut g = ghosts(flash());
+    let ghost = ghost_of(300, 4);
+    keep(&mut g, "a", &ghost).unwrap();
+    let f = g.into_flash();
+    // The raw map reads the item back under the tagged hash: 0xe40c_292c
+    // with 0x80 in its low byte.
+    let mut old = MapStorage::<u32, _, _>::new(f, MapConfig::new(REGION), Cache::new_uncached());
+    let mut buf = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    let got = block_on(old.fetch_item::<&[u8]>(&mut buf, &0xe40c_29ac)).unwrap();
+    assert_eq!(got, Some(&ghost[..]));
+}
+
+/// Ghosts an older firmware kept under the bare hash (no tag bit) read back
+/// as records' keys: the first load after a power-up finds them, erases the
+/// region and says so once; the region then works as new. A ghost whose
+/// bare hash already had the bit is the same key as before.
+#[test]
+fn ghosts_of_an_older_firmware_are_cleared_once_and_said() {
+    let old_ghost = ghost_of(500, 2);
+    let mut old =
+        MapStorage::<u32, _, _>::new(flash(), MapConfig::new(REGION), Cache::new_uncached());
+    let mut work = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    // "a": 0xe40c_292c, the tag bit clear.
+    block_on(old.store_item(&mut work, &ghost_key("a"), &&old_ghost[..])).unwrap();
+    let f = old.destroy().0;
+    let mut g = ghosts(f.clone());
+    let mut buf = vec![0u8; ghost_work_bytes::<Flash>(MAX)];
+    assert_eq!(
+        block_on(g.load("corner", &mut buf)),
+        Err(GhostStoreError::OlderFormat)
+    );
+    assert_eq!(
+        GhostStoreError::OlderFormat.as_str(),
+        "ghosts of an older firmware: region cleared"
+    );
+    assert_eq!(block_on(g.load("a", &mut buf)), Ok(None));
+    let new = ghost_of(600, 3);
+    keep(&mut g, "a", &new).unwrap();
+    assert_eq!(load(&g.into_flash(), "a"), Ok(Some(new.clone())));
+    // A keep first clears the region too, and keeps its ghost.
+    let mut g = ghosts(f);
+    keep(&mut g, "b", &new).unwrap();
+    let f = g.into_flash();
+    assert_eq!(load(&f, "b"), Ok(Some(new.clone())));
+    assert_eq!(load(&f, "a"), Ok(None));
+    // "": 0x811c_9dc5, the tag bit set: an older firmware's ghost of that
+    // name is this firmware's, and nothing is cleared.
+    let mut old =
+        MapStorage::<u32, _, _>::new(flash(), MapConfig::new(REGION), Cache::new_uncached());
+    block_on(old.store_item(&mut work, &ghost_key(""), &&old_ghost[..])).unwrap();
+    assert_eq!(load(&old.destroy().0, ""), Ok(Some(old_ghost)));
+}
+
 /// QEMU's RAM flash (the NVMC's rules) keeps a ghost across a save and reload
 /// of its image.
 #[test]
@@ -333,64 +397,93 @@ fn qemu_ram_flash_holds_a_ghost_across_a_reload() {
 mod v2 {
     use super::ghost_of;
     use embassy_futures::{block_on, join::join, yield_now};
-    use embassy_sync::blocking_mutex::raw::NoopRawMutex;
-    use embassy_sync::mutex::Mutex;
+    use embedded_storage::nor_flash as blocking;
     use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
     use marble_rolling::app::GhostKit;
     use marble_rolling::board::levels_region;
     use marble_rolling::board::microbit::storage::{
-        fits, local, nvmc_busy_us, overlap, partition, share, Shared, LONGEST_STALL_MS,
+        fits, local, nvmc_busy_us, overlap, partition, share, Region, RegionError, Shared,
+        LONGEST_STALL_MS,
     };
     use marble_rolling::board::microbit::{GHOSTS, GHOST_BYTES, RECORDS};
     use marble_rolling::records::{ghost_work_bytes, Ghosts, Offer, Records};
     use sequential_storage::mock_flash::{MockFlashBase, WriteCountCheck};
-    use std::cell::Cell;
+    use std::cell::{Cell, RefCell};
 
     /// The nRF52833's flash: 128 pages of 4 KiB, 4-byte words.
     type Nvmc = MockFlashBase<128, 4, 1024>;
 
-    /// The mock, each erase and write logged by its address and its NVMC
-    /// time (the datasheet's maxima) added up until someone takes it.
+    /// The mock, blocking as the NVMC is (its operations end within the
+    /// call), each erase and write logged by its address and its NVMC time
+    /// (the datasheet's maxima) added up until someone takes it.
     struct Logged<'c> {
         flash: Nvmc,
         log: Vec<u32>,
         busy_us: &'c Cell<u64>,
     }
 
-    impl ErrorType for Logged<'_> {
+    impl blocking::ErrorType for Logged<'_> {
         type Error = <Nvmc as ErrorType>::Error;
     }
 
-    impl ReadNorFlash for Logged<'_> {
+    impl blocking::ReadNorFlash for Logged<'_> {
         const READ_SIZE: usize = Nvmc::READ_SIZE;
-        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-            self.flash.read(offset, bytes).await
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            block_on(self.flash.read(offset, bytes))
         }
         fn capacity(&self) -> usize {
             self.flash.capacity()
         }
     }
 
-    impl NorFlash for Logged<'_> {
+    impl blocking::NorFlash for Logged<'_> {
         const WRITE_SIZE: usize = Nvmc::WRITE_SIZE;
         const ERASE_SIZE: usize = Nvmc::ERASE_SIZE;
-        async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
             self.log.push(from);
             let pages = u64::from((to - from) / Nvmc::ERASE_SIZE as u32);
             self.busy_us
                 .set(self.busy_us.get() + nvmc_busy_us(pages, 0));
-            self.flash.erase(from, to).await
+            block_on(self.flash.erase(from, to))
         }
-        async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
             self.log.push(offset);
             let us = nvmc_busy_us(0, bytes.len() as u64);
             self.busy_us.set(self.busy_us.get() + us);
-            self.flash.write(offset, bytes).await
+            block_on(self.flash.write(offset, bytes))
         }
     }
 
-    fn logged(flash: Nvmc, busy_us: &Cell<u64>) -> Mutex<NoopRawMutex, Logged<'_>> {
-        Mutex::new(Logged {
+    /// A mock flash of other pages, blocking, for the regions' checks.
+    struct Blocking<F>(F);
+
+    impl<F: ErrorType> blocking::ErrorType for Blocking<F> {
+        type Error = F::Error;
+    }
+
+    impl<F: ReadNorFlash> blocking::ReadNorFlash for Blocking<F> {
+        const READ_SIZE: usize = F::READ_SIZE;
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            block_on(self.0.read(offset, bytes))
+        }
+        fn capacity(&self) -> usize {
+            self.0.capacity()
+        }
+    }
+
+    impl<F: NorFlash> blocking::NorFlash for Blocking<F> {
+        const WRITE_SIZE: usize = F::WRITE_SIZE;
+        const ERASE_SIZE: usize = F::ERASE_SIZE;
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            block_on(self.0.erase(from, to))
+        }
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            block_on(self.0.write(offset, bytes))
+        }
+    }
+
+    fn logged(flash: Nvmc, busy_us: &Cell<u64>) -> RefCell<Logged<'_>> {
+        RefCell::new(Logged {
             flash,
             log: Vec::new(),
             busy_us,
@@ -401,12 +494,10 @@ mod v2 {
         Nvmc::new(WriteCountCheck::OnceOnly, None, true)
     }
 
-    type Part<'a, 'c> = marble_rolling::board::microbit::storage::Paced<
-        embassy_embedded_hal::flash::partition::Partition<'a, NoopRawMutex, Logged<'c>>,
-    >;
+    type Part<'a, 'c> = Region<'a, Logged<'c>>;
 
     fn stores<'a, 'c>(
-        flash: &'a Mutex<NoopRawMutex, Logged<'c>>,
+        flash: &'a RefCell<Logged<'c>>,
     ) -> (Records<Part<'a, 'c>>, Ghosts<Part<'a, 'c>>) {
         let Shared { records, ghosts } = share(flash).expect("the v2's regions on its flash");
         (
@@ -434,20 +525,41 @@ mod v2 {
         assert!(!overlap(&RECORDS, &levels_region::V2));
         assert!(overlap(&(0..4096), &(4095..8192)) && !overlap(&(0..4096), &(4096..8192)));
         assert_eq!(local(&GHOSTS), 0..16 * 1024);
-        // Not whole pages, or empty: no partition (never the panic of
-        // `Partition::new`).
+        // Not whole pages, empty or past the flash's end: no region (never
+        // a panic).
         let busy = Cell::new(0);
         let flash = logged(erased(), &busy);
         assert!(partition(&flash, 0x7_7000..0x7_7800).is_none());
         assert!(partition(&flash, 0x7_7800..0x7_8800).is_none());
         assert!(partition(&flash, 0x7_7000..0x7_7000).is_none());
+        assert!(partition(&flash, 0x7_F000..0x8_1000).is_none());
         let parts = share(&flash).expect("the v2's regions on its flash");
-        assert_eq!(parts.ghosts.0.offset(), GHOSTS.start);
-        assert_eq!(parts.records.0.size(), RECORDS.end - RECORDS.start);
+        assert_eq!(parts.ghosts.offset(), GHOSTS.start);
+        assert_eq!(parts.records.size(), RECORDS.end - RECORDS.start);
+        // Each region's operations stop at its end, as offsets from its
+        // start; a flash already borrowed is an error, never a panic.
+        let Shared {
+            mut records,
+            mut ghosts,
+        } = parts;
+        let size = records.size();
+        let past = block_on(records.write(size - 4, &[0; 8]));
+        assert!(matches!(past, Err(RegionError::OutOfBounds)), "{past:?}");
+        let wrap = block_on(records.erase(8192, 4096));
+        assert!(matches!(wrap, Err(RegionError::OutOfBounds)), "{wrap:?}");
+        block_on(ghosts.write(0, &[1, 2, 3, 4])).unwrap();
+        assert_eq!(flash.borrow().flash.as_bytes()[GHOSTS.start as usize], 1);
+        let held = flash.borrow_mut();
+        let mut word = [0u8; 4];
+        let busy_read = block_on(ghosts.read(0, &mut word));
+        assert!(matches!(busy_read, Err(RegionError::Busy)), "{busy_read:?}");
+        drop(held);
+        block_on(ghosts.read(0, &mut word)).unwrap();
+        assert_eq!(word, [1, 2, 3, 4]);
         // On a flash of 8 KiB pages the ghosts' region (0x77000) is not
         // page-aligned: no stores, said by `None`.
         type Big = MockFlashBase<64, 4, 2048>;
-        let big = Mutex::<NoopRawMutex, _>::new(Big::new(WriteCountCheck::OnceOnly, None, true));
+        let big = RefCell::new(Blocking(Big::new(WriteCountCheck::OnceOnly, None, true)));
         assert!(share(&big).is_none());
     }
 
@@ -529,7 +641,7 @@ mod v2 {
             let (mut records, mut ghosts) = stores(&flash);
             let result = block_on(ghosts.keep("maze-0", &new, &mut work));
             let finished = {
-                let mut f = flash.try_lock().expect("no operation under way");
+                let mut f = flash.try_borrow_mut().expect("no operation under way");
                 let finished = f.flash.bytes_until_shutoff.is_some();
                 f.flash.bytes_until_shutoff = None;
                 finished
@@ -573,12 +685,12 @@ mod v2 {
             for n in 0..60usize {
                 let len = 200 + (n * 733) % (longest - 200);
                 let ghost = ghost_of(len, n as i32);
-                let before = flash.lock().await.flash.stats_snapshot();
+                let before = flash.borrow().flash.stats_snapshot();
                 let kept = ghosts
                     .keep(&format!("maze-{}", n % 9), &ghost, &mut work)
                     .await
                     .unwrap();
-                let used = before.compare_to(flash.lock().await.flash.stats_snapshot());
+                let used = before.compare_to(flash.borrow().flash.stats_snapshot());
                 worst_keep = worst_keep.max(nvmc_busy_us(used.erases, used.bytes_written));
                 evicted += u32::from(kept.evicted);
             }

@@ -346,3 +346,55 @@ fn qemu_ram_flash_holds_records_across_a_reload() {
         assert_eq!(b, [0xFF; 4]);
     });
 }
+
+/// The records' items on flash are what firmwares before `records::Slot`
+/// wrote (sequential-storage's map with a one-byte key, the level, and a
+/// four-byte value, the frames): a board's best times survive the update
+/// that gave the records and the ghosts one key type.
+#[test]
+fn records_written_by_an_older_firmware_read_back() {
+    use sequential_storage::cache::Cache;
+    use sequential_storage::map::{MapConfig, MapStorage};
+    let mut old =
+        MapStorage::<u8, _, _>::new(flash(), MapConfig::new(REGION), Cache::new_uncached());
+    let mut buffer = [0u8; 16];
+    block_on(async {
+        for level in 0..LEVELS {
+            let frames = 700 + u32::from(level);
+            old.store_item(&mut buffer, &level, &frames).await.unwrap();
+        }
+    });
+    let f = old.destroy().0;
+    let mut r = records(f);
+    block_on(async {
+        for level in 0..LEVELS {
+            assert_eq!(r.best(level).await, Ok(Some(700 + u32::from(level))));
+        }
+        assert_eq!(
+            r.offer(2, 650).await,
+            Ok(Offer::New {
+                previous: Some(702)
+            })
+        );
+    });
+    // And the other way: what this firmware writes, the older one reads.
+    let f = r.into_flash();
+    let mut old = MapStorage::<u8, _, _>::new(f, MapConfig::new(REGION), Cache::new_uncached());
+    let got = block_on(old.fetch_item::<u32>(&mut buffer, &2)).unwrap();
+    assert_eq!(got, Some(650));
+}
+
+/// A level's key is one byte under the ghosts' tag bit: from 128 on there
+/// is no record, and offering one is an error, not a ghost's key.
+#[test]
+fn levels_from_128_have_no_record() {
+    let mut r = records(flash());
+    block_on(async {
+        assert_eq!(r.offer(127, 500).await, Ok(Offer::New { previous: None }));
+        assert_eq!(r.best(127).await, Ok(Some(500)));
+        assert_eq!(r.offer(128, 500).await, Err(RecordError::BadLevel));
+        assert_eq!(r.offer(255, 500).await, Err(RecordError::BadLevel));
+        assert_eq!(r.best(128).await, Ok(None));
+        assert_eq!(r.best(127).await, Ok(Some(500)));
+    });
+}

@@ -199,6 +199,10 @@ pub(super) async fn demo<
             Some(kit) => Some(kit.begin::<EVENTS>(player.session()).await),
             None => None,
         };
+        #[cfg(feature = "ghosts")]
+        if let Some(ghost) = &mut ghost {
+            ghost.check(player.session()).await;
+        }
         if let Some(fault) = sensor {
             player.handle(InputEvent::SensorDown(fault));
         }

@@ -18,7 +18,7 @@ use crate::input::tilt::TiltConfig;
 use crate::player::{Carried, Player};
 
 #[cfg(feature = "ghosts")]
-use super::ghosts::GhostStore;
+use super::ghosts::{GhostStore, LevelGhost};
 
 /// Runs the game at [`FRAME_HZ`] in `mode` (see [`GameMode`]), publishing a
 /// frame on [`Links::frames`] and the [`Links::status`] every tick. Returns
@@ -226,114 +226,43 @@ async fn play<
             player.level_name()
         );
         // The level's best run, raced beside each attempt (read from flash
-        // and replayed to its hash first), and the attempts recorded.
-        #[cfg(feature = "ghosts")]
-        let mut ghost = match ghosts.as_deref_mut() {
-            Some(kit) => Some(kit.begin::<EVENTS>(player.session()).await),
-            None => None,
-        };
-        loop {
-            ticker.next().await;
-            while let Ok(event) = links.events.try_receive() {
-                #[cfg(feature = "defmt")]
-                defmt::info!("input {}", event);
-                #[cfg(feature = "sleep")]
-                if let crate::input::event::InputEvent::Command(_) = event {
-                    idle.activity();
-                }
-                if !player.handle(event) {
-                    return GameExit::Quit;
-                }
-            }
-            // Won or skipped (here or in the last tick): the next level.
-            if player.wants_next() {
-                break;
-            }
-            // The autopilot playing is the toy in use.
-            #[cfg(feature = "sleep")]
-            if idle.tick(links.tilt.get().reading_mg()) && !player.autopilot() {
-                #[cfg(feature = "defmt")]
-                defmt::info!(
-                    "idle for two minutes: asleep on level {=usize}",
-                    player.level_index() + 1
-                );
-                return GameExit::Asleep {
-                    level: player.level_index().min(usize::from(u8::MAX)) as u8,
-                };
-            }
-            // Draw only once the display has taken the previous frame (it
-            // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
-            let draw = !links.frames.signaled();
-            let tick = player.tick(links.tilt.get().reading_mg(), draw);
+        // and replayed to its hash in place first), and the attempts
+        // recorded. In a block of its own: the level's ghost (its session)
+        // is gone before the recording's replay below, which has a session
+        // of its own; and held at one await only (the attempts'), so that
+        // it shares its room with the flash's futures (held at two, it
+        // would be kept beside them: 1 KB more of the v2's static RAM).
+        let recorded = {
             #[cfg(feature = "ghosts")]
-            let tick = match &mut ghost {
-                Some(ghost) => {
-                    ghost.frame(player.session());
-                    let mut tick = tick;
-                    if let Some(frame) = &mut tick.frame {
-                        ghost.draw(frame, player.session(), player.viewport());
-                    }
-                    tick
-                }
-                None => tick,
+            let mut ghost = match ghosts.as_deref_mut() {
+                Some(kit) => Some(kit.begin::<EVENTS>(player.session()).await),
+                None => None,
             };
-            if let Some(phase) = tick.finished {
-                #[cfg(feature = "defmt")]
-                defmt::info!(
-                    "level {=usize} {=str}: {=str} after {=u64} steps",
-                    player.level_index() + 1,
-                    player.level_name(),
-                    phase.as_str(),
-                    player.game().steps()
-                );
-                // Records are the built-in levels' only: a generated maze is
-                // seldom played twice, and the region's levels change with
-                // the .hex.
+            let played = attempts(
+                links,
+                ticker,
+                player,
+                #[cfg(feature = "sleep")]
+                &mut idle,
                 #[cfg(feature = "records")]
-                if let (Phase::Won, false, Some(Ok(level))) =
-                    (phase, player.autopilot(), builtin.map(u8::try_from))
-                {
-                    // The records task writes the flash while the win is on
-                    // show, between levels; a full queue drops the win, never
-                    // the game.
-                    let _ = links.wins.try_send(Win {
-                        level,
-                        frames: player.game().clock_frames(),
-                    });
-                }
-                let _ = phase;
+                builtin,
+                #[cfg(feature = "storey-maps")]
+                endless.maze(number),
+                #[cfg(feature = "ghosts")]
+                ghost.as_mut(),
+            )
+            .await;
+            if let Err(exit) = played {
+                return exit;
             }
-            #[cfg(feature = "records")]
-            if let (Some(record), Some(level)) = (links.new_record.try_take(), builtin) {
-                if usize::from(record) == level {
-                    player.announce_record();
-                }
-            }
-            #[cfg(feature = "records")]
-            let status = crate::player::Status {
-                best: builtin
-                    .and_then(|index| links.bests.get().get(index).copied())
-                    .flatten(),
-                ..player.status()
-            };
-            #[cfg(not(feature = "records"))]
-            let status = player.status();
-            #[cfg(feature = "storey-maps")]
-            let status = crate::player::Status {
-                maze: endless.maze(number),
-                ..status
-            };
-            links.status.set(status);
-            if let Some(frame) = tick.frame {
-                links.frames.signal(frame);
-            }
-            #[cfg(feature = "sound")]
-            for sound in tick.sounds.iter() {
-                let _ = links.sounds.try_send(sound);
-            }
-        }
-        #[cfg(feature = "ghosts")]
-        let recorded = ghost.and_then(|ghost| ghost.leave(player.session()));
+            #[cfg(feature = "ghosts")]
+            let recorded = ghost.and_then(|ghost| ghost.leave(player.session()));
+            #[cfg(not(feature = "ghosts"))]
+            let recorded: Option<&[u8]> = None;
+            recorded
+        };
+        #[cfg(not(feature = "ghosts"))]
+        let _ = recorded;
         // A win that beat the ghost, whose recording replays to its hash,
         // becomes the level's ghost, written between levels.
         #[cfg(feature = "ghosts")]
@@ -346,5 +275,121 @@ async fn play<
         }
         carried = Some(player.carried());
         number = player.level_index().saturating_add(1);
+    }
+}
+
+/// One level's attempts at the frame clock's ticks, the level's ghost
+/// checked first and raced beside them: `Ok` once the level is won or
+/// skipped, `Err` with what [`play`] returns when the game ends.
+#[allow(clippy::too_many_arguments)]
+async fn attempts<const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>(
+    links: &Links<W, H>,
+    ticker: &mut Ticker,
+    player: &mut Player<'_, W, H, PILOT, EVENTS>,
+    #[cfg(feature = "sleep")] idle: &mut crate::input::idle::Idle,
+    #[cfg(feature = "records")] builtin: Option<usize>,
+    #[cfg(feature = "storey-maps")] maze: Option<crate::game::endless::MazeArgs>,
+    #[cfg(feature = "ghosts")] mut ghost: Option<&mut LevelGhost<'_, '_, EVENTS>>,
+) -> Result<(), GameExit> {
+    #[cfg(feature = "ghosts")]
+    if let Some(ghost) = ghost.as_deref_mut() {
+        ghost.check(player.session()).await;
+    }
+    loop {
+        ticker.next().await;
+        while let Ok(event) = links.events.try_receive() {
+            #[cfg(feature = "defmt")]
+            defmt::info!("input {}", event);
+            #[cfg(feature = "sleep")]
+            if let crate::input::event::InputEvent::Command(_) = event {
+                idle.activity();
+            }
+            if !player.handle(event) {
+                return Err(GameExit::Quit);
+            }
+        }
+        // Won or skipped (here or in the last tick): the next level.
+        if player.wants_next() {
+            return Ok(());
+        }
+        // The autopilot playing is the toy in use.
+        #[cfg(feature = "sleep")]
+        if idle.tick(links.tilt.get().reading_mg()) && !player.autopilot() {
+            #[cfg(feature = "defmt")]
+            defmt::info!(
+                "idle for two minutes: asleep on level {=usize}",
+                player.level_index() + 1
+            );
+            return Err(GameExit::Asleep {
+                level: player.level_index().min(usize::from(u8::MAX)) as u8,
+            });
+        }
+        // Draw only once the display has taken the previous frame (it
+        // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
+        let draw = !links.frames.signaled();
+        let tick = player.tick(links.tilt.get().reading_mg(), draw);
+        #[cfg(feature = "ghosts")]
+        let tick = match ghost.as_deref_mut() {
+            Some(ghost) => {
+                ghost.frame(player.session());
+                let mut tick = tick;
+                if let Some(frame) = &mut tick.frame {
+                    ghost.draw(frame, player.session(), player.viewport());
+                }
+                tick
+            }
+            None => tick,
+        };
+        if let Some(phase) = tick.finished {
+            #[cfg(feature = "defmt")]
+            defmt::info!(
+                "level {=usize} {=str}: {=str} after {=u64} steps",
+                player.level_index() + 1,
+                player.level_name(),
+                phase.as_str(),
+                player.game().steps()
+            );
+            // Records are the built-in levels' only: a generated maze is
+            // seldom played twice, and the region's levels change with
+            // the .hex.
+            #[cfg(feature = "records")]
+            if let (Phase::Won, false, Some(Ok(level))) =
+                (phase, player.autopilot(), builtin.map(u8::try_from))
+            {
+                // The records task writes the flash while the win is on
+                // show, between levels; a full queue drops the win, never
+                // the game.
+                let _ = links.wins.try_send(Win {
+                    level,
+                    frames: player.game().clock_frames(),
+                });
+            }
+            let _ = phase;
+        }
+        #[cfg(feature = "records")]
+        if let (Some(record), Some(level)) = (links.new_record.try_take(), builtin) {
+            if usize::from(record) == level {
+                player.announce_record();
+            }
+        }
+        #[cfg(feature = "records")]
+        let status = crate::player::Status {
+            best: builtin
+                .and_then(|index| links.bests.get().get(index).copied())
+                .flatten(),
+            ..player.status()
+        };
+        #[cfg(not(feature = "records"))]
+        let status = player.status();
+        #[cfg(feature = "storey-maps")]
+        let status = crate::player::Status { maze, ..status };
+        links.status.set(status);
+        if let Some(frame) = tick.frame {
+            links.frames.signal(frame);
+        }
+        #[cfg(feature = "sound")]
+        for sound in tick.sounds.iter() {
+            let _ = links.sounds.try_send(sound);
+        }
     }
 }

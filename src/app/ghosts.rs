@@ -67,10 +67,11 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
     }
 
     /// The level's parts for `live`, a fresh attempt at it: its racer (a
-    /// stored ghost that replays to its hash on the same level, game
-    /// configuration and tilt path, read from flash and checked here) and a
-    /// recorder of the attempts. Logs what it found. By reference: an async
-    /// fn keeps its arguments while it runs, and a level is large.
+    /// stored ghost, read from flash here, to be raced once its replay on
+    /// the same level, game configuration and tilt path reaches its hash:
+    /// [`LevelGhost::check`], in place) and a recorder of the attempts. Logs
+    /// what it found. By reference: an async fn keeps its arguments while it
+    /// runs, and a level is large.
     pub async fn begin<'k, 'a, const EVENTS: bool>(
         &'k mut self,
         live: &Session<'a, Fx>,
@@ -89,18 +90,11 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
         let loaded = store.load(name, &mut stored[..]).await;
         let racer = match loaded {
             Ok(Some(bytes)) => {
-                let checked = check::<EVENTS>(bytes, live).await;
-                match checked {
-                    Ok(racer) => {
-                        #[cfg(feature = "defmt")]
-                        defmt::info!(
-                        "ghost {=str}: {=usize} bytes, replays to its hash: racing it ({=u32} frames on the clock)",
-                        name,
-                        bytes.len(),
-                        racer.clock()
-                    );
-                        Some(racer)
-                    }
+                let game = live.game();
+                let checking =
+                    Checking::new(bytes, *game.level(), game.config(), live.tilt_config());
+                match checking {
+                    Ok(checking) => Some(checking),
                     Err(e) => {
                         #[cfg(feature = "defmt")]
                         defmt::warn!("ghost {=str} not raced: {}", name, e);
@@ -117,11 +111,10 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
                 None
             }
         };
-        let best = racer.as_ref().map(Racer::clock);
         LevelGhost {
             racer,
             recorder: Recorder::new(&mut record[..Self::longest()]).ok(),
-            best,
+            best: None,
         }
     }
 
@@ -179,20 +172,58 @@ impl<F: NorFlash, const N: usize> GhostStore for GhostKit<F, N> {
 
 /// One level's ghost: the racer and the recorder.
 pub struct LevelGhost<'a, 'k, const EVENTS: bool> {
-    racer: Option<Racer<'a, 'k, EVENTS>>,
+    /// The stored ghost, raced once [`LevelGhost::check`] found it good.
+    racer: Option<Checking<'a, 'k, EVENTS>>,
     recorder: Option<Recorder<'k>>,
     /// The raced ghost's time (frames on the level clock).
     best: Option<u32>,
 }
 
 impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
+    /// Replays the stored ghost on `live`'s level to its end a stretch at a
+    /// time, the task yielding between stretches: raced if it wins on its
+    /// own state hash, dropped (logged) if not. Call once, before the
+    /// attempt's first frame.
+    pub async fn check(&mut self, live: &Session<'_, Fx>) {
+        let Some(checking) = &mut self.racer else {
+            return;
+        };
+        while !checking.play(REPLAY_STRETCH) {
+            embassy_futures::yield_now().await;
+        }
+        let name = live.game().level().info.name;
+        match checking.verify() {
+            Ok(racer) => {
+                #[cfg(feature = "defmt")]
+                defmt::info!(
+                    "ghost {=str}: {=usize} bytes, replays to its hash: racing it ({=u32} frames on the clock)",
+                    name,
+                    racer.bytes(),
+                    racer.clock()
+                );
+                self.best = Some(racer.clock());
+            }
+            Err(e) => {
+                #[cfg(feature = "defmt")]
+                defmt::warn!("ghost {=str} not raced: {}", name, e);
+                let _ = (e, name);
+                self.racer = None;
+            }
+        }
+    }
+
+    /// The checked racer.
+    fn raced(&self) -> Option<&Racer<'a, 'k, EVENTS>> {
+        self.racer.as_ref().and_then(Checking::racer)
+    }
+
     /// After each frame of `live` (the attempt at the level): records it and
     /// moves the ghost to where it races.
     pub fn frame(&mut self, live: &Session<'_, Fx>) {
         if let Some(recorder) = &mut self.recorder {
             recorder.observe(live);
         }
-        if let Some(racer) = &mut self.racer {
+        if let Some(racer) = self.racer.as_mut().and_then(Checking::racer_mut) {
             racer.follow(live.game());
         }
     }
@@ -205,7 +236,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
         live: &Session<'_, Fx>,
         viewport: Viewport,
     ) {
-        if let (Some(racer), Phase::Playing) = (&self.racer, live.game().phase()) {
+        if let (Some(racer), Phase::Playing) = (self.raced(), live.game().phase()) {
             draw_ghost(frame, live.game(), racer.game(), viewport);
         }
     }
@@ -214,7 +245,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
     /// board replayed it bit-exactly): its frames and hash. `None`: no ghost,
     /// or not at its end.
     pub(crate) fn raced_to_its_end(&self) -> Option<(u32, u64)> {
-        let racer = self.racer.as_ref()?;
+        let racer = self.raced()?;
         let (frames, hash) = racer.run();
         (racer.game().frames() == frames && racer.state_hash() == hash).then_some((frames, hash))
     }

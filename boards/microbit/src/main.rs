@@ -132,19 +132,17 @@ type Mazes = MazeSlot<{ board::MAZE_REACH.words() }, { board::MAZE_REACH.text_by
 /// The game; first the self-test when B was held at power-on
 /// (`board::power_on`), until A. The generated mazes after the built-in
 /// levels take their seeds from `seed`, drawn at power-up; each level's
-/// ghost is raced from `ghosts`. With `race` (A held at power-on) the race
-/// task instead, for ever (its maze in the same slot, its link of the lean
-/// sizes: the 16 KiB RAM budget).
+/// ghost is raced from `ghosts`' store. With `race` (A held at power-on) the
+/// race task instead, for ever (its maze in the same slot, its link of the
+/// lean sizes: the 16 KiB RAM budget).
 #[embassy_executor::task]
 async fn game(
     self_test: bool,
     level: u8,
     seed: u32,
-    mut ghosts: Option<&'static mut storage::Kit>,
+    ghosts: Option<storage::GhostsStore>,
     race: bool,
 ) {
-    #[cfg(not(feature = "ghosts"))]
-    let _ = &mut ghosts;
     if self_test {
         let test = pin!(run_self_test());
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
@@ -169,13 +167,33 @@ async fn game(
         >(&LINKS, &AIR, &mut mazes, seed));
         poll_beating(|| HEARTBEATS.beat(Task::Game), race).await;
     }
+    // After the race's block, and awaited at one place only: the race never
+    // returns, so the levels' future (with the ghosts' kit and its two run
+    // buffers) takes the room the race's has in this task's (the kit in a
+    // static of its own, as before, was 1.3 KB more of static RAM).
+    play_levels(level, seed, &mut mazes, ghosts).await
+}
+
+/// The levels for ever, from `level` (the generated mazes' seeds from
+/// `seed`), each level's ghost raced from `ghosts`' store.
+async fn play_levels(
+    level: u8,
+    seed: u32,
+    mazes: &mut Mazes,
+    ghosts: Option<storage::GhostsStore>,
+) -> ! {
+    // Made here, in this future: written in place, never moved through a
+    // stack frame.
+    #[cfg_attr(not(feature = "ghosts"), allow(unused_mut, unused_variables))]
+    let mut kit = storage::kit(ghosts);
     loop {
         // The micro:bit never sends Quit; restart the game if it ever returns.
         // The game loop is app's (play only: the v2 has no demo); being
         // polled (every frame tick, paused or not) is its heartbeat.
         // In a block of its own: gone before the sleep's await below, the
-        // game's future is live at one await only, so it shares its room in
-        // this task with the race's (else 2.4 KB more of static RAM).
+        // game's future is live at one await only, so it shares its room
+        // with the sleep's (held at two, it would be kept beside the race's
+        // too: 2.4 KB more of static RAM).
         let exit = {
             #[cfg(feature = "ghosts")]
             let game = pin!(app::play_task::<
@@ -190,8 +208,8 @@ async fn game(
                 TiltConfig::SENSOR,
                 level,
                 Seeds::Drawn(seed),
-                &mut mazes,
-                ghosts.as_deref_mut()
+                mazes,
+                kit.as_mut()
             ));
             #[cfg(not(feature = "ghosts"))]
             let game = pin!(app::play_task::<
@@ -206,7 +224,7 @@ async fn game(
                 TiltConfig::SENSOR,
                 level,
                 Seeds::Drawn(seed),
-                &mut mazes
+                mazes
             ));
             poll_beating(|| HEARTBEATS.beat(Task::Game), game).await
         };
@@ -393,7 +411,7 @@ async fn main(spawner: Spawner) {
         choice == PowerOn::SelfTest,
         sleep::level_after_reset(),
         seed,
-        storage::kit(stores.ghosts),
+        stores.ghosts,
         race,
     ) {
         Ok(token) => spawner.spawn(token),

@@ -1,35 +1,29 @@
 //! The NVMC shared by the best times (the records task) and the ghosts (the
-//! game task): one mutex over the flash, a partition for each store
+//! game task): one `RefCell` over the flash, a region for each store
 //! (`marble_rolling::board::microbit::storage`, the library's feature
 //! `shared-flash`, host-tested there). Wiring only.
 //!
-//! Without the `ghosts` feature (the default: with the radio race the ghost
-//! passes the v2's flash and RAM budgets) the records have the NVMC to
-//! themselves and there is no ghost: the same names, a store that is never
-//! there.
+//! Without the `ghosts` feature (on by default; `--no-default-features`
+//! builds the v2 of before, best times and no ghost) the records have the
+//! NVMC to themselves: the same names, a store that is never there.
 
 #[cfg(feature = "ghosts")]
 mod shared {
-    use embassy_embedded_hal::adapter::BlockingAsync;
-    use embassy_embedded_hal::flash::partition::Partition;
+    use core::cell::RefCell;
+
     use embassy_nrf::nvmc::Nvmc;
     use embassy_nrf::{peripherals, Peri};
-    use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
-    use embassy_sync::mutex::Mutex;
     use marble_rolling::app::GhostKit;
-    use marble_rolling::board::microbit::storage::{self, local, Paced};
+    use marble_rolling::board::microbit::storage::{self, local, Region};
     use marble_rolling::board::microbit::{self as board, Heartbeats};
     use marble_rolling::records::{Ghosts, Records};
 
     use crate::hw::WatchedFlash;
 
-    /// The NVMC, blocking (the CPU waits on a page erase, about 85 ms, between
-    /// levels only), as the async NOR flash the stores take.
-    type Nvm = BlockingAsync<Nvmc<'static>>;
-
-    /// One store's region of the NVMC, its task yielding after each erase and
-    /// write.
-    pub type Part = Paced<Partition<'static, CriticalSectionRawMutex, Nvm>>;
+    /// One store's region of the NVMC, blocking (the CPU waits on a page
+    /// erase, about 85 ms, between levels only), its task yielding after
+    /// each erase and write.
+    pub type Part = Region<'static, Nvmc<'static>>;
 
     /// The records' flash, each operation a heartbeat of the records task
     /// ([`WatchedFlash`]).
@@ -41,6 +35,9 @@ mod shared {
     /// The ghosts and the game task's two run buffers of
     /// [`board::GHOST_BYTES`].
     pub type Kit = GhostKit<GhostsFlash, { board::GHOST_BYTES }>;
+
+    /// The ghosts' store, which the game task makes its [`Kit`] of.
+    pub type GhostsStore = Ghosts<GhostsFlash>;
 
     /// The stores over the NVMC; a store whose region is not whole pages is
     /// `None` (logged).
@@ -57,10 +54,10 @@ mod shared {
             records: None,
             ghosts: None,
         };
-        // The mutex lives as long as the tasks that lock it: a static, filled
+        // The cell lives as long as the tasks that borrow it: a static, filled
         // once here (the NVMC peripheral can be taken only once).
         let Some(flash) = cortex_m::singleton!(
-            : Mutex<CriticalSectionRawMutex, Nvm> = Mutex::new(BlockingAsync::new(Nvmc::new(nvmc)))
+            : RefCell<Nvmc<'static>> = RefCell::new(Nvmc::new(nvmc))
         ) else {
             defmt::error!("flash: the NVMC is already shared");
             return none;
@@ -103,16 +100,11 @@ mod shared {
         }
     }
 
-    /// The ghosts with their buffers, in a static of their own (a task's
-    /// argument would be moved through the game task's stack frame, which lies
-    /// under the game's deepest call); `None` without a store.
-    pub fn kit(ghosts: Option<Ghosts<GhostsFlash>>) -> Option<&'static mut Kit> {
-        let store = ghosts?;
-        let kit = cortex_m::singleton!(: Kit = GhostKit::new(store, |_| {}));
-        if kit.is_none() {
-            defmt::error!("ghosts: the kit is already taken");
-        }
-        kit
+    /// The ghosts with their buffers (`None` without a store), for the game
+    /// task to keep in its future where the race's never is: made there,
+    /// it is written in place, never moved through a stack frame.
+    pub fn kit(ghosts: Option<GhostsStore>) -> Option<Kit> {
+        ghosts.map(|store| GhostKit::new(store, |_| {}))
     }
 }
 #[cfg(feature = "ghosts")]
@@ -136,10 +128,13 @@ mod records_only {
     /// No ghost is kept: the game task's kit is never there.
     pub enum Kit {}
 
+    /// No ghosts' store either.
+    pub enum GhostsStore {}
+
     /// The best times' store; no ghosts.
     pub struct Stores {
         pub records: Option<Records<RecordsFlash>>,
-        pub ghosts: Option<Kit>,
+        pub ghosts: Option<GhostsStore>,
     }
 
     /// The records over the whole NVMC (board::RECORDS).
@@ -162,7 +157,7 @@ mod records_only {
     }
 
     /// No kit without the feature.
-    pub fn kit(_: Option<Kit>) -> Option<&'static mut Kit> {
+    pub fn kit(_: Option<GhostsStore>) -> Option<Kit> {
         None
     }
 }

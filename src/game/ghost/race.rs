@@ -97,17 +97,19 @@ pub struct Racer<'a, 'g, const EVENTS: bool> {
 /// A stored ghost's replay played a stretch at a time ([`Checking::play`]),
 /// so that a board can let its other tasks run between stretches: a long run
 /// replayed at once would hold the CPU for as long as the physics of every
-/// frame of it takes. [`Racer::new`] plays it whole.
+/// frame of it takes. [`Racer::new`] plays it whole. The replay's session is
+/// the racer's: checked in place ([`Checking::verify`]), a board keeps one
+/// session for the ghost, not a second beside it while the first is made.
 #[derive(Clone, Debug)]
 pub struct Checking<'a, 'g, const EVENTS: bool> {
-    session: Session<'a, Fx>,
-    ghost: Ghost<'g>,
-    readings: Readings<'g>,
+    racer: Racer<'a, 'g, EVENTS>,
     phase: Phase,
     /// The replay is over: the attempt ended, the readings did, or one of
     /// them was not a reading (`error`).
     ended: bool,
     error: Option<GhostError>,
+    /// [`Checking::verify`] found the replay good: the racer is at its start.
+    verified: bool,
 }
 
 impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
@@ -124,25 +126,29 @@ impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
         session.tilt_mut().set_calibration(ghost.calibration);
         let phase = session.game().phase();
         Ok(Checking {
-            session,
-            readings: ghost.readings(),
-            ghost,
+            racer: Racer {
+                session,
+                readings: ghost.readings(),
+                ghost,
+                idle: 0,
+            },
             phase,
             ended: false,
             error: None,
+            verified: false,
         })
     }
 
     /// Plays up to `frames` more frames of the run; whether the replay is
-    /// over (then [`Checking::finish`] says how it ended).
+    /// over (then [`Checking::verify`] says how it ended).
     pub fn play(&mut self, frames: u32) -> bool {
         for _ in 0..frames {
             if self.ended || self.phase != Phase::Playing {
                 self.ended = true;
                 break;
             }
-            match self.readings.next() {
-                Some(Ok(r)) => self.phase = self.session.frame_in::<EVENTS>(r),
+            match self.racer.readings.next() {
+                Some(Ok(r)) => self.phase = self.racer.session.frame_in::<EVENTS>(r),
                 Some(Err(e)) => {
                     self.error = Some(e);
                     self.ended = true;
@@ -153,31 +159,49 @@ impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
         self.ended || self.phase != Phase::Playing
     }
 
-    /// The racer, once the replay (played to its end here if it was not)
-    /// won the level on the ghost's own state hash; or why not.
-    pub fn finish(mut self) -> Result<Racer<'a, 'g, EVENTS>, RaceError> {
+    /// The racer, at its start, once the replay (played to its end here if
+    /// it was not) won the level on the ghost's own state hash; or why not.
+    /// Again after a good verdict: the same racer, as it is.
+    pub fn verify(&mut self) -> Result<&mut Racer<'a, 'g, EVENTS>, RaceError> {
+        if self.verified {
+            return Ok(&mut self.racer);
+        }
         while !self.play(u32::MAX) {}
         if let Some(e) = self.error {
             return Err(RaceError::Ghost(e));
         }
+        let racer = &mut self.racer;
         match (
             self.phase,
-            self.session.state_hash() == self.ghost.state_hash,
+            racer.session.state_hash() == racer.ghost.state_hash,
         ) {
             (Phase::Won, true) => {}
             (Phase::Won, false) => return Err(RaceError::Hash),
             _ => return Err(RaceError::NotWon),
         }
-        let game = self.session.game();
-        let idle = game.frames() - game.clock_frames();
+        let game = racer.session.game();
+        racer.idle = game.frames() - game.clock_frames();
         // A restart keeps the calibration the replay set.
-        self.session.restart();
-        Ok(Racer {
-            session: self.session,
-            readings: self.ghost.readings(),
-            ghost: self.ghost,
-            idle,
-        })
+        racer.session.restart();
+        racer.readings = racer.ghost.readings();
+        self.verified = true;
+        Ok(racer)
+    }
+
+    /// The racer once [`Checking::verify`] found the replay good.
+    pub fn racer(&self) -> Option<&Racer<'a, 'g, EVENTS>> {
+        self.verified.then_some(&self.racer)
+    }
+
+    /// [`Checking::racer`], to race it.
+    pub fn racer_mut(&mut self) -> Option<&mut Racer<'a, 'g, EVENTS>> {
+        self.verified.then_some(&mut self.racer)
+    }
+
+    /// [`Checking::verify`], the racer moved out.
+    pub fn finish(mut self) -> Result<Racer<'a, 'g, EVENTS>, RaceError> {
+        self.verify()?;
+        Ok(self.racer)
     }
 }
 
@@ -198,6 +222,11 @@ impl<'a, 'g, const EVENTS: bool> Racer<'a, 'g, EVENTS> {
     /// The ghost's time: its frames on the level clock.
     pub fn clock(&self) -> u32 {
         self.ghost.frames - self.idle
+    }
+
+    /// The stored ghost's length in bytes.
+    pub fn bytes(&self) -> usize {
+        super::HEADER_BYTES + self.ghost.tokens.len()
     }
 
     /// The ghost's run in frames, and its end state hash.
