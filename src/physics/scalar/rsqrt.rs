@@ -12,7 +12,7 @@ use super::product::mul_wide;
 /// scaled by a power of four into `m ∈ [1, 4)`, a 96-entry table (by `m`'s top
 /// bits) seeds `1/√m` to within 0.8 %, and Newton steps `y ← y·(3 − m·y²)/2` in
 /// Q31 with 32×32→64-bit products (one instruction each on a Cortex-M3/M4, four
-/// 16-bit multiplies on a Cortex-M0: [`mul_wide`]) take it
+/// 16-bit multiplies on a Cortex-M0: `mul_wide`) take it
 /// to 10⁻⁴, then 1.5·10⁻⁸ — enough for 24 fraction bits — and a third step for
 /// wider formats.
 pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
