@@ -68,7 +68,7 @@ impl<S: Scalar> Segment<S> {
     }
 
     /// A marble standing still at `p`.
-    pub fn still(p: Vec3<S>) -> Self {
+    pub const fn still(p: Vec3<S>) -> Self {
         Segment {
             p,
             v: Vec3::ZERO,

@@ -15,7 +15,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         self.stats.pair_runs = self.stats.pair_runs.wrapping_add(1);
         let count = self.marbles.len();
         let before = self.marbles.clone();
-        let mut fl = [Flight::start(); M];
+        let mut fl = [Flight::START; M];
         let mut plan: [Option<(S, Event<S>)>; M] = [None; M];
         let mut live = [false; M];
         for (n, alive) in live.iter_mut().enumerate().take(count) {
