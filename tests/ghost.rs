@@ -11,7 +11,7 @@ use marble_rolling::game::level::{parse, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{GameConfig, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
-use marble_rolling::input::event::Tilt;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::input::sensor::Calibration;
 use proptest::prelude::*;
 
@@ -94,7 +94,7 @@ fn ghost_replays_a_generated_maze() {
 fn ghost_races_from_the_first_tilt() {
     let level = LEVELS[1];
     let config = GameConfig::EVENTS;
-    let flat = Tilt::FLAT.reading_mg();
+    let flat = AccelMg::LEVEL.reading_mg();
     // A player who looks at the maze for `looking` frames, then lets the autopilot play.
     let player = |looking: u32| {
         let mut autopilot = Autopilot::new(&level);
@@ -418,7 +418,7 @@ fn ghost_file_keeps_the_best_run() {
     let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let start = run.at(fresh.game()).unwrap();
     for _ in 0..256 {
-        fresh.frame(Tilt::FLAT.reading_mg());
+        fresh.frame(AccelMg::LEVEL.reading_mg());
     }
     assert_eq!(fresh.game().clock_frames(), 0);
     assert_eq!(
@@ -453,7 +453,7 @@ fn ghost_file_keeps_the_best_run() {
     let mut kept = None;
     while session.game().phase() == Phase::Playing {
         if session.game().frames() < 300 {
-            session.frame(Tilt::FLAT.reading_mg());
+            session.frame(AccelMg::LEVEL.reading_mg());
         } else {
             session.autopilot_frame(&mut ap);
         }

@@ -7,7 +7,7 @@ use marble_rolling::board::microbit::power_on::{
     CONFIRM_TIMEOUT_SAMPLES, LEVEL_FRAMES, SWEEP_FRAMES,
 };
 use marble_rolling::board::microbit::{AXIS_MAP, BUTTONS};
-use marble_rolling::input::event::{Command, Fault, InputEvent, Tilt};
+use marble_rolling::input::event::{Command, Fault, InputEvent};
 use marble_rolling::input::sensor::AccelMg;
 use marble_rolling::matrix::MAX_BRIGHTNESS;
 
@@ -117,7 +117,7 @@ fn the_self_test_flow_follows_the_events() {
     let right = [-1000, 0, 0];
     assert_eq!(test.next_frame(right).get(4, 2), MAX_BRIGHTNESS, "the dot");
     for event in [
-        InputEvent::Tilt(Tilt::FLAT),
+        InputEvent::Tilt(AccelMg::LEVEL),
         InputEvent::Command(Command::NextLevel),
     ] {
         assert!(!test.event(event), "{event:?} does not end it");

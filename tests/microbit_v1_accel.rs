@@ -28,7 +28,6 @@ use marble_rolling::board::qemu::virtual_lsm303agr::{
     ChipControl, InjectedFault, VirtualLsm303agr, MICROBIT_V2,
 };
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::input::event::Tilt;
 use marble_rolling::input::sensor::{AccelMg, Fault, Read, Transition};
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::physics::Scalar;
@@ -205,11 +204,7 @@ fn orientations(chip: Accelerometer) {
     ];
     for (tilt, what) in cases {
         let control = ChipControl::new();
-        control.set_tilt(Tilt {
-            x: tilt[0] as i16,
-            y: tilt[1] as i16,
-            z: tilt[2] as i16,
-        });
+        control.set_tilt(AccelMg::new(tilt[0], tilt[1], tilt[2]));
         let clock = Cell::new(0);
         let mut stack = Stack::up(chip, &control, &clock);
         let seen = stack.polls(3);
@@ -231,10 +226,10 @@ fn game() -> Player<'static, 5, 5, false, true> {
 
 /// The hand's tilt at game frame `frame`: half a second each way along the
 /// first corridor, so the marble keeps moving.
-fn scripted_tilt(frame: u64) -> Tilt {
-    const STEPS: [(i16, i16); 4] = [(-250, 0), (250, 60), (-250, -60), (250, 0)];
+fn scripted_tilt(frame: u64) -> AccelMg {
+    const STEPS: [(i32, i32); 4] = [(-250, 0), (250, 60), (-250, -60), (250, 0)];
     let (x, z) = STEPS[(frame / (FRAME_HZ / 2)) as usize % STEPS.len()];
-    Tilt { x, y: 965, z }
+    AccelMg { x, y: 965, z }
 }
 
 /// What one game through a fault showed.
@@ -396,9 +391,9 @@ fn a_stuck_bus_needs_a_clear(chip: Accelerometer) {
 /// rolls towards +x, tilted left towards −x.
 fn drives_the_game(chip: Accelerometer) {
     let mut moved = [0.0f64; 2];
-    for (i, x_mg) in [-500i16, 500].into_iter().enumerate() {
+    for (i, x_mg) in [-500i32, 500].into_iter().enumerate() {
         let control = ChipControl::new();
-        control.set_tilt(Tilt {
+        control.set_tilt(AccelMg {
             x: x_mg,
             y: 866,
             z: 0,
@@ -521,7 +516,7 @@ fn mma8653_and_fxos8700_found_when_they_answer_after_a_silent_boot() {
     for chip in [Accelerometer::Mma8653fc, Accelerometer::Fxos8700cq] {
         let control = ChipControl::new();
         control.inject(InjectedFault::Nak);
-        control.set_tilt(Tilt {
+        control.set_tilt(AccelMg {
             x: -500,
             y: 866,
             z: 0,
@@ -712,7 +707,7 @@ fn fxos8700_left_in_fifo_mode_is_reset_by_the_bring_up() {
     let chip = Accelerometer::Fxos8700cq;
     let nxp_chip = chip.nxp().expect("NXP");
     let control = ChipControl::new();
-    control.set_tilt(Tilt {
+    control.set_tilt(AccelMg {
         x: -500,
         y: 866,
         z: 0,

@@ -5,7 +5,8 @@
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
-use marble_rolling::input::event::{Command, InputEvent, Tilt};
+use marble_rolling::input::axes::AccelMg;
+use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::input::keys::KeyTilt;
 use marble_rolling::input::sensor::Fault;
 use marble_rolling::player::{Player, LOSS_PAUSE_FRAMES, WIN_PAUSE_FRAMES};
@@ -122,7 +123,7 @@ fn commands_reach_the_game_and_quit_is_reported() {
     assert_eq!(p.level_index(), 3);
     assert!(!p.handle(InputEvent::Command(Command::Quit)));
     // Tilt events are not commands: the tilt is passed to every tick.
-    assert!(p.handle(InputEvent::Tilt(Tilt::FLAT)));
+    assert!(p.handle(InputEvent::Tilt(AccelMg::LEVEL)));
 }
 
 /// Raw terminal bytes: right, right, up (an escape sequence and WASD), then
@@ -147,7 +148,7 @@ fn key_bytes_give_the_same_game_on_every_front_end() {
     assert_eq!(readings[1], [-200, 979, 0]);
     let play = |events: &[InputEvent]| {
         let mut p = player(1);
-        let mut keys_tilt = Tilt::FLAT;
+        let mut keys_tilt = AccelMg::LEVEL;
         for event in events {
             if let InputEvent::Tilt(t) = event {
                 keys_tilt = *t;

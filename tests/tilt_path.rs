@@ -333,7 +333,7 @@ fn a_reading_is_judged_once_and_reaches_the_world_unclamped() {
     assert_eq!(step.action, Action::KeepLast(AccelMg::LEVEL));
     assert_eq!(pipeline.supervisor().last_fault(), Some(Fault::Implausible));
     assert_eq!(pipeline.supervisor().total_faults(), 1);
-    session.frame(pipeline.reading().reading_mg());
+    session.frame(pipeline.tilt().reading_mg());
     assert_eq!(
         session.tilt_errors(),
         (0, None),
@@ -348,7 +348,7 @@ fn a_reading_is_judged_once_and_reaches_the_world_unclamped() {
     assert_eq!(step.action, Action::Use(AccelMg::new(-bound, 0, 0)));
     assert_eq!(pipeline.supervisor().total_faults(), 1);
     for _ in 0..SETTLE_FRAMES {
-        session.frame(pipeline.reading().reading_mg());
+        session.frame(pipeline.tilt().reading_mg());
     }
     assert_eq!(session.tilt_errors(), (0, None));
     assert_eq!(session.game().world().gravity_mg(), [bound, 0, 0]);

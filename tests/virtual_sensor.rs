@@ -21,7 +21,6 @@ use marble_rolling::board::qemu::virtual_lsm303agr::{
     ACCEL_ADDRESS, CTRL4_BDU, CTRL_REG1_A_RESET, MAG_ADDRESS, MICROBIT_V2,
 };
 use marble_rolling::board::qemu::{QEMU_RAM, SENSOR_AXIS_MAP, SUPERVISOR};
-use marble_rolling::input::event::Tilt;
 use marble_rolling::input::sensor::{
     AccelMg, Action, Axis, AxisMap, AxisSource, Fault, Plausibility, Read, TiltPipeline, Transition,
 };
@@ -313,16 +312,16 @@ fn readings_equal_the_set_tilt_within_one_lsb_in_every_mode_and_scale() {
     let mut bus = twim(&control, &mut copy, &clock, stack_ram(&anchor));
     let mut sensor = Lsm303agr::new_with_i2c(&mut bus);
     let tilts = [
-        Tilt::FLAT,
-        Tilt::from_xz(-200, 0),
-        Tilt::from_xz(300, -450),
-        Tilt {
+        AccelMg::LEVEL,
+        AccelMg::from_xz(-200, 0),
+        AccelMg::from_xz(300, -450),
+        AccelMg {
             x: 1234,
             y: -1500,
             z: 1999,
         },
-        Tilt { x: -7, y: 3, z: -1 },
-        Tilt {
+        AccelMg { x: -7, y: 3, z: -1 },
+        AccelMg {
             x: 15_000,
             y: -9_000,
             z: 5_500,
@@ -505,11 +504,11 @@ fn frozen_data_stops_the_output_and_a_reinit_does_not_help() {
         AccelOutputDataRate::Hz100,
     )
     .expect("configure");
-    control.set_tilt(Tilt::from_xz(-300, 0));
+    control.set_tilt(AccelMg::from_xz(-300, 0));
     clock.set(10_000);
     let before = sample(read(&mut sensor));
     control.inject(InjectedFault::FrozenData);
-    control.set_tilt(Tilt::from_xz(400, 100));
+    control.set_tilt(AccelMg::from_xz(400, 100));
     for t in (20_000..200_000).step_by(10_000) {
         clock.set(t);
         assert_eq!(read(&mut sensor), Read::NotReady);
@@ -532,7 +531,7 @@ fn frozen_data_stops_the_output_and_a_reinit_does_not_help() {
     control.inject(InjectedFault::Healthy);
     clock.set(310_000);
     let after = board(sample(read(&mut sensor)));
-    let [x, y, z] = Tilt::from_xz(400, 100).reading_mg();
+    let [x, y, z] = AccelMg::from_xz(400, 100).reading_mg();
     assert_eq!(after, AccelMg::new(x, y, z));
 }
 
@@ -670,7 +669,7 @@ fn a_one_byte_copy_buffer_is_enough_for_the_driver() {
         AccelOutputDataRate::Hz100,
     )
     .expect("configure");
-    control.set_tilt(Tilt::from_xz(-500, 250));
+    control.set_tilt(AccelMg::from_xz(-500, 250));
     clock.set(10_000);
     assert_eq!(
         board(sample(read(&mut sensor))),
@@ -810,7 +809,7 @@ fn the_pipeline_goes_down_on_each_fault_and_comes_back() {
         }
         step
     };
-    control.set_tilt(Tilt::from_xz(-200, 0));
+    control.set_tilt(AccelMg::from_xz(-200, 0));
     assert!(matches!(
         poll(&mut pipeline, &mut sensor).action,
         Action::Use(_)

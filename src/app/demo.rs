@@ -19,7 +19,8 @@ use crate::game::endless::{Endless, MazeArgs, MazeSlot, Seeds, StageError, DEMO_
 use crate::game::levels::LEVELS;
 use crate::game::rules::Phase;
 use crate::game::session::SYNTHETIC_TILT;
-use crate::input::event::{Command, InputEvent, Tilt};
+use crate::input::axes::AccelMg;
+use crate::input::event::{Command, InputEvent};
 use crate::matrix::Frame;
 use crate::physics::world::SetupError;
 use crate::player::{Player, Status, WIN_PAUSE_FRAMES};
@@ -34,7 +35,7 @@ fn profiled_frame<const W: usize, const H: usize, const PILOT: bool, const EVENT
     profile: &mut Profile,
 ) -> Phase {
     let mut reading = [0; 3];
-    let pilot = meter(&mut || reading = player.reading(Tilt::FLAT.reading_mg()));
+    let pilot = meter(&mut || reading = player.reading(AccelMg::LEVEL.reading_mg()));
     let mut phase = Phase::Playing;
     let physics = meter(&mut || phase = player.session_mut().frame_in::<EVENTS>(reading));
     profile.frame(pilot, physics);
@@ -213,14 +214,14 @@ pub(super) async fn demo<
             }
             if player.sensor_down().is_some() {
                 // Paused: the same picture as the game's (Player::tick).
-                if let Some(frame) = player.tick(Tilt::FLAT.reading_mg(), true).frame {
+                if let Some(frame) = player.tick(AccelMg::LEVEL.reading_mg(), true).frame {
                     links.frames.signal(frame);
                 }
                 links.status.set(status_of(player, maze));
                 continue;
             }
             let phase = match meter {
-                None => player.frame(Tilt::FLAT.reading_mg()),
+                None => player.frame(AccelMg::LEVEL.reading_mg()),
                 Some(meter) => profiled_frame(player, meter, &mut profile),
             };
             #[cfg(feature = "ghosts")]

@@ -11,7 +11,8 @@ use embassy_sync::signal::Signal;
 
 #[cfg(feature = "records")]
 use crate::game::levels::LEVELS;
-use crate::input::event::{InputEvent, Tilt};
+use crate::input::axes::AccelMg;
+use crate::input::event::InputEvent;
 use crate::matrix::Frame;
 use crate::player::Status;
 #[cfg(feature = "sound")]
@@ -46,7 +47,7 @@ impl<T: Copy> Latest<T> {
 /// static of this module) and hands it to the tasks.
 pub struct Links<const W: usize, const H: usize> {
     /// Latest tilt, written by [`input_task`](super::input_task), read by [`game_task`](super::game_task) each frame.
-    pub tilt: Latest<Tilt>,
+    pub tilt: Latest<AccelMg>,
     /// Commands and the sensor's ups and downs, from [`input_task`](super::input_task) to
     /// [`game_task`](super::game_task), in order.
     pub events: Channel<CriticalSectionRawMutex, InputEvent, 8>,
@@ -78,7 +79,7 @@ impl<const W: usize, const H: usize> Links<W, H> {
     /// Nothing sent yet: a flat board, no command, no frame.
     pub const fn new() -> Self {
         Self {
-            tilt: Latest::new(Tilt::FLAT),
+            tilt: Latest::new(AccelMg::LEVEL),
             events: Channel::new(),
             frames: Signal::new(),
             status: Latest::new(Status::START),

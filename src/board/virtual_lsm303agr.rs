@@ -76,7 +76,7 @@ pub use control::{ChipControl, InjectedFault};
 pub use placement::{to_sensor_frame, Placement, MICROBIT_V2};
 pub use registers::*;
 
-use crate::input::event::Tilt;
+use crate::input::axes::AccelMg;
 use crate::input::sensor::AxisMap;
 
 /// Where new samples come from.
@@ -154,11 +154,7 @@ impl VirtualLsm303agr {
             samples: 0,
             next_due_us: 0,
             half_read: [0; 3],
-            tilt_mg: [
-                Tilt::FLAT.x as i32,
-                Tilt::FLAT.y as i32,
-                Tilt::FLAT.z as i32,
-            ],
+            tilt_mg: AccelMg::LEVEL.reading_mg(),
             source: SampleSource::Tilt,
             rng: 0x2545_f491,
             latched: 0,

@@ -8,7 +8,12 @@
 //! `(0, +1000, 0)`, and tilting the right edge down (the marble rolls towards
 //! `+x`) makes `x` negative.
 
-/// One accelerometer sample in milli-g (1000 = 1 g).
+/// One g in milli-g.
+pub(crate) const ONE_G_MG: i32 = 1000;
+
+/// One accelerometer sample in milli-g (1000 = 1 g): the one tilt type from
+/// the board's sensor (or keys, a phone, a test) through the app's links to
+/// the session.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AccelMg {
@@ -28,6 +33,23 @@ impl AccelMg {
 
     /// What a board lying flat and still reads in the board frame.
     pub const LEVEL: Self = Self::new(0, 1000, 0);
+
+    /// A 1 g reading with the given `x` and `z` components (clamped to
+    /// ±1000 mg together) and `y = +sqrt(1000² - x² - z²)`: what keys and a
+    /// phone's screen tilt hand the game, so they enter the tilt path as a
+    /// sensor sample would.
+    pub fn from_xz(x: i32, z: i32) -> Self {
+        let x = x.clamp(-ONE_G_MG, ONE_G_MG);
+        let z = z.clamp(-ONE_G_MG, ONE_G_MG);
+        let horizontal = x * x + z * z;
+        let y = ((ONE_G_MG * ONE_G_MG - horizontal).max(0) as u32).isqrt();
+        Self::new(x, y as i32, z)
+    }
+
+    /// As the `[x, y, z]` reading the session's tilt path takes.
+    pub const fn reading_mg(self) -> [i32; 3] {
+        [self.x, self.y, self.z]
+    }
 
     /// Squared magnitude in mg², saturating (never overflows).
     pub const fn magnitude_sq(&self) -> u64 {

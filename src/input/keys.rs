@@ -3,7 +3,8 @@
 //! firmware and the host's terminal player (`cargo play`) both use it, so the
 //! same keys give the same readings and the same game.
 
-use super::event::{Command, InputEvent, Tilt};
+use super::axes::AccelMg;
+use super::event::{Command, InputEvent};
 
 /// Tilt added per key press, milli-g.
 pub const KEY_TILT_STEP_MG: i32 = 100;
@@ -170,7 +171,7 @@ impl KeyTilt {
     }
 
     /// The tilt the keys hold now (flat until the first tilt key).
-    pub fn tilt(&self) -> Tilt {
-        Tilt::from_xz(self.x, self.z)
+    pub fn tilt(&self) -> AccelMg {
+        AccelMg::from_xz(self.x, self.z)
     }
 }

@@ -12,7 +12,7 @@
 //!
 //! Every reading is a board-frame reading in mg, and every one reaches the
 //! physics through the game's session and its [`tilt::TiltFilter`]: a sensor's
-//! sample (as the app's [`event::Tilt`], [`sensor::TiltPipeline::reading`]),
+//! sample ([`sensor::TiltPipeline::tilt`]),
 //! the keys' tilt, the autopilot's, a trace's and a ghost's. One rule says which
 //! readings are believed ([`plausible::Plausibility::judge`]), asked once of each
 //! reading (a sensor's sample by its supervision, which counts a refused one as

@@ -16,7 +16,7 @@
 //! bounds configured: the physics' largest pull ([`MAX_MG`]) less the largest
 //! calibration offset. So the gravity a believed reading becomes (negated,
 //! offset, filtered: never larger) is within what the physics takes without a
-//! clamp, and a reading fits the app's [`Tilt`](super::event::Tilt) exactly.
+//! clamp.
 
 use super::axes::{AccelMg, Axis, Calibration};
 use super::event::Fault;

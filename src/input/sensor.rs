@@ -32,7 +32,7 @@
 
 pub use super::axes::{AccelMg, Axis, AxisMap, AxisSource, Calibration};
 pub use super::event::Fault;
-use super::event::{InputEvent, Tilt};
+use super::event::InputEvent;
 pub use super::plausible::Plausibility;
 
 /// The outcome of one poll of the sensor, in the sensor's frame.
@@ -371,19 +371,6 @@ impl TiltPipeline {
     /// the first one).
     pub const fn tilt(&self) -> AccelMg {
         self.supervisor.last_good()
-    }
-
-    /// [`TiltPipeline::tilt`] as the app's reading, exactly: only believed
-    /// samples (or level) are kept, and a believed sample keeps to
-    /// ±[`MAX_READING_MG`](super::plausible::MAX_READING_MG) per axis, which
-    /// 16 bits hold.
-    pub const fn reading(&self) -> Tilt {
-        let s = self.tilt();
-        Tilt {
-            x: s.x as i16,
-            y: s.y as i16,
-            z: s.z as i16,
-        }
     }
 
     /// Whether the sensor is considered down.

@@ -153,7 +153,7 @@ impl TiltConfig {
     };
 
     /// For a sensor's samples
-    /// ([`TiltPipeline::reading`](crate::input::sensor::TiltPipeline::reading)):
+    /// ([`TiltPipeline::tilt`](crate::input::sensor::TiltPipeline::tilt)):
     /// [`TiltConfig::DEFAULT`] but not judged again, since the pipeline's
     /// supervision judged them by the same rule and bounds
     /// ([`Plausibility::DEFAULT`]) and kept only believed ones.

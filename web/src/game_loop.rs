@@ -11,7 +11,7 @@ use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
-use marble_rolling::input::event::Tilt;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::player::FRAME_HZ;
 
 use crate::ghost_run::{GhostRun, Recorder};
@@ -89,7 +89,7 @@ impl App {
             player,
             levels: &LEVELS,
             source: Source::Builtin,
-            reading: Tilt::FLAT.reading_mg(),
+            reading: AccelMg::LEVEL.reading_mg(),
             led: [0; WIDTH * HEIGHT],
             finished: Finished {
                 count: 0,
@@ -271,13 +271,13 @@ pub extern "C" fn ticks(n: u32, stop_on_finish: u32) -> u32 {
 
 /// The page's tilt in milli-g: `right_mg` lowers the right edge (the marble
 /// rolls right), `up_mg` lowers the far edge (it rolls up the screen). Made a
-/// 1 g reading in the board frame by the library ([`Tilt::from_xz`]: x right,
+/// 1 g reading in the board frame by the library ([`AccelMg::from_xz`]: x right,
 /// z towards the player, so both signs flip as the keys' do in
 /// `input::keys::KeyTilt`).
 #[no_mangle]
 pub extern "C" fn set_tilt(right_mg: i32, up_mg: i32) {
     with_app((), |app| {
-        app.reading = Tilt::from_xz(right_mg.saturating_neg(), up_mg).reading_mg();
+        app.reading = AccelMg::from_xz(right_mg.saturating_neg(), up_mg).reading_mg();
     })
 }
 

@@ -5,7 +5,7 @@
 //! This crate is only the glue. Each frame is one [`Player::tick`], the very
 //! step the firmware's game task, `cargo play` and the host tests call, fed a
 //! reading made by the library's
-//! [`Tilt::from_xz`](marble_rolling::input::event::Tilt::from_xz) from the
+//! [`AccelMg::from_xz`](marble_rolling::input::axes::AccelMg::from_xz) from the
 //! page's tilt (keys, mouse joystick or the phone's orientation) through
 //! [`SYNTHETIC_TILT`], the tilt path `cargo play` and `cargo sim` use. So a run
 //! here plays the same game as on the host and the boards, and the autopilot

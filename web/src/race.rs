@@ -15,7 +15,8 @@ use marble_rolling::board::microbit::MAZE_REACH;
 use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::endless::MazeSlot;
 use marble_rolling::game::rules::Phase;
-use marble_rolling::input::event::{Command, Tilt};
+use marble_rolling::input::axes::AccelMg;
+use marble_rolling::input::event::Command;
 use marble_rolling::physics::Fx;
 use marble_rolling::player::race::{RaceRound, RoundExit};
 use marble_rolling::race::stream::{EARLY_BLOCKS, INBOX_READINGS, OUT_BLOCKS};
@@ -135,7 +136,7 @@ pub extern "C" fn race_tick(right_mg: i32, up_mg: i32, command: u32) -> u32 {
     };
     with_race(0, |race| {
         if race.exit.is_none() {
-            let tilt = Tilt::from_xz(right_mg.saturating_neg(), up_mg).reading_mg();
+            let tilt = AccelMg::from_xz(right_mg.saturating_neg(), up_mg).reading_mg();
             let (autopilot, pilot) = (race.autopilot, &mut race.pilot);
             let frame = race.round.frame(command, |s| match autopilot {
                 Some(looks) if s.game().frames() < looks => FLAT,

@@ -306,7 +306,7 @@ async fn game(options: Options) {
         None => defmt::warn!("cpu load: no time elapsed"),
     }
     defmt::info!(
-        "demo sensor: {=u32} re-inits, {=u32} faults, last tilt {=i16} {=i16} {=i16} mg",
+        "demo sensor: {=u32} re-inits, {=u32} faults, last tilt {=i32} {=i32} {=i32} mg",
         SENSOR_REINITS.load(Ordering::Relaxed),
         SENSOR_FAULTS.load(Ordering::Relaxed),
         LINKS.tilt.get().x,

@@ -329,6 +329,6 @@ impl TiltInput for Input {
             defmt::warn!("accelerometer: {}", transition);
             let _ = self.pending.push_back(transition.event());
         }
-        InputEvent::Tilt(self.sensor.reading())
+        InputEvent::Tilt(self.sensor.tilt())
     }
 }

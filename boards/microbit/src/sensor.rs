@@ -392,7 +392,7 @@ impl TiltInput for MicrobitInput {
         if let Some(command) = command {
             let _ = self.pending.push_back(InputEvent::Command(command));
         }
-        let tilt = InputEvent::Tilt(self.pipeline.reading());
+        let tilt = InputEvent::Tilt(self.pipeline.tilt());
         let _ = self.pending.push_back(tilt);
         self.pending.pop_front().unwrap_or(tilt)
     }

@@ -33,7 +33,8 @@ use marble_rolling::app::{Links, FRAME_HZ};
 use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
 use marble_rolling::board::qemu::{HEIGHT, PLAY_TILT, WIDTH};
 use marble_rolling::game::levels::LEVELS;
-use marble_rolling::input::event::{InputEvent, Tilt};
+use marble_rolling::input::axes::AccelMg;
+use marble_rolling::input::event::InputEvent;
 use marble_rolling::input::sensor::Fault;
 use marble_rolling::matrix::Frame;
 use marble_rolling::player::Player;
@@ -139,7 +140,7 @@ impl Script {
         if self.tick.is_multiple_of(TILT_STEP_TICKS) {
             let step = (self.tick / TILT_STEP_TICKS) as usize % TILTS.len();
             let (x, z) = TILTS[step];
-            self.chip.set_tilt(Tilt::from_xz(x, z));
+            self.chip.set_tilt(AccelMg::from_xz(x, z));
         }
         self.tick = self.tick.wrapping_add(1);
         while let Ok(event) = self.links.events.try_receive() {

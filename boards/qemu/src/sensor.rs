@@ -445,7 +445,7 @@ impl<S: ByteSource, C: Console> TiltInput for QemuInput<'_, S, C> {
                 self.draw_status();
             }
             // After this poll's transition, if any (as the micro:bit).
-            let tilt = InputEvent::Tilt(self.pipeline.reading());
+            let tilt = InputEvent::Tilt(self.pipeline.tilt());
             if self.pending.push_back(tilt).is_err() {
                 return tilt;
             }

@@ -32,7 +32,6 @@ use super::nxp_driver;
 use super::twi::{Pause, TwiError};
 use crate::board::accel_link::SUPERVISOR;
 use crate::board::i2c::{ClearBus, Recovering};
-use crate::input::event::Tilt;
 use crate::input::sensor::{AccelMg, Action, AxisMap, Fault, Read, TiltPipeline, Transition};
 
 /// The bus the poll loop needs: async I²C with the v1 TWI's errors, a bus
@@ -134,11 +133,6 @@ impl<B: Bus> PollLoop<B> {
     /// milli-g.
     pub const fn tilt(&self) -> AccelMg {
         self.pipeline.tilt()
-    }
-
-    /// [`PollLoop::tilt`] as the app's reading ([`TiltPipeline::reading`]).
-    pub const fn reading(&self) -> Tilt {
-        self.pipeline.reading()
     }
 
     /// The supervision.

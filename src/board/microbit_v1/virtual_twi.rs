@@ -190,9 +190,8 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
             self.resets_seen = requests;
             self.chip.power_on_reset();
         }
-        let tilt = self.control.tilt();
         self.chip.feed(
-            [i32::from(tilt.x), i32::from(tilt.y), i32::from(tilt.z)],
+            self.control.tilt().reading_mg(),
             fault,
             (self.now_us)() + self.paused_us,
         );

@@ -77,7 +77,8 @@ impl FaultKeys {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::event::{Command, Tilt};
+    use crate::input::axes::AccelMg;
+    use crate::input::event::Command;
 
     fn feed_all(keys: &mut FaultKeys, bytes: &[u8]) -> heapless::Vec<QemuKey, 8> {
         let mut out = heapless::Vec::new();
@@ -115,7 +116,7 @@ mod tests {
         let mut keys = FaultKeys::new();
         assert_eq!(
             feed_all(&mut keys, b"d"),
-            [QemuKey::Input(InputEvent::Tilt(Tilt::from_xz(-100, 0)))]
+            [QemuKey::Input(InputEvent::Tilt(AccelMg::from_xz(-100, 0)))]
         );
     }
 }

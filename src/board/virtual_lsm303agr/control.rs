@@ -6,9 +6,9 @@
 //!
 //! [`VirtualTwim`]: crate::board::qemu::virtual_i2c::VirtualTwim
 
-use core::sync::atomic::{AtomicI16, AtomicU32, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicI32, AtomicU32, AtomicU8, Ordering};
 
-use crate::input::event::Tilt;
+use crate::input::axes::AccelMg;
 
 /// A fault injected into the virtual chip or its bus.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -81,7 +81,7 @@ impl InjectedFault {
 /// seen half written.
 #[derive(Debug)]
 pub struct ChipControl {
-    tilt: [AtomicI16; 3],
+    tilt: [AtomicI32; 3],
     fault: AtomicU8,
     reset_requests: AtomicU32,
     transfers: AtomicU32,
@@ -94,9 +94,9 @@ impl ChipControl {
     pub const fn new() -> Self {
         Self {
             tilt: [
-                AtomicI16::new(Tilt::FLAT.x),
-                AtomicI16::new(Tilt::FLAT.y),
-                AtomicI16::new(Tilt::FLAT.z),
+                AtomicI32::new(AccelMg::LEVEL.x),
+                AtomicI32::new(AccelMg::LEVEL.y),
+                AtomicI32::new(AccelMg::LEVEL.z),
             ],
             fault: AtomicU8::new(InjectedFault::Healthy as u8),
             reset_requests: AtomicU32::new(0),
@@ -107,19 +107,19 @@ impl ChipControl {
     }
 
     /// Sets the tilt (board frame, milli-g) the chip samples from now on.
-    pub fn set_tilt(&self, tilt: Tilt) {
+    pub fn set_tilt(&self, tilt: AccelMg) {
         self.tilt[0].store(tilt.x, Ordering::Relaxed);
         self.tilt[1].store(tilt.y, Ordering::Relaxed);
         self.tilt[2].store(tilt.z, Ordering::Relaxed);
     }
 
     /// The tilt the chip samples.
-    pub fn tilt(&self) -> Tilt {
-        Tilt {
-            x: self.tilt[0].load(Ordering::Relaxed),
-            y: self.tilt[1].load(Ordering::Relaxed),
-            z: self.tilt[2].load(Ordering::Relaxed),
-        }
+    pub fn tilt(&self) -> AccelMg {
+        AccelMg::new(
+            self.tilt[0].load(Ordering::Relaxed),
+            self.tilt[1].load(Ordering::Relaxed),
+            self.tilt[2].load(Ordering::Relaxed),
+        )
     }
 
     /// Injects `fault` (replacing the one in force). [`InjectedFault::ChipReset`]
