@@ -6,7 +6,7 @@ import { $, answer, levelName, PHASE_WON, status, w } from './core.js';
 import { releaseInput } from './input.js';
 import { ghostNote, showGhost } from './ghost.js';
 import { mazeArg, updateUrl } from './maze.js';
-import { fitBoard, forgetBoard } from './draw.js';
+import { fitBoard, forgetBoard, showLevel } from './draw.js';
 import { bestKey, drop, followStorey, level, setLevel, storeyFloorMm } from './level.js';
 
 // A new level or a restart: its geometry, the picker, the best time; held
@@ -49,6 +49,7 @@ export function newAttempt() {
   $('stepping').value = w.stepping_events() ? 'events' : 'fixed';
   const best = Number(localStorage.getItem(bestKey()));
   $('hud-best').textContent = best ? `${best.toFixed(2)} s` : '–';
+  showLevel();
   showGhost();
   $('hud-ghost').textContent = ghostNote();
   updateUrl();

@@ -213,10 +213,16 @@ function drawLeds() {
   }
 }
 
-function drawHud() {
-  const frames = w.clock_frames();
+// The panel's level: drawn with every frame, and at once by a new attempt
+// (beside the best time it shows), not only at the next animation frame.
+export function showLevel() {
   const where = w.level_is_custom() ? ' (editor)' : w.level_is_generated() ? ' (generated)' : ` (${w.level_index() + 1})`;
   $('hud-level').textContent = `${level.name}${where}`;
+}
+
+function drawHud() {
+  const frames = w.clock_frames();
+  showLevel();
   // The level clock: it starts at the first tilt that rolls the marble.
   $('hud-time').textContent = frames || w.phase() !== 0
     ? `${(frames / hz).toFixed(1)} / ${w.time_limit_s()} s`
