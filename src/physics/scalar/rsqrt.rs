@@ -24,10 +24,7 @@ pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
     // 31 − b or 32 − b, so a value that fits 32 bits (every 32-bit format) needs
     // no 64-bit shift: the same k and m on one word.
     let (k, m) = if let Ok(x) = u32::try_from(bits) {
-        let b = 32 - x.leading_zeros() as i32;
-        let k = (b - 1 - frac as i32).div_euclid(2);
-        let sh = 30 - frac as i32 - 2 * k; // −1 ..= 31
-        (k, if sh >= 0 { x << sh } else { x >> (-sh) })
+        normalise_word(x, frac)
     } else {
         let b = 64 - bits.leading_zeros() as i32;
         let k = (b - 1 - frac as i32).div_euclid(2);
@@ -50,6 +47,16 @@ pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
             _ => 0,
         }
     }
+}
+
+/// `x = bits·2^-frac = m·4^k` for `bits > 0` of one word: `(k, m)` with `m` in
+/// Q30 (`[1, 4)`), shifted by `30 − frac − 2k`, which is `−1 ..= 31`.
+#[inline(always)]
+fn normalise_word(bits: u32, frac: u32) -> (i32, u32) {
+    let b = 32 - bits.leading_zeros() as i32;
+    let k = (b - 1 - frac as i32).div_euclid(2);
+    let sh = 30 - frac as i32 - 2 * k;
+    (k, if sh >= 0 { bits << sh } else { bits >> (-sh) })
 }
 
 /// `1/√m` in Q31 for `m` in Q30 (`[1, 4)`): the seed, then `steps` Newton
@@ -82,11 +89,7 @@ pub fn sqrt_bits<const FRAC: u32>(bits: u32) -> u32 {
     if bits == 0 {
         return 0;
     }
-    // x = m·4^k with m ∈ [1, 4) in Q30, as in `rsqrt_bits`.
-    let b = 32 - bits.leading_zeros() as i32;
-    let k = (b - 1 - FRAC as i32).div_euclid(2);
-    let sh = 30 - FRAC as i32 - 2 * k; // −1 ..= 31
-    let m = if sh >= 0 { bits << sh } else { bits >> 1 };
+    let (k, m) = normalise_word(bits, FRAC);
     // √x·2^FRAC = (m/2^30)·(y/2^31)·2^k·2^FRAC = m·y·2^-(61 − k − FRAC), and
     // that shift is at least 32 for a 32-bit format: taken on the high word.
     let y = rsqrt_q31(m, 2);

@@ -98,28 +98,13 @@ impl<S: Scalar> Flight<S> {
     /// A flight at the step's start, for the marbles flown together: `[START;
     /// M]` is one copy of an aligned block, where `[start(); M]` copied, for
     /// each marble, its options' undefined payload from a template at an odd
-    /// offset (a misaligned `memcpy` of 66 bytes a marble). One marble's flight
-    /// is cheaper built in place ([`Flight::start`]).
-    pub(super) const START: Self = Flight {
-        t: S::ZERO,
-        seg: Segment::still(Vec3::ZERO),
-        len: S::ONE,
-        stop: None,
-        holds: false,
-        dir: (S::ZERO, S::ZERO),
-        events: 0,
-        inelastic: false,
-        idle: 0,
-        want: None,
-        rail: None,
-        around: Around::Slice,
-        slice: None,
-        end: None,
-    };
+    /// offset (a misaligned `memcpy` of 66 bytes a marble).
+    pub(super) const START: Self = Self::start();
 
-    /// [`Flight::START`], built in place by stores (the constant would be
-    /// copied from flash: 94 instructions more for a single marble's step).
-    pub(super) fn start() -> Self {
+    /// A flight at the step's start, built in place by stores where it is
+    /// called at run time: one marble's flight is cheaper so than copied from
+    /// [`Flight::START`] in flash (94 instructions more a step).
+    pub(super) const fn start() -> Self {
         Flight {
             t: S::ZERO,
             seg: Segment::still(Vec3::ZERO),
