@@ -7,7 +7,8 @@ use marble_rolling::game::level::{parse, Cell, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
 use marble_rolling::game::session::SYNTHETIC_TILT;
-use marble_rolling::input::tilt::{TiltConfig, TiltFilter};
+use marble_rolling::input::axes::AccelMg;
+use marble_rolling::input::tilt::{GravityMg, TiltConfig, TiltFilter};
 use marble_rolling::physics::{Scalar, Vec3};
 
 /// How one attempt ended.
@@ -29,23 +30,21 @@ fn play<S: Scalar>(mut game: Game<'_, S>, tilt: Option<TiltConfig>) -> Outcome {
     let level = *game.level();
     let mut ap = Autopilot::new(&level);
     let mut filter = tilt.map(TiltFilter::new);
-    let (mut max_tilt, mut max_step, mut prev) = (0, 0, [0, 1000, 0]);
+    let (mut max_tilt, mut max_step, mut prev) = (0, 0, AccelMg::LEVEL);
     while game.phase() == Phase::Playing {
         let r = ap.reading_mg(&game);
-        let m2 = r.iter().map(|&v| v as i64 * v as i64).sum::<i64>();
+        let m2 = r.magnitude_sq();
         assert!(
             (990_000..=1_000_000).contains(&m2),
             "{}: |reading|² = {m2}",
             level.info.name
         );
-        max_tilt = max_tilt.max(r[0].abs()).max(r[2].abs());
-        max_step = max_step
-            .max((r[0] - prev[0]).abs())
-            .max((r[2] - prev[2]).abs());
+        max_tilt = max_tilt.max(r.x.abs()).max(r.z.abs());
+        max_step = max_step.max((r.x - prev.x).abs()).max((r.z - prev.z).abs());
         prev = r;
         let g = match filter.as_mut() {
             Some(f) => f.push(r).ok(),
-            None => Some([-r[0], -r[1], -r[2]]),
+            None => Some(GravityMg::new(-r.x, -r.y, -r.z)),
         };
         if let Some(g) = g {
             game.set_gravity_mg(g);
@@ -317,5 +316,5 @@ fn unreachable_goal_is_reported_and_the_board_stays_level() {
     let mut ap = Autopilot::new(&view);
     assert_eq!(ap.path_cells(), None);
     let game = Game::<f64>::new(view, GameConfig::DEFAULT).expect("sets up");
-    assert_eq!(ap.reading_mg(&game), [0, 1000, 0]);
+    assert_eq!(ap.reading_mg(&game), AccelMg::LEVEL);
 }

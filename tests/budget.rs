@@ -9,6 +9,7 @@ use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::game::stress::{StressScene, STRESS};
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::physics::{Effects, Fx, PhysicsSpec, Scalar, Vec3, FLIGHT_BUDGET};
 use marble_rolling::player::Player;
 
@@ -186,7 +187,7 @@ fn no_built_in_level_reaches_the_budget() {
         let mut player = Player::<19, 9, true, true>::new(&LEVELS, index, SYNTHETIC_TILT, true)
             .expect("level sets up");
         for _ in 0..1024 {
-            let reading = player.reading([0, 1000, 0]);
+            let reading = player.reading(AccelMg::LEVEL);
             if player.session_mut().frame_in::<true>(reading) != Phase::Playing {
                 break;
             }

@@ -13,6 +13,7 @@ use marble_rolling::game::level::{parse, LevelView};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{GameConfig, Phase, DEFAULT_EVENTS};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::physics::geometry::grid::{words_for, MAX_STOREYS};
 use marble_rolling::physics::geometry::tiles::TileIndex;
@@ -354,7 +355,7 @@ type FivePlayer<'a> = Player<'a, 5, 5, true, false>;
 /// `frames`); returns whether it did.
 fn play_until_next(player: &mut FivePlayer<'_>, frames: u32) -> bool {
     for _ in 0..frames {
-        player.tick([0, 1000, 0], false);
+        player.tick(AccelMg::LEVEL, false);
         if player.wants_next() {
             return true;
         }
@@ -383,7 +384,7 @@ fn in_the_run_a_player_says_it_is_done_and_keeps_its_number() {
 #[test]
 fn a_single_level_outside_the_run_starts_again() {
     let mut player = FivePlayer::single(LEVELS[1], SYNTHETIC_TILT, false).expect("level");
-    player.tick([-400, 900, 0], false);
+    player.tick(AccelMg::new(-400, 900, 0), false);
     player.handle(InputEvent::Command(Command::NextLevel));
     assert!(!player.wants_next());
     assert_eq!(player.game().frames(), 0, "started again");
@@ -395,7 +396,7 @@ fn the_next_level_keeps_the_sound_the_calibration_and_the_autopilot() {
     let mut player = FivePlayer::new(&LEVELS, 0, SYNTHETIC_TILT, false).expect("level");
     // A calibration the defaults do not have: taken at a tilted board.
     for _ in 0..64 {
-        player.tick([120, 990, -80], false);
+        player.tick(AccelMg::new(120, 990, -80), false);
     }
     player.handle(InputEvent::Command(Command::Calibrate));
     player.handle(InputEvent::Command(Command::ToggleMute));

@@ -11,6 +11,7 @@ use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::game::stress::STRESS;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::physics::{Effects, Fx, Scalar, Vec3};
 use marble_rolling::player::Player;
 
@@ -25,7 +26,7 @@ fn twins(name: &str, a: &mut Pilot<'_>, b: &mut Pilot<'_>, frames: u32) -> (u32,
         .world_mut()
         .set_free_regions(false);
     for n in 0..frames {
-        let reading = a.reading([0, 1000, 0]);
+        let reading = a.reading(AccelMg::LEVEL);
         let pa = a.session_mut().frame_in::<true>(reading);
         let pb = b.session_mut().frame_in::<true>(reading);
         assert_eq!(

@@ -18,7 +18,7 @@ use proptest::prelude::*;
 type Fx = fixed::types::I8F24;
 
 /// The autopilot's run of `level`: its readings, how it ended, its hash.
-fn record(level: LevelView<'_>, config: GameConfig) -> (Vec<[i32; 3]>, Phase, u64) {
+fn record(level: LevelView<'_>, config: GameConfig) -> (Vec<AccelMg>, Phase, u64) {
     let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let mut ap = Autopilot::new(&level);
     let mut readings = Vec::new();
@@ -30,7 +30,7 @@ fn record(level: LevelView<'_>, config: GameConfig) -> (Vec<[i32; 3]>, Phase, u6
     (readings, session.game().phase(), session.state_hash())
 }
 
-fn encode(readings: &[[i32; 3]], hash: u64) -> Vec<u8> {
+fn encode(readings: &[AccelMg], hash: u64) -> Vec<u8> {
     let mut buf = vec![0u8; HEADER_BYTES + 6 * readings.len() + 16];
     let mut w = GhostWriter::new(&mut buf).unwrap();
     for &r in readings {
@@ -45,7 +45,7 @@ fn ghost_replays(level: LevelView<'_>, config: GameConfig) -> (usize, f64) {
     let bytes = encode(&readings, hash);
     let ghost = Ghost::parse(&bytes).unwrap();
     assert_eq!(ghost.frames as usize, readings.len());
-    let decoded: Vec<[i32; 3]> = ghost.readings().map(Result::unwrap).collect();
+    let decoded: Vec<AccelMg> = ghost.readings().map(Result::unwrap).collect();
     assert_eq!(decoded, readings, "{}", level.info.name);
     let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let (end, same) = replay(&mut fresh, &ghost).unwrap();
@@ -94,7 +94,7 @@ fn ghost_replays_a_generated_maze() {
 fn ghost_races_from_the_first_tilt() {
     let level = LEVELS[1];
     let config = GameConfig::EVENTS;
-    let flat = AccelMg::LEVEL.reading_mg();
+    let flat = AccelMg::LEVEL;
     // A player who looks at the maze for `looking` frames, then lets the autopilot play.
     let player = |looking: u32| {
         let mut autopilot = Autopilot::new(&level);
@@ -208,7 +208,7 @@ fn ghost_replay_of_another_run_misses_the_hash() {
     let (mut readings, _, hash) = record(level, config);
     // One reading 1 mg off, halfway through.
     let n = readings.len() / 2;
-    readings[n][0] += 1;
+    readings[n].x += 1;
     let bytes = encode(&readings, hash);
     let ghost = Ghost::parse(&bytes).unwrap();
     let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
@@ -249,7 +249,7 @@ fn ghost_is_checked_a_stretch_at_a_time() {
     assert_eq!(early.finish().map(|r| r.run()), Ok(whole.run()));
     // One reading 1 mg off: refused after its stretches, as a whole replay is.
     let n = readings.len() / 2;
-    readings[n][0] += 1;
+    readings[n].x += 1;
     let other = encode(&readings, hash);
     let mut checking = Checking::<true>::new(&other, level, config, SYNTHETIC_TILT).unwrap();
     let mut stretches = 0;
@@ -270,7 +270,9 @@ fn ghost_is_checked_a_stretch_at_a_time() {
 
 #[test]
 fn ghost_writer_stops_whole_when_full() {
-    let readings: Vec<[i32; 3]> = (0..200).map(|n| [n * 3, 1000 - n, -n]).collect();
+    let readings: Vec<AccelMg> = (0..200)
+        .map(|n| AccelMg::new(n * 3, 1000 - n, -n))
+        .collect();
     let mut buf = [0u8; 64];
     let mut w = GhostWriter::new(&mut buf).unwrap();
     let mut written = 0;
@@ -296,7 +298,9 @@ fn ghost_writer_stops_whole_when_full() {
 
 #[test]
 fn ghost_errors_name_the_byte() {
-    let readings: Vec<[i32; 3]> = (0..50).map(|n| [n * 300, 1000, -n * 200]).collect();
+    let readings: Vec<AccelMg> = (0..50)
+        .map(|n| AccelMg::new(n * 300, 1000, -n * 200))
+        .collect();
     let bytes = encode(&readings, 1);
     assert_eq!(
         Ghost::parse(b"not a ghost at all"),
@@ -335,13 +339,13 @@ proptest! {
                 r[a] += d[a];
             }
             for _ in 0..=repeat {
-                readings.push(r);
+                readings.push(AccelMg::from_array(r));
             }
         }
         let bytes = encode(&readings, 0xfeed);
         let ghost = Ghost::parse(&bytes).unwrap();
         prop_assert_eq!(ghost.state_hash, 0xfeed);
-        let back: Vec<[i32; 3]> = ghost.readings().map(Result::unwrap).collect();
+        let back: Vec<AccelMg> = ghost.readings().map(Result::unwrap).collect();
         prop_assert_eq!(back, readings);
     }
 }
@@ -360,9 +364,9 @@ fn ghost_size_per_second() {
         s ^= s << 5;
         (s % 9) as i32 - 4
     };
-    let noisy: Vec<[i32; 3]> = readings
+    let noisy: Vec<AccelMg> = readings
         .iter()
-        .map(|r| [r[0] + noise(), r[1] + noise(), r[2] + noise()])
+        .map(|r| AccelMg::new(r.x + noise(), r.y + noise(), r.z + noise()))
         .collect();
     let (clean, rough) = (encode(&readings, hash).len(), encode(&noisy, hash).len());
     println!(
@@ -393,7 +397,7 @@ fn ghost_file_keeps_the_best_run() {
     let mut session = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let mut ap = Autopilot::new(&level);
     for _ in 0..50 {
-        session.frame([-200, 980, 0]);
+        session.frame(AccelMg::new(-200, 980, 0));
         assert_eq!(keeper.observe(&session), Ok(None));
     }
     session.restart();
@@ -418,7 +422,7 @@ fn ghost_file_keeps_the_best_run() {
     let mut fresh = Session::<Fx>::new(level, config, SYNTHETIC_TILT).unwrap();
     let start = run.at(fresh.game()).unwrap();
     for _ in 0..256 {
-        fresh.frame(AccelMg::LEVEL.reading_mg());
+        fresh.frame(AccelMg::LEVEL);
     }
     assert_eq!(fresh.game().clock_frames(), 0);
     assert_eq!(
@@ -453,7 +457,7 @@ fn ghost_file_keeps_the_best_run() {
     let mut kept = None;
     while session.game().phase() == Phase::Playing {
         if session.game().frames() < 300 {
-            session.frame(AccelMg::LEVEL.reading_mg());
+            session.frame(AccelMg::LEVEL);
         } else {
             session.autopilot_frame(&mut ap);
         }

@@ -10,6 +10,7 @@
 
 use embassy_futures::block_on;
 use marble_rolling::game::ghost::{Ghost, GhostError, GhostWriter};
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::input::sensor::Calibration;
 use marble_rolling::records::{
     ghost_key, ghost_work_bytes, max_ghost_bytes, GhostStoreError, Ghosts, Kept, Slot,
@@ -40,7 +41,7 @@ fn ghost_of(len: usize, seed: i32) -> Vec<u8> {
     let mut n = 0i32;
     loop {
         // Changes of one or two bytes per axis, never a repeat.
-        let reading = [seed + n % 97, 1000 - n % 13, (n * 7) % 300];
+        let reading = AccelMg::new(seed + n % 97, 1000 - n % 13, (n * 7) % 300);
         match w.push(reading) {
             Ok(()) => n += 1,
             Err(GhostError::Full) => break,

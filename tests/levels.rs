@@ -9,6 +9,7 @@ use marble_rolling::game::level::{
 use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::input::tilt::GravityMg;
 use marble_rolling::physics::geometry::tiles::LayoutError;
 use marble_rolling::physics::{MicroF32, Params, PhysicsSpec, Scalar, SetupError};
 
@@ -202,7 +203,7 @@ fn the_largest_grid_parses_and_plays() {
     let l = parse::<W>(&src).unwrap();
     let mut g = Game::<fixed::types::I8F24>::new(l.view(), GameConfig::DEFAULT).unwrap();
     // Rolled diagonally across the whole board, far from the origin, it arrives.
-    g.set_gravity_mg([300, -950, 300]);
+    g.set_gravity_mg(GravityMg::new(300, -950, 300));
     let mut frames = 0;
     while g.frame() == Phase::Playing {
         frames += 1;

@@ -96,7 +96,7 @@ fn self_test_lights_each_led_alone_then_each_level() {
     // The dot: nothing while the sensor is down, one pixel otherwise.
     let blank = self_test_frame(dot_from(), None);
     assert!((0..25).all(|p| blank.get(p % 5, p / 5) == 0));
-    let f = self_test_frame(dot_from() + 1000, Some([0, 1000, 0]));
+    let f = self_test_frame(dot_from() + 1000, Some(AccelMg::LEVEL));
     assert_eq!(f.get(2, 2), MAX_BRIGHTNESS);
 }
 
@@ -106,7 +106,7 @@ fn self_test_lights_each_led_alone_then_each_level() {
 #[test]
 fn the_self_test_flow_follows_the_events() {
     let mut test = SelfTest::new();
-    let level = [0, 1000, 0];
+    let level = AccelMg::LEVEL;
     for n in 0..dot_from() {
         assert_eq!(
             test.next_frame(level),
@@ -114,7 +114,7 @@ fn the_self_test_flow_follows_the_events() {
             "frame {n}"
         );
     }
-    let right = [-1000, 0, 0];
+    let right = AccelMg::new(-1000, 0, 0);
     assert_eq!(test.next_frame(right).get(4, 2), MAX_BRIGHTNESS, "the dot");
     for event in [
         InputEvent::Tilt(AccelMg::LEVEL),

@@ -289,8 +289,7 @@ fn through_the_game(chip: Accelerometer, fault: InjectedFault) -> Outage {
                 assert!(player.handle(transition.event()));
             }
         }
-        let tilt = stack.sensor.tilt();
-        let reading = [tilt.x, tilt.y, tilt.z];
+        let reading = stack.sensor.tilt();
         let (frames, hash) = (player.game().frames(), player.session().state_hash());
         let tick = player.tick(reading, true);
         let down = player.status().sensor_down;
@@ -409,7 +408,7 @@ fn drives_the_game(chip: Accelerometer) {
                 stack.poll();
             }
             let t = stack.sensor.tilt();
-            player.tick([t.x, t.y, t.z], false);
+            player.tick(AccelMg::new(t.x, t.y, t.z), false);
         }
         moved[i] = player.game().world().marbles()[0].pos.x.to_f64() - start;
     }

@@ -15,7 +15,7 @@ use marble_rolling::render::screens::fault_frame;
 type FivePlayer = Player<'static, 5, 5, true, false>;
 
 /// A reading that rolls the marble: 0.3 g towards +x.
-const TILTED: [i32; 3] = [-300, 954, 0];
+const TILTED: AccelMg = AccelMg::new(-300, 954, 0);
 
 fn player(level: usize) -> FivePlayer {
     FivePlayer::new(&LEVELS, level, SYNTHETIC_TILT, false).expect("built-in level")
@@ -79,7 +79,7 @@ fn an_outage_during_the_win_display_holds_it() {
     let mut p = FivePlayer::new(&LEVELS, 0, SYNTHETIC_TILT, true).expect("level");
     let mut won = None;
     for frame in 0..20_000 {
-        if let Some(phase) = p.tick([0, 1000, 0], false).finished {
+        if let Some(phase) = p.tick(AccelMg::LEVEL, false).finished {
             won = Some((phase, frame));
             break;
         }
@@ -91,7 +91,7 @@ fn an_outage_during_the_win_display_holds_it() {
     );
     p.handle(InputEvent::SensorDown(Fault::NoData));
     for _ in 0..10 * WIN_PAUSE_FRAMES {
-        p.tick([0, 1000, 0], false);
+        p.tick(AccelMg::LEVEL, false);
     }
     assert_eq!(
         p.level_index(),
@@ -100,7 +100,7 @@ fn an_outage_during_the_win_display_holds_it() {
     );
     p.handle(InputEvent::SensorUp);
     for _ in 0..=WIN_PAUSE_FRAMES {
-        p.tick([0, 1000, 0], false);
+        p.tick(AccelMg::LEVEL, false);
     }
     assert_eq!(
         p.level_index(),
@@ -136,16 +136,16 @@ fn key_bytes_give_the_same_game_on_every_front_end() {
     let mut keys = KeyTilt::new();
     let events: Vec<InputEvent> = BYTES.iter().filter_map(|&b| keys.feed(b)).collect();
     assert_eq!(events.len(), 6, "{events:?}");
-    let readings: Vec<[i32; 3]> = events
+    let readings: Vec<AccelMg> = events
         .iter()
         .filter_map(|e| match e {
-            InputEvent::Tilt(t) => Some(t.reading_mg()),
+            InputEvent::Tilt(t) => Some(*t),
             _ => None,
         })
         .collect();
     // Two presses to the right: x = -200 mg, and y makes the total 1 g with
     // the integer root the firmware uses.
-    assert_eq!(readings[1], [-200, 979, 0]);
+    assert_eq!(readings[1], AccelMg::new(-200, 979, 0));
     let play = |events: &[InputEvent]| {
         let mut p = player(1);
         let mut keys_tilt = AccelMg::LEVEL;
@@ -154,7 +154,7 @@ fn key_bytes_give_the_same_game_on_every_front_end() {
                 keys_tilt = *t;
             }
             for _ in 0..64 {
-                p.tick(keys_tilt.reading_mg(), false);
+                p.tick(keys_tilt, false);
             }
         }
         p.session().state_hash()
@@ -203,7 +203,7 @@ fn a_new_record_shows_growing_squares_until_the_next_level() {
     assert!(!p.status().new_record);
     let mut last = None;
     for _ in 0..20_000 {
-        let tick = p.tick([0, 1000, 0], true);
+        let tick = p.tick(AccelMg::LEVEL, true);
         if tick.finished == Some(Phase::Won) {
             last = tick.frame;
             break;
@@ -213,14 +213,14 @@ fn a_new_record_shows_growing_squares_until_the_next_level() {
     // Before the news: the win's flash.
     let left = WIN_PAUSE_FRAMES;
     assert_eq!(
-        p.tick([0, 1000, 0], true).frame,
+        p.tick(AccelMg::LEVEL, true).frame,
         Some(win_frame(&last, left))
     );
     p.announce_record();
     assert!(p.status().new_record);
     let mut rings = std::collections::BTreeSet::new();
     for left in (1..left).rev() {
-        let frame = p.tick([0, 1000, 0], true).frame.expect("drawn");
+        let frame = p.tick(AccelMg::LEVEL, true).frame.expect("drawn");
         assert_eq!(frame, record_frame::<5, 5>(WIN_PAUSE_FRAMES - left));
         // One square around the centre at a time.
         let lit: Vec<(usize, usize)> = (0..25)
@@ -239,7 +239,7 @@ fn a_new_record_shows_growing_squares_until_the_next_level() {
         3,
         "the squares grow from the centre to the edge"
     );
-    p.tick([0, 1000, 0], true);
+    p.tick(AccelMg::LEVEL, true);
     assert_eq!(p.level_index(), 1);
     assert!(!p.status().new_record, "the next level starts without it");
 }
@@ -255,7 +255,7 @@ fn the_clock_starts_at_the_first_tilt_that_rolls_a_marble() {
             .expect("built-in level");
         const LOOKING: u32 = 300;
         for _ in 0..LOOKING {
-            p.tick([0, 1000, 0], false);
+            p.tick(AccelMg::LEVEL, false);
         }
         assert_eq!(p.game().frames(), LOOKING);
         assert_eq!(p.game().clock_frames(), 0, "looking at the maze is free");
@@ -263,7 +263,7 @@ fn the_clock_starts_at_the_first_tilt_that_rolls_a_marble() {
         assert_eq!(p.status().frames, 0, "the status shows the clock");
         // Noise a hand gives (a few mg): the rolling resistance holds the marble.
         for n in 0..200 {
-            let wobble = [(n % 5) - 2, 1000, (n % 3) - 1];
+            let wobble = AccelMg::new((n % 5) - 2, 1000, (n % 3) - 1);
             p.tick(wobble, false);
         }
         assert_eq!(
@@ -313,7 +313,7 @@ fn the_time_limit_counts_from_the_clock_start() {
     let mut untouched = player(0);
     let mut ended = None;
     for frame in 1..=limit + 10 {
-        if let Some(phase) = untouched.tick([0, 1000, 0], false).finished {
+        if let Some(phase) = untouched.tick(AccelMg::LEVEL, false).finished {
             ended = Some((phase, frame));
             break;
         }
@@ -329,12 +329,16 @@ fn the_time_limit_counts_from_the_clock_start() {
     let mut p = player(1);
     let looking = 20 * 128;
     for _ in 0..looking {
-        p.tick([0, 1000, 0], false);
+        p.tick(AccelMg::LEVEL, false);
     }
     let limit = u32::from(LEVELS[1].info.time_limit_s) * 128;
     let mut ended = None;
     for frame in 1..=2 * limit {
-        let reading = if frame <= 32 { TILTED } else { [300, 954, 0] };
+        let reading = if frame <= 32 {
+            TILTED
+        } else {
+            AccelMg::new(300, 954, 0)
+        };
         if let Some(phase) = p.tick(reading, false).finished {
             ended = Some((phase, frame, p.game().clock_frames()));
             break;

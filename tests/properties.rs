@@ -441,13 +441,13 @@ proptest! {
         let mut frames = 0;
         for r in readings {
             let before = s.game().frames();
-            let phase = s.frame(r);
+            let phase = s.frame(marble_rolling::input::axes::AccelMg::from_array(r));
             if phase == Phase::Playing {
                 prop_assert_eq!(s.game().frames(), before + 1);
             }
             frames += 1;
             let g = s.tilt().gravity_mg();
-            prop_assert!(g.iter().all(|v| v.abs() <= 8000));
+            prop_assert!(g.to_array().iter().all(|v| v.abs() <= 8000));
         }
         prop_assert!(frames > 0);
     }

@@ -16,6 +16,7 @@ use marble_rolling::game::endless::{Endless, MazeSlot, Seeds};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::levels::{by_name, LEVELS};
 use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
 use marble_rolling::player::{MarbleSpot, Player, Status};
 use marble_rolling::render::storey_tile;
@@ -148,7 +149,7 @@ fn the_status_carries_each_marble_in_play_and_its_storey() {
     // The autopilot drops through the hole: the status follows it down.
     let mut frames = 0;
     let down = loop {
-        player.tick([0, 1000, 0], false);
+        player.tick(AccelMg::LEVEL, false);
         frames += 1;
         if let Some(spot) = status_of(&player).marbles[0] {
             if spot.storey == 0 {

@@ -14,6 +14,7 @@ use marble_rolling::game::endless::{MazeError, MazeSlot, Reach};
 use marble_rolling::game::level::{parse, Level, LevelView};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::Session;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::input::event::Command;
 use marble_rolling::input::race_setup::{
     race_at_power_on, Field, RaceSetup, Tuning, FIRST_CHANNEL, GROUPS, LAST_CHANNEL,
@@ -188,7 +189,7 @@ impl<'a> Board<'a> {
                 let (looks, autopilot) = (self.looks, &mut self.autopilot);
                 r.frame(|s: &Session<'_, Fx>| {
                     if s.game().frames() < looks {
-                        [0, 1000, 0]
+                        AccelMg::LEVEL
                     } else {
                         autopilot.as_mut().unwrap().reading_mg(s.game())
                     }
@@ -802,7 +803,8 @@ fn link_in_stage(stage: u8) -> RaceLink {
     for f in 0..COUNTDOWN_FRAMES + 200 {
         b.tick();
         if b.stage() == LinkStage::Racing {
-            b.push_own([f as i32 % 7, 1000, -(f as i32 % 5)]).unwrap();
+            b.push_own(AccelMg::new(f as i32 % 7, 1000, -(f as i32 % 5)))
+                .unwrap();
         }
         if let Some(p) = b.transmit(&mut buf) {
             a.receive(p).unwrap();
@@ -891,13 +893,13 @@ proptest! {
 fn a_full_block_keeps_the_run_before_the_frame_that_did_not_fit() {
     use marble_rolling::game::ghost::{Readings, TokenWriter};
     let mut buf = [0u8; 4];
-    let before = [0, 1000, 0];
+    let before = AccelMg::LEVEL;
     let mut w = TokenWriter::new(&mut buf, before);
-    w.push([1, 1000, 0]).unwrap(); // 2 bytes
-    w.push([1, 1000, 0]).unwrap(); // a run, written later
-    w.push([1, 1000, 0]).unwrap();
+    w.push(AccelMg::new(1, 1000, 0)).unwrap(); // 2 bytes
+    w.push(AccelMg::new(1, 1000, 0)).unwrap(); // a run, written later
+    w.push(AccelMg::new(1, 1000, 0)).unwrap();
     assert!(
-        w.push([900, -900, 900]).is_err(),
+        w.push(AccelMg::new(900, -900, 900)).is_err(),
         "3 changes of 2 bytes do not fit"
     );
     assert_eq!(w.frames(), 3);
@@ -905,7 +907,7 @@ fn a_full_block_keeps_the_run_before_the_frame_that_did_not_fit() {
     let back: Vec<_> = Readings::from_tokens(tokens, before)
         .map(Result::unwrap)
         .collect();
-    assert_eq!(back, [[1, 1000, 0]; 3]);
+    assert_eq!(back, [AccelMg::new(1, 1000, 0); 3]);
 }
 
 /// `cargo play -- --race`'s sides over real UDP sockets on localhost, in one
@@ -928,7 +930,7 @@ fn two_sides_race_over_localhost_udp() {
     let pilot = |looks: u32| {
         move |s: &Session<'static, Fx>, ap: &mut Option<Autopilot>| {
             if s.game().frames() < looks {
-                [0, 1000, 0]
+                AccelMg::LEVEL
             } else {
                 ap.as_mut().unwrap().reading_mg(s.game())
             }
@@ -1171,7 +1173,7 @@ impl OnAir {
                 let looks = self.looks;
                 r.frame(|s| {
                     if s.game().frames() < looks {
-                        [0, 1000, 0]
+                        AccelMg::LEVEL
                     } else {
                         autopilot.reading_mg(s.game())
                     }
@@ -1525,7 +1527,7 @@ fn a_round_looks_pairs_races_and_ends_on_a_button() {
             match rounds[i].frame(command, |s| {
                 let p = pilot.get_or_insert_with(|| Autopilot::new(s.game().level()));
                 if i == 1 && s.game().frames() < 40 {
-                    [0, 1000, 0]
+                    AccelMg::LEVEL
                 } else {
                     p.reading_mg(s.game())
                 }
@@ -1578,12 +1580,12 @@ fn b_while_looking_ends_the_round_for_the_chooser() {
     let mut slot = V2Slot::new(V2_REACH);
     let mut round = V2Round::new(NonZeroU32::new(3).unwrap(), &mut slot);
     assert_eq!(
-        round.frame(Some(Command::Restart), |_| [0, 1000, 0]),
+        round.frame(Some(Command::Restart), |_| AccelMg::LEVEL),
         Ok(None)
     );
-    assert_eq!(round.frame(None, |_| [0, 1000, 0]), Ok(None));
+    assert_eq!(round.frame(None, |_| AccelMg::LEVEL), Ok(None));
     assert_eq!(
-        round.frame(Some(Command::NextLevel), |_| [0, 1000, 0]),
+        round.frame(Some(Command::NextLevel), |_| AccelMg::LEVEL),
         Err(RoundExit::Choose)
     );
 }
@@ -1613,11 +1615,11 @@ fn a_maze_beyond_the_boards_reach_ends_the_round() {
     let mut buf = [0u8; MAX_PACKET];
     let mut refused = None;
     for _ in 0..10 * HZ {
-        let _ = proposer.frame(None, |_| [0, 1000, 0]);
+        let _ = proposer.frame(None, |_| AccelMg::LEVEL);
         if let Some(p) = proposer.transmit(&mut buf) {
             let _ = refuser.receive(p);
         }
-        match refuser.frame(None, |_| [0, 1000, 0]) {
+        match refuser.frame(None, |_| AccelMg::LEVEL) {
             Ok(Some(RoundEvent::Refused(e))) => refused = Some(e),
             Ok(_) => {}
             Err(exit) => {

@@ -3,6 +3,7 @@
 use fixed::types::I8F24;
 use marble_rolling::game::level::{parse, words_needed, Level};
 use marble_rolling::game::rules::{cell_centre, Game, GameConfig};
+use marble_rolling::input::tilt::GravityMg;
 use marble_rolling::matrix::{Frame, MAX_BRIGHTNESS};
 use marble_rolling::physics::Vec3;
 use marble_rolling::render::{
@@ -523,7 +524,7 @@ fn rendering_is_deterministic() {
         let mut g = game(&l);
         let mut r = Renderer::<5, 5>::new();
         let mut frames = Vec::new();
-        g.set_gravity_mg([120, -990, 80]);
+        g.set_gravity_mg(GravityMg::new(120, -990, 80));
         for _ in 0..300 {
             g.frame();
             frames.push(r.render(&g));

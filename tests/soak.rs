@@ -14,6 +14,7 @@ use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::{GameConfig, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::physics::geometry::broadphase::candidates;
 use marble_rolling::physics::geometry::narrowphase::offset;
 use marble_rolling::physics::{Fx, Scalar};
@@ -64,11 +65,11 @@ fn soak(config: GameConfig) {
         loop {
             let phase = if n < shake_frames {
                 shaken += 1;
-                session.frame([
+                session.frame(AccelMg::new(
                     rng.range(-2000, 2000),
                     rng.range(-500, 2000),
                     rng.range(-2000, 2000),
-                ])
+                ))
             } else {
                 session.autopilot_frame(&mut ap)
             };

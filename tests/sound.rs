@@ -9,6 +9,7 @@ use fixed::types::I8F24;
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::input::event::{Command, InputEvent};
 use marble_rolling::physics::{Effects, PhysicsSpec, Scalar, Vec3};
 use marble_rolling::player::Player;
@@ -141,7 +142,7 @@ fn the_player_plays_the_outcome_and_obeys_the_mute() {
         Player::<5, 5, true, false>::new(&LEVELS, 0, SYNTHETIC_TILT, true).expect("first level");
     let mut win = false;
     for _ in 0..(u32::from(LEVELS[0].info.time_limit_s) * 128) {
-        let tick = player.tick([0, 1000, 0], false);
+        let tick = player.tick(AccelMg::LEVEL, false);
         if tick.finished == Some(Phase::Won) {
             win = tick.sounds.iter().any(|s| s == Sound::Win);
             break;
@@ -154,7 +155,7 @@ fn the_player_plays_the_outcome_and_obeys_the_mute() {
     muted.handle(InputEvent::Command(Command::ToggleMute));
     assert!(muted.muted() && muted.status().muted);
     for _ in 0..(u32::from(LEVELS[0].info.time_limit_s) * 128) {
-        let tick = muted.tick([0, 1000, 0], false);
+        let tick = muted.tick(AccelMg::LEVEL, false);
         assert!(tick.sounds.is_empty(), "a sound while muted");
         if tick.finished.is_some() {
             break;

@@ -7,6 +7,7 @@ mod common;
 use common::*;
 use marble_rolling::game::level::{parse, words_needed, Cell, Level, LevelError, LevelErrorKind};
 use marble_rolling::game::rules::{Game, GameConfig, Phase};
+use marble_rolling::input::tilt::GravityMg;
 use marble_rolling::physics::{Params, Scalar, TileIndex, Vec3, World};
 use proptest::prelude::*;
 
@@ -398,7 +399,7 @@ fn the_goal_is_on_its_storey() {
     // its goal at (5, 1), under the tile before the goal above.
     let mut phase = Phase::Playing;
     for _ in 0..(10 * 128) {
-        game.set_gravity_mg([150, -990, 0]);
+        game.set_gravity_mg(GravityMg::new(150, -990, 0));
         phase = game.frame();
         if phase != Phase::Playing {
             break;

@@ -1,19 +1,19 @@
 //! The tilt input path (src/input/tilt.rs): accelerometer reading → gravity.
 
 use marble_rolling::input::sensor::{AccelMg, Axis, Calibration, Fault, Plausibility};
-use marble_rolling::input::tilt::{TiltConfig, TiltError, TiltFilter, MAX_READING_MG};
+use marble_rolling::input::tilt::{GravityMg, TiltConfig, TiltError, TiltFilter, MAX_READING_MG};
 use marble_rolling::physics::range::MAX_MG;
 use proptest::prelude::*;
 
 /// Tiny zero-mean in-plane noise (±2 mg, a period of 5 samples) so that a long run
 /// of a steady pose is not taken for a stuck sensor, as on real hardware.
-fn noisy(r: [i32; 3], n: usize) -> [i32; 3] {
+fn noisy(r: AccelMg, n: usize) -> AccelMg {
     const NOISE: [i32; 5] = [0, 1, -2, 2, -1];
-    [r[0] + NOISE[n % 5], r[1], r[2] + NOISE[(n + 2) % 5]]
+    AccelMg::new(r.x + NOISE[n % 5], r.y, r.z + NOISE[(n + 2) % 5])
 }
 
 /// Feeds `n` noisy samples of `r`, all of which must be accepted.
-fn settle(f: &mut TiltFilter, r: [i32; 3], n: usize) -> [i32; 3] {
+fn settle(f: &mut TiltFilter, r: AccelMg, n: usize) -> GravityMg {
     let mut g = f.gravity_mg();
     for i in 0..n {
         g = f.push(noisy(r, i)).expect("good sample");
@@ -39,49 +39,49 @@ fn bare(shift: u8) -> TiltFilter {
 #[test]
 fn level_before_first_sample() {
     let f = TiltFilter::default();
-    assert_eq!(f.gravity_mg(), [0, -1000, 0]);
-    assert_eq!(f.filtered_reading_mg(), [0, 1000, 0]);
+    assert_eq!(f.gravity_mg(), GravityMg::new(0, -1000, 0));
+    assert_eq!(f.filtered_reading_mg(), AccelMg::new(0, 1000, 0));
 }
 
 #[test]
 fn flat_board_settles_to_down() {
     let mut f = TiltFilter::default();
     // Start tilted, then lie flat: the filter must forget the tilt.
-    settle(&mut f, [-300, 950, 200], 10);
-    assert_ne!(f.gravity_mg(), [0, -1000, 0]);
-    let g = settle(&mut f, [0, 1000, 0], 200);
-    assert_eq!(g, [0, -1000, 0]);
+    settle(&mut f, AccelMg::new(-300, 950, 200), 10);
+    assert_ne!(f.gravity_mg(), GravityMg::new(0, -1000, 0));
+    let g = settle(&mut f, AccelMg::new(0, 1000, 0), 200);
+    assert_eq!(g, GravityMg::new(0, -1000, 0));
     assert_eq!(f.gravity_mg(), g);
 }
 
 #[test]
 fn negative_x_reading_rolls_towards_plus_x() {
     let mut f = TiltFilter::default();
-    let g = settle(&mut f, [-300, 950, 0], 100);
-    assert!(g[0] > 0, "{g:?}");
-    assert_eq!(g[0], 300, "the reading itself: no dead zone");
-    assert_eq!(g[2], 0);
-    assert_eq!(g[1], -950);
-    let g = settle(&mut f, [300, 950, 0], 100);
-    assert!(g[0] < 0, "{g:?}");
+    let g = settle(&mut f, AccelMg::new(-300, 950, 0), 100);
+    assert!(g.x > 0, "{g:?}");
+    assert_eq!(g.x, 300, "the reading itself: no dead zone");
+    assert_eq!(g.z, 0);
+    assert_eq!(g.y, -950);
+    let g = settle(&mut f, AccelMg::new(300, 950, 0), 100);
+    assert!(g.x < 0, "{g:?}");
 }
 
 #[test]
 fn negative_z_reading_rolls_towards_plus_z() {
     let mut f = TiltFilter::default();
-    let g = settle(&mut f, [0, 950, -300], 100);
-    assert!(g[2] > 0, "{g:?}");
-    assert_eq!(g[0], 0);
-    let g = settle(&mut f, [0, 950, 300], 100);
-    assert!(g[2] < 0, "{g:?}");
+    let g = settle(&mut f, AccelMg::new(0, 950, -300), 100);
+    assert!(g.z > 0, "{g:?}");
+    assert_eq!(g.x, 0);
+    let g = settle(&mut f, AccelMg::new(0, 950, 300), 100);
+    assert!(g.z < 0, "{g:?}");
 }
 
 #[test]
 fn calibrating_a_tilted_board_makes_it_level() {
     let mut f = TiltFilter::default();
-    let tilted = [-259, 966, 150]; // ~15° right edge down, a little towards the player
+    let tilted = AccelMg::new(-259, 966, 150); // ~15° right edge down, a little towards the player
     settle(&mut f, tilted, 100);
-    assert!(f.gravity_mg()[0] > 200);
+    assert!(f.gravity_mg().x > 200);
     let c = f.calibrate(tilted).expect("plausible");
     assert_eq!(
         c,
@@ -92,30 +92,34 @@ fn calibrating_a_tilted_board_makes_it_level() {
     );
     assert_eq!(f.calibration(), c);
     // Takes effect at once, and stays level while the board stays there.
-    assert_eq!(f.gravity_mg(), [0, -966, 0]);
-    assert_eq!(settle(&mut f, tilted, 100), [0, -966, 0]);
+    assert_eq!(f.gravity_mg(), GravityMg::new(0, -966, 0));
+    assert_eq!(settle(&mut f, tilted, 100), GravityMg::new(0, -966, 0));
     // Tilting further from the new level rolls as usual.
-    let g = settle(&mut f, [-459, 900, 150], 100);
-    assert_eq!(g[0], 200);
+    let g = settle(&mut f, AccelMg::new(-459, 900, 150), 100);
+    assert_eq!(g.x, 200);
     // Calibrating again replaces the offset instead of stacking it.
-    f.calibrate([0, 1000, 0]).unwrap();
+    f.calibrate(AccelMg::new(0, 1000, 0)).unwrap();
     assert_eq!(f.calibration(), Calibration::NONE);
     // Levelling the filtered (noise-free) orientation works the same way.
     settle(&mut f, tilted, 100);
     f.calibrate(f.filtered_reading_mg()).unwrap();
-    assert_eq!(f.gravity_mg(), [0, -966, 0]);
+    assert_eq!(f.gravity_mg(), GravityMg::new(0, -966, 0));
 }
 
 #[test]
 fn calibration_is_clamped_and_refuses_garbage() {
     let mut f = TiltFilter::default();
-    let c = f.calibrate([-900, 400, 0]).unwrap();
+    let c = f.calibrate(AccelMg::new(-900, 400, 0)).unwrap();
     assert_eq!(c.offset_x, -Calibration::MAX_OFFSET_MG);
     f.set_calibration(Calibration {
         offset_x: 7,
         offset_z: -3,
     });
-    for bad in [[0, 0, 0], [i32::MIN, 1000, 0], [0, 100, 0]] {
+    for bad in [
+        AccelMg::new(0, 0, 0),
+        AccelMg::new(i32::MIN, 1000, 0),
+        AccelMg::new(0, 100, 0),
+    ] {
         assert!(f.calibrate(bad).is_err(), "{bad:?}");
         assert_eq!(
             f.calibration(),
@@ -149,8 +153,8 @@ fn default_path_passes_every_tilt_unchanged() {
         ..TiltConfig::DEFAULT
     });
     for x in -600..=600 {
-        let g = f.push([x, 1000, -x]).unwrap();
-        assert_eq!(g, [-x, -1000, x], "x = {x}");
+        let g = f.push(AccelMg::new(x, 1000, -x)).unwrap();
+        assert_eq!(g, GravityMg::new(-x, -1000, x), "x = {x}");
     }
 }
 
@@ -165,7 +169,7 @@ fn dead_zone_zeroes_small_tilts_and_ramps_back_to_identity() {
     let mut f = TiltFilter::new(cfg);
     let mut prev: Option<i32> = None;
     for x in -100..=100i32 {
-        let g = f.push([x, 1000, -x]).unwrap();
+        let g = f.push(AccelMg::new(x, 1000, -x)).unwrap();
         // 0 inside ±20, 2(|x| − 20) from 20 to 40, the reading itself beyond.
         let mag = match x.abs() {
             a if a <= 20 => 0,
@@ -173,33 +177,33 @@ fn dead_zone_zeroes_small_tilts_and_ramps_back_to_identity() {
             a => a,
         };
         let expect = -x.signum() * mag;
-        assert_eq!(g[0], expect, "x = {x}");
-        assert_eq!(g[2], -expect, "z = {}", -x);
+        assert_eq!(g.x, expect, "x = {x}");
+        assert_eq!(g.z, -expect, "z = {}", -x);
         if x.abs() >= 40 {
-            assert_eq!(g[0], -x, "identity beyond twice the width, x = {x}");
+            assert_eq!(g.x, -x, "identity beyond twice the width, x = {x}");
         }
         // Never further from the identity than the width.
-        assert!((g[0] + x).abs() <= 20, "x = {x}");
+        assert!((g.x + x).abs() <= 20, "x = {x}");
         // Continuous: the ramp's slope is 2, so 1 mg in moves at most 2 mg out.
         if let Some(p) = prev {
-            assert!((g[0] - p).abs() <= 2, "jump at x = {x}");
+            assert!((g.x - p).abs() <= 2, "jump at x = {x}");
         }
-        prev = Some(g[0]);
+        prev = Some(g.x);
     }
     // Just inside / outside the edges.
-    assert_eq!(f.push([-20, 1000, 0]).unwrap()[0], 0);
-    assert_eq!(f.push([-21, 1000, 0]).unwrap()[0], 2);
-    assert_eq!(f.push([-39, 1000, 0]).unwrap()[0], 38);
-    assert_eq!(f.push([-40, 1000, 0]).unwrap()[0], 40);
+    assert_eq!(f.push(AccelMg::new(-20, 1000, 0)).unwrap().x, 0);
+    assert_eq!(f.push(AccelMg::new(-21, 1000, 0)).unwrap().x, 2);
+    assert_eq!(f.push(AccelMg::new(-39, 1000, 0)).unwrap().x, 38);
+    assert_eq!(f.push(AccelMg::new(-40, 1000, 0)).unwrap().x, 40);
 }
 
 /// Samples until the output first reaches 63.2 % of a step from 0 to 1000.
 fn samples_to_63_percent(shift: u8, sign: i32) -> usize {
     let mut f = bare(shift);
-    f.push([0, 1000, 0]).unwrap();
+    f.push(AccelMg::new(0, 1000, 0)).unwrap();
     for n in 1..10_000 {
-        let g = f.push([-sign * 1000, 1000, 0]).unwrap();
-        if g[0] * sign >= 632 {
+        let g = f.push(AccelMg::new(-sign * 1000, 1000, 0)).unwrap();
+        if g.x * sign >= 632 {
             return n;
         }
     }
@@ -233,17 +237,17 @@ fn low_pass_converges_exactly_without_truncation_error() {
         for target in [1, -1, 7, -7, 333, -333, 1999, -1999, 4000, -4000] {
             for start in [0, 1, -1, 2000, -2000] {
                 let mut f = bare(shift);
-                f.push([start, 1000, -start]).unwrap();
-                let mut g = [0; 3];
+                f.push(AccelMg::new(start, 1000, -start)).unwrap();
+                let mut g = GravityMg::LEVEL;
                 for _ in 0..20_000 {
-                    g = f.push([target, 1000, -target]).unwrap();
+                    g = f.push(AccelMg::new(target, 1000, -target)).unwrap();
                 }
                 assert_eq!(
                     g,
-                    [-target, -1000, target],
+                    GravityMg::new(-target, -1000, target),
                     "shift {shift}, {start} → {target}"
                 );
-                assert_eq!(f.filtered_reading_mg(), [target, 1000, -target]);
+                assert_eq!(f.filtered_reading_mg(), AccelMg::new(target, 1000, -target));
             }
         }
     }
@@ -258,16 +262,16 @@ fn slow_low_pass_has_no_dead_band() {
         for target in [1, -1, 333, -333] {
             for start in [0, 1000, -1000] {
                 let mut f = bare(shift);
-                f.push([start, 1000, 0]).unwrap();
+                f.push(AccelMg::new(start, 1000, 0)).unwrap();
                 for _ in 0..(20usize << shift) {
-                    f.push([target, 1000, 0]).unwrap();
+                    f.push(AccelMg::new(target, 1000, 0)).unwrap();
                 }
                 assert_eq!(
-                    f.filtered_reading_mg()[0],
+                    f.filtered_reading_mg().x,
                     target,
                     "shift {shift}, {start} → {target}"
                 );
-                assert_eq!(f.gravity_mg()[0], -target);
+                assert_eq!(f.gravity_mg().x, -target);
             }
         }
     }
@@ -277,17 +281,17 @@ fn slow_low_pass_has_no_dead_band() {
 fn output_rounds_to_nearest_mg_symmetrically() {
     for sign in [1, -1] {
         let mut f = bare(1);
-        f.push([0, 1000, 0]).unwrap();
+        f.push(AccelMg::new(0, 1000, 0)).unwrap();
         // Half way to 1 mg: 0.5 mg rounds away from zero, both signs.
-        assert_eq!(f.push([sign, 1000, 0]).unwrap()[0], -sign);
-        assert_eq!(f.filtered_reading_mg()[0], sign);
+        assert_eq!(f.push(AccelMg::new(sign, 1000, 0)).unwrap().x, -sign);
+        assert_eq!(f.filtered_reading_mg().x, sign);
     }
 }
 
 #[test]
 fn implausible_samples_are_rejected_and_output_unchanged() {
     let mut f = TiltFilter::default();
-    let before = settle(&mut f, [-300, 950, 100], 50);
+    let before = settle(&mut f, AccelMg::new(-300, 950, 100), 50);
     let cases: [([i32; 3], TiltError); 7] = [
         ([0, 0, 0], TiltError::AllZero),
         (
@@ -333,7 +337,7 @@ fn implausible_samples_are_rejected_and_output_unchanged() {
     ];
     for (bad, err) in cases {
         let snapshot = f;
-        assert_eq!(f.push(bad), Err(err), "{bad:?}");
+        assert_eq!(f.push(AccelMg::from_array(bad)), Err(err), "{bad:?}");
         assert_eq!(f.gravity_mg(), before);
         assert_eq!(f.filtered_reading_mg(), snapshot.filtered_reading_mg());
     }
@@ -344,8 +348,8 @@ fn implausible_samples_are_rejected_and_output_unchanged() {
 #[test]
 fn stuck_sensor_is_reported_and_last_good_kept() {
     let mut f = TiltFilter::default();
-    settle(&mut f, [-300, 950, 100], 30);
-    let frozen = [-150, 980, 40];
+    settle(&mut f, AccelMg::new(-300, 950, 100), 30);
+    let frozen = AccelMg::new(-150, 980, 40);
     let mut last = f.gravity_mg();
     for i in 1..=120 {
         let r = f.push(frozen);
@@ -358,7 +362,7 @@ fn stuck_sensor_is_reported_and_last_good_kept() {
         }
     }
     // The sensor comes back: the first different sample is used.
-    assert!(f.push([-151, 980, 40]).is_ok());
+    assert!(f.push(AccelMg::new(-151, 980, 40)).is_ok());
     assert!(!f.is_stuck());
     // Disabled when stuck_samples < 2.
     let mut f = TiltFilter::new(TiltConfig {
@@ -375,8 +379,14 @@ fn saturated_full_scale_readings_are_consistent() {
     // The firmware's ±2 g range saturates at -2048..=2047 mg: always accepted
     // per axis, and passed through exactly.
     let mut f = bare(0);
-    assert_eq!(f.push([-2048, 1000, 0]), Ok([2048, -1000, 0]));
-    assert_eq!(f.push([2047, 1000, -2048]), Ok([-2047, -1000, 2048]));
+    assert_eq!(
+        f.push(AccelMg::new(-2048, 1000, 0)),
+        Ok(GravityMg::new(2048, -1000, 0))
+    );
+    assert_eq!(
+        f.push(AccelMg::new(2047, 1000, -2048)),
+        Ok(GravityMg::new(-2047, -1000, 2048))
+    );
     // Exactly at the configured full scale: accepted; one above: rejected,
     // the same on every axis and both signs.
     let p = Plausibility {
@@ -395,17 +405,22 @@ fn saturated_full_scale_readings_are_consistent() {
             let mut r = [0, 0, 0];
             r[axis] = 2000 * s;
             r[(axis + 1) % 3] = 500;
-            assert_eq!(f.push(r), Ok(r.map(|v| -v)), "{r:?}");
+            let [x, y, z] = r.map(|v| -v);
+            assert_eq!(
+                f.push(AccelMg::from_array(r)),
+                Ok(GravityMg::new(x, y, z)),
+                "{r:?}"
+            );
             r[axis] = 2001 * s;
             let ax = [Axis::X, Axis::Y, Axis::Z][axis];
             assert_eq!(
-                f.push(r),
+                f.push(AccelMg::from_array(r)),
                 Err(TiltError::OutOfRange {
                     axis: ax,
                     value: 2001 * s
                 })
             );
-            assert_eq!(f.gravity_mg()[axis], -2000 * s, "last good kept");
+            assert_eq!(f.gravity_mg().to_array()[axis], -2000 * s, "last good kept");
         }
     }
     // A full scale beyond what the physics takes, less the largest calibration
@@ -422,18 +437,24 @@ fn saturated_full_scale_readings_are_consistent() {
         ..TiltConfig::DEFAULT
     });
     assert_eq!(MAX_READING_MG as i32, MAX_MG - Calibration::MAX_OFFSET_MG);
-    assert_eq!(f.push([-7_500, 0, 0]), Ok([7_500, 0, 0]));
+    assert_eq!(
+        f.push(AccelMg::new(-7_500, 0, 0)),
+        Ok(GravityMg::new(7_500, 0, 0))
+    );
     f.set_calibration(Calibration {
         offset_x: 500,
         offset_z: 0,
     });
-    assert_eq!(f.push([-7_500, 0, 0]), Ok([MAX_MG, 0, 0]));
+    assert_eq!(
+        f.push(AccelMg::new(-7_500, 0, 0)),
+        Ok(GravityMg::new(MAX_MG, 0, 0))
+    );
     assert!(matches!(
-        f.push([7_501, 0, 0]),
+        f.push(AccelMg::new(7_501, 0, 0)),
         Err(TiltError::OutOfRange { .. })
     ));
     assert!(matches!(
-        f.push([-16_000, 0, 0]),
+        f.push(AccelMg::new(-16_000, 0, 0)),
         Err(TiltError::OutOfRange { .. })
     ));
 }
@@ -449,29 +470,32 @@ fn garbage_interleaved_with_good_samples_keeps_last_good() {
         [4095, 4095, 4095],
         [0, -i32::MAX, 0],
     ];
-    let good = [-400, 900, 200];
+    let good = AccelMg::new(-400, 900, 200);
     let mut reference = TiltFilter::default();
     for i in 0..300 {
         let r = noisy(good, i);
         let want = reference.push(r).unwrap();
         assert_eq!(f.push(r), Ok(want));
         for g in &garbage[..(i % garbage.len()) + 1] {
-            assert!(f.push(*g).is_err());
+            assert!(f.push(AccelMg::from_array(*g)).is_err());
             assert_eq!(f.gravity_mg(), want, "after {g:?}");
         }
     }
-    assert_eq!(f.gravity_mg(), [400, -900, -200]);
+    assert_eq!(f.gravity_mg(), GravityMg::new(400, -900, -200));
 }
 
 #[test]
 fn reset_forgets_state_but_keeps_calibration() {
     let mut f = TiltFilter::default();
-    settle(&mut f, [-300, 950, 0], 20);
-    f.calibrate([-100, 990, 0]).unwrap();
+    settle(&mut f, AccelMg::new(-300, 950, 0), 20);
+    f.calibrate(AccelMg::new(-100, 990, 0)).unwrap();
     f.reset();
-    assert_eq!(f.gravity_mg(), [0, -1000, 0]);
+    assert_eq!(f.gravity_mg(), GravityMg::new(0, -1000, 0));
     assert_eq!(f.calibration().offset_x, -100);
-    assert_eq!(f.push([-100, 990, 0]), Ok([0, -990, 0]));
+    assert_eq!(
+        f.push(AccelMg::new(-100, 990, 0)),
+        Ok(GravityMg::new(0, -990, 0))
+    );
 }
 
 fn any_config() -> impl Strategy<Value = TiltConfig> {
@@ -522,21 +546,21 @@ proptest! {
         let mut f = TiltFilter::new(cfg);
         for (i, s) in samples.iter().enumerate() {
             let before = f.gravity_mg();
-            match f.push(*s) {
+            match f.push(AccelMg::from_array(*s)) {
                 Ok(g) => prop_assert_eq!(g, f.gravity_mg()),
                 Err(_) => prop_assert_eq!(f.gravity_mg(), before),
             }
-            for v in f.gravity_mg() {
+            for v in f.gravity_mg().to_array() {
                 prop_assert!((-MAX_MG..=MAX_MG).contains(&v));
             }
             if i == samples.len() / 2 {
                 if let Some(c) = cal {
-                    let _ = f.calibrate(c);
+                    let _ = f.calibrate(AccelMg::from_array(c));
                 }
             }
-            let _ = f.push_sample(AccelMg::new(s[1], s[2], s[0]));
+            let _ = f.push(AccelMg::new(s[1], s[2], s[0]));
         }
-        for v in f.gravity_mg() {
+        for v in f.gravity_mg().to_array() {
             prop_assert!((-MAX_MG..=MAX_MG).contains(&v));
         }
         let _ = f.config().time_constant_us(u32::MAX);

@@ -12,7 +12,8 @@ use fixed::types::I8F24;
 use marble_rolling::game::level::{parse, Level, LevelView};
 use marble_rolling::game::rules::{GameConfig, Phase};
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
-use marble_rolling::input::tilt::TiltConfig;
+use marble_rolling::input::axes::AccelMg;
+use marble_rolling::input::tilt::{GravityMg, TiltConfig};
 use marble_rolling::physics::Scalar;
 
 /// Standard gravity per milli-g, mm/s²: the physics' own constant
@@ -97,7 +98,7 @@ impl Sensor {
         self.rng.wrapping_mul(0x2545_f491_4f6c_dd1d)
     }
 
-    fn read(&mut self, truth: [f64; 3]) -> [i32; 3] {
+    fn read(&mut self, truth: [f64; 3]) -> AccelMg {
         if self.used == 8 {
             for a in 0..3 {
                 let mut b: [f64; 8] =
@@ -117,7 +118,7 @@ impl Sensor {
             self.carry[a] = want - out[a] as f64;
         }
         self.used += 1;
-        out
+        AccelMg::from_array(out)
     }
 }
 
@@ -128,7 +129,7 @@ impl Sensor {
 fn measure<S: Scalar>(
     level: LevelView<'_>,
     tilt: TiltConfig,
-    mut read: impl FnMut() -> [i32; 3],
+    mut read: impl FnMut() -> AccelMg,
 ) -> (f64, u32) {
     let mut s = Session::<S>::new(level, GameConfig::DEFAULT, tilt).expect("sets up");
     for _ in 0..SETTLE_FRAMES {
@@ -173,25 +174,25 @@ fn a_steady_reading_reaches_the_physics_whole() {
     let level = parse::<W>(&src).expect("parses");
     for rolling in [true, false] {
         for deg in ANGLES {
-            let reading = tilted(deg).map(|v| v.round() as i32);
+            let reading = AccelMg::from_array(tilted(deg).map(|v| v.round() as i32));
             for backend in ["i8f24", "f64"] {
                 let l = view(&level, rolling);
                 let (a, n) = match backend {
                     "i8f24" => measure::<I8F24>(l, SYNTHETIC_TILT, || reading),
                     _ => measure::<f64>(l, SYNTHETIC_TILT, || reading),
                 };
-                let of_reading = share(rolling) * MM_S2_PER_MG * -reading[0] as f64;
+                let of_reading = share(rolling) * MM_S2_PER_MG * -reading.x as f64;
                 let ideal = share(rolling) * MM_S2_PER_MG * 1000.0 * deg.to_radians().sin();
                 let (e_reading, e_ideal) = (a / of_reading - 1.0, a / ideal - 1.0);
                 println!(
                     "{backend:5} rolling {rolling:5} {deg:2}°: reading {:4} mg, {a:8.2} mm/s² over \
                      {n:3} frames; vs the reading {:+.5} %, vs the ideal {:+.3} %",
-                    reading[0],
+                    reading.x,
                     100.0 * e_reading,
                     100.0 * e_ideal
                 );
                 assert!(e_reading.abs() < 1e-4, "{deg}°: {a} vs {of_reading}");
-                let quantum = (-reading[0] as f64 / (1000.0 * deg.to_radians().sin()) - 1.0).abs();
+                let quantum = (-reading.x as f64 / (1000.0 * deg.to_radians().sin()) - 1.0).abs();
                 assert!(e_ideal.abs() < 0.005 + quantum, "{deg}°: {a} vs {ideal}");
                 if deg >= 5.0 {
                     assert!(e_ideal.abs() < 0.005, "{deg}°: {a} vs {ideal}");
@@ -237,7 +238,7 @@ fn a_held_tilt_rolls_at_five_sevenths_g_sin_theta() {
 
 /// Plays `frames` frames of `read()` on a level board and returns how far the marble
 /// moved (mm) and whether it ever moved at all.
-fn drift(level: LevelView<'_>, frames: u32, mut read: impl FnMut() -> [i32; 3]) -> (f64, bool) {
+fn drift(level: LevelView<'_>, frames: u32, mut read: impl FnMut() -> AccelMg) -> (f64, bool) {
     let mut s =
         Session::<I8F24>::new(level, GameConfig::DEFAULT, TiltConfig::DEFAULT).expect("sets up");
     let start = s.game().world().marbles()[0].pos;
@@ -272,7 +273,7 @@ fn rolling_resistance_holds_a_marble_on_a_near_level_board() {
         let (d, moved) = case("rolling, friction", "0.01", level_board, seed);
         assert!(!moved, "level ±5 mg, seed {seed}: moved {d} mm");
     }
-    let steady = tilted(0.5).map(|v| v.round() as i32);
+    let steady = AccelMg::from_array(tilted(0.5).map(|v| v.round() as i32));
     let src = open_floor("rolling, friction", "0.01");
     let level = parse::<W>(&src).expect("parses");
     let (d, moved) = drift(level.view(), frames, || steady);
@@ -333,7 +334,7 @@ fn a_reading_is_judged_once_and_reaches_the_world_unclamped() {
     assert_eq!(step.action, Action::KeepLast(AccelMg::LEVEL));
     assert_eq!(pipeline.supervisor().last_fault(), Some(Fault::Implausible));
     assert_eq!(pipeline.supervisor().total_faults(), 1);
-    session.frame(pipeline.tilt().reading_mg());
+    session.frame(pipeline.tilt());
     assert_eq!(
         session.tilt_errors(),
         (0, None),
@@ -348,7 +349,7 @@ fn a_reading_is_judged_once_and_reaches_the_world_unclamped() {
     assert_eq!(step.action, Action::Use(AccelMg::new(-bound, 0, 0)));
     assert_eq!(pipeline.supervisor().total_faults(), 1);
     for _ in 0..SETTLE_FRAMES {
-        session.frame(pipeline.tilt().reading_mg());
+        session.frame(pipeline.tilt());
     }
     assert_eq!(session.tilt_errors(), (0, None));
     assert_eq!(session.game().world().gravity_mg(), [bound, 0, 0]);
@@ -356,14 +357,14 @@ fn a_reading_is_judged_once_and_reaches_the_world_unclamped() {
     // The check the session leaves out is the same rule, made where a reading
     // comes from anything but a sensor: a filter that judges on entry refuses
     // that sample too, a filter fed the sensor's samples does not ask.
-    let past = [-(bound + 1), 0, 0];
+    let past = AccelMg::new(-(bound + 1), 0, 0);
     assert!(matches!(
         TiltFilter::new(TiltConfig::DEFAULT).push(past),
         Err(TiltError::Magnitude { .. })
     ));
     assert_eq!(
         TiltFilter::new(TiltConfig::SENSOR).push(past),
-        Ok([bound + 1, 0, 0])
+        Ok(GravityMg::new(bound + 1, 0, 0))
     );
     assert_eq!(TiltConfig::SENSOR.plausibility, None);
     assert_eq!(

@@ -356,8 +356,10 @@ fn readings_equal_the_set_tilt_within_one_lsb_in_every_mode_and_scale() {
                 control.set_tilt(tilt);
                 clock.set(clock.get() + 10_000);
                 let got = board(sample(read(&mut sensor)));
-                let want = tilt.reading_mg();
-                for (axis, (got, want)) in [got.x, got.y, got.z].into_iter().zip(want).enumerate() {
+                let want = tilt;
+                for (axis, (got, want)) in
+                    got.to_array().into_iter().zip(want.to_array()).enumerate()
+                {
                     // The chip saturates at its full scale.
                     let want = want.clamp(min, max);
                     assert!(
@@ -531,8 +533,7 @@ fn frozen_data_stops_the_output_and_a_reinit_does_not_help() {
     control.inject(InjectedFault::Healthy);
     clock.set(310_000);
     let after = board(sample(read(&mut sensor)));
-    let [x, y, z] = AccelMg::from_xz(400, 100).reading_mg();
-    assert_eq!(after, AccelMg::new(x, y, z));
+    assert_eq!(after, AccelMg::from_xz(400, 100));
 }
 
 #[test]
@@ -906,14 +907,15 @@ fn power_down_before_sleep_stops_the_samples_and_a_reinit_brings_them_back() {
 fn the_chips_placement_and_the_firmwares_axis_table_agree() {
     // Each tilt of the board, read by the chip placed as on the micro:bit v2
     // and turned back by the firmware's table: the tilt itself.
-    for tilt in [[0, 1000, 0], [1000, 0, 0], [0, 0, 1000], [-700, 700, 100]] {
+    for tilt in [
+        AccelMg::LEVEL,
+        AccelMg::new(1000, 0, 0),
+        AccelMg::new(0, 0, 1000),
+        AccelMg::new(-700, 700, 100),
+    ] {
         let raw = MICROBIT_V2.raw(tilt);
-        let read = SENSOR_AXIS_MAP.apply(AccelMg::new(raw[0], raw[1], raw[2]));
-        assert_eq!(
-            read,
-            AccelMg::new(tilt[0], tilt[1], tilt[2]),
-            "tilt {tilt:?}"
-        );
+        let read = SENSOR_AXIS_MAP.apply(AccelMg::from_array(raw));
+        assert_eq!(read, tilt, "tilt {tilt:?}");
     }
     assert_eq!(Placement::assumed_by(&SENSOR_AXIS_MAP), MICROBIT_V2);
 }
@@ -937,21 +939,18 @@ fn a_sign_error_in_the_firmwares_table_shows() {
             z: AxisSource::pos(Axis::Z),
         },
     ] {
-        let caught = [[1000, 0, 0], [0, 1000, 0], [0, 0, 1000]]
-            .into_iter()
-            .any(|tilt| {
-                let raw = MICROBIT_V2.raw(tilt);
-                wrong.apply(AccelMg::new(raw[0], raw[1], raw[2]))
-                    != AccelMg::new(tilt[0], tilt[1], tilt[2])
-            });
+        let caught = [
+            AccelMg::new(1000, 0, 0),
+            AccelMg::LEVEL,
+            AccelMg::new(0, 0, 1000),
+        ]
+        .into_iter()
+        .any(|tilt| wrong.apply(AccelMg::from_array(MICROBIT_V2.raw(tilt))) != tilt);
         assert!(caught, "{wrong:?} reads every tilt right");
         // A chip that took its placement from the wrong table would not
         // have caught it.
         let assumed = Placement::assumed_by(&wrong);
-        let raw = assumed.raw([1000, 0, 0]);
-        assert_eq!(
-            wrong.apply(AccelMg::new(raw[0], raw[1], raw[2])),
-            AccelMg::new(1000, 0, 0)
-        );
+        let right = AccelMg::new(1000, 0, 0);
+        assert_eq!(wrong.apply(AccelMg::from_array(assumed.raw(right))), right);
     }
 }

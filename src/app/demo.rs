@@ -34,8 +34,8 @@ fn profiled_frame<const W: usize, const H: usize, const PILOT: bool, const EVENT
     meter: Meter,
     profile: &mut Profile,
 ) -> Phase {
-    let mut reading = [0; 3];
-    let pilot = meter(&mut || reading = player.reading(AccelMg::LEVEL.reading_mg()));
+    let mut reading = AccelMg::default();
+    let pilot = meter(&mut || reading = player.reading(AccelMg::LEVEL));
     let mut phase = Phase::Playing;
     let physics = meter(&mut || phase = player.session_mut().frame_in::<EVENTS>(reading));
     profile.frame(pilot, physics);
@@ -214,14 +214,14 @@ pub(super) async fn demo<
             }
             if player.sensor_down().is_some() {
                 // Paused: the same picture as the game's (Player::tick).
-                if let Some(frame) = player.tick(AccelMg::LEVEL.reading_mg(), true).frame {
+                if let Some(frame) = player.tick(AccelMg::LEVEL, true).frame {
                     links.frames.signal(frame);
                 }
                 links.status.set(status_of(player, maze));
                 continue;
             }
             let phase = match meter {
-                None => player.frame(AccelMg::LEVEL.reading_mg()),
+                None => player.frame(AccelMg::LEVEL),
                 Some(meter) => profiled_frame(player, meter, &mut profile),
             };
             #[cfg(feature = "ghosts")]

@@ -314,7 +314,7 @@ async fn attempts<const W: usize, const H: usize, const PILOT: bool, const EVENT
         }
         // The autopilot playing is the toy in use.
         #[cfg(feature = "sleep")]
-        if idle.tick(links.tilt.get().reading_mg()) && !player.autopilot() {
+        if idle.tick(links.tilt.get()) && !player.autopilot() {
             #[cfg(feature = "defmt")]
             defmt::info!(
                 "idle for two minutes: asleep on level {=usize}",
@@ -327,7 +327,7 @@ async fn attempts<const W: usize, const H: usize, const PILOT: bool, const EVENT
         // Draw only once the display has taken the previous frame (it
         // refreshes at REFRESH_HZ < FRAME_HZ): rendering is not free.
         let draw = !links.frames.signaled();
-        let tick = player.tick(links.tilt.get().reading_mg(), draw);
+        let tick = player.tick(links.tilt.get(), draw);
         #[cfg(feature = "ghosts")]
         let tick = match ghost.as_deref_mut() {
             Some(ghost) => {

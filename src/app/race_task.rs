@@ -159,7 +159,7 @@ async fn race_once<
         while let Ok(p) = air.incoming.try_receive() {
             let _ = round.receive(&p);
         }
-        let reading = links.tilt.get().reading_mg();
+        let reading = links.tilt.get();
         match round.frame(command(links), |_| reading) {
             Ok(Some(event)) => report(event, links),
             Ok(None) => {}

@@ -120,7 +120,7 @@ pub struct VirtualLsm303agr {
     /// Per axis: bit 0 low byte, bit 1 high byte read since the last sample
     /// (block data update holds the output while only one was).
     half_read: [u8; 3],
-    tilt_mg: [i32; 3],
+    tilt: AccelMg,
     source: SampleSource,
     rng: u32,
     /// Samples latched since power-on (diagnostics).
@@ -154,7 +154,7 @@ impl VirtualLsm303agr {
             samples: 0,
             next_due_us: 0,
             half_read: [0; 3],
-            tilt_mg: AccelMg::LEVEL.reading_mg(),
+            tilt: AccelMg::LEVEL,
             source: SampleSource::Tilt,
             rng: 0x2545_f491,
             latched: 0,
@@ -180,9 +180,9 @@ impl VirtualLsm303agr {
         self.half_read = [0; 3];
     }
 
-    /// Sets the tilt (board frame, milli-g) the next samples take.
-    pub(crate) fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
-        self.tilt_mg = tilt_mg;
+    /// Sets the tilt (a board-frame reading) the next samples take.
+    pub(crate) fn set_tilt(&mut self, tilt: AccelMg) {
+        self.tilt = tilt;
     }
 
     /// Sets where the next samples come from.
@@ -320,7 +320,7 @@ impl VirtualLsm303agr {
     fn latch(&mut self, skipped: bool) {
         let mode = self.mode();
         let fs = self.full_scale_g();
-        let sensor = self.placement.raw(self.tilt_mg);
+        let sensor = self.placement.raw(self.tilt);
         for (axis, &mg) in sensor.iter().enumerate() {
             let raw = match self.source {
                 SampleSource::Garbage => {

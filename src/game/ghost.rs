@@ -52,6 +52,7 @@
 //! sensor's noise (±4 mg on every axis, every frame) `corner` takes 489 (`cargo test --features tools
 //! --test ghost -- --nocapture` prints them).
 
+use crate::input::axes::AccelMg;
 use crate::input::sensor::Calibration;
 use crate::physics::Fx;
 
@@ -64,7 +65,7 @@ pub use race::{race_frame, replay, replay_in, Checking, RaceError, Racer};
 pub const HEADER_BYTES: usize = 24;
 const MAGIC: [u8; 4] = [b'M', b'G', 1, 0];
 /// The reading before the first frame.
-const FLAT: [i32; 3] = [0, 1000, 0];
+const FLAT: AccelMg = AccelMg::LEVEL;
 
 /// What is wrong with a ghost, or with writing one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -137,7 +138,7 @@ impl<'a> GhostWriter<'a> {
 
     /// Adds one frame's reading. On [`GhostError::Full`] the ghost so far stays
     /// whole (finish it, or drop it).
-    pub fn push(&mut self, reading: [i32; 3]) -> Result<(), GhostError> {
+    pub fn push(&mut self, reading: AccelMg) -> Result<(), GhostError> {
         self.tokens.push(reading)
     }
 
@@ -167,14 +168,14 @@ pub struct TokenWriter<'a> {
     buf: &'a mut [u8],
     len: usize,
     frames: u32,
-    last: [i32; 3],
+    last: AccelMg,
     /// Frames repeating `last`, not written yet.
     run: u32,
 }
 
 impl<'a> TokenWriter<'a> {
     /// A writer into `buf`; `before` is the reading before the first frame.
-    pub fn new(buf: &'a mut [u8], before: [i32; 3]) -> Self {
+    pub fn new(buf: &'a mut [u8], before: AccelMg) -> Self {
         TokenWriter {
             buf,
             len: 0,
@@ -202,7 +203,7 @@ impl<'a> TokenWriter<'a> {
 
     /// Adds one frame's reading. On [`GhostError::Full`] the tokens so far stay
     /// whole.
-    pub fn push(&mut self, reading: [i32; 3]) -> Result<(), GhostError> {
+    pub fn push(&mut self, reading: AccelMg) -> Result<(), GhostError> {
         if reading == self.last {
             self.run += 1;
             self.frames += 1;
@@ -211,7 +212,8 @@ impl<'a> TokenWriter<'a> {
         // The pending run and this frame go in together or not at all.
         let (mark, run) = (self.len, self.run);
         let result = self.flush_run().and_then(|()| {
-            let last = self.last;
+            // The file's coding, axis by axis.
+            let (reading, last) = (reading.to_array(), self.last.to_array());
             let changed = |a: usize| reading[a] != last[a];
             let mask = (0..3).filter(|&a| changed(a)).fold(0u32, |m, a| m | 1 << a);
             self.varint(u64::from(mask << 1 | 1))?;
@@ -331,7 +333,7 @@ impl<'a> Ghost<'a> {
 pub struct Readings<'a> {
     tokens: &'a [u8],
     pos: usize,
-    last: [i32; 3],
+    last: AccelMg,
     run: u64,
 }
 
@@ -339,7 +341,7 @@ impl<'a> Readings<'a> {
     /// The readings coded by bare `tokens` (a [`TokenWriter`]'s), `before`
     /// being the reading before the first. Error offsets count as in a ghost,
     /// from the start of its header.
-    pub fn from_tokens(tokens: &'a [u8], before: [i32; 3]) -> Self {
+    pub fn from_tokens(tokens: &'a [u8], before: AccelMg) -> Self {
         Readings {
             tokens,
             pos: 0,
@@ -372,7 +374,7 @@ impl Readings<'_> {
 }
 
 impl Iterator for Readings<'_> {
-    type Item = Result<[i32; 3], GhostError>;
+    type Item = Result<AccelMg, GhostError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         if self.run > 0 {
@@ -396,7 +398,7 @@ impl Iterator for Readings<'_> {
             if mask == 0 || mask > 7 {
                 return Err(GhostError::Truncated { at: start });
             }
-            let mut next = self.last;
+            let mut next = self.last.to_array();
             for (a, value) in next.iter_mut().enumerate() {
                 if mask & (1 << a) != 0 {
                     let d = unzigzag(self.varint()?);
@@ -404,6 +406,7 @@ impl Iterator for Readings<'_> {
                         .map_err(|_| GhostError::Overflow { at: start })?;
                 }
             }
+            let next = AccelMg::from_array(next);
             self.last = next;
             Ok(next)
         })();

@@ -18,6 +18,7 @@
 //! (or 8.5 minutes, if the limit is longer) still ends as time up, so an
 //! untouched board does not play one attempt for ever.
 
+use crate::input::tilt::GravityMg;
 use crate::physics::dynamics::board_motion::BoardTrack;
 use crate::physics::world::{Params, SetupError, Stepping, World};
 use crate::physics::{Scalar, Vec3};
@@ -213,10 +214,12 @@ impl<'a, S: Scalar> Game<'a, S> {
         self.phase
     }
 
-    /// Sets the apparent gravity (milli-g, board frame: flat is `(0, -1000, 0)`),
-    /// as the tilt path delivers it. With `board_motion`, the change from the last
-    /// call also sets the board's rotation (eq. 4 frames of the tilted board).
-    pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
+    /// Sets the apparent gravity (board frame: flat is [`GravityMg::LEVEL`]), as
+    /// the tilt path delivers it; here it leaves the input's type for the
+    /// physics' vector. With `board_motion`, the change from the last call also
+    /// sets the board's rotation (eq. 4 frames of the tilted board).
+    pub fn set_gravity_mg(&mut self, g: GravityMg) {
+        let g = g.to_array();
         // World::set_gravity_mg returns at once when the pull is unchanged.
         self.world.set_gravity_mg(g);
         if self.level.info.spec.effects.board_motion {

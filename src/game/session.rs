@@ -3,8 +3,8 @@
 //! sequence, which is why their `state_hash`es agree for the same inputs:
 //!
 //! ```text
-//! reading (mg, board frame) ─→ tilt path (plausibility, low-pass, calibration)
-//!                           ─→ gravity ─→ Game::set_gravity_mg ─→ Game::frame
+//! reading (AccelMg) ─→ tilt path (plausibility, low-pass, calibration)
+//!                   ─→ gravity (GravityMg) ─→ Game::set_gravity_mg ─→ Game::frame
 //! ```
 //!
 //! Once the low-pass has settled, the gravity is the calibrated reading itself: a
@@ -12,8 +12,11 @@
 //! is cut off near level; a resting marble is held by rolling resistance (effect
 //! `friction`), see [`crate::input::tilt`].
 //!
-//! The reading comes from the caller (sensor, keys, trace) or from the autopilot.
+//! The reading comes from the caller (sensor, keys, trace, ghost) or from the
+//! autopilot, always as an [`AccelMg`]: what a source skips of the tilt path is
+//! its [`TiltConfig`]'s (e.g. [`SYNTHETIC_TILT`]), not a second way in.
 
+use crate::input::axes::AccelMg;
 use crate::input::tilt::{TiltConfig, TiltError, TiltFilter};
 use crate::physics::world::SetupError;
 use crate::physics::Scalar;
@@ -36,7 +39,7 @@ pub struct Session<'a, S: Scalar> {
     game: Game<'a, S>,
     tilt: TiltFilter,
     tilt_config: TiltConfig,
-    reading: [i32; 3],
+    reading: AccelMg,
     tilt_errors: u32,
     last_tilt_error: Option<TiltError>,
 }
@@ -52,7 +55,7 @@ impl<'a, S: Scalar> Session<'a, S> {
             game: Game::new(level, config)?,
             tilt: TiltFilter::new(tilt),
             tilt_config: tilt,
-            reading: [0, 1000, 0],
+            reading: AccelMg::LEVEL,
             tilt_errors: 0,
             last_tilt_error: None,
         })
@@ -66,8 +69,8 @@ impl<'a, S: Scalar> Session<'a, S> {
     pub fn game_mut(&mut self) -> &mut Game<'a, S> {
         &mut self.game
     }
-    /// The last reading fed in (mg, board frame).
-    pub fn reading(&self) -> [i32; 3] {
+    /// The last reading fed in.
+    pub fn reading(&self) -> AccelMg {
         self.reading
     }
     /// The tilt path.
@@ -88,23 +91,23 @@ impl<'a, S: Scalar> Session<'a, S> {
         (self.tilt_errors, self.last_tilt_error)
     }
 
-    /// Plays one frame with `reading_mg` from the accelerometer (or a stand-in). A
+    /// Plays one frame with `reading` from the accelerometer (or a stand-in). A
     /// rejected reading keeps the last good tilt: the game goes on.
-    pub fn frame(&mut self, reading_mg: [i32; 3]) -> Phase {
-        self.take(reading_mg);
+    pub fn frame(&mut self, reading: AccelMg) -> Phase {
+        self.take(reading);
         self.game.frame()
     }
 
     /// [`Session::frame`] with the stepper fixed at compile time (firmware:
     /// [`Game::frame_in`]).
-    pub fn frame_in<const EVENTS: bool>(&mut self, reading_mg: [i32; 3]) -> Phase {
-        self.take(reading_mg);
+    pub fn frame_in<const EVENTS: bool>(&mut self, reading: AccelMg) -> Phase {
+        self.take(reading);
         self.game.frame_in::<EVENTS>()
     }
 
-    fn take(&mut self, reading_mg: [i32; 3]) {
-        self.reading = reading_mg;
-        match self.tilt.push(reading_mg) {
+    fn take(&mut self, reading: AccelMg) {
+        self.reading = reading;
+        match self.tilt.push(reading) {
             Ok(g) => self.game.set_gravity_mg(g),
             Err(e) => {
                 self.tilt_errors = self.tilt_errors.saturating_add(1);

@@ -12,9 +12,9 @@
 //! for.
 
 use super::level::LevelView;
+use crate::input::axes::AccelMg;
 
-/// A scene: a level and the reading (mg, board frame: `[0, 1000, 0]` is level)
-/// for each of its frames.
+/// A scene: a level and the reading for each of its frames.
 #[derive(Clone, Copy, Debug)]
 pub struct StressScene {
     /// The maze and its marbles.
@@ -22,30 +22,30 @@ pub struct StressScene {
     /// Frames to play (128 a second).
     pub frames: u32,
     /// The reading at frame `n`.
-    pub tilt: fn(u32) -> [i32; 3],
+    pub tilt: fn(u32) -> AccelMg,
 }
 
 /// Hard towards −x' and −z' (a reading's +x rolls the marble to −x'), a slight
 /// shake every quarter second: the marble keeps bouncing between the corner's two
 /// walls (nothing damps it at `e = 1`).
-fn into_the_corner(frame: u32) -> [i32; 3] {
+fn into_the_corner(frame: u32) -> AccelMg {
     let shake = if frame % 32 < 16 { 0 } else { 150 };
-    [600 - shake, 500, 600 + shake]
+    AccelMg::new(600 - shake, 500, 600 + shake)
 }
 
 /// A new diagonal every eighth of a second, hard.
-fn shaken(frame: u32) -> [i32; 3] {
+fn shaken(frame: u32) -> AccelMg {
     match (frame / 16) % 4 {
-        0 => [700, 400, 700],
-        1 => [-700, 400, 700],
-        2 => [-700, 400, -700],
-        _ => [700, 400, -700],
+        0 => AccelMg::new(700, 400, 700),
+        1 => AccelMg::new(-700, 400, 700),
+        2 => AccelMg::new(-700, 400, -700),
+        _ => AccelMg::new(700, 400, -700),
     }
 }
 
 /// Towards +x': into the hole, and the marble below against its wall.
-fn towards_plus_x(_: u32) -> [i32; 3] {
-    [-300, 950, 0]
+fn towards_plus_x(_: u32) -> AccelMg {
+    AccelMg::new(-300, 950, 0)
 }
 
 /// Every stress scene. Each goal lies where the scene's tilt never takes a

@@ -18,6 +18,7 @@ use crate::game::ghost::{race_frame, replay, Ghost, GhostWriter, HEADER_BYTES};
 use crate::game::level::LevelView;
 use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::Session;
+use crate::input::axes::AccelMg;
 use crate::input::tilt::TiltConfig;
 use crate::physics::Fx;
 
@@ -61,7 +62,7 @@ pub struct GhostKeeper {
     dir: PathBuf,
     level: &'static str,
     tilt: TiltConfig,
-    readings: Vec<[i32; 3]>,
+    readings: Vec<AccelMg>,
     /// The readings are the attempt's from its first frame (none missed).
     whole: bool,
     /// Frames on the level clock of the stored ghost's win (a run is as fast
@@ -141,7 +142,7 @@ impl GhostKeeper {
 #[derive(Debug)]
 pub struct GhostRun {
     session: Session<'static, Fx>,
-    readings: Vec<[i32; 3]>,
+    readings: Vec<AccelMg>,
     /// Its frames before its clock started (see [`race_frame`]).
     idle: u32,
 }

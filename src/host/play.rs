@@ -334,7 +334,7 @@ impl Game {
                 }
                 continue;
             }
-            self.player.tick(self.keys.tilt().reading_mg(), false);
+            self.player.tick(self.keys.tilt(), false);
             self.follow_ghost();
             if self.player.level_index() != self.shown_level || self.player.game().frames() == 0 {
                 // Another level, or the same one restarted: a new picture.
@@ -400,7 +400,7 @@ impl Game {
             format!("{} ({which})  {status}  · {}", info.name, self.ghost_note),
             format!(
                 "tilt  x {:+5} mg  z {:+5} mg{pilot}",
-                -reading[0], -reading[2]
+                -reading.x, -reading.z
             ),
             "arrows/WASD tilt · space level · c calibrate · r restart · n next · p autopilot · q quit"
                 .to_string(),

@@ -27,6 +27,7 @@ use super::play::{key_of, Args, Picture, TerminalGuard};
 use crate::game::autopilot::Autopilot;
 use crate::game::level::LevelView;
 use crate::game::session::Session;
+use crate::input::axes::AccelMg;
 use crate::input::event::InputEvent;
 use crate::input::keys::{Key, KeyTilt};
 use crate::input::sensor::Calibration;
@@ -139,7 +140,7 @@ impl UdpBoard {
     /// is due. A send the network refuses is a lost packet, as on the radio.
     pub fn frame(
         &mut self,
-        reading: impl FnOnce(&Session<'static, I8F24>, &mut Option<Autopilot>) -> [i32; 3],
+        reading: impl FnOnce(&Session<'static, I8F24>, &mut Option<Autopilot>) -> AccelMg,
     ) -> Result<(), String> {
         let mut buf = [0u8; 2 * MAX_PACKET];
         loop {
@@ -269,7 +270,7 @@ impl Screen {
                 }
                 continue;
             }
-            let (keys, pilot) = (self.keys.tilt().reading_mg(), self.autopilot);
+            let (keys, pilot) = (self.keys.tilt(), self.autopilot);
             self.board
                 .frame(|s, a| match (pilot, a.as_mut()) {
                     (true, Some(a)) => a.reading_mg(s.game()),
@@ -352,11 +353,11 @@ impl Screen {
                 }
             }
         }
-        let reading = self.keys.tilt().reading_mg();
+        let reading = self.keys.tilt();
         lines.push(format!(
             "tilt x {:+5} mg z {:+5} mg{}   packets sent {} received {} dropped {}",
-            -reading[0],
-            -reading[2],
+            -reading.x,
+            -reading.z,
             if self.autopilot { " [autopilot]" } else { "" },
             k.sent,
             k.received,

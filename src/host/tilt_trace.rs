@@ -21,6 +21,7 @@ use std::string::String;
 use std::vec::Vec;
 
 use super::excerpt;
+use crate::input::axes::AccelMg;
 
 /// The required header.
 pub const HEADER: &str = "t_s,ax_mg,ay_mg,az_mg";
@@ -30,12 +31,12 @@ pub const HEADER: &str = "t_s,ax_mg,ay_mg,az_mg";
 pub const MAX_READING_MG: f64 = 16_000.0;
 
 /// A flat board's reading.
-pub const FLAT: [i32; 3] = [0, 1000, 0];
+pub const FLAT: AccelMg = AccelMg::LEVEL;
 
 /// A parsed trace.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TiltTrace {
-    samples: Vec<(f64, [i32; 3])>,
+    samples: Vec<(f64, AccelMg)>,
     next: usize,
 }
 
@@ -141,7 +142,7 @@ impl TiltTrace {
                 }
                 mg[i] = v[i + 1].round() as i32;
             }
-            samples.push((t, mg, fields[0]));
+            samples.push((t, AccelMg::from_array(mg), fields[0]));
         }
         if !header {
             return Err(TraceError {
@@ -166,7 +167,7 @@ impl TiltTrace {
     /// The reading in force at `t` seconds: the last sample at or before `t`, or a
     /// flat board before the first one. Calls must come with non-decreasing `t`
     /// (the simulator's frames); an earlier `t` starts the search over.
-    pub(crate) fn reading_at(&mut self, t: f64) -> [i32; 3] {
+    pub(crate) fn reading_at(&mut self, t: f64) -> AccelMg {
         if self.next > 0 && self.samples[self.next - 1].0 > t {
             self.next = 0;
         }
@@ -190,9 +191,9 @@ mod tests {
         let mut t =
             TiltTrace::parse("t_s,ax_mg,ay_mg,az_mg\n0.5,-200,980,0\n1,0,1000,10.4\n").unwrap();
         assert_eq!(t.reading_at(0.0), FLAT);
-        assert_eq!(t.reading_at(0.5), [-200, 980, 0]);
-        assert_eq!(t.reading_at(0.99), [-200, 980, 0]);
-        assert_eq!(t.reading_at(7.0), [0, 1000, 10]);
+        assert_eq!(t.reading_at(0.5), AccelMg::new(-200, 980, 0));
+        assert_eq!(t.reading_at(0.99), AccelMg::new(-200, 980, 0));
+        assert_eq!(t.reading_at(7.0), AccelMg::new(0, 1000, 10));
         assert_eq!(t.reading_at(0.1), FLAT);
     }
 

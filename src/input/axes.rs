@@ -11,9 +11,11 @@
 /// One g in milli-g.
 pub(crate) const ONE_G_MG: i32 = 1000;
 
-/// One accelerometer sample in milli-g (1000 = 1 g): the one tilt type from
-/// the board's sensor (or keys, a phone, a test) through the app's links to
-/// the session.
+/// One accelerometer reading in milli-g (1000 = 1 g), board frame: the one
+/// tilt type from the board's sensor, the keys, a phone, the autopilot, a
+/// trace or a ghost through the app's links, the player and the session into
+/// the tilt filter ([`crate::input::tilt::TiltFilter::push`]), which turns it
+/// into a [`crate::input::tilt::GravityMg`] for the physics.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AccelMg {
@@ -46,8 +48,15 @@ impl AccelMg {
         Self::new(x, y as i32, z)
     }
 
-    /// As the `[x, y, z]` reading the session's tilt path takes.
-    pub const fn reading_mg(self) -> [i32; 3] {
+    /// A reading from its `[x, y, z]` components: for a format's boundary
+    /// (a trace's or a ghost's file, a virtual chip's registers), where the
+    /// axes are read one by one.
+    pub const fn from_array([x, y, z]: [i32; 3]) -> Self {
+        Self::new(x, y, z)
+    }
+
+    /// Its `[x, y, z]` components, for a format's boundary or a per-axis loop.
+    pub const fn to_array(self) -> [i32; 3] {
         [self.x, self.y, self.z]
     }
 

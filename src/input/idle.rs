@@ -20,6 +20,8 @@
 //! toy, and starts the count again from the new reading. Counting in frames,
 //! not reading a clock, keeps it pure; the game's frames are its clock.
 
+use super::axes::AccelMg;
+
 /// When the toy counts as idle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -47,7 +49,7 @@ impl IdleConfig {
 pub struct Idle {
     config: IdleConfig,
     /// The reading at the last activity (`None` before the first reading).
-    anchor: Option<[i32; 3]>,
+    anchor: Option<AccelMg>,
     /// Frames since the last activity.
     still: u32,
 }
@@ -70,10 +72,15 @@ impl Idle {
 
     /// One frame with the tilt reading `mg`: `true` once the toy has been idle
     /// for the timeout (and every frame after, until some activity).
-    pub fn tick(&mut self, mg: [i32; 3]) -> bool {
+    pub fn tick(&mut self, mg: AccelMg) -> bool {
         let moved = match self.anchor {
             None => true,
-            Some(a) => (0..3).any(|i| (mg[i] - a[i]).abs() > self.config.still_mg),
+            Some(a) => {
+                let still = self.config.still_mg;
+                (mg.x - a.x).abs() > still
+                    || (mg.y - a.y).abs() > still
+                    || (mg.z - a.z).abs() > still
+            }
         };
         if moved {
             self.anchor = Some(mg);
@@ -99,7 +106,7 @@ mod tests {
     /// Frames until `tick` first says sleep, feeding `reading(frame)`.
     fn frames_to_sleep(
         idle: &mut Idle,
-        reading: impl Fn(u32) -> [i32; 3],
+        reading: impl Fn(u32) -> AccelMg,
         limit: u32,
     ) -> Option<u32> {
         (0..limit).find(|&f| idle.tick(reading(f)))
@@ -108,11 +115,11 @@ mod tests {
     #[test]
     fn a_still_board_sleeps_after_exactly_two_minutes() {
         let mut idle = Idle::new(CONFIG);
-        let at = frames_to_sleep(&mut idle, |_| [10, 990, -5], 20_000);
+        let at = frames_to_sleep(&mut idle, |_| AccelMg::new(10, 990, -5), 20_000);
         // The first reading is the anchor; 120 s × 128 frames after it.
         assert_eq!(at, Some(120 * 128));
         assert!(
-            idle.tick([10, 990, -5]),
+            idle.tick(AccelMg::new(10, 990, -5)),
             "still asleep-worthy a frame later"
         );
     }
@@ -124,7 +131,7 @@ mod tests {
         // offset drifts by tens of mg with temperature).
         let noise = |f: u32| {
             let n = ((f.wrapping_mul(2_654_435_761) >> 16) % 51) as i32 - 25;
-            [n, 1000 - n / 2, -n]
+            AccelMg::new(n, 1000 - n / 2, -n)
         };
         assert_eq!(frames_to_sleep(&mut idle, noise, 20_000), Some(120 * 128));
     }
@@ -132,10 +139,10 @@ mod tests {
     #[test]
     fn a_tilt_or_a_button_starts_the_count_again() {
         let mut idle = Idle::new(CONFIG);
-        let flat = [0, 1000, 0];
+        let flat = AccelMg::LEVEL;
         assert_eq!(frames_to_sleep(&mut idle, |_| flat, 100 * 128), None);
         // A 5° tilt (87 mg on x) at 100 s: two more minutes from there.
-        let tilted = [87, 996, 0];
+        let tilted = AccelMg::new(87, 996, 0);
         assert_eq!(
             frames_to_sleep(&mut idle, |_| tilted, 20_000),
             Some(120 * 128)
@@ -156,7 +163,7 @@ mod tests {
             timeout_frames: 0,
             still_mg: 0,
         });
-        assert!(!idle.tick([0, 0, 0]));
-        assert!(idle.tick([0, 0, 0]));
+        assert!(!idle.tick(AccelMg::new(0, 0, 0)));
+        assert!(idle.tick(AccelMg::new(0, 0, 0)));
     }
 }

@@ -10,10 +10,11 @@
 //!
 //! # One tilt path, and the stages a source skips
 //!
-//! Every reading is a board-frame reading in mg, and every one reaches the
-//! physics through the game's session and its [`tilt::TiltFilter`]: a sensor's
-//! sample ([`sensor::TiltPipeline::tilt`]),
-//! the keys' tilt, the autopilot's, a trace's and a ghost's. One rule says which
+//! Every reading is an [`axes::AccelMg`] (board frame, mg), and every one
+//! reaches the physics through the game's session and its
+//! [`tilt::TiltFilter`], which makes it a [`tilt::GravityMg`]: a sensor's
+//! sample ([`sensor::TiltPipeline::tilt`]), the keys' tilt, the autopilot's, a
+//! trace's, a ghost's and a race opponent's. One rule says which
 //! readings are believed ([`plausible::Plausibility::judge`]), asked once of each
 //! reading (a sensor's sample by its supervision, which counts a refused one as
 //! a fault; any other on entry to the filter), and no stage clamps: a believed

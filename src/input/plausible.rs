@@ -105,8 +105,8 @@ impl Plausibility {
     ///
     /// Three comparisons per axis and three 32-bit multiplications: no
     /// division, no 64-bit arithmetic, no overflow for any `i32` input.
-    pub const fn judge(&self, reading: [i32; 3]) -> Result<(), TiltError> {
-        let [x, y, z] = reading;
+    pub const fn judge(&self, reading: AccelMg) -> Result<(), TiltError> {
+        let AccelMg { x, y, z } = reading;
         if x == 0 && y == 0 && z == 0 {
             return Err(TiltError::AllZero);
         }
@@ -134,7 +134,7 @@ impl Plausibility {
 
     /// Whether the sample `s` is believed ([`Plausibility::judge`]).
     pub const fn check(&self, s: AccelMg) -> bool {
-        self.judge([s.x, s.y, s.z]).is_ok()
+        self.judge(s).is_ok()
     }
 }
 

@@ -1,5 +1,6 @@
-//! The tilt input path: a board-frame accelerometer sample (milli-g) → the
-//! apparent gravity the physics consumes ([`crate::physics::world::World::set_gravity_mg`]).
+//! The tilt input path: a board-frame reading ([`AccelMg`]) → the apparent
+//! gravity the physics consumes ([`GravityMg`], handed on by
+//! `Game::set_gravity_mg` to [`crate::physics::world::World::set_gravity_mg`]).
 //!
 //! ```text
 //! reading ─▶ [plausibility, on entry] ─▶ stuck check ─▶ low-pass ─▶ − calibration ─▶ [dead zone (x, z), off by default] ─▶ negate
@@ -81,6 +82,42 @@
 
 use super::axes::{AccelMg, Calibration};
 pub use super::plausible::{Plausibility, TiltError, MAX_READING_MG};
+
+/// The apparent gravity the tilt path hands the physics
+/// (`Game::set_gravity_mg`), in milli-g, board frame: **not** a reading but
+/// its negation, after the low-pass, the calibration and the dead zone. A
+/// sensor reads the reaction to gravity ([`AccelMg`]: a level board reads
+/// `(0, +1000, 0)`); the pull on the marble points the other way, down = −y,
+/// so a level board gives [`GravityMg::LEVEL`], `(0, −1000, 0)`. Each axis
+/// is within ±8 000 mg (a believed reading's ±[`MAX_READING_MG`] plus the
+/// largest calibration offset): the physics' largest pull, taken without a
+/// clamp. Only [`TiltFilter`] makes one from readings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GravityMg {
+    /// X component (right), milli-g.
+    pub x: i32,
+    /// Y component (up out of the board), milli-g: about −1000 near level.
+    pub y: i32,
+    /// Z component (towards the player), milli-g.
+    pub z: i32,
+}
+
+impl GravityMg {
+    /// The pull on a level board: 1 g straight down.
+    pub const LEVEL: Self = Self::new(0, -1000, 0);
+
+    /// A pull from its three components (tools and tests that set the
+    /// physics' gravity directly).
+    pub const fn new(x: i32, y: i32, z: i32) -> Self {
+        Self { x, y, z }
+    }
+
+    /// Its `[x, y, z]` components: the vector the physics' world takes.
+    pub const fn to_array(self) -> [i32; 3] {
+        [self.x, self.y, self.z]
+    }
+}
 
 /// Fractional bits of the low-pass state (the state is mg · 2^12).
 ///
@@ -192,7 +229,7 @@ pub struct TiltFilter {
     /// Low-pass state: filtered raw board-frame reading, mg · 2^FRAC_BITS.
     state: [i32; 3],
     primed: bool,
-    last_raw: [i32; 3],
+    last_raw: AccelMg,
     /// How many times `last_raw` came in a row (0: no sample yet).
     repeats: u16,
 }
@@ -205,7 +242,7 @@ impl TiltFilter {
             calibration: clamp_calibration(config.calibration),
             state: [0, 1000 << FRAC_BITS, 0],
             primed: false,
-            last_raw: [0; 3],
+            last_raw: AccelMg::new(0, 0, 0),
             repeats: 0,
         }
     }
@@ -215,9 +252,9 @@ impl TiltFilter {
         &self.config
     }
 
-    /// Feeds one raw board-frame reading (mg) and returns the new gravity
-    /// (mg, physics convention: down = −y, each axis within ±8 000: the
-    /// physics' `MAX_MG`).
+    /// Feeds one raw board-frame reading and returns the new gravity
+    /// ([`GravityMg`]: down = −y, each axis within ±8 000 mg, the physics'
+    /// `MAX_MG`).
     ///
     /// A rejected reading returns why and leaves the filter — and so
     /// [`TiltFilter::gravity_mg`], the last good gravity — unchanged (only the
@@ -225,11 +262,12 @@ impl TiltFilter {
     /// only when [`TiltConfig::plausibility`] judges on entry):
     /// [`TiltError::AllZero`], [`TiltError::OutOfRange`],
     /// [`TiltError::Magnitude`], [`TiltError::Stuck`].
-    pub fn push(&mut self, reading_mg: [i32; 3]) -> Result<[i32; 3], TiltError> {
-        let stuck = self.note_repeat(reading_mg);
+    pub fn push(&mut self, reading: AccelMg) -> Result<GravityMg, TiltError> {
+        let stuck = self.note_repeat(reading);
         if let Some(bounds) = self.config.plausibility {
-            bounds.judge(reading_mg)?;
+            bounds.judge(reading)?;
         }
+        let reading_mg = reading.to_array();
         if stuck {
             return Err(TiltError::Stuck);
         }
@@ -247,34 +285,30 @@ impl TiltFilter {
         Ok(self.gravity_mg())
     }
 
-    /// [`TiltFilter::push`] for a [`crate::input::sensor`] sample.
-    pub fn push_sample(&mut self, s: AccelMg) -> Result<[i32; 3], TiltError> {
-        self.push([s.x, s.y, s.z])
-    }
-
-    /// The gravity to hand to `World::set_gravity_mg` (mg, tile frame,
+    /// The gravity to hand to `Game::set_gravity_mg` (board frame,
     /// down = −y): the negated filtered reading minus the calibration, with
     /// the dead zone (if any) on `x` and `z`; each axis within ±8 000 (a
     /// believed reading's ±[`MAX_READING_MG`] plus the largest calibration
     /// offset). Level, `(0, −1000, 0)`, until the first good sample.
-    pub fn gravity_mg(&self) -> [i32; 3] {
+    pub fn gravity_mg(&self) -> GravityMg {
         if !self.primed {
-            return [0, -1000, 0];
+            return GravityMg::LEVEL;
         }
         let dz = (min_u32(self.config.dead_zone_mg, MAX_READING_MG) as i32) << FRAC_BITS;
         let c = self.calibration;
         // |state| < 2^26, |offset| ≤ 500 · 2^12: no overflow below.
         let x = dead_zone(self.state[0] - (c.offset_x << FRAC_BITS), dz);
         let z = dead_zone(self.state[2] - (c.offset_z << FRAC_BITS), dz);
-        [x, self.state[1], z].map(|v| -round_fx(v))
+        let [x, y, z] = [x, self.state[1], z].map(|v| -round_fx(v));
+        GravityMg::new(x, y, z)
     }
 
     /// The low-pass output before calibration, dead zone and negation: the
     /// filtered raw board-frame reading, rounded to mg (`(0, 1000, 0)` before
     /// the first good sample). `f.calibrate(f.filtered_reading_mg())` levels
     /// the current, noise-free orientation.
-    pub fn filtered_reading_mg(&self) -> [i32; 3] {
-        self.state.map(round_fx)
+    pub fn filtered_reading_mg(&self) -> AccelMg {
+        AccelMg::from_array(self.state.map(round_fx))
     }
 
     /// Whether the last reading was (part of) a stuck run, i.e. whether the
@@ -284,7 +318,7 @@ impl TiltFilter {
         n >= 2 && self.repeats >= n
     }
 
-    /// Makes the orientation that reads `current_reading_mg` (raw board frame)
+    /// Makes the orientation that reads `current_reading` (raw board frame)
     /// "level": its in-plane components (`x`, `z`), each clamped to
     /// ±[`Calibration::MAX_OFFSET_MG`] (about 30°), become the offset
     /// subtracted from later filtered readings — exactly
@@ -300,11 +334,10 @@ impl TiltFilter {
     /// ([`Plausibility::DEFAULT`]) when the readings come judged. Stuck runs
     /// are not checked here: pass a reading the filter accepted, or
     /// [`TiltFilter::filtered_reading_mg`].
-    pub fn calibrate(&mut self, current_reading_mg: [i32; 3]) -> Result<Calibration, TiltError> {
+    pub fn calibrate(&mut self, current_reading: AccelMg) -> Result<Calibration, TiltError> {
         let bounds = self.config.plausibility.unwrap_or(Plausibility::DEFAULT);
-        bounds.judge(current_reading_mg)?;
-        let [x, y, z] = current_reading_mg;
-        self.calibration = Calibration::from_reference(AccelMg::new(x, y, z));
+        bounds.judge(current_reading)?;
+        self.calibration = Calibration::from_reference(current_reading);
         Ok(self.calibration)
     }
 
@@ -330,7 +363,7 @@ impl TiltFilter {
 
     /// Counts `raw` in the run of identical readings; `true` if the run is
     /// now long enough to call the sensor stuck.
-    fn note_repeat(&mut self, raw: [i32; 3]) -> bool {
+    fn note_repeat(&mut self, raw: AccelMg) -> bool {
         if self.repeats > 0 && raw == self.last_raw {
             self.repeats = self.repeats.saturating_add(1);
         } else {

@@ -34,6 +34,7 @@ use crate::game::autopilot::Autopilot;
 use crate::game::level::LevelView;
 use crate::game::rules::{Game, GameConfig, Phase};
 use crate::game::session::Session;
+use crate::input::axes::AccelMg;
 use crate::input::event::{Command, Fault, InputEvent};
 use crate::input::sensor::Calibration;
 use crate::input::tilt::TiltConfig;
@@ -240,24 +241,24 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     }
 
     /// The reading for the next frame: the autopilot's when it plays, else
-    /// `tilt_mg` (the accelerometer's or the keys').
-    pub fn reading(&mut self, tilt_mg: [i32; 3]) -> [i32; 3] {
+    /// `tilt` (the accelerometer's or the keys').
+    pub fn reading(&mut self, tilt: AccelMg) -> AccelMg {
         match &mut self.autopilot {
             // `PILOT` again, though the pilot is never set without it: the
             // compiler cannot see that, and the constant drops the controller
             // (~2 KB) from a board without it.
             Some(pilot) if PILOT => pilot.reading_mg(self.session.game()),
-            _ => tilt_mg,
+            _ => tilt,
         }
     }
 
     /// Plays one frame (`2^substeps_log2` physics steps) with
-    /// [`Player::reading`]`(tilt_mg)` and returns where the attempt stands. A
+    /// [`Player::reading`]`(tilt)` and returns where the attempt stands. A
     /// finished attempt stays finished (the game does not step any more).
     /// This is the bare step, without the loop's pauses: [`Player::tick`] is
     /// the game loop.
-    pub fn frame(&mut self, tilt_mg: [i32; 3]) -> Phase {
-        let reading = self.reading(tilt_mg);
+    pub fn frame(&mut self, tilt: AccelMg) -> Phase {
+        let reading = self.reading(tilt);
         self.session.frame_in::<EVENTS>(reading)
     }
 
@@ -316,13 +317,13 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         true
     }
 
-    /// One frame of the game loop with the latest tilt reading `tilt_mg`:
+    /// One frame of the game loop with the latest tilt reading `tilt`:
     /// paused while the sensor is down; else a physics frame, or one frame of
     /// a finished attempt's display, after which a won level moves on to the
     /// next and a lost one restarts. `draw` asks for the picture (the
     /// firmware asks only once the display has taken the previous one:
     /// rendering is not free).
-    pub fn tick(&mut self, tilt_mg: [i32; 3], draw: bool) -> Tick<W, H> {
+    pub fn tick(&mut self, tilt: AccelMg, draw: bool) -> Tick<W, H> {
         if self.sensor_down.is_some() {
             let frame = (draw && !self.fault_shown).then(fault_frame);
             self.fault_shown |= frame.is_some();
@@ -340,7 +341,7 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
         let mut sounds = Sounds::NONE;
         let frame = match self.pause {
             None => {
-                let phase = self.frame(tilt_mg);
+                let phase = self.frame(tilt);
                 if cfg!(feature = "sound") {
                     let world = self.session.game_mut().world_mut();
                     let impacts = world.take_impacts();

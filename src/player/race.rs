@@ -9,6 +9,7 @@ use core::num::NonZeroU32;
 use crate::game::endless::{MazeArgs, MazeError, MazeSlot};
 use crate::game::rules::Phase;
 use crate::game::session::Session;
+use crate::input::axes::AccelMg;
 use crate::input::event::Command;
 use crate::input::sensor::Calibration;
 use crate::matrix::Frame;
@@ -169,7 +170,7 @@ impl<
     pub fn frame(
         &mut self,
         command: Option<Command>,
-        reading: impl FnOnce(&Session<'a, S>) -> [i32; 3],
+        reading: impl FnOnce(&Session<'a, S>) -> AccelMg,
     ) -> Result<Option<RoundEvent>, RoundExit> {
         let race = match &mut self.stage {
             Stage::Search(link) => {

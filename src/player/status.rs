@@ -7,6 +7,7 @@ use crate::game::level::MAX_MARBLES;
 #[cfg(feature = "storey-maps")]
 use crate::game::rules::Game;
 use crate::game::rules::Phase;
+use crate::input::axes::AccelMg;
 #[cfg(feature = "storey-maps")]
 use crate::physics::Fx;
 #[cfg(feature = "storey-maps")]
@@ -29,8 +30,8 @@ pub struct Status {
     /// the frames played: a status is copied often, and the v1 has no RAM for
     /// both.
     pub frames: u32,
-    /// The reading fed to the game last (milli-g, board frame).
-    pub reading: [i32; 3],
+    /// The reading fed to the game last.
+    pub reading: AccelMg,
     /// Whether the autopilot is playing.
     pub autopilot: bool,
     /// Whether the game is paused because the sensor is down.
@@ -113,7 +114,7 @@ impl Status {
         level: 0,
         phase: Phase::Playing,
         frames: 0,
-        reading: [0, 1000, 0],
+        reading: AccelMg::LEVEL,
         autopilot: false,
         sensor_down: false,
         muted: false,

@@ -4,6 +4,7 @@
 use crate::game::level::LevelView;
 use crate::game::rules::Phase;
 use crate::game::session::Session;
+use crate::input::axes::AccelMg;
 use crate::physics::world::SetupError;
 use crate::physics::Scalar;
 
@@ -87,7 +88,7 @@ impl<'a, S: Scalar, const O: usize, const I: usize, const E: usize> Race<'a, S, 
     /// (asked only then: an autopilot is asked once a frame played); then the
     /// opponent's replay catches up with what has arrived (at most
     /// [`CATCH_UP`] frames).
-    pub fn frame(&mut self, reading: impl FnOnce(&Session<'a, S>) -> [i32; 3]) -> Phase {
+    pub fn frame(&mut self, reading: impl FnOnce(&Session<'a, S>) -> AccelMg) -> Phase {
         self.link.tick();
         if self.link.stage() == LinkStage::Racing && self.own.game().phase() == Phase::Playing {
             let reading = reading(&self.own);

@@ -14,6 +14,7 @@ use super::stream::{
     Inbox, Outbox, Overflow, Taken, EARLY_BLOCKS, INBOX_READINGS, LEAN_EARLY_BLOCKS,
     LEAN_INBOX_READINGS, LEAN_OUT_BLOCKS, OUT_BLOCKS,
 };
+use crate::input::axes::AccelMg;
 use crate::input::sensor::Calibration;
 
 /// Frames between two hellos while searching (4 a second).
@@ -304,7 +305,7 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
 
     /// This board's next reading of its run. After an [`Overflow`] (the
     /// opponent unheard while the outbox filled) the run cannot reach it.
-    pub fn push_own(&mut self, reading: [i32; 3]) -> Result<(), Overflow> {
+    pub fn push_own(&mut self, reading: AccelMg) -> Result<(), Overflow> {
         self.out.push(reading)
     }
 
@@ -314,7 +315,7 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
     }
 
     /// The opponent's next reading, in order.
-    pub(crate) fn pop_opponent(&mut self) -> Option<[i32; 3]> {
+    pub(crate) fn pop_opponent(&mut self) -> Option<AccelMg> {
         self.inbox.pop()
     }
 

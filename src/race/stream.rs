@@ -17,6 +17,7 @@ use heapless::{Deque, Vec};
 
 use super::packet::{End, Writer, BLOCK_BYTES};
 use crate::game::ghost::{Readings, TokenWriter};
+use crate::input::axes::AccelMg;
 
 /// The most readings in a block: a block waits at most this many frames
 /// (1/8 s) before it can be sent.
@@ -41,7 +42,7 @@ pub const LEAN_INBOX_READINGS: usize = 96;
 /// [`EARLY_BLOCKS`] on such a board.
 pub const LEAN_EARLY_BLOCKS: usize = 8;
 /// The reading before a run's first frame: a flat board (the ghost's).
-pub const FLAT: [i32; 3] = [0, 1000, 0];
+pub const FLAT: AccelMg = AccelMg::LEVEL;
 
 /// A block of this board's run.
 #[derive(Clone, Debug)]
@@ -59,9 +60,9 @@ pub struct Outbox<const N: usize = OUT_BLOCKS> {
     /// Cut and not acknowledged, oldest first.
     blocks: Deque<Block, N>,
     /// Readings not cut into a block yet.
-    pending: Vec<[i32; 3], BLOCK_FRAMES>,
+    pending: Vec<AccelMg, BLOCK_FRAMES>,
     /// The reading before `pending`'s first.
-    before: [i32; 3],
+    before: AccelMg,
     /// Frames pushed.
     frames: u32,
     /// Frames the opponent holds.
@@ -138,7 +139,7 @@ impl<const N: usize> Outbox<N> {
 
     /// Adds the next frame's reading. After an [`Overflow`] the run can no
     /// longer reach the opponent whole: every later push fails too.
-    pub fn push(&mut self, reading: [i32; 3]) -> Result<(), Overflow> {
+    pub fn push(&mut self, reading: AccelMg) -> Result<(), Overflow> {
         if self.overflowed || self.end.is_some() {
             return Err(Overflow);
         }
@@ -205,7 +206,7 @@ impl<const N: usize> Outbox<N> {
         block.frames = taken as u8;
         block.len = len as u8;
         self.before = self.pending[taken - 1];
-        let rest: Vec<[i32; 3], BLOCK_FRAMES> = self.pending[taken..].iter().copied().collect();
+        let rest: Vec<AccelMg, BLOCK_FRAMES> = self.pending[taken..].iter().copied().collect();
         self.pending = rest;
         let _ = self.blocks.push_back(block);
         Ok(())
@@ -285,13 +286,13 @@ pub enum Taken {
 /// and [`EARLY_BLOCKS`] unless the board has less RAM to give).
 #[derive(Clone, Debug)]
 pub struct Inbox<const R: usize = INBOX_READINGS, const E: usize = EARLY_BLOCKS> {
-    readings: Deque<[i32; 3], R>,
+    readings: Deque<AccelMg, R>,
     /// Blocks after a gap.
     early: Vec<Block, E>,
     /// Frames taken (in order).
     have: u32,
     /// The reading of frame `have - 1` (the flat board before the first).
-    last: [i32; 3],
+    last: AccelMg,
     end: Option<End>,
 }
 
@@ -391,7 +392,7 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
 
     /// Decodes the block that starts at `have`.
     fn next(&mut self, tokens: &[u8]) -> Taken {
-        let mut block: Vec<[i32; 3], BLOCK_FRAMES> = Vec::new();
+        let mut block: Vec<AccelMg, BLOCK_FRAMES> = Vec::new();
         for r in Readings::from_tokens(tokens, self.last) {
             match r {
                 Ok(r) if block.push(r).is_ok() => {}
@@ -430,7 +431,7 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
     }
 
     /// The next reading for the replay.
-    pub fn pop(&mut self) -> Option<[i32; 3]> {
+    pub fn pop(&mut self) -> Option<AccelMg> {
         self.readings.pop_front()
     }
 }

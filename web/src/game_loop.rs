@@ -68,7 +68,7 @@ pub(crate) struct App {
     /// Where that list comes from.
     pub(crate) source: Source,
     /// The page's tilt, as the accelerometer reading the player is fed.
-    pub(crate) reading: [i32; 3],
+    pub(crate) reading: AccelMg,
     /// The matrix as the last frame drew it, row by row (brightness 0..=15).
     pub(crate) led: [u8; WIDTH * HEIGHT],
     pub(crate) finished: Finished,
@@ -89,7 +89,7 @@ impl App {
             player,
             levels: &LEVELS,
             source: Source::Builtin,
-            reading: AccelMg::LEVEL.reading_mg(),
+            reading: AccelMg::LEVEL,
             led: [0; WIDTH * HEIGHT],
             finished: Finished {
                 count: 0,
@@ -277,20 +277,20 @@ pub extern "C" fn ticks(n: u32, stop_on_finish: u32) -> u32 {
 #[no_mangle]
 pub extern "C" fn set_tilt(right_mg: i32, up_mg: i32) {
     with_app((), |app| {
-        app.reading = AccelMg::from_xz(right_mg.saturating_neg(), up_mg).reading_mg();
+        app.reading = AccelMg::from_xz(right_mg.saturating_neg(), up_mg);
     })
 }
 
 /// The reading fed to the game last, x (mg, board frame).
 #[no_mangle]
 pub extern "C" fn reading_x() -> i32 {
-    with_app(0, |app| app.player.reading()[0])
+    with_app(0, |app| app.player.reading().x)
 }
 
 /// The reading fed to the game last, z (mg, board frame).
 #[no_mangle]
 pub extern "C" fn reading_z() -> i32 {
-    with_app(0, |app| app.player.reading()[2])
+    with_app(0, |app| app.player.reading().z)
 }
 
 /// Plays built-in level `index` from its start; 1 on success.

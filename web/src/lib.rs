@@ -87,6 +87,7 @@ use marble_rolling::board::microbit::{HEIGHT, WIDTH};
 use marble_rolling::game::level::LevelView;
 use marble_rolling::game::rules::Game;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::physics::Fx;
 use marble_rolling::player::{Player, Tick};
 
@@ -127,7 +128,7 @@ impl AnyPlayer {
     pub(crate) fn events(&self) -> bool {
         matches!(self, AnyPlayer::Events(_))
     }
-    pub(crate) fn tick(&mut self, reading: [i32; 3]) -> Tick<WIDTH, HEIGHT> {
+    pub(crate) fn tick(&mut self, reading: AccelMg) -> Tick<WIDTH, HEIGHT> {
         each!(self, p => p.tick(reading, true))
     }
     pub(crate) fn game(&self) -> &Game<'static, Fx> {
@@ -142,7 +143,7 @@ impl AnyPlayer {
     pub(crate) fn state_hash(&self) -> u64 {
         self.session().state_hash()
     }
-    pub(crate) fn reading(&self) -> [i32; 3] {
+    pub(crate) fn reading(&self) -> AccelMg {
         each!(self, p => p.session().reading())
     }
     pub(crate) fn autopilot(&self) -> bool {

@@ -24,8 +24,6 @@ use marble_rolling::race::{Status, Verdict, MAX_PACKET};
 
 use crate::Single;
 
-/// A flat board's reading.
-const FLAT: [i32; 3] = [0, 1000, 0];
 /// The race's picture: 11 × 11, a 5-cell maze whole.
 pub const PICTURE: usize = 11;
 const WORDS: usize = MAZE_REACH.words();
@@ -136,10 +134,10 @@ pub extern "C" fn race_tick(right_mg: i32, up_mg: i32, command: u32) -> u32 {
     };
     with_race(0, |race| {
         if race.exit.is_none() {
-            let tilt = AccelMg::from_xz(right_mg.saturating_neg(), up_mg).reading_mg();
+            let tilt = AccelMg::from_xz(right_mg.saturating_neg(), up_mg);
             let (autopilot, pilot) = (race.autopilot, &mut race.pilot);
             let frame = race.round.frame(command, |s| match autopilot {
-                Some(looks) if s.game().frames() < looks => FLAT,
+                Some(looks) if s.game().frames() < looks => AccelMg::LEVEL,
                 Some(_) => pilot
                     .get_or_insert_with(|| Autopilot::new(s.game().level()))
                     .reading_mg(s.game()),

@@ -250,9 +250,7 @@ async fn run_self_test() {
                 return;
             }
         }
-        LINKS
-            .frames
-            .signal(test.next_frame(LINKS.tilt.get().reading_mg()));
+        LINKS.frames.signal(test.next_frame(LINKS.tilt.get()));
     }
 }
 

@@ -27,6 +27,7 @@ use marble_rolling::board::qemu::{HEIGHT, WIDTH};
 use marble_rolling::game::autopilot::Autopilot;
 use marble_rolling::game::level::parse;
 use marble_rolling::game::rules::Phase;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::input::sensor::Calibration;
 use marble_rolling::race::wire::{self, Unframer, MAX_FRAME};
 use marble_rolling::race::{self, MazeSpec, Race, RaceLink, Status, Verdict, MAX_PACKET};
@@ -240,7 +241,7 @@ fn main() -> ! {
         let looks = a.looks;
         race.frame(|s| {
             if s.game().frames() < looks {
-                [0, 1000, 0]
+                AccelMg::LEVEL
             } else {
                 autopilot.reading_mg(s.game())
             }

@@ -169,7 +169,7 @@ impl Script {
             }
             self.player.handle(event);
         }
-        let reading = self.links.tilt.get().reading_mg();
+        let reading = self.links.tilt.get();
         let before = (self.frames(), self.hash());
         let draw = !self.links.frames.signaled();
         let tick = self.player.tick(reading, draw);

@@ -44,6 +44,7 @@ use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES}
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
+use marble_rolling::input::axes::AccelMg;
 use marble_rolling::matrix::{Frame, OnTimeIntegrator, Scanner};
 use marble_rolling::player::Player;
 use marble_rolling::records::{Ghosts, Records};
@@ -413,7 +414,7 @@ fn profile(mazes: &mut Mazes) {
         };
         let mut costs = Costs::default();
         while costs.frames < PROFILE_FRAMES {
-            let (reading, pilot) = count_instructions(|| player.reading([0, 1000, 0]));
+            let (reading, pilot) = count_instructions(|| player.reading(AccelMg::LEVEL));
             let (phase, frame) =
                 count_instructions(|| player.session_mut().frame_in::<EVENTS>(reading));
             let (_, render) = count_instructions(|| player.render());
@@ -444,7 +445,7 @@ fn profile(mazes: &mut Mazes) {
         };
         let mut costs = Costs::default();
         while costs.frames < PROFILE_FRAMES {
-            let reading = player.reading([0, 1000, 0]);
+            let reading = player.reading(AccelMg::LEVEL);
             let (phase, frame) =
                 count_instructions(|| player.session_mut().frame_in::<EVENTS>(reading));
             costs.add(0, frame, 0);

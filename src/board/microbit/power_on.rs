@@ -30,6 +30,7 @@
 //! and so does doing nothing for [`CONFIRM_TIMEOUT_SAMPLES`] (a board that
 //! starts with both buttons stuck down never loses its records).
 
+use crate::input::axes::AccelMg;
 use crate::input::buttons::{ButtonConfig, ButtonEvent, Buttons};
 use crate::input::event::{Command, InputEvent};
 use crate::matrix::{Brightness, Frame, MAX_BRIGHTNESS};
@@ -123,10 +124,10 @@ pub const LEVEL_FRAMES: u32 = 32;
 /// Milli-g of tilt per pixel the dot moves (about 17° to the edge).
 pub const DOT_MG_PER_PIXEL: i32 = 150;
 
-/// Frame `n` of the self-test (see the module doc), with `reading_mg` the
-/// latest accelerometer reading in the board frame (for the dot; `None`
-/// while the sensor is down: the dot is then not shown).
-pub fn self_test_frame(n: u32, reading_mg: Option<[i32; 3]>) -> Frame<5, 5> {
+/// Frame `n` of the self-test (see the module doc), with `reading` the
+/// latest accelerometer reading (for the dot; `None` while the sensor is
+/// down: the dot is then not shown).
+pub fn self_test_frame(n: u32, reading: Option<AccelMg>) -> Frame<5, 5> {
     let mut frame = Frame::new();
     let sweep = 25 * SWEEP_FRAMES;
     if n < sweep {
@@ -138,7 +139,7 @@ pub fn self_test_frame(n: u32, reading_mg: Option<[i32; 3]>) -> Frame<5, 5> {
     if level <= u32::from(MAX_BRIGHTNESS) {
         return Frame::filled(level as Brightness);
     }
-    if let Some([x, _, z]) = reading_mg {
+    if let Some(AccelMg { x, z, .. }) = reading {
         let (col, row) = dot(x, z);
         frame.set(col, row, MAX_BRIGHTNESS);
     }
@@ -182,10 +183,10 @@ impl SelfTest {
         false
     }
 
-    /// The next frame ([`self_test_frame`]), the dot from `reading_mg`, the
-    /// latest reading in the board frame, while the sensor is up.
-    pub fn next_frame(&mut self, reading_mg: [i32; 3]) -> Frame<5, 5> {
-        let frame = self_test_frame(self.frame, self.sensor_up.then_some(reading_mg));
+    /// The next frame ([`self_test_frame`]), the dot from `reading`, the
+    /// latest reading, while the sensor is up.
+    pub fn next_frame(&mut self, reading: AccelMg) -> Frame<5, 5> {
+        let frame = self_test_frame(self.frame, self.sensor_up.then_some(reading));
         self.frame = self.frame.saturating_add(1);
         frame
     }

@@ -58,6 +58,7 @@
 use super::accel::{nxp, Accelerometer};
 #[cfg(doc)]
 use crate::board::virtual_lsm303agr::{ChipControl, InjectedFault};
+use crate::input::axes::AccelMg;
 
 /// The NXP chips' placement on the v1 (both sit on the back of the board,
 /// the same way round): for chip axis X, Y, Z, the board axis it points
@@ -97,7 +98,7 @@ pub struct VirtualNxp {
     next_due_us: u64,
     /// Bit per axis: MSB read since the last sample.
     msb_read: u8,
-    tilt_mg: [i32; 3],
+    tilt: AccelMg,
     frozen: bool,
     garbage: bool,
     rng: u32,
@@ -121,7 +122,7 @@ impl VirtualNxp {
             now_us: 0,
             next_due_us: 0,
             msb_read: 0,
-            tilt_mg: [0, 1000, 0],
+            tilt: AccelMg::LEVEL,
             frozen: false,
             garbage: false,
             rng: 0x2545_f491,
@@ -241,9 +242,9 @@ impl VirtualNxp {
         (u8::from(self.fifo_overflow) << 7) | self.fifo_len as u8
     }
 
-    /// Sets the tilt (board frame, milli-g) the next samples take.
-    pub(crate) fn set_tilt_mg(&mut self, tilt_mg: [i32; 3]) {
-        self.tilt_mg = tilt_mg;
+    /// Sets the tilt (a board-frame reading) the next samples take.
+    pub(crate) fn set_tilt(&mut self, tilt: AccelMg) {
+        self.tilt = tilt;
     }
 
     /// Frozen (no new samples) or garbage (implausible samples).
@@ -299,7 +300,7 @@ impl VirtualNxp {
                     magnitude
                 }
             } else {
-                let mg = i64::from(sign) * i64::from(self.tilt_mg[board]);
+                let mg = i64::from(sign) * i64::from(self.tilt.to_array()[board]);
                 let scaled = mg * counts_per_g;
                 let rounded = if scaled >= 0 {
                     (scaled + 500) / 1000

@@ -11,6 +11,7 @@ use crate::board::i2c::ClearBus;
 use crate::board::virtual_lsm303agr::{
     ChipControl, InjectedFault, SampleSource, VirtualLsm303agr, MICROBIT_V2,
 };
+use crate::input::axes::AccelMg;
 
 /// The accelerometer a virtual v1 board carries.
 #[derive(Clone, Debug)]
@@ -57,19 +58,19 @@ impl VirtualChip {
         }
     }
 
-    fn feed(&mut self, tilt_mg: [i32; 3], fault: InjectedFault, now_us: u64) {
+    fn feed(&mut self, tilt: AccelMg, fault: InjectedFault, now_us: u64) {
         let (frozen, garbage) = (
             fault == InjectedFault::FrozenData,
             fault == InjectedFault::Garbage,
         );
         match self {
             VirtualChip::Nxp(chip) => {
-                chip.set_tilt_mg(tilt_mg);
+                chip.set_tilt(tilt);
                 chip.set_faults(frozen, garbage);
                 chip.advance_to(now_us);
             }
             VirtualChip::Lsm303agr(chip) => {
-                chip.set_tilt_mg(tilt_mg);
+                chip.set_tilt(tilt);
                 chip.set_source(if frozen {
                     SampleSource::Frozen
                 } else if garbage {
@@ -190,11 +191,8 @@ impl<'a, C: Fn() -> u64> VirtualTwi<'a, C> {
             self.resets_seen = requests;
             self.chip.power_on_reset();
         }
-        self.chip.feed(
-            self.control.tilt().reading_mg(),
-            fault,
-            (self.now_us)() + self.paused_us,
-        );
+        self.chip
+            .feed(self.control.tilt(), fault, (self.now_us)() + self.paused_us);
         if fault == InjectedFault::StuckBus {
             self.stuck = true;
         }

@@ -35,6 +35,7 @@ use super::{HEIGHT, WIDTH};
 use crate::game::endless::{MazeArgs, MazeSlot};
 use crate::game::level::LevelView;
 use crate::game::levels::LEVELS;
+use crate::input::axes::AccelMg;
 use crate::matrix::output::Console;
 use crate::matrix::{Brightness, Frame};
 use crate::player::Status;
@@ -169,7 +170,7 @@ pub fn draw<C: Console>(
         out.0.write(b"\x1b[0m\x1b[K\r\n");
     }
     let tenths = status.frames * 10 / FRAME_HZ.max(1);
-    let [x, _, z] = status.reading;
+    let AccelMg { x, z, .. } = status.reading;
     let number = usize::from(status.level) + 1;
     // Past the built-in levels, the endless run's generated mazes.
     let _ = match (LEVELS.get(usize::from(status.level)), maze) {

@@ -253,7 +253,7 @@ impl<'a, C: FnMut() -> u64, R: Ram> VirtualTwim<'a, C, R> {
             self.chip.power_on_reset();
             self.control.count_reset();
         }
-        self.chip.set_tilt_mg(self.control.tilt().reading_mg());
+        self.chip.set_tilt(self.control.tilt());
         self.chip.set_source(match self.control.fault() {
             InjectedFault::FrozenData => SampleSource::Frozen,
             InjectedFault::Garbage => SampleSource::Garbage,

@@ -2,7 +2,7 @@
 //! virtual chips turn a board-frame tilt into their raw axes with it, apart
 //! from the firmware's axis tables, so a sign error in either shows.
 
-use crate::input::sensor::{Axis, AxisMap, AxisSource};
+use crate::input::sensor::{AccelMg, Axis, AxisMap, AxisSource};
 
 /// Where a chip's axes point on the board: for each chip axis, the board axis
 /// (`x` right, `y` up out of the LEDs, `z` towards the player) it lies along,
@@ -45,8 +45,10 @@ impl Placement {
         }
     }
 
-    /// A board-frame reading in the chip's axes.
-    pub const fn raw(&self, board: [i32; 3]) -> [i32; 3] {
+    /// A board-frame reading in the chip's axes: the values its registers
+    /// hold, x, y, z.
+    pub const fn raw(&self, board: AccelMg) -> [i32; 3] {
+        let board = board.to_array();
         let chip = [self.x, self.y, self.z];
         let mut raw = [0i32; 3];
         let mut i = 0;
@@ -81,9 +83,10 @@ pub const MICROBIT_V2: Placement = Placement {
     z: AxisSource::neg(Axis::Y),
 };
 
-/// A board-frame reading expressed in the chip's axes: the inverse of `map`
-/// (which gives each board axis from a sensor axis and a sign).
-pub const fn to_sensor_frame(map: &AxisMap, board: [i32; 3]) -> [i32; 3] {
+/// A board-frame reading expressed in the chip's axes (x, y, z): the inverse
+/// of `map` (which gives each board axis from a sensor axis and a sign).
+pub const fn to_sensor_frame(map: &AxisMap, board: AccelMg) -> [i32; 3] {
+    let board = board.to_array();
     let mut raw = [0i32; 3];
     let sources = [map.x, map.y, map.z];
     let mut i = 0;

@@ -32,6 +32,7 @@ use super::planning::{connected, is_goal, is_pit, solid, Dir, STOREYS};
 use super::Autopilot;
 use crate::game::level::LevelView;
 use crate::game::rules::Game;
+use crate::input::axes::AccelMg;
 use crate::physics::geometry::grid::Tiles;
 use crate::physics::geometry::tiles::TileLayout;
 use crate::physics::world::{Marble, PhysicsSpec};
@@ -86,16 +87,14 @@ impl Autopilot {
     ///
     /// Call it once per frame (it keeps the last tilt and follows the marble's
     /// progress), with an attempt at the level the autopilot was made for.
-    pub fn reading_mg<S: Scalar>(&mut self, game: &Game<'_, S>) -> [i32; 3] {
+    pub fn reading_mg<S: Scalar>(&mut self, game: &Game<'_, S>) -> AccelMg {
         let [gx, gz] = self.gravity_in_plane(game);
         let gx = gx.clamp(self.last[0] as i32 - SLEW_MG, self.last[0] as i32 + SLEW_MG);
         let gz = gz.clamp(self.last[1] as i32 - SLEW_MG, self.last[1] as i32 + SLEW_MG);
         self.last = [gx as i16, gz as i16];
-        let (x, z) = (-gx as i64, -gz as i64);
-        // The rest of 1 g on the board's normal (|x|, |z| ≤ 450 mg: positive, and
-        // below 2^20, so u32 holds it: core's exact root, no 64-bit division).
-        let y = ((1_000_000 - x * x - z * z).clamp(0, 1_000_000) as u32).isqrt();
-        [x as i32, y as i32, z as i32]
+        // The rest of 1 g on the board's normal, as the keys' tilt makes it
+        // (|x|, |z| ≤ 450 mg: within the 1 g its clamp allows).
+        AccelMg::from_xz(-gx, -gz)
     }
 
     /// The in-plane gravity `[x', z']` (milli-g) the autopilot wants.

@@ -1,9 +1,10 @@
 //! The autopilot: tilts the board to roll a marble along the shortest cell path to
 //! a goal (demos, `cargo sim --autopilot`, the QEMU demo, end-to-end tests).
 //!
-//! It produces what a human produces — an accelerometer **reading** (board frame,
-//! milli-g; a flat board reads `(0, +1000, 0)`) — so the caller runs it through the
-//! same tilt path as a real sensor:
+//! It produces what a human produces — an accelerometer **reading**
+//! ([`AccelMg`](crate::input::axes::AccelMg), board frame; a flat board reads
+//! `(0, +1000, 0)`) — so the caller runs it through the same tilt path as a real
+//! sensor:
 //!
 //! ```text
 //! let r = autopilot.reading_mg(&game);

@@ -2,6 +2,7 @@
 //! stretch at a time on a board), and played beside the live attempt on the
 //! level clock (see the parent module's "Racing from the first tilt").
 
+use crate::input::axes::AccelMg;
 use crate::input::tilt::TiltConfig;
 use crate::physics::world::SetupError;
 use crate::physics::{Fx, Scalar};
@@ -26,7 +27,7 @@ pub fn replay<S: Scalar>(
 fn replay_by<'a, S: Scalar>(
     session: &mut Session<'a, S>,
     ghost: &Ghost<'_>,
-    mut frame: impl FnMut(&mut Session<'a, S>, [i32; 3]) -> Phase,
+    mut frame: impl FnMut(&mut Session<'a, S>, AccelMg) -> Phase,
 ) -> Result<(Phase, bool), GhostError> {
     session.tilt_mut().set_calibration(ghost.calibration);
     let mut phase = session.game().phase();
