@@ -9,6 +9,7 @@ use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::boards::MICROBIT_V1;
 use crate::demo;
 use crate::error::{say, Failure};
 use crate::hex::{self, Image};
@@ -293,8 +294,8 @@ fn demo_from_image(
     levels: Option<&[(String, Vec<u8>)]>,
 ) -> Result<(), String> {
     let fail = |e: Failure| e.message;
-    let limit = runner::timeout(600).map_err(fail)?;
-    let tools = setup::m4_qemu().map_err(fail)?;
+    let limit = runner::timeout(MICROBIT_V1.game.timeout).map_err(fail)?;
+    let tools = MICROBIT_V1.game.qemu_tools().map_err(fail)?;
     let log_path = target.join("hex-check/v1-demo.log");
     let file =
         File::create(&log_path).map_err(|e| format!("cannot write {}: {e}", log_path.display()))?;

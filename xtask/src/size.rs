@@ -25,10 +25,8 @@ use object::elf::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS};
 use object::read::elf::{FileHeader, SectionHeader};
 use object::{elf, Endianness, FileKind, Object, ObjectSection, ObjectSymbol};
 
+use crate::boards::MICROBIT;
 use crate::error::{say, Failure, Outcome};
-use crate::firmware::{self, Artifact};
-use crate::setup::{self, M4};
-use crate::workspace;
 
 /// What the accounting needs of a section header.
 #[derive(Clone, Copy, Debug)]
@@ -208,17 +206,13 @@ pub fn table(size: &Berkeley, flash_budget: u64, ram_budget: u64) -> String {
 /// `cargo xtask size-report [--no-build] [ELF]`: an explicit ELF is measured
 /// as it is; otherwise the micro:bit firmware, built first unless `--no-build`.
 pub fn run(no_build: bool, elf: Option<PathBuf>) -> Outcome {
-    let flash_budget = workspace::env_number("FLASH_BUDGET", 131_072)?;
-    let ram_budget = workspace::env_number("RAM_BUDGET", 16384)?;
+    let flash_budget = MICROBIT.budget(&MICROBIT.budgets.flash)?;
+    let ram_budget = MICROBIT.budget(&MICROBIT.budgets.ram)?;
     let explicit = elf.is_some();
     let elf = match elf {
         Some(elf) => elf,
-        None if no_build => workspace::target_dir()?.join(M4).join("release/microbit"),
-        None => {
-            setup::target(M4)?;
-            setup::flip_link()?;
-            firmware::build(&Artifact::firmware("marble-microbit", "microbit", M4))?
-        }
+        None if no_build => MICROBIT.game.built()?,
+        None => MICROBIT.game.build()?,
     };
     if !elf.is_file() {
         return Err(Failure::new(format!(

@@ -24,7 +24,7 @@ pub fn check_ghosts() -> Outcome {
     for run in 1..=2 {
         let log = target.join(format!("check-ghosts-{run}.log"));
         say!("ghosts run {run}: cargo qemu -- --demo --ghosts…");
-        let status = run_demo(&log, &["--demo", "--ghosts"])?;
+        let status = run_demo(&crate::boards::QEMU, &log, &["--demo", "--ghosts"])?;
         let text = std::fs::read(&log)
             .map_err(|e| Failure::new(format!("cannot read {}: {e}", log.display())))?;
         let text = strip_colours(&String::from_utf8_lossy(&text));

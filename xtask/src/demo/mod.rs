@@ -26,10 +26,9 @@ pub use ghosts::check_ghosts;
 pub use log::{centi, parse_levels, parse_stepping, strip_colours, Level};
 pub use sim::{build_sim, compare_levels, simulate, verdict, Verdict};
 
+use crate::boards::{Board, QEMU};
 use crate::error::{say, Failure, Outcome};
-use crate::firmware::{self, Artifact};
 use crate::runner::{self, Output};
-use crate::setup::{self, M4};
 use crate::workspace;
 use log::{parse_budget_cuts, parse_cpu_load, parse_worst_frames};
 
@@ -115,7 +114,7 @@ pub fn run() -> Outcome {
     let mut problems = Problems::default();
 
     say!("running the QEMU demo (cargo qemu --demo)…");
-    let status = run_demo(&log, &["--demo"])?;
+    let status = run_demo(&QEMU, &log, &["--demo"])?;
     let text = std::fs::read(&log)
         .map_err(|e| Failure::new(format!("cannot read the QEMU log {}: {e}", log.display())))?;
     let text = strip_colours(&String::from_utf8_lossy(&text));
@@ -153,10 +152,10 @@ pub fn run() -> Outcome {
     }
 
     let sim = build_sim()?;
-    let failed = compare_levels(&sim, &levels, stepping, "qemu");
+    let failed = compare_levels(&sim, &levels, stepping, QEMU.tag);
     problems.0 |= !failed.is_empty();
 
-    let budget = workspace::env_number("CPU_BUDGET_CENTIPERCENT", 300)?;
+    let budget = QEMU.budget(&QEMU.budgets.cpu)?;
     match parse_cpu_load(&text) {
         None => problems.report(format!("no cpu load line in the QEMU log ({})", log.display())),
         Some(load) if load > budget => problems.report(format!(
@@ -167,9 +166,15 @@ pub fn run() -> Outcome {
         Some(load) => say!("CPU load {} % of 64 MHz (budget {} %)", centi(load), centi(budget)),
     }
 
-    let bound = workspace::env_number("WORST_FRAME_M4", 64_000)?;
+    let bound = QEMU.budget(&QEMU.budgets.frame)?;
     let names: Vec<String> = levels.iter().map(|l| l.name.clone()).collect();
-    check_worst_frames(&text, &names, (bound, BUDGET_BOUND_M4), "M4", &mut problems);
+    check_worst_frames(
+        &text,
+        &names,
+        (bound, BUDGET_BOUND_M4),
+        QEMU.core,
+        &mut problems,
+    );
     check_budget_cuts(&text, &names, &mut problems);
 
     if problems.0 {
@@ -185,20 +190,22 @@ pub fn run() -> Outcome {
     Ok(0)
 }
 
-/// The headless demo, exactly as `cargo xtask qemu --demo` runs it, its output
-/// (QEMU's and defmt-print's) into `log`; QEMU's status.
-fn run_demo(log: &Path, args: &[&str]) -> Outcome {
+/// `board`'s headless demo, exactly as `cargo xtask qemu --demo` runs it, its
+/// output (QEMU's and defmt-print's) into `log`; QEMU's status.
+fn run_demo(board: &Board, log: &Path, args: &[&str]) -> Outcome {
     if let Some(dir) = log.parent() {
         std::fs::create_dir_all(dir)
             .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
     }
     let file = File::create(log)
         .map_err(|e| Failure::new(format!("cannot write {}: {e}", log.display())))?;
-    let limit = runner::timeout(600)?;
-    let tools = setup::m4_qemu()?;
-    let elf = firmware::build(&Artifact::firmware("marble-qemu", "qemu", M4))?;
+    let machine = board.machine()?;
+    let limit = runner::timeout(board.game.timeout)?;
+    let tools = board.game.qemu_tools()?;
+    let elf = board.game.build()?;
     let demo: Vec<String> = args.iter().map(|a| a.to_string()).collect();
-    match runner::headless(&tools, &elf, &demo, Output::File(&file), limit) {
+    let output = Output::File(&file);
+    match runner::headless(machine, &board.game, &tools, &elf, &demo, output, limit) {
         Ok(status) => Ok(status),
         // A timeout is a failed demo like any other: report it with the log.
         Err(failure) if failure.status == 124 => Ok(124),
