@@ -1,5 +1,30 @@
 //! Reading the firmware's demo log: the per-level lines, the stepper, the CPU
-//! load and the per-frame profile and flight-budget lines.
+//! load and the per-frame profile and flight-budget lines; and the log files
+//! every board's checks write and read back.
+
+use std::fs::File;
+use std::path::Path;
+
+use crate::error::Failure;
+
+/// A new log file at `path`, its directory made.
+pub fn create_log(path: &Path) -> Result<File, Failure> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    File::create(path).map_err(|e| Failure::new(format!("cannot write {}: {e}", path.display())))
+}
+
+/// The log at `path` as plain text ([`strip_colours`]), written back so, to
+/// be kept for reading.
+pub fn read_log(path: &Path) -> Result<String, Failure> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", path.display())))?;
+    let text = strip_colours(&String::from_utf8_lossy(&bytes));
+    let _ = std::fs::write(path, &text);
+    Ok(text)
+}
 
 /// One level as the firmware reported it.
 #[derive(Clone, Debug, PartialEq, Eq)]

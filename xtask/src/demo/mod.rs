@@ -19,11 +19,10 @@ mod ghosts;
 mod log;
 mod sim;
 
-use std::fs::File;
 use std::path::Path;
 
 pub use ghosts::check_ghosts;
-pub use log::{centi, parse_levels, parse_stepping, strip_colours, Level};
+pub use log::{centi, create_log, parse_levels, parse_stepping, read_log, Level};
 pub use sim::{build_sim, compare_levels, simulate, verdict, Verdict};
 
 use crate::boards::{Board, QEMU};
@@ -93,15 +92,19 @@ fn check_budget_cuts(log: &str, levels: &[String], problems: &mut Problems) {
     }
 }
 
-/// Whether anything failed; each problem is reported when found, and the check
-/// goes on so that one run shows them all.
+/// What failed, in every board's check: each problem is reported when found,
+/// and the check goes on so that one run shows them all.
 #[derive(Default)]
-struct Problems(bool);
+pub struct Problems(u32);
 
 impl Problems {
-    fn report(&mut self, message: String) {
+    pub fn report(&mut self, message: String) {
         say!("{message}");
-        self.0 = true;
+        self.0 += 1;
+    }
+
+    pub fn count(&self) -> u32 {
+        self.0
     }
 }
 
@@ -115,11 +118,7 @@ pub fn run() -> Outcome {
 
     say!("running the QEMU demo (cargo qemu --demo)…");
     let status = run_demo(&QEMU, &log, &["--demo"])?;
-    let text = std::fs::read(&log)
-        .map_err(|e| Failure::new(format!("cannot read the QEMU log {}: {e}", log.display())))?;
-    let text = strip_colours(&String::from_utf8_lossy(&text));
-    // The log is kept for reading, as plain text.
-    let _ = std::fs::write(&log, &text);
+    let text = read_log(&log)?;
     if status != 0 {
         problems.report(format!(
             "the QEMU demo exited with status {status} (log: {}); its last lines:",
@@ -131,29 +130,7 @@ pub fn run() -> Outcome {
         }
     }
 
-    let (levels, total) = parse_levels(&text);
-    if levels.is_empty() {
-        return Err(Failure::new(format!(
-            "no per-level lines in the QEMU log ({})",
-            log.display()
-        )));
-    }
-    let stepping = parse_stepping(&text).ok_or_else(|| {
-        Failure::new(format!(
-            "the QEMU log names no stepper (`demo stepping=fixed|events`, {})",
-            log.display()
-        ))
-    })?;
-    if let Some(total) = total.filter(|&total| total != levels.len()) {
-        problems.report(format!(
-            "the QEMU demo reported {} of {total} levels",
-            levels.len()
-        ));
-    }
-
-    let sim = build_sim()?;
-    let failed = compare_levels(&sim, &levels, stepping, QEMU.tag);
-    problems.0 |= !failed.is_empty();
+    let levels = check_levels(&QEMU, &text, &log, &mut problems)?;
 
     let budget = QEMU.budget(&QEMU.budgets.cpu)?;
     match parse_cpu_load(&text) {
@@ -177,7 +154,7 @@ pub fn run() -> Outcome {
     );
     check_budget_cuts(&text, &names, &mut problems);
 
-    if problems.0 {
+    if problems.count() > 0 {
         return Err(Failure::new(format!(
             "FAILED (QEMU log: {})",
             log.display()
@@ -190,15 +167,50 @@ pub fn run() -> Outcome {
     Ok(0)
 }
 
+/// The levels of `board`'s demo log (`text`, from `log`), each compared with
+/// the simulator's run (`sim --level NAME --autopilot --json --stepping S`,
+/// [`compare_levels`]): a level that differs, or a count short of the
+/// demo's total, is a problem; a log without levels or without its stepper
+/// is a failure.
+pub fn check_levels(
+    board: &Board,
+    text: &str,
+    log: &Path,
+    problems: &mut Problems,
+) -> Result<Vec<Level>, Failure> {
+    let (levels, total) = parse_levels(text);
+    if levels.is_empty() {
+        return Err(Failure::new(format!(
+            "no per-level lines in the {} demo's log ({})",
+            board.name,
+            log.display()
+        )));
+    }
+    if let Some(total) = total.filter(|&total| total != levels.len()) {
+        problems.report(format!(
+            "the {} demo reported {} of {total} levels",
+            board.name,
+            levels.len()
+        ));
+    }
+    let stepping = parse_stepping(text).ok_or_else(|| {
+        Failure::new(format!(
+            "the {} demo's log names no stepper (`demo stepping=fixed|events`, {})",
+            board.name,
+            log.display()
+        ))
+    })?;
+    let sim = build_sim()?;
+    for (level, verdict) in compare_levels(&sim, &levels, stepping, board.tag) {
+        problems.report(format!("level {level}: {verdict:?}"));
+    }
+    Ok(levels)
+}
+
 /// `board`'s headless demo, exactly as `cargo xtask qemu --demo` runs it, its
 /// output (QEMU's and defmt-print's) into `log`; QEMU's status.
 fn run_demo(board: &Board, log: &Path, args: &[&str]) -> Outcome {
-    if let Some(dir) = log.parent() {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
-    }
-    let file = File::create(log)
-        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log.display())))?;
+    let file = create_log(log)?;
     let machine = board.machine()?;
     let limit = runner::timeout(board.game.timeout)?;
     let tools = board.game.qemu_tools()?;
@@ -235,17 +247,17 @@ INFO  demo summary: 13/13 levels won
         let levels = ["first-roll".to_string()];
         let mut problems = Problems::default();
         check_worst_frames(log, &levels, (1_900, 40_000), "M4", &mut problems);
-        assert!(problems.0, "a level's 1 934 is over 1 900");
+        assert!(problems.count() > 0, "a level's 1 934 is over 1 900");
         let mut problems = Problems::default();
         check_worst_frames(log, &levels, (30_000, 40_000), "M4", &mut problems);
         assert!(
-            !problems.0,
+            problems.count() == 0,
             "a stress scene over the goal, within the budget's bound, is reported only"
         );
         let mut problems = Problems::default();
         check_worst_frames(log, &levels, (30_000, 30_100), "M4", &mut problems);
         assert!(
-            problems.0,
+            problems.count() > 0,
             "a stress scene over the budget's bound is a problem"
         );
         let mut problems = Problems::default();
@@ -256,7 +268,7 @@ INFO  demo summary: 13/13 levels won
             "M4",
             &mut problems,
         );
-        assert!(problems.0, "a log without profiles is a problem");
+        assert!(problems.count() > 0, "a log without profiles is a problem");
     }
 
     #[test]
@@ -274,12 +286,18 @@ INFO  demo summary: 13/13 levels won
         );
         let mut problems = Problems::default();
         check_budget_cuts(log, &["first-roll".to_string()], &mut problems);
-        assert!(!problems.0, "cuts in a stress scene are reported only");
+        assert!(
+            problems.count() == 0,
+            "cuts in a stress scene are reported only"
+        );
         let mut problems = Problems::default();
         check_budget_cuts(log, &["drop-onto-marble".to_string()], &mut problems);
-        assert!(problems.0, "a cut on a level is a problem");
+        assert!(problems.count() > 0, "a cut on a level is a problem");
         let mut problems = Problems::default();
         check_budget_cuts("no budget here", &[], &mut problems);
-        assert!(problems.0, "a log without budget lines is a problem");
+        assert!(
+            problems.count() > 0,
+            "a log without budget lines is a problem"
+        );
     }
 }

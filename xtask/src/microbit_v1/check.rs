@@ -1,6 +1,5 @@
 //! `cargo xtask check-microbit-v1` (see the parent module's doc).
 
-use std::fs::File;
 use std::path::Path;
 use std::time::Duration;
 
@@ -8,7 +7,7 @@ use super::log::{bloat, parse_cpu, parse_profile, parse_ram, parse_watchdog};
 use super::qemu::{qemu_run, Sink};
 use super::{hex_rows, leds, max_difference, parse_frame, LoggedFrame, Timeline};
 use crate::boards::MICROBIT_V1;
-use crate::demo::{self, Level};
+use crate::demo::{self, Problems};
 use crate::error::{say, Failure, Outcome};
 use crate::runner;
 use crate::setup;
@@ -16,17 +15,6 @@ use crate::workspace;
 
 /// Tolerance of the rebuilt frames, brightness levels per pixel.
 const FRAME_TOLERANCE: u8 = 1;
-
-/// Collects the problems; each is reported when found.
-#[derive(Default)]
-struct Problems(Vec<String>);
-
-impl Problems {
-    fn report(&mut self, message: String) {
-        say!("{message}");
-        self.0.push(message);
-    }
-}
 
 /// `cargo xtask check-microbit-v1`: see the module doc.
 pub fn check() -> Outcome {
@@ -43,12 +31,7 @@ pub fn check() -> Outcome {
 
     let tools = board.game.qemu_tools()?;
     let elf = board.game.build()?;
-    if let Some(dir) = log_path.parent() {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
-    }
-    let file = File::create(&log_path)
-        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
+    let file = demo::create_log(&log_path)?;
     say!("running the demo in QEMU microbit with the GPIO trace…");
     let demo_args = ["--demo".to_string()];
     let (status, took) = match qemu_run(
@@ -63,10 +46,7 @@ pub fn check() -> Outcome {
         Err(failure) if failure.status == 124 => (124, limit),
         Err(failure) => return Err(failure),
     };
-    let text = std::fs::read(&log_path)
-        .map_err(|e| Failure::new(format!("cannot read {}: {e}", log_path.display())))?;
-    let text = demo::strip_colours(&String::from_utf8_lossy(&text));
-    let _ = std::fs::write(&log_path, &text);
+    let text = demo::read_log(&log_path)?;
     say!("QEMU ran for {:.1} s of host time", took.as_secs_f64());
     if status != 0 {
         problems.report(format!(
@@ -76,26 +56,7 @@ pub fn check() -> Outcome {
     }
 
     // 1. Every level as the simulator plays it.
-    let (levels, total) = demo::parse_levels(&text);
-    if levels.is_empty() {
-        return Err(Failure::new(format!(
-            "no per-level lines in the log ({})",
-            log_path.display()
-        )));
-    }
-    if let Some(total) = total.filter(|&total| total != levels.len()) {
-        problems.report(format!(
-            "the demo reported {} of {total} levels",
-            levels.len()
-        ));
-    }
-    let stepping = demo::parse_stepping(&text).ok_or_else(|| {
-        Failure::new(format!(
-            "the log names no stepper (`demo stepping=fixed|events`, {})",
-            log_path.display()
-        ))
-    })?;
-    compare_with_sim(&levels, stepping, &mut problems)?;
+    let levels = demo::check_levels(board, &text, &log_path, &mut problems)?;
 
     // 2. The LEDs, rebuilt from the GPIO trace.
     let trace = std::fs::read(&trace_path)
@@ -199,10 +160,10 @@ pub fn check() -> Outcome {
         ));
     }
 
-    if !problems.0.is_empty() {
+    if problems.count() > 0 {
         return Err(Failure::new(format!(
             "FAILED: {} problem(s) (log {}, trace {})",
-            problems.0.len(),
+            problems.count(),
             log_path.display(),
             trace_path.display()
         )));
@@ -305,8 +266,7 @@ fn check_play_on_stub(
 ) -> Result<(), Failure> {
     let log_path = target.join("check-microbit-v1-sensor.log");
     let trace_path = target.join("check-microbit-v1-sensor.trace");
-    let file = File::create(&log_path)
-        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
+    let file = demo::create_log(&log_path)?;
     say!("playing 2 s in QEMU on its TWI stub (the MMA8653FC's identity, no chip behind it)…");
     let args = ["--seconds=2".to_string(), "--no-frame-log".to_string()];
     let (status, _) = qemu_run(
@@ -317,10 +277,7 @@ fn check_play_on_stub(
         Sink::File(&file),
         limit,
     )?;
-    let text = std::fs::read(&log_path)
-        .map_err(|e| Failure::new(format!("cannot read {}: {e}", log_path.display())))?;
-    let text = demo::strip_colours(&String::from_utf8_lossy(&text));
-    let _ = std::fs::write(&log_path, &text);
+    let text = demo::read_log(&log_path)?;
     let trace = std::fs::read(&trace_path)
         .map_err(|e| Failure::new(format!("cannot read {}: {e}", trace_path.display())))?;
     let timeline = Timeline::from_lines(String::from_utf8_lossy(&trace).lines());
@@ -369,8 +326,7 @@ fn check_profile(
     problems: &mut Problems,
 ) -> Result<(), Failure> {
     let log_path = target.join("check-microbit-v1-profile.log");
-    let file = File::create(&log_path)
-        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log_path.display())))?;
+    let file = demo::create_log(&log_path)?;
     say!("profiling the demo's frames in QEMU microbit (--demo --profile)…");
     let args = [
         "--demo".to_string(),
@@ -378,10 +334,7 @@ fn check_profile(
         "--no-frame-log".to_string(),
     ];
     let (status, _) = qemu_run(tools, elf, &args, None, Sink::File(&file), limit)?;
-    let text = std::fs::read(&log_path)
-        .map_err(|e| Failure::new(format!("cannot read {}: {e}", log_path.display())))?;
-    let text = demo::strip_colours(&String::from_utf8_lossy(&text));
-    let _ = std::fs::write(&log_path, &text);
+    let text = demo::read_log(&log_path)?;
     let profiles: Vec<_> = text.lines().filter_map(parse_profile).collect();
     let (levels, _) = demo::parse_levels(&text);
     if status != 0 || profiles.is_empty() || profiles.len() != levels.len() {
@@ -399,19 +352,6 @@ fn check_profile(
         } else {
             say!("profile {level}: {frames} frames, physics {average} per frame, worst {max}");
         }
-    }
-    Ok(())
-}
-
-/// Compares each level with `sim --level NAME --autopilot --json --stepping S`.
-fn compare_with_sim(
-    levels: &[Level],
-    stepping: &str,
-    problems: &mut Problems,
-) -> Result<(), Failure> {
-    let sim = demo::build_sim()?;
-    for (level, verdict) in demo::compare_levels(&sim, levels, stepping, MICROBIT_V1.tag) {
-        problems.report(format!("level {level}: {verdict:?}"));
     }
     Ok(())
 }
