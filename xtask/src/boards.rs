@@ -269,6 +269,9 @@ pub const MICROBIT_V1: Board = Board {
     }),
 };
 
+/// Every board, in `cargo xtask setup`'s order (its targets installed so).
+pub const ALL: [&Board; 3] = [&QEMU, &MICROBIT, &MICROBIT_V1];
+
 /// One of two QEMU mps2-an386 boards racing (`boards/qemu-race`, `cargo qemu
 /// -- --race`).
 pub const QEMU_RACE: Firmware = Firmware {
@@ -294,7 +297,7 @@ mod tests {
 
     #[test]
     fn each_board_runs_somewhere_and_its_firmware_is_its_own() {
-        let boards = [&QEMU, &MICROBIT, &MICROBIT_V1];
+        let boards = ALL;
         for board in boards {
             assert!(
                 board.qemu.is_some() || board.chip.is_some(),

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::boards::{M0, M4};
+use crate::boards;
 use crate::error::{say, Failure, Outcome};
 use crate::process;
 use crate::workspace::{self, find_tool, on_path};
@@ -20,11 +20,15 @@ pub struct Qemu {
     pub defmt_print: Option<PathBuf>,
 }
 
-/// `cargo xtask setup [--all]`: everything the QEMU firmware and the study's
-/// target benchmarks need; `--all` also reports on probe-rs (micro:bit).
+/// `cargo xtask setup [--all]`: everything the boards' firmware and the
+/// study's target benchmarks need (each board's target, [`boards::ALL`]);
+/// `--all` also reports on probe-rs (micro:bit).
 pub fn run(all: bool) -> Outcome {
-    target(M4)?;
-    target(M0)?;
+    let mut targets: Vec<&str> = boards::ALL.iter().map(|b| b.game.target).collect();
+    targets.dedup();
+    for triple in targets {
+        target(triple)?;
+    }
     qemu()?;
     flip_link()?;
     defmt_print()?;
