@@ -139,7 +139,7 @@ fn digits(text: &str) -> &str {
 }
 
 /// The CPU load in hundredths of a percent, from the first line like
-/// `cpu load: … = X.YY % of a 64 MHz …`.
+/// `cpu load: … = X.YY % of a 64 MHz …` (any board's clock).
 pub fn parse_cpu_load(log: &str) -> Option<u64> {
     log.lines().find_map(cpu_load_of)
 }
@@ -147,7 +147,12 @@ pub fn parse_cpu_load(log: &str) -> Option<u64> {
 fn cpu_load_of(line: &str) -> Option<u64> {
     let start = line.find("cpu load: ")? + "cpu load: ".len();
     let line = &line[start..];
-    line.rmatch_indices(" % of a 64 MHz").find_map(|(end, _)| {
+    line.rmatch_indices(" % of a ").find_map(|(end, of)| {
+        let clock = &line[end + of.len()..];
+        let unit = clock.trim_start_matches(|c: char| c.is_ascii_digit());
+        if unit.len() == clock.len() || !unit.starts_with(" MHz") {
+            return None;
+        }
         let number = &line[..end];
         let cents = number.get(number.len().checked_sub(2)?..)?;
         let before = number[..number.len() - 2].strip_suffix('.')?;
@@ -278,6 +283,12 @@ INFO  cpu load: 123 busy instructions in 456 us of firmware time = 789 instructi
         assert_eq!(parse_cpu_load("cpu load: x = 1.5 % of a 64 MHz"), None);
         assert_eq!(parse_cpu_load("cpu load: no time elapsed"), None);
         assert_eq!(parse_cpu_load("load = 1.00 % of a 64 MHz"), None);
+        assert_eq!(
+            parse_cpu_load("cpu load: x = 18.58 % of a 16 MHz Cortex-M0"),
+            Some(1858)
+        );
+        assert_eq!(parse_cpu_load("cpu load: x = 1.00 % of a fast MHz"), None);
+        assert_eq!(parse_cpu_load("cpu load: x = 1.00 % of a 16 GHz"), None);
         assert_eq!(centi(300), "3.00");
         assert_eq!(centi(7), "0.07");
     }

@@ -22,14 +22,14 @@ mod sim;
 use std::path::Path;
 
 pub use ghosts::check_ghosts;
-pub use log::{centi, create_log, parse_levels, parse_stepping, read_log, Level};
+pub use log::{centi, create_log, parse_cpu_load, parse_levels, parse_stepping, read_log, Level};
 pub use sim::{build_sim, compare_levels, simulate, verdict, Verdict};
 
 use crate::boards::{Board, QEMU};
 use crate::error::{say, Failure, Outcome};
 use crate::runner::{self, Output};
 use crate::workspace;
-use log::{parse_budget_cuts, parse_cpu_load, parse_worst_frames};
+use log::{parse_budget_cuts, parse_worst_frames};
 
 /// The worst physics frame of each level against `bound` instructions (`what`:
 /// the board's CPU): a level's frame over it is a problem. The stress scenes

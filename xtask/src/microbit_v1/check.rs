@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use super::log::{bloat, parse_cpu, parse_profile, parse_ram, parse_watchdog};
+use super::log::{bloat, parse_profile, parse_ram, parse_watchdog};
 use super::qemu::{qemu_run, Sink};
 use super::{hex_rows, leds, max_difference, parse_frame, LoggedFrame, Timeline};
 use crate::boards::MICROBIT_V1;
@@ -117,7 +117,7 @@ pub fn check() -> Outcome {
     //     included: QEMU's stub runs only the MMA8653FC's and never fails,
     //     so its stack is bounded from the ELF instead.
     check_sensor_stack(&elf, parse_ram(&text), ram_budget, &mut problems)?;
-    match parse_cpu(&text) {
+    match demo::parse_cpu_load(&text) {
         Some(load) => {
             say!(
                 "CPU load {} % of a 16 MHz Cortex-M0 (budget {} %)",

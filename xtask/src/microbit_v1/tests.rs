@@ -1,6 +1,7 @@
 use super::gpio_trace::{parse_trace_line, TraceEvent};
-use super::log::{module_of, parse_cpu, parse_profile, parse_ram, parse_watchdog};
+use super::log::{module_of, parse_profile, parse_ram, parse_watchdog};
 use super::*;
+use crate::demo::parse_cpu_load;
 
 #[test]
 fn trace_lines() {
@@ -125,8 +126,8 @@ fn budget_lines() {
     let log = "x INFO  ram: statics 5084 B + stack high-water 8364 B = 13448 B of 16384 B (budget 12288 B)\n\
                x INFO  cpu load: 75141188 busy instructions in 25267360 us of firmware time = 2973844 instructions/s = 18.58 % of a 16 MHz Cortex-M0 (128 frames/s, 100 refreshes/s)\n";
     assert_eq!(parse_ram(log), Some((5084, 8364)));
-    assert_eq!(parse_cpu(log), Some(1858));
-    assert_eq!(parse_cpu("cpu load: x = 1.5 % of a 16 MHz"), None);
+    assert_eq!(parse_cpu_load(log), Some(1858));
+    assert_eq!(parse_cpu_load("cpu load: x = 1.5 % of a 16 MHz"), None);
 }
 
 #[test]
