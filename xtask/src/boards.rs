@@ -158,6 +158,11 @@ pub struct Board {
     pub budgets: Budgets,
     /// Its section in the universal hex (the micro:bits).
     pub hex: Option<HexSection>,
+    /// Its firmware for racing another board of its kind in QEMU, if any
+    /// (`--race`).
+    pub race: Option<Firmware>,
+    /// The study's benchmark for its core, run in its QEMU machine, if any.
+    pub bench: Option<Firmware>,
 }
 
 impl Board {
@@ -220,6 +225,13 @@ pub const QEMU: Board = Board {
         ..NONE
     },
     hex: None,
+    // boards/qemu-race: one of two boards whose UART1s the task joins.
+    race: Some(Firmware {
+        timeout: 300,
+        ..Firmware::new("marble-qemu-race", "qemu-race", M4)
+    }),
+    // The study's Cortex-M4F benchmark (`cargo xtask bench-m4`).
+    bench: Some(Firmware::new("marble-qemu", "bench", M4)),
 };
 
 /// The micro:bit v2 (`boards/microbit`, nRF52833): `cargo microbit`,
@@ -241,6 +253,8 @@ pub const MICROBIT: Board = Board {
         block: hex::BOARD_V2,
         region: levels_region::V2.start,
     }),
+    race: None,
+    bench: None,
 };
 
 /// The micro:bit v1 (`boards/microbit-v1`, nRF51822), in QEMU's `microbit`
@@ -267,29 +281,19 @@ pub const MICROBIT_V1: Board = Board {
         block: hex::BOARD_V1,
         region: levels_region::V1.start,
     }),
+    race: None,
+    // The study's Cortex-M0 benchmark (`cargo xtask bench-m0`, study/bench-m0):
+    // under -icount the nRF51's TIMER0 counts instructions; it prints on
+    // semihosting's console, which the study parses.
+    bench: Some(Firmware {
+        log: Log::Console,
+        timeout: 900,
+        ..Firmware::new("marble-bench-m0", "bench_m0", M0)
+    }),
 };
 
 /// Every board, in `cargo xtask setup`'s order (its targets installed so).
 pub const ALL: [&Board; 3] = [&QEMU, &MICROBIT, &MICROBIT_V1];
-
-/// One of two QEMU mps2-an386 boards racing (`boards/qemu-race`, `cargo qemu
-/// -- --race`).
-pub const QEMU_RACE: Firmware = Firmware {
-    timeout: 300,
-    ..Firmware::new("marble-qemu-race", "qemu-race", M4)
-};
-
-/// The study's Cortex-M4F benchmark, on [`QEMU`] (`cargo xtask bench-m4`).
-pub const BENCH_M4: Firmware = Firmware::new("marble-qemu", "bench", M4);
-
-/// The study's Cortex-M0 benchmark, on [`MICROBIT_V1`]'s QEMU machine
-/// (`cargo xtask bench-m0`): under -icount the nRF51's TIMER0 counts
-/// instructions.
-pub const BENCH_M0: Firmware = Firmware {
-    log: Log::Console,
-    timeout: 900,
-    ..Firmware::new("marble-bench-m0", "bench_m0", M0)
-};
 
 #[cfg(test)]
 mod tests {
@@ -306,11 +310,17 @@ mod tests {
             );
             assert_eq!(board.machine().is_ok(), board.qemu.is_some());
             assert_eq!(board.game.log, Log::Defmt, "the demo checks decode defmt");
+            assert!(
+                board.qemu.is_some() || (board.race.is_none() && board.bench.is_none()),
+                "{}: a race or a benchmark runs in QEMU",
+                board.name
+            );
         }
         let mut packages: Vec<(&str, &str)> = boards
             .iter()
-            .map(|b| (b.game.package, b.game.bin))
-            .chain([&QEMU_RACE, &BENCH_M4, &BENCH_M0].map(|f| (f.package, f.bin)))
+            .flat_map(|b| [Some(&b.game), b.race.as_ref(), b.bench.as_ref()])
+            .flatten()
+            .map(|f| (f.package, f.bin))
             .collect();
         packages.sort_unstable();
         packages.dedup();

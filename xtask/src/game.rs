@@ -18,8 +18,8 @@ use crate::workspace;
 /// `cargo xtask qemu|microbit|microbit-v1 [ARGS...]`: the rest of ARGS go to
 /// the firmware's semihosting command line in QEMU, to probe-rs after the ELF
 /// on a board. In QEMU: headless when `--demo` is given or stdin is not a
-/// terminal (CI, pipes), else the game on the terminal; `--race` (QEMU
-/// mps2-an386): two boards racing, headless ([`crate::race`]); `--image
+/// terminal (CI, pipes), else the game on the terminal; `--race` (a board
+/// with a race firmware, QEMU mps2-an386): two boards racing, headless ([`crate::race`]); `--image
 /// FILE` (a board QEMU also runs): that flash image instead of the ELF.
 pub fn play(board: &Board, args: &[String]) -> Outcome {
     let args = runner::drop_separators(args);
@@ -29,7 +29,7 @@ pub fn play(board: &Board, args: &[String]) -> Outcome {
         (Some(_), Some(_)) => has(&args, "--demo") || has(&args, "--qemu"),
         (None, _) => false,
     };
-    if in_qemu && board.chip.is_none() && has(&args, "--race") {
+    if in_qemu && board.race.is_some() && has(&args, "--race") {
         return crate::race::run(board);
     }
     let (image, args) = if board.qemu.is_some() && board.chip.is_some() {

@@ -21,7 +21,7 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 
-use crate::boards::{Board, Firmware, BENCH_M4, MICROBIT_V1, QEMU};
+use crate::boards::{Board, Firmware, MICROBIT_V1, QEMU};
 use crate::error::{say, Failure, Outcome};
 use crate::process;
 use crate::runner::{self, Load};
@@ -48,11 +48,14 @@ pub enum Subject {
 
 impl Subject {
     /// The board it runs on and the firmware.
-    fn firmware(&self) -> (&'static Board, &'static Firmware) {
+    fn firmware(&self) -> Result<(&'static Board, &'static Firmware), Failure> {
         match self {
-            Subject::Demo => (&QEMU, &QEMU.game),
-            Subject::DemoV1 => (&MICROBIT_V1, &MICROBIT_V1.game),
-            Subject::Bench(_) => (&QEMU, &BENCH_M4),
+            Subject::Demo => Ok((&QEMU, &QEMU.game)),
+            Subject::DemoV1 => Ok((&MICROBIT_V1, &MICROBIT_V1.game)),
+            Subject::Bench(_) => match &QEMU.bench {
+                Some(bench) => Ok((&QEMU, bench)),
+                None => Err(Failure::new("QEMU mps2-an386 has no benchmark")),
+            },
         }
     }
 }
@@ -63,7 +66,7 @@ impl Subject {
 /// `step_events:1933-2230` is grand-tour's frames in the v1 demo (the frames of
 /// the levels before it summed, as `check-microbit-v1` lists them).
 pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
-    let (board, firmware) = subject.firmware();
+    let (board, firmware) = subject.firmware()?;
     let machine = board.machine()?;
     let qemu = setup::qemu()?;
     let elf = firmware.build()?;

@@ -31,7 +31,7 @@ use marble_rolling::race::replay::{RACE_CONFIG, RACE_TILT};
 use marble_rolling::race::wire::{self, Unframer, MAX_FRAME};
 use marble_rolling::race::{self, MazeSpec};
 
-use crate::boards::{self, QEMU_RACE};
+use crate::boards;
 use crate::error::{say, Failure, Outcome};
 use crate::process;
 use crate::runner::{self, Load};
@@ -68,12 +68,16 @@ struct Report {
     picture: Vec<String>,
 }
 
-/// `cargo qemu -- --race [--demo]`, on `board`'s machine (QEMU mps2-an386's).
+/// `cargo qemu -- --race [--demo]`: `board`'s race firmware on its machine
+/// (QEMU mps2-an386's).
 pub fn run(board: &boards::Board) -> Outcome {
     let machine = board.machine()?;
-    let limit = runner::timeout(QEMU_RACE.timeout)?;
-    let tools = QEMU_RACE.qemu_tools()?;
-    let elf = QEMU_RACE.build()?;
+    let Some(racer) = &board.race else {
+        return Err(Failure::new(format!("the {} does not race", board.name)).status(2));
+    };
+    let limit = runner::timeout(racer.timeout)?;
+    let tools = racer.qemu_tools()?;
+    let elf = racer.build()?;
     let Some(defmt_print) = &tools.defmt_print else {
         return Err(Failure::new("defmt-print was not set up for the race"));
     };

@@ -2,7 +2,7 @@
 //! (`marble-study`'s `accuracy`) runs `cargo xtask bench-m4` and `bench-m0` and
 //! parses their stdout: the `BENCH`, `CALIBRATION`, `EMPTY` and `DONE` lines.
 
-use crate::boards::{Board, Firmware, BENCH_M0, BENCH_M4, M0, MICROBIT_V1, QEMU};
+use crate::boards::{Board, M0, M4, MICROBIT_V1, QEMU};
 use crate::error::{say, Failure, Outcome};
 use crate::process;
 use crate::runner::{self, Output};
@@ -12,19 +12,22 @@ use crate::workspace;
 /// `cargo xtask bench-m4 [ARGS...]`: the Cortex-M4F benchmark, headless in
 /// QEMU mps2-an386, its defmt log decoded on stdout.
 pub fn bench_m4(args: &[String]) -> Outcome {
-    bench(&QEMU, &BENCH_M4, "Cortex-M4F", args)
+    bench(&QEMU, "Cortex-M4F", args)
 }
 
 /// `cargo xtask bench-m0 [ARGS...]`: the Cortex-M0 benchmark in QEMU microbit,
 /// its console on stdout.
 pub fn bench_m0(args: &[String]) -> Outcome {
-    bench(&MICROBIT_V1, &BENCH_M0, "Cortex-M0", args)
+    bench(&MICROBIT_V1, "Cortex-M0", args)
 }
 
-/// A benchmark, headless on `board`'s QEMU machine, its output on stdout.
-fn bench(board: &Board, bench: &Firmware, core: &str, args: &[String]) -> Outcome {
+/// `board`'s benchmark, headless on its QEMU machine, its output on stdout.
+fn bench(board: &Board, core: &str, args: &[String]) -> Outcome {
     let args = runner::drop_separators(args);
     let machine = board.machine()?;
+    let Some(bench) = &board.bench else {
+        return Err(Failure::new(format!("the {} has no benchmark", board.name)).status(2));
+    };
     let limit = runner::timeout(bench.timeout)?;
     let tools = bench.qemu_tools()?;
     let elf = bench.build()?;
@@ -38,8 +41,9 @@ pub fn accuracy(args: &[String]) -> Outcome {
     let args = runner::drop_separators(args);
     // Everything its target runs need, installed up front rather than in the
     // middle of an hour-long run.
-    BENCH_M4.qemu_tools()?;
+    setup::qemu_tools(true)?;
     setup::flip_link()?;
+    setup::target(M4)?;
     setup::target(M0)?;
     let dir = workspace::root().join("study");
     if !dir.is_dir() {
