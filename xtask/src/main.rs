@@ -212,13 +212,14 @@ impl Task {
             } => {
                 let subject = match bench {
                     Some(scene) => profile::Subject::Bench(
+                        &boards::QEMU,
                         profile::SCENES
                             .iter()
                             .position(|&s| s == scene)
                             .unwrap_or(0),
                     ),
-                    None if v1 => profile::Subject::DemoV1,
-                    None => profile::Subject::Demo,
+                    None if v1 => profile::Subject::Demo(&boards::MICROBIT_V1),
+                    None => profile::Subject::Demo(&boards::QEMU),
                 };
                 profile::run(top, subject, window.as_deref())
             }

@@ -21,7 +21,7 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 
-use crate::boards::{Board, Firmware, MICROBIT_V1, QEMU};
+use crate::boards::{Board, Firmware};
 use crate::error::{say, Failure, Outcome};
 use crate::process;
 use crate::runner::{self, Load};
@@ -35,26 +35,23 @@ use crate::workspace;
 pub const SCENES: [&str; 4] = ["incline", "bounce", "maze", "corner"];
 
 /// What to profile.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug)]
 pub enum Subject {
-    /// The QEMU firmware's headless demo.
-    Demo,
-    /// The micro:bit v1 firmware's demo in QEMU microbit.
-    DemoV1,
-    /// The M4 benchmark, one scene (index in [`SCENES`]), backend i8f24,
-    /// event stepping.
-    Bench(usize),
+    /// A board's headless demo in its QEMU machine.
+    Demo(&'static Board),
+    /// A board's benchmark, one scene (index in [`SCENES`]), backend i8f24,
+    /// event stepping (the study's scene mask; QEMU mps2-an386's is the M4's).
+    Bench(&'static Board, usize),
 }
 
 impl Subject {
     /// The board it runs on and the firmware.
-    fn firmware(&self) -> Result<(&'static Board, &'static Firmware), Failure> {
+    fn firmware(self) -> Result<(&'static Board, &'static Firmware), Failure> {
         match self {
-            Subject::Demo => Ok((&QEMU, &QEMU.game)),
-            Subject::DemoV1 => Ok((&MICROBIT_V1, &MICROBIT_V1.game)),
-            Subject::Bench(_) => match &QEMU.bench {
-                Some(bench) => Ok((&QEMU, bench)),
-                None => Err(Failure::new("QEMU mps2-an386 has no benchmark")),
+            Subject::Demo(board) => Ok((board, &board.game)),
+            Subject::Bench(board, _) => match &board.bench {
+                Some(bench) => Ok((board, bench)),
+                None => Err(Failure::new(format!("the {} has no benchmark", board.name))),
             },
         }
     }
@@ -78,7 +75,7 @@ pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
         .map_err(|e| Failure::new(format!("cannot write in {}: {e}", dir.display())))?;
 
     let demo = match subject {
-        Subject::Bench(scene) => vec![
+        Subject::Bench(_, scene) => vec![
             "--backends=1".to_string(),
             "--rates=1".to_string(),
             format!("--scenes={}", 1u32 << scene),
@@ -94,7 +91,7 @@ pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
     say!(
         "tracing the {} in QEMU (up to 2 GB in {})…",
         match subject {
-            Subject::Bench(scene) => format!("benchmark's {} scene", SCENES[scene]),
+            Subject::Bench(_, scene) => format!("benchmark's {} scene", SCENES[scene]),
             _ => "headless demo".to_string(),
         },
         trace.display()
