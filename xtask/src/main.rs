@@ -202,7 +202,7 @@ impl Task {
             Task::BenchM0 { args } => study::bench_m0(&args),
             Task::CheckDemo => demo::run(),
             Task::CheckGhosts => demo::check_ghosts(),
-            Task::SizeReport { no_build, elf } => size::run(no_build, elf),
+            Task::SizeReport { no_build, elf } => size::run(&boards::MICROBIT, no_build, elf),
             Task::Properties { cases } => properties::run(cases),
             Task::QemuProfile {
                 top,
