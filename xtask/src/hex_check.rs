@@ -5,10 +5,10 @@
 //! from the universal hex plays the demo in QEMU's `microbit` machine.
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::boards::MICROBIT_V1;
 use crate::demo;
 use crate::error::{say, Failure};
 use crate::hex::{self, Image};
@@ -293,11 +293,10 @@ fn demo_from_image(
     levels: Option<&[(String, Vec<u8>)]>,
 ) -> Result<(), String> {
     let fail = |e: Failure| e.message;
-    let limit = runner::timeout(600).map_err(fail)?;
-    let tools = setup::m4_qemu().map_err(fail)?;
+    let limit = runner::timeout(MICROBIT_V1.game.timeout).map_err(fail)?;
+    let tools = MICROBIT_V1.game.qemu_tools().map_err(fail)?;
     let log_path = target.join("hex-check/v1-demo.log");
-    let file =
-        File::create(&log_path).map_err(|e| format!("cannot write {}: {e}", log_path.display()))?;
+    let file = demo::create_log(&log_path).map_err(fail)?;
     say!(
         "running the V1 demo in QEMU microbit from {} (QEMU's loader; log {})…",
         image.display(),
@@ -305,10 +304,7 @@ fn demo_from_image(
     );
     let args = ["--demo".to_string(), "--no-frame-log".to_string()];
     let status = microbit_v1::run_image(&tools, elf, image, &args, &file, limit).map_err(fail)?;
-    let text =
-        std::fs::read(&log_path).map_err(|e| format!("cannot read {}: {e}", log_path.display()))?;
-    let text = demo::strip_colours(&String::from_utf8_lossy(&text));
-    let _ = std::fs::write(&log_path, &text);
+    let text = demo::read_log(&log_path).map_err(fail)?;
     let won = demo_verdict(status, &text).map_err(|why| {
         format!(
             "V1 from the universal hex in QEMU: {why} (log {})",

@@ -29,11 +29,9 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::boards::{self, Firmware, MICROBIT, MICROBIT_V1};
 use crate::error::{say, Failure};
-use crate::firmware::{self, Artifact};
 use crate::hex::{self, Image};
-use crate::microbit_v1;
-use crate::setup::{self, M0, M4};
 use crate::workspace;
 
 use marble_rolling::board::levels_region::{self, LevelCheck};
@@ -47,39 +45,34 @@ pub const LIBRARY_VERSION: &str = "0.2.2";
 /// The universal hex, in `target/hex/`.
 pub const UNIVERSAL: &str = "marble-rolling.hex";
 
-/// One board's firmware and files.
+/// One board's firmware and files ([`boards::HexSection`]).
 pub(crate) struct Board {
     /// `v1`, `v2`: in file names and messages.
     pub(crate) name: &'static str,
-    package: &'static str,
-    bin: &'static str,
-    target: &'static str,
+    firmware: &'static Firmware,
     /// Its block type in the universal hex.
     pub(crate) block: u16,
     /// Where its levels region is.
     pub(crate) region: u32,
 }
 
-/// The two boards, V1 first (the order of their sections in the universal hex).
-pub(crate) const BOARDS: [Board; 2] = [
-    Board {
-        name: "v1",
-        package: microbit_v1::PACKAGE,
-        bin: microbit_v1::BIN,
-        target: M0,
-        block: hex::BOARD_V1,
-        region: levels_region::V1.start,
-    },
-    // As `cargo microbit` builds it (game::microbit).
-    Board {
-        name: "v2",
-        package: "marble-microbit",
-        bin: "microbit",
-        target: M4,
-        block: hex::BOARD_V2,
-        region: levels_region::V2.start,
-    },
-];
+/// A board's section; one without is this table's mistake, caught when
+/// xtask compiles.
+const fn section(board: &'static boards::Board) -> Board {
+    match &board.hex {
+        Some(hex) => Board {
+            name: hex.name,
+            firmware: &board.game,
+            block: hex.block,
+            region: hex.region,
+        },
+        None => panic!("a board in the universal hex needs a HexSection"),
+    }
+}
+
+/// The two boards, V1 first (the order of their sections in the universal
+/// hex), built as `cargo microbit-v1` and `cargo microbit` build them.
+pub(crate) const BOARDS: [Board; 2] = [section(&MICROBIT_V1), section(&MICROBIT)];
 
 impl Board {
     fn plain_file(&self) -> String {
@@ -132,16 +125,13 @@ pub fn run(levels: &[PathBuf]) -> Result<Written, Failure> {
         );
         Some((files, region))
     };
-    setup::target(M0)?;
-    setup::target(M4)?;
-    setup::flip_link()?;
     let target = workspace::target_dir()?;
     let out = target.join("hex");
     std::fs::create_dir_all(&out)
         .map_err(|e| Failure::new(format!("cannot create {}: {e}", out.display())))?;
     let mut built = Vec::new();
     for board in &BOARDS {
-        let elf = firmware::build(&Artifact::firmware(board.package, board.bin, board.target))?;
+        let elf = board.firmware.build()?;
         let mut image = image_of(&elf)?;
         if image.is_empty() {
             return Err(Failure::new(format!(

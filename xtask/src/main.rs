@@ -4,6 +4,7 @@
 //! wherever cargo does, install what they need on first use, and fail with a
 //! message naming what and where.
 
+mod boards;
 mod demo;
 mod error;
 mod firmware;
@@ -193,15 +194,15 @@ impl Task {
     fn run(self) -> error::Outcome {
         match self {
             Task::Setup { all } => setup::run(all),
-            Task::Qemu { demo, args } => game::qemu(&with_demo(demo, args)),
-            Task::Microbit { args } => game::microbit(&args),
-            Task::MicrobitV1 { args } => microbit_v1::run(&args),
+            Task::Qemu { demo, args } => game::play(&boards::QEMU, &with_demo(demo, args)),
+            Task::Microbit { args } => game::play(&boards::MICROBIT, &args),
+            Task::MicrobitV1 { args } => game::play(&boards::MICROBIT_V1, &args),
             Task::CheckMicrobitV1 => microbit_v1::check(),
             Task::BenchM4 { args } => study::bench_m4(&args),
             Task::BenchM0 { args } => study::bench_m0(&args),
             Task::CheckDemo => demo::run(),
             Task::CheckGhosts => demo::check_ghosts(),
-            Task::SizeReport { no_build, elf } => size::run(no_build, elf),
+            Task::SizeReport { no_build, elf } => size::run(&boards::MICROBIT, no_build, elf),
             Task::Properties { cases } => properties::run(cases),
             Task::QemuProfile {
                 top,
@@ -211,13 +212,14 @@ impl Task {
             } => {
                 let subject = match bench {
                     Some(scene) => profile::Subject::Bench(
+                        &boards::QEMU,
                         profile::SCENES
                             .iter()
                             .position(|&s| s == scene)
                             .unwrap_or(0),
                     ),
-                    None if v1 => profile::Subject::DemoV1,
-                    None => profile::Subject::Demo,
+                    None if v1 => profile::Subject::Demo(&boards::MICROBIT_V1),
+                    None => profile::Subject::Demo(&boards::QEMU),
                 };
                 profile::run(top, subject, window.as_deref())
             }

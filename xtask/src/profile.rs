@@ -2,7 +2,9 @@
 //! firmware's instructions go, by function (the mps2-an386 board's, or with
 //! `--v1` the micro:bit v1's in QEMU microbit, or with `--bench` the study's
 //! Cortex-M4F benchmark running one scene with the firmware's backend and
-//! event stepping: where `cargo accuracy`'s M4 instructions per step go). Runs the headless demo with QEMU's translation-block trace on
+//! event stepping: where `cargo accuracy`'s M4 instructions per step go; any
+//! board of [`crate::boards`] with a QEMU machine can be profiled, its
+//! headless command line being the runner's). Runs the headless demo with QEMU's translation-block trace on
 //! (`-d in_asm,exec,nochain`: every executed block is logged, chaining off so
 //! none is skipped) and attributes every executed instruction to the function
 //! holding it (see trace.rs). A second pair of tables follows the DWARF
@@ -19,12 +21,11 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 
+use crate::boards::{Board, Firmware};
 use crate::error::{say, Failure, Outcome};
-use crate::firmware::{self, Artifact};
-use crate::microbit_v1;
 use crate::process;
-use crate::runner;
-use crate::setup::{self, M0, M4};
+use crate::runner::{self, Load};
+use crate::setup;
 use crate::symbols::{self, Symbols};
 use crate::trace::{Profile, Tally, Window};
 use crate::workspace;
@@ -34,15 +35,26 @@ use crate::workspace;
 pub const SCENES: [&str; 4] = ["incline", "bounce", "maze", "corner"];
 
 /// What to profile.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug)]
 pub enum Subject {
-    /// The QEMU firmware's headless demo.
-    Demo,
-    /// The micro:bit v1 firmware's demo in QEMU microbit.
-    DemoV1,
-    /// The M4 benchmark, one scene (index in [`SCENES`]), backend i8f24,
-    /// event stepping.
-    Bench(usize),
+    /// A board's headless demo in its QEMU machine.
+    Demo(&'static Board),
+    /// A board's benchmark, one scene (index in [`SCENES`]), backend i8f24,
+    /// event stepping (the study's scene mask; QEMU mps2-an386's is the M4's).
+    Bench(&'static Board, usize),
+}
+
+impl Subject {
+    /// The board it runs on and the firmware.
+    fn firmware(self) -> Result<(&'static Board, &'static Firmware), Failure> {
+        match self {
+            Subject::Demo(board) => Ok((board, &board.game)),
+            Subject::Bench(board, _) => match &board.bench {
+                Some(bench) => Ok((board, bench)),
+                None => Err(Failure::new(format!("the {} has no benchmark", board.name))),
+            },
+        }
+    }
 }
 
 /// Runs, attributes, prints the tables on stdout. With `window`
@@ -51,23 +63,10 @@ pub enum Subject {
 /// `step_events:1933-2230` is grand-tour's frames in the v1 demo (the frames of
 /// the levels before it summed, as `check-microbit-v1` lists them).
 pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
-    let v1 = subject == Subject::DemoV1;
+    let (board, firmware) = subject.firmware()?;
+    let machine = board.machine()?;
     let qemu = setup::qemu()?;
-    let elf = if let Subject::Bench(_) = subject {
-        setup::target(M4)?;
-        firmware::build(&Artifact::firmware("marble-qemu", "bench", M4))?
-    } else if v1 {
-        setup::target(M0)?;
-        firmware::build(&Artifact::firmware(
-            microbit_v1::PACKAGE,
-            microbit_v1::BIN,
-            M0,
-        ))?
-    } else {
-        setup::target(M4)?;
-        setup::flip_link()?;
-        firmware::build(&Artifact::firmware("marble-qemu", "qemu", M4))?
-    };
+    let elf = firmware.build()?;
     let dir = workspace::env_path("PROFILE_DIR", workspace::target_dir()?.join("qemu-profile"));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
@@ -76,7 +75,7 @@ pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
         .map_err(|e| Failure::new(format!("cannot write in {}: {e}", dir.display())))?;
 
     let demo = match subject {
-        Subject::Bench(scene) => vec![
+        Subject::Bench(_, scene) => vec![
             "--backends=1".to_string(),
             "--rates=1".to_string(),
             format!("--scenes={}", 1u32 << scene),
@@ -84,14 +83,7 @@ pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
         ],
         _ => vec!["--demo".to_string()],
     };
-    let mut cmd = if v1 {
-        // Its command line already counts instructions (`-icount`).
-        microbit_v1::qemu_command(&qemu, &elf, &demo)
-    } else {
-        let mut cmd = runner::mps2(&qemu, &elf, "--headless", &demo);
-        cmd.args(runner::ICOUNT).args(["-serial", "null"]);
-        cmd
-    };
+    let mut cmd = runner::headless_command(machine, &qemu, &Load::Elf(&elf), &demo);
     cmd.args(["-d", "in_asm,exec,nochain", "-D"])
         .arg(&trace)
         .stdin(Stdio::null())
@@ -99,7 +91,7 @@ pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
     say!(
         "tracing the {} in QEMU (up to 2 GB in {})…",
         match subject {
-            Subject::Bench(scene) => format!("benchmark's {} scene", SCENES[scene]),
+            Subject::Bench(_, scene) => format!("benchmark's {} scene", SCENES[scene]),
             _ => "headless demo".to_string(),
         },
         trace.display()

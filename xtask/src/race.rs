@@ -31,11 +31,10 @@ use marble_rolling::race::replay::{RACE_CONFIG, RACE_TILT};
 use marble_rolling::race::wire::{self, Unframer, MAX_FRAME};
 use marble_rolling::race::{self, MazeSpec};
 
+use crate::boards;
 use crate::error::{say, Failure, Outcome};
-use crate::firmware::{self, Artifact};
 use crate::process;
-use crate::runner;
-use crate::setup::{self, M4};
+use crate::runner::{self, Load};
 use crate::workspace;
 
 /// The two boards' ids; the lower proposes, so the race's maze is its offer.
@@ -69,11 +68,19 @@ struct Report {
     picture: Vec<String>,
 }
 
-/// `cargo qemu -- --race [--demo]`.
-pub fn run() -> Outcome {
-    let limit = runner::timeout(300)?;
-    let tools = setup::m4_qemu()?;
-    let elf = firmware::build(&Artifact::firmware("marble-qemu-race", "qemu-race", M4))?;
+/// `cargo qemu -- --race [--demo]`: `board`'s race firmware on its machine
+/// (QEMU mps2-an386's).
+pub fn run(board: &boards::Board) -> Outcome {
+    let machine = board.machine()?;
+    let Some(racer) = &board.race else {
+        return Err(Failure::new(format!("the {} does not race", board.name)).status(2));
+    };
+    let limit = runner::timeout(racer.timeout)?;
+    let tools = racer.qemu_tools()?;
+    let elf = racer.build()?;
+    let Some(defmt_print) = &tools.defmt_print else {
+        return Err(Failure::new("defmt-print was not set up for the race"));
+    };
     let target = workspace::target_dir()?;
     let listener = TcpListener::bind("127.0.0.1:0")
         .map_err(|e| Failure::new(format!("cannot listen on 127.0.0.1: {e}")))?;
@@ -82,8 +89,9 @@ pub fn run() -> Outcome {
         .map_err(|e| Failure::new(format!("the link's port: {e}")))?
         .port();
     say!(
-        "racing two QEMU mps2-an386 boards on maze {} (size {}, storeys {}, difficulty {}), \
+        "racing two QEMU {} boards on maze {} (size {}, storeys {}, difficulty {}), \
          their UART1s joined here with {:.0} % of packets lost and {:.0} % repeated",
+        machine.name,
         MAZE.seed,
         MAZE.size,
         MAZE.storeys,
@@ -110,11 +118,11 @@ pub fn run() -> Outcome {
             "--difficulty".into(),
             MAZE.difficulty.to_string(),
         ];
-        let mut qemu = runner::mps2(&tools.qemu, &elf, "--race", &line);
+        let mut qemu = runner::qemu(machine, &tools.qemu, &Load::Elf(&elf), "--race", &line);
         qemu.args(runner::ICOUNT)
             .args(["-serial", "null", "-serial"])
             .arg(format!("tcp:127.0.0.1:{port}"));
-        let board = Board::start(&mut qemu, &tools.defmt_print, &elf, &log)?;
+        let board = Board::start(&mut qemu, defmt_print, &elf, &log)?;
         boards.push(board);
         // QEMU connects before it runs the firmware: one board at a time, so
         // that the first connection is the first board's.

@@ -1,8 +1,9 @@
-//! Runs firmware ELFs: QEMU mps2-an386 (Cortex-M4F) with its defmt log decoded
-//! by defmt-print, QEMU microbit (Cortex-M0) with its semihosting console, and
-//! probe-rs for the real micro:bit. The firmware learns how it was started from
-//! its semihosting command line: program name, then (mps2-an386) `--headless`
-//! or `--interactive`, then the user's arguments.
+//! Runs firmware ELFs on any board of [`crate::boards`]: in its QEMU machine,
+//! the log decoded by defmt-print (a defmt log) or passed on (a console), or
+//! on the board itself with probe-rs. The firmware learns how it was started
+//! from its semihosting command line: program name, then (a machine whose
+//! firmware reads it, mps2-an386) `--headless`, `--interactive` or `--race`,
+//! then the user's arguments.
 //!
 //! Headless runs use `-icount shift=7,align=off,sleep=off`: each instruction is
 //! 2^7 ns of virtual time and idle time is skipped, so the output is the same on
@@ -16,6 +17,7 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use crate::boards::{Firmware, Log, Machine};
 use crate::error::{Failure, Outcome};
 use crate::process;
 use crate::setup::Qemu;
@@ -73,36 +75,96 @@ fn program(elf: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// QEMU mps2-an386 with `elf`, its semihosting command line `mode` + `args`,
-/// started in the workspace root (the firmware keeps its records' flash image in
-/// `target/qemu-records.bin`, a path relative to there).
-pub fn mps2(qemu: &Path, elf: &Path, mode: &str, args: &[String]) -> Command {
-    let mut line = vec![mode.to_string()];
+/// What QEMU loads.
+pub enum Load<'a> {
+    /// An ELF, as the kernel; its file name is the firmware's program name.
+    Elf(&'a Path),
+    /// A flash image (a `.hex`, as a person drags onto a board, or an ELF)
+    /// put in place by QEMU's generic loader: the core then boots from the
+    /// vector table it wrote, as a chip does from flash. The firmware sees
+    /// `program` as its program name.
+    Image { image: &'a Path, program: &'a str },
+}
+
+/// QEMU's `machine`, no display, no monitor, no default devices, with
+/// `load`, its semihosting command line the program name, then `mode` (if
+/// the machine's firmware reads one: [`Machine::modes`]), then `args`;
+/// started in the workspace root (the mps2 firmware keeps its records' flash
+/// image in `target/qemu-records.bin`, a path relative to there).
+pub fn qemu(machine: &Machine, qemu: &Path, load: &Load, mode: &str, args: &[String]) -> Command {
+    let mut line = Vec::with_capacity(args.len() + 1);
+    if machine.modes {
+        line.push(mode.to_string());
+    }
     line.extend_from_slice(args);
+    let program = match load {
+        Load::Elf(elf) => program(elf),
+        Load::Image { program, .. } => program.to_string(),
+    };
     let mut cmd = Command::new(qemu);
     cmd.current_dir(crate::workspace::root());
-    cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
-        .args(["-display", "none", "-monitor", "none", "-nodefaults"])
+    cmd.args(["-machine", machine.name]);
+    if let Some(cpu) = machine.cpu {
+        cmd.args(["-cpu", cpu]);
+    }
+    cmd.args(["-display", "none", "-monitor", "none", "-nodefaults"])
         .arg("-semihosting-config")
-        .arg(semihosting_config(&program(elf), &line))
-        .arg("-kernel")
-        .arg(elf);
+        .arg(semihosting_config(&program, &line));
+    match load {
+        Load::Elf(elf) => {
+            cmd.arg("-kernel").arg(elf);
+        }
+        Load::Image { image, .. } => {
+            let mut loader = std::ffi::OsString::from("loader,file=");
+            loader.push(image.to_string_lossy().replace(',', ",,"));
+            cmd.arg("-device").arg(loader);
+        }
+    }
     cmd
 }
 
-/// The headless mps2-an386 run: UART0 discarded, defmt log (semihosting, which
-/// QEMU writes to its stdout) through `defmt-print` to `output`. The status is
-/// QEMU's (the firmware sets it), else defmt-print's.
+/// [`qemu`] headless: `--headless`, virtual time from the instruction count
+/// ([`ICOUNT`]) and what the machine discards ([`Machine::headless`]).
+pub fn headless_command(
+    machine: &Machine,
+    qemu_path: &Path,
+    load: &Load,
+    args: &[String],
+) -> Command {
+    let mut cmd = qemu(machine, qemu_path, load, "--headless", args);
+    cmd.args(ICOUNT).args(machine.headless);
+    cmd
+}
+
+/// The headless run of `elf` (`firmware`, built) on `machine`, killed after
+/// `limit`, its log to `output`: a defmt log (semihosting, which QEMU writes
+/// to its stdout) through defmt-print, a console (semihosting SYS_WRITE0,
+/// which QEMU writes to its stderr) as it is, in one stream with the rest.
+/// The status is QEMU's (the firmware sets it), else defmt-print's.
 pub fn headless(
+    machine: &Machine,
+    firmware: &Firmware,
     tools: &Qemu,
     elf: &Path,
     args: &[String],
     output: Output,
     limit: Duration,
 ) -> Outcome {
-    let mut qemu = mps2(&tools.qemu, elf, "--headless", args);
-    qemu.args(ICOUNT).args(["-serial", "null"]);
-    decoded(qemu, tools, elf, output, limit).map(|(status, _)| status)
+    let mut cmd = headless_command(machine, &tools.qemu, &Load::Elf(elf), args);
+    match firmware.log {
+        Log::Defmt => decoded(cmd, tools, elf, output, limit).map(|(status, _)| status),
+        Log::Console => {
+            let stdout = match &output {
+                Output::Terminal => stdout_copy(),
+                Output::File(file) => clone(file)?,
+            };
+            cmd.stdin(Stdio::null())
+                .stdout(output.stdio()?)
+                .stderr(stdout);
+            let mut child = process::spawn(&mut cmd)?;
+            Ok(process::code(wait_at_most(&mut child, limit)?))
+        }
+    }
 }
 
 /// Runs `qemu`, a headless QEMU command line of any machine, killed after
@@ -139,9 +201,16 @@ pub fn decoded(
     ))
 }
 
-/// The interactive mps2-an386 run: UART0 on the terminal (raw mode), real time
-/// (no -icount), the defmt log into `log`, whose tail is printed at the end.
-pub fn interactive(tools: &Qemu, elf: &Path, args: &[String], log: &Path) -> Outcome {
+/// The interactive run (a machine that has it, [`Machine::interactive`]):
+/// UART0 on the terminal (raw mode), real time (no -icount), the defmt log
+/// into `log`, whose tail is printed at the end.
+pub fn interactive(
+    machine: &Machine,
+    tools: &Qemu,
+    elf: &Path,
+    args: &[String],
+    log: &Path,
+) -> Outcome {
     if !tty::available() {
         return Err(
             Failure::new("interactive mode needs a terminal (/dev/tty); use --demo").status(2),
@@ -153,7 +222,7 @@ pub fn interactive(tools: &Qemu, elf: &Path, args: &[String], log: &Path) -> Out
     }
     let log_file = File::create(log)
         .map_err(|e| Failure::new(format!("cannot write {}: {e}", log.display())))?;
-    let mut qemu = mps2(&tools.qemu, elf, "--interactive", args);
+    let mut qemu = qemu(machine, &tools.qemu, &Load::Elf(elf), "--interactive", args);
     qemu.args([
         "-chardev",
         "serial,id=term,path=/dev/tty",
@@ -198,7 +267,11 @@ fn decoder(
     let Some(pipe) = qemu.stdout.take() else {
         return Err(Failure::new("QEMU's stdout was not piped"));
     };
-    let mut cmd = Command::new(&tools.defmt_print);
+    let Some(defmt_print) = &tools.defmt_print else {
+        let _ = qemu.kill();
+        return Err(Failure::new("defmt-print was not set up for this run"));
+    };
+    let mut cmd = Command::new(defmt_print);
     cmd.arg("-e")
         .arg(elf)
         .stdin(pipe)
@@ -207,32 +280,6 @@ fn decoder(
     process::spawn(&mut cmd).inspect_err(|_| {
         let _ = qemu.kill();
     })
-}
-
-/// The Cortex-M0 benchmark in QEMU microbit (nRF51822): under -icount the
-/// nRF51's TIMER0 counts instructions. Its console (semihosting SYS_WRITE0,
-/// which QEMU writes to its stderr) goes to our stdout with the rest of its
-/// output, so that one stream carries everything the benchmark prints.
-pub fn m0(qemu: &Path, elf: &Path, args: &[String], limit: Duration) -> Outcome {
-    let mut cmd = Command::new(qemu);
-    cmd.args([
-        "-machine",
-        "microbit",
-        "-display",
-        "none",
-        "-monitor",
-        "none",
-        "-nodefaults",
-    ])
-    .arg("-semihosting-config")
-    .arg(semihosting_config(&program(elf), args))
-    .args(ICOUNT)
-    .arg("-kernel")
-    .arg(elf)
-    .stdin(Stdio::null())
-    .stderr(stdout_copy());
-    let mut child = process::spawn(&mut cmd)?;
-    Ok(process::code(wait_at_most(&mut child, limit)?))
 }
 
 /// Our stdout, for a child's stderr.
@@ -247,13 +294,11 @@ fn stdout_copy() -> Stdio {
     Stdio::inherit()
 }
 
-/// `probe-rs run` on the micro:bit v2; probe-rs replaces us (its Ctrl-C handling
-/// stops the core cleanly, and its status is the run's).
-pub fn probe_rs(probe: &Path, elf: &Path, args: &[String]) -> Outcome {
+/// `probe-rs run --chip CHIP` on a board; probe-rs replaces us (its Ctrl-C
+/// handling stops the core cleanly, and its status is the run's).
+pub fn probe_rs(chip: &str, probe: &Path, elf: &Path, args: &[String]) -> Outcome {
     let mut cmd = Command::new(probe);
-    cmd.args(["run", "--chip", "nRF52833_xxAA"])
-        .arg(elf)
-        .args(args);
+    cmd.args(["run", "--chip", chip]).arg(elf).args(args);
     #[cfg(unix)]
     {
         use std::os::unix::process::CommandExt;
@@ -306,6 +351,7 @@ fn pipeline_status(qemu: ExitStatus, decoder: ExitStatus) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::boards;
 
     fn strings(args: &[&str]) -> Vec<String> {
         args.iter().map(|s| s.to_string()).collect()
@@ -360,9 +406,12 @@ mod tests {
 
     #[test]
     fn mps2_command_line() {
-        let cmd = mps2(
+        let machine = boards::QEMU.machine().expect("a machine");
+        let load = Load::Elf(Path::new("/t/qemu"));
+        let cmd = qemu(
+            machine,
             Path::new("qemu-system-arm"),
-            Path::new("/t/qemu"),
+            &load,
             "--headless",
             &["--demo".into()],
         );
@@ -372,5 +421,48 @@ mod tests {
              -nodefaults -semihosting-config \
              enable=on,target=native,arg=qemu,arg=--headless,arg=--demo -kernel /t/qemu"
         );
+        let cmd = headless_command(machine, Path::new("qemu-system-arm"), &load, &[]);
+        assert!(process::shown(&cmd).ends_with(
+            "arg=qemu,arg=--headless -kernel /t/qemu -icount shift=7,align=off,sleep=off -serial null"
+        ));
+    }
+
+    #[test]
+    fn microbit_command_line_has_no_mode() {
+        let machine = boards::MICROBIT_V1.machine().expect("a machine");
+        let cmd = headless_command(
+            machine,
+            Path::new("qemu-system-arm"),
+            &Load::Elf(Path::new("/t/microbit-v1")),
+            &["--demo".into()],
+        );
+        assert_eq!(
+            process::shown(&cmd),
+            "qemu-system-arm -machine microbit -display none -monitor none -nodefaults \
+             -semihosting-config enable=on,target=native,arg=microbit-v1,arg=--demo \
+             -kernel /t/microbit-v1 -icount shift=7,align=off,sleep=off"
+        );
+    }
+
+    #[test]
+    fn an_image_is_loaded_by_the_generic_loader_not_as_the_kernel() {
+        let image = Load::Image {
+            image: Path::new("/t/a,b/v1.hex"),
+            program: "microbit-v1",
+        };
+        let machine = boards::MICROBIT_V1.machine().expect("a machine");
+        let cmd = qemu(
+            machine,
+            Path::new("qemu-system-arm"),
+            &image,
+            "--headless",
+            &["--demo".into()],
+        );
+        let shown = process::shown(&cmd);
+        assert!(
+            shown.ends_with("arg=microbit-v1,arg=--demo -device loader,file=/t/a,,b/v1.hex"),
+            "{shown}"
+        );
+        assert!(!shown.contains("-kernel"), "{shown}");
     }
 }

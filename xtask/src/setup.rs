@@ -8,26 +8,27 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::boards;
 use crate::error::{say, Failure, Outcome};
 use crate::process;
 use crate::workspace::{self, find_tool, on_path};
 
-/// The QEMU firmware (game and Cortex-M4 benchmark).
-pub const M4: &str = "thumbv7em-none-eabihf";
-/// The study's Cortex-M0 benchmark.
-pub const M0: &str = "thumbv6m-none-eabi";
-
 /// The tools a QEMU run needs, where they were found.
 pub struct Qemu {
     pub qemu: PathBuf,
-    pub defmt_print: PathBuf,
+    /// For a defmt log.
+    pub defmt_print: Option<PathBuf>,
 }
 
-/// `cargo xtask setup [--all]`: everything the QEMU firmware and the study's
-/// target benchmarks need; `--all` also reports on probe-rs (micro:bit).
+/// `cargo xtask setup [--all]`: everything the boards' firmware and the
+/// study's target benchmarks need (each board's target, [`boards::ALL`]);
+/// `--all` also reports on probe-rs (micro:bit).
 pub fn run(all: bool) -> Outcome {
-    target(M4)?;
-    target(M0)?;
+    let mut targets: Vec<&str> = boards::ALL.iter().map(|b| b.game.target).collect();
+    targets.dedup();
+    for triple in targets {
+        target(triple)?;
+    }
     qemu()?;
     flip_link()?;
     defmt_print()?;
@@ -42,21 +43,13 @@ pub fn run(all: bool) -> Outcome {
     Ok(0)
 }
 
-/// What building and running the mps2-an386 firmware needs (the game, the
-/// Cortex-M4 benchmark).
-pub fn m4_qemu() -> Result<Qemu, Failure> {
-    target(M4)?;
-    flip_link()?;
+/// What a headless QEMU run needs (the firmware's own needs are
+/// [`crate::boards::Firmware::build`]'s): qemu-system-arm, and defmt-print
+/// for a `defmt` log.
+pub fn qemu_tools(defmt: bool) -> Result<Qemu, Failure> {
     let qemu = qemu()?;
-    let defmt_print = defmt_print()?;
+    let defmt_print = if defmt { Some(defmt_print()?) } else { None };
     Ok(Qemu { qemu, defmt_print })
-}
-
-/// What the Cortex-M0 benchmark needs: it prints through semihosting's console,
-/// not defmt, and links with plain rust-lld.
-pub fn m0_qemu() -> Result<PathBuf, Failure> {
-    target(M0)?;
-    qemu()
 }
 
 /// flip-link, the firmware's linker (set in .cargo/config.toml).
@@ -64,7 +57,7 @@ pub fn flip_link() -> Result<PathBuf, Failure> {
     cargo_tool("flip-link", "flip-link", "about a minute")
 }
 
-/// defmt-print, which decodes the mps2-an386 firmware's defmt log.
+/// defmt-print, which decodes the firmware's defmt log (semihosting, in QEMU).
 fn defmt_print() -> Result<PathBuf, Failure> {
     cargo_tool("defmt-print", "defmt-print", "a few minutes")
 }

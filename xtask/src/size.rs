@@ -10,8 +10,9 @@
 //!
 //! Measured from the ELF's section headers with the `object` crate, with the
 //! Berkeley accounting of `llvm-size -B` (so no llvm-tools component is needed
-//! and the figures are the ones `llvm-size -B` prints). Budgets in bytes:
-//! FLASH_BUDGET (default 131072 = 128 KiB), RAM_BUDGET (default 16384 = 16 KiB),
+//! and the figures are the ones `llvm-size -B` prints). Budgets in bytes, the
+//! board's ([`crate::boards::MICROBIT`]'s): FLASH_BUDGET (default 131072 = 128
+//! KiB), RAM_BUDGET (default 16384 = 16 KiB),
 //! issue 27's: the v2 runs event stepping, about 18 KiB more code than fixed steps.
 //!
 //! It also prints the stepping the firmware links, read from the ELF: the byte
@@ -25,10 +26,8 @@ use object::elf::{SHF_ALLOC, SHF_EXECINSTR, SHF_WRITE, SHT_NOBITS};
 use object::read::elf::{FileHeader, SectionHeader};
 use object::{elf, Endianness, FileKind, Object, ObjectSection, ObjectSymbol};
 
+use crate::boards::Board;
 use crate::error::{say, Failure, Outcome};
-use crate::firmware::{self, Artifact};
-use crate::setup::{self, M4};
-use crate::workspace;
 
 /// What the accounting needs of a section header.
 #[derive(Clone, Copy, Debug)]
@@ -185,8 +184,8 @@ fn verdict(used: u64, budget: u64) -> &'static str {
     }
 }
 
-/// The markdown report.
-pub fn table(size: &Berkeley, flash_budget: u64, ram_budget: u64) -> String {
+/// The markdown report on `board`'s firmware.
+pub fn table(board: &str, size: &Berkeley, flash_budget: u64, ram_budget: u64) -> String {
     let line = |what: &str, used: u64, budget: u64| {
         format!(
             "| {what} | {used} B ({}) | {} | {} | {} |",
@@ -197,7 +196,7 @@ pub fn table(size: &Berkeley, flash_budget: u64, ram_budget: u64) -> String {
         )
     };
     [
-        "| micro:bit v2 firmware | used | budget | share | |".to_string(),
+        format!("| {board} firmware | used | budget | share | |"),
         "| --- | ---: | ---: | ---: | --- |".to_string(),
         line("Flash (text + data)", size.flash(), flash_budget),
         line("Static RAM (data + bss)", size.ram(), ram_budget),
@@ -205,20 +204,17 @@ pub fn table(size: &Berkeley, flash_budget: u64, ram_budget: u64) -> String {
     .join("\n")
 }
 
-/// `cargo xtask size-report [--no-build] [ELF]`: an explicit ELF is measured
-/// as it is; otherwise the micro:bit firmware, built first unless `--no-build`.
-pub fn run(no_build: bool, elf: Option<PathBuf>) -> Outcome {
-    let flash_budget = workspace::env_number("FLASH_BUDGET", 131_072)?;
-    let ram_budget = workspace::env_number("RAM_BUDGET", 16384)?;
+/// `cargo xtask size-report [--no-build] [ELF]` on `board` (the micro:bit
+/// v2): an explicit ELF is measured as it is, against the board's budgets;
+/// otherwise its firmware, built first unless `--no-build`.
+pub fn run(board: &Board, no_build: bool, elf: Option<PathBuf>) -> Outcome {
+    let flash_budget = board.budget(&board.budgets.flash)?;
+    let ram_budget = board.budget(&board.budgets.ram)?;
     let explicit = elf.is_some();
     let elf = match elf {
         Some(elf) => elf,
-        None if no_build => workspace::target_dir()?.join(M4).join("release/microbit"),
-        None => {
-            setup::target(M4)?;
-            setup::flip_link()?;
-            firmware::build(&Artifact::firmware("marble-microbit", "microbit", M4))?
-        }
+        None if no_build => board.game.built()?,
+        None => board.game.build()?,
     };
     if !elf.is_file() {
         return Err(Failure::new(format!(
@@ -229,7 +225,7 @@ pub fn run(no_build: bool, elf: Option<PathBuf>) -> Outcome {
     }
     let size = measure(&elf)?;
     let stepping = stepping_of(&elf)?;
-    println!("{}", table(&size, flash_budget, ram_budget));
+    println!("{}", table(board.name, &size, flash_budget, ram_budget));
     let mut status = 0;
     match stepping {
         Some(stepping) => println!("stepping: {} ({STEPPING_SYMBOL})", stepping.name()),
@@ -242,7 +238,10 @@ pub fn run(no_build: bool, elf: Option<PathBuf>) -> Outcome {
             status = 1;
         }
         (None, false) => {
-            say!("the micro:bit firmware has no {STEPPING_SYMBOL} symbol");
+            say!(
+                "the {} firmware has no {STEPPING_SYMBOL} symbol",
+                board.name
+            );
             status = 1;
         }
     }
@@ -319,13 +318,13 @@ mod tests {
             bss: 3_792,
         };
         assert_eq!(
-            table(&size, 65536, 16384),
+            table("micro:bit v2", &size, 65536, 16384),
             "| micro:bit v2 firmware | used | budget | share | |\n\
              | --- | ---: | ---: | ---: | --- |\n\
              | Flash (text + data) | 57060 B (55.7 KiB) | 64.0 KiB | 87 % | ok |\n\
              | Static RAM (data + bss) | 4852 B (4.7 KiB) | 16.0 KiB | 30 % | ok |"
         );
-        assert!(table(&size, 1000, 16384).contains("| 5706 % | **OVER** |"));
+        assert!(table("micro:bit v2", &size, 1000, 16384).contains("| 5706 % | **OVER** |"));
     }
 
     /// A little-endian ARM ELF with `name` as a data object of `bytes` in

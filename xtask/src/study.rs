@@ -2,33 +2,37 @@
 //! (`marble-study`'s `accuracy`) runs `cargo xtask bench-m4` and `bench-m0` and
 //! parses their stdout: the `BENCH`, `CALIBRATION`, `EMPTY` and `DONE` lines.
 
+use crate::boards::{Board, M0, M4, MICROBIT_V1, QEMU};
 use crate::error::{say, Failure, Outcome};
-use crate::firmware::{self, Artifact};
 use crate::process;
 use crate::runner::{self, Output};
-use crate::setup::{self, M0, M4};
+use crate::setup;
 use crate::workspace;
 
 /// `cargo xtask bench-m4 [ARGS...]`: the Cortex-M4F benchmark, headless in
 /// QEMU mps2-an386, its defmt log decoded on stdout.
 pub fn bench_m4(args: &[String]) -> Outcome {
-    let args = runner::drop_separators(args);
-    let limit = runner::timeout(600)?;
-    let tools = setup::m4_qemu()?;
-    let elf = firmware::build(&Artifact::firmware("marble-qemu", "bench", M4))?;
-    say!("running it in QEMU mps2-an386 (Cortex-M4F)");
-    runner::headless(&tools, &elf, &args, Output::Terminal, limit)
+    bench(&QEMU, "Cortex-M4F", args)
 }
 
 /// `cargo xtask bench-m0 [ARGS...]`: the Cortex-M0 benchmark in QEMU microbit,
 /// its console on stdout.
 pub fn bench_m0(args: &[String]) -> Outcome {
+    bench(&MICROBIT_V1, "Cortex-M0", args)
+}
+
+/// `board`'s benchmark, headless on its QEMU machine, its output on stdout.
+fn bench(board: &Board, core: &str, args: &[String]) -> Outcome {
     let args = runner::drop_separators(args);
-    let limit = runner::timeout(900)?;
-    let qemu = setup::m0_qemu()?;
-    let elf = firmware::build(&Artifact::firmware("marble-bench-m0", "bench_m0", M0))?;
-    say!("running it in QEMU microbit (Cortex-M0)");
-    runner::m0(&qemu, &elf, &args, limit)
+    let machine = board.machine()?;
+    let Some(bench) = &board.bench else {
+        return Err(Failure::new(format!("the {} has no benchmark", board.name)).status(2));
+    };
+    let limit = runner::timeout(bench.timeout)?;
+    let tools = bench.qemu_tools()?;
+    let elf = bench.build()?;
+    say!("running it in QEMU {} ({core})", machine.name);
+    runner::headless(machine, bench, &tools, &elf, &args, Output::Terminal, limit)
 }
 
 /// `cargo xtask accuracy [ARGS...]`: the study, built with its own `study`
@@ -37,7 +41,9 @@ pub fn accuracy(args: &[String]) -> Outcome {
     let args = runner::drop_separators(args);
     // Everything its target runs need, installed up front rather than in the
     // middle of an hour-long run.
-    setup::m4_qemu()?;
+    setup::qemu_tools(true)?;
+    setup::flip_link()?;
+    setup::target(M4)?;
     setup::target(M0)?;
     let dir = workspace::root().join("study");
     if !dir.is_dir() {

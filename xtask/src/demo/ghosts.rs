@@ -1,6 +1,6 @@
 //! `cargo xtask check-ghosts`: the QEMU board's ghosts kept across a restart.
 
-use super::log::{parse_levels, strip_colours};
+use super::log::{parse_levels, read_log};
 use super::run_demo;
 use crate::error::{say, Failure, Outcome};
 use crate::workspace;
@@ -24,10 +24,8 @@ pub fn check_ghosts() -> Outcome {
     for run in 1..=2 {
         let log = target.join(format!("check-ghosts-{run}.log"));
         say!("ghosts run {run}: cargo qemu -- --demo --ghosts…");
-        let status = run_demo(&log, &["--demo", "--ghosts"])?;
-        let text = std::fs::read(&log)
-            .map_err(|e| Failure::new(format!("cannot read {}: {e}", log.display())))?;
-        let text = strip_colours(&String::from_utf8_lossy(&text));
+        let status = run_demo(&crate::boards::QEMU, &log, &["--demo", "--ghosts"])?;
+        let text = read_log(&log)?;
         if status != 0 {
             return Err(Failure::new(format!(
                 "the QEMU demo exited with status {status} (log: {})",

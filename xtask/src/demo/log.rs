@@ -1,5 +1,30 @@
 //! Reading the firmware's demo log: the per-level lines, the stepper, the CPU
-//! load and the per-frame profile and flight-budget lines.
+//! load and the per-frame profile and flight-budget lines; and the log files
+//! every board's checks write and read back.
+
+use std::fs::File;
+use std::path::Path;
+
+use crate::error::Failure;
+
+/// A new log file at `path`, its directory made.
+pub fn create_log(path: &Path) -> Result<File, Failure> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    File::create(path).map_err(|e| Failure::new(format!("cannot write {}: {e}", path.display())))
+}
+
+/// The log at `path` as plain text ([`strip_colours`]), written back so, to
+/// be kept for reading.
+pub fn read_log(path: &Path) -> Result<String, Failure> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| Failure::new(format!("cannot read {}: {e}", path.display())))?;
+    let text = strip_colours(&String::from_utf8_lossy(&bytes));
+    let _ = std::fs::write(path, &text);
+    Ok(text)
+}
 
 /// One level as the firmware reported it.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -114,7 +139,7 @@ fn digits(text: &str) -> &str {
 }
 
 /// The CPU load in hundredths of a percent, from the first line like
-/// `cpu load: … = X.YY % of a 64 MHz …`.
+/// `cpu load: … = X.YY % of a 64 MHz …` (any board's clock).
 pub fn parse_cpu_load(log: &str) -> Option<u64> {
     log.lines().find_map(cpu_load_of)
 }
@@ -122,7 +147,12 @@ pub fn parse_cpu_load(log: &str) -> Option<u64> {
 fn cpu_load_of(line: &str) -> Option<u64> {
     let start = line.find("cpu load: ")? + "cpu load: ".len();
     let line = &line[start..];
-    line.rmatch_indices(" % of a 64 MHz").find_map(|(end, _)| {
+    line.rmatch_indices(" % of a ").find_map(|(end, of)| {
+        let clock = &line[end + of.len()..];
+        let unit = clock.trim_start_matches(|c: char| c.is_ascii_digit());
+        if unit.len() == clock.len() || !unit.starts_with(" MHz") {
+            return None;
+        }
         let number = &line[..end];
         let cents = number.get(number.len().checked_sub(2)?..)?;
         let before = number[..number.len() - 2].strip_suffix('.')?;
@@ -253,6 +283,12 @@ INFO  cpu load: 123 busy instructions in 456 us of firmware time = 789 instructi
         assert_eq!(parse_cpu_load("cpu load: x = 1.5 % of a 64 MHz"), None);
         assert_eq!(parse_cpu_load("cpu load: no time elapsed"), None);
         assert_eq!(parse_cpu_load("load = 1.00 % of a 64 MHz"), None);
+        assert_eq!(
+            parse_cpu_load("cpu load: x = 18.58 % of a 16 MHz Cortex-M0"),
+            Some(1858)
+        );
+        assert_eq!(parse_cpu_load("cpu load: x = 1.00 % of a fast MHz"), None);
+        assert_eq!(parse_cpu_load("cpu load: x = 1.00 % of a 16 GHz"), None);
         assert_eq!(centi(300), "3.00");
         assert_eq!(centi(7), "0.07");
     }

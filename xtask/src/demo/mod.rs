@@ -19,19 +19,17 @@ mod ghosts;
 mod log;
 mod sim;
 
-use std::fs::File;
 use std::path::Path;
 
 pub use ghosts::check_ghosts;
-pub use log::{centi, parse_levels, parse_stepping, strip_colours, Level};
+pub use log::{centi, create_log, parse_cpu_load, parse_levels, parse_stepping, read_log, Level};
 pub use sim::{build_sim, compare_levels, simulate, verdict, Verdict};
 
+use crate::boards::{Board, QEMU};
 use crate::error::{say, Failure, Outcome};
-use crate::firmware::{self, Artifact};
 use crate::runner::{self, Output};
-use crate::setup::{self, M4};
 use crate::workspace;
-use log::{parse_budget_cuts, parse_cpu_load, parse_worst_frames};
+use log::{parse_budget_cuts, parse_worst_frames};
 
 /// The worst physics frame of each level against `bound` instructions (`what`:
 /// the board's CPU): a level's frame over it is a problem. The stress scenes
@@ -94,15 +92,19 @@ fn check_budget_cuts(log: &str, levels: &[String], problems: &mut Problems) {
     }
 }
 
-/// Whether anything failed; each problem is reported when found, and the check
-/// goes on so that one run shows them all.
+/// What failed, in every board's check: each problem is reported when found,
+/// and the check goes on so that one run shows them all.
 #[derive(Default)]
-struct Problems(bool);
+pub struct Problems(u32);
 
 impl Problems {
-    fn report(&mut self, message: String) {
+    pub fn report(&mut self, message: String) {
         say!("{message}");
-        self.0 = true;
+        self.0 += 1;
+    }
+
+    pub fn count(&self) -> u32 {
+        self.0
     }
 }
 
@@ -115,12 +117,8 @@ pub fn run() -> Outcome {
     let mut problems = Problems::default();
 
     say!("running the QEMU demo (cargo qemu --demo)…");
-    let status = run_demo(&log, &["--demo"])?;
-    let text = std::fs::read(&log)
-        .map_err(|e| Failure::new(format!("cannot read the QEMU log {}: {e}", log.display())))?;
-    let text = strip_colours(&String::from_utf8_lossy(&text));
-    // The log is kept for reading, as plain text.
-    let _ = std::fs::write(&log, &text);
+    let status = run_demo(&QEMU, &log, &["--demo"])?;
+    let text = read_log(&log)?;
     if status != 0 {
         problems.report(format!(
             "the QEMU demo exited with status {status} (log: {}); its last lines:",
@@ -132,31 +130,9 @@ pub fn run() -> Outcome {
         }
     }
 
-    let (levels, total) = parse_levels(&text);
-    if levels.is_empty() {
-        return Err(Failure::new(format!(
-            "no per-level lines in the QEMU log ({})",
-            log.display()
-        )));
-    }
-    let stepping = parse_stepping(&text).ok_or_else(|| {
-        Failure::new(format!(
-            "the QEMU log names no stepper (`demo stepping=fixed|events`, {})",
-            log.display()
-        ))
-    })?;
-    if let Some(total) = total.filter(|&total| total != levels.len()) {
-        problems.report(format!(
-            "the QEMU demo reported {} of {total} levels",
-            levels.len()
-        ));
-    }
+    let levels = check_levels(&QEMU, &text, &log, &mut problems)?;
 
-    let sim = build_sim()?;
-    let failed = compare_levels(&sim, &levels, stepping, "qemu");
-    problems.0 |= !failed.is_empty();
-
-    let budget = workspace::env_number("CPU_BUDGET_CENTIPERCENT", 300)?;
+    let budget = QEMU.budget(&QEMU.budgets.cpu)?;
     match parse_cpu_load(&text) {
         None => problems.report(format!("no cpu load line in the QEMU log ({})", log.display())),
         Some(load) if load > budget => problems.report(format!(
@@ -167,12 +143,18 @@ pub fn run() -> Outcome {
         Some(load) => say!("CPU load {} % of 64 MHz (budget {} %)", centi(load), centi(budget)),
     }
 
-    let bound = workspace::env_number("WORST_FRAME_M4", 64_000)?;
+    let bound = QEMU.budget(&QEMU.budgets.frame)?;
     let names: Vec<String> = levels.iter().map(|l| l.name.clone()).collect();
-    check_worst_frames(&text, &names, (bound, BUDGET_BOUND_M4), "M4", &mut problems);
+    check_worst_frames(
+        &text,
+        &names,
+        (bound, BUDGET_BOUND_M4),
+        QEMU.core,
+        &mut problems,
+    );
     check_budget_cuts(&text, &names, &mut problems);
 
-    if problems.0 {
+    if problems.count() > 0 {
         return Err(Failure::new(format!(
             "FAILED (QEMU log: {})",
             log.display()
@@ -185,20 +167,57 @@ pub fn run() -> Outcome {
     Ok(0)
 }
 
-/// The headless demo, exactly as `cargo xtask qemu --demo` runs it, its output
-/// (QEMU's and defmt-print's) into `log`; QEMU's status.
-fn run_demo(log: &Path, args: &[&str]) -> Outcome {
-    if let Some(dir) = log.parent() {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
+/// The levels of `board`'s demo log (`text`, from `log`), each compared with
+/// the simulator's run (`sim --level NAME --autopilot --json --stepping S`,
+/// [`compare_levels`]): a level that differs, or a count short of the
+/// demo's total, is a problem; a log without levels or without its stepper
+/// is a failure.
+pub fn check_levels(
+    board: &Board,
+    text: &str,
+    log: &Path,
+    problems: &mut Problems,
+) -> Result<Vec<Level>, Failure> {
+    let (levels, total) = parse_levels(text);
+    if levels.is_empty() {
+        return Err(Failure::new(format!(
+            "no per-level lines in the {} demo's log ({})",
+            board.name,
+            log.display()
+        )));
     }
-    let file = File::create(log)
-        .map_err(|e| Failure::new(format!("cannot write {}: {e}", log.display())))?;
-    let limit = runner::timeout(600)?;
-    let tools = setup::m4_qemu()?;
-    let elf = firmware::build(&Artifact::firmware("marble-qemu", "qemu", M4))?;
+    if let Some(total) = total.filter(|&total| total != levels.len()) {
+        problems.report(format!(
+            "the {} demo reported {} of {total} levels",
+            board.name,
+            levels.len()
+        ));
+    }
+    let stepping = parse_stepping(text).ok_or_else(|| {
+        Failure::new(format!(
+            "the {} demo's log names no stepper (`demo stepping=fixed|events`, {})",
+            board.name,
+            log.display()
+        ))
+    })?;
+    let sim = build_sim()?;
+    for (level, verdict) in compare_levels(&sim, &levels, stepping, board.tag) {
+        problems.report(format!("level {level}: {verdict:?}"));
+    }
+    Ok(levels)
+}
+
+/// `board`'s headless demo, exactly as `cargo xtask qemu --demo` runs it, its
+/// output (QEMU's and defmt-print's) into `log`; QEMU's status.
+fn run_demo(board: &Board, log: &Path, args: &[&str]) -> Outcome {
+    let file = create_log(log)?;
+    let machine = board.machine()?;
+    let limit = runner::timeout(board.game.timeout)?;
+    let tools = board.game.qemu_tools()?;
+    let elf = board.game.build()?;
     let demo: Vec<String> = args.iter().map(|a| a.to_string()).collect();
-    match runner::headless(&tools, &elf, &demo, Output::File(&file), limit) {
+    let output = Output::File(&file);
+    match runner::headless(machine, &board.game, &tools, &elf, &demo, output, limit) {
         Ok(status) => Ok(status),
         // A timeout is a failed demo like any other: report it with the log.
         Err(failure) if failure.status == 124 => Ok(124),
@@ -228,17 +247,17 @@ INFO  demo summary: 13/13 levels won
         let levels = ["first-roll".to_string()];
         let mut problems = Problems::default();
         check_worst_frames(log, &levels, (1_900, 40_000), "M4", &mut problems);
-        assert!(problems.0, "a level's 1 934 is over 1 900");
+        assert!(problems.count() > 0, "a level's 1 934 is over 1 900");
         let mut problems = Problems::default();
         check_worst_frames(log, &levels, (30_000, 40_000), "M4", &mut problems);
         assert!(
-            !problems.0,
+            problems.count() == 0,
             "a stress scene over the goal, within the budget's bound, is reported only"
         );
         let mut problems = Problems::default();
         check_worst_frames(log, &levels, (30_000, 30_100), "M4", &mut problems);
         assert!(
-            problems.0,
+            problems.count() > 0,
             "a stress scene over the budget's bound is a problem"
         );
         let mut problems = Problems::default();
@@ -249,7 +268,7 @@ INFO  demo summary: 13/13 levels won
             "M4",
             &mut problems,
         );
-        assert!(problems.0, "a log without profiles is a problem");
+        assert!(problems.count() > 0, "a log without profiles is a problem");
     }
 
     #[test]
@@ -267,12 +286,18 @@ INFO  demo summary: 13/13 levels won
         );
         let mut problems = Problems::default();
         check_budget_cuts(log, &["first-roll".to_string()], &mut problems);
-        assert!(!problems.0, "cuts in a stress scene are reported only");
+        assert!(
+            problems.count() == 0,
+            "cuts in a stress scene are reported only"
+        );
         let mut problems = Problems::default();
         check_budget_cuts(log, &["drop-onto-marble".to_string()], &mut problems);
-        assert!(problems.0, "a cut on a level is a problem");
+        assert!(problems.count() > 0, "a cut on a level is a problem");
         let mut problems = Problems::default();
         check_budget_cuts("no budget here", &[], &mut problems);
-        assert!(problems.0, "a log without budget lines is a problem");
+        assert!(
+            problems.count() > 0,
+            "a log without budget lines is a problem"
+        );
     }
 }

@@ -1,5 +1,6 @@
-//! The figures the v1's firmware logs: its RAM, CPU load, watchdog and
-//! per-level frame costs, and where its flash goes.
+//! The figures the v1's firmware logs: its RAM, watchdog and per-level frame
+//! costs, and where its flash goes (its CPU load is read as every board's,
+//! [`crate::demo::parse_cpu_load`]).
 
 /// `ram: statics S B + stack high-water H B = T B …` → (statics, stack).
 pub fn parse_ram(log: &str) -> Option<(u64, u64)> {
@@ -8,20 +9,6 @@ pub fn parse_ram(log: &str) -> Option<(u64, u64)> {
         let (statics, rest) = rest.split_once(" B + stack high-water ")?;
         let (stack, _) = rest.split_once(" B")?;
         Some((statics.parse().ok()?, stack.parse().ok()?))
-    })
-}
-
-/// `cpu load: … = X.YY % of a 16 MHz …` → hundredths of a percent.
-pub fn parse_cpu(log: &str) -> Option<u64> {
-    log.lines().find_map(|line| {
-        let rest = &line[line.find("cpu load: ")?..];
-        let end = rest.find(" % of a 16 MHz")?;
-        let number = rest[..end].rsplit(' ').next()?;
-        let (whole, cents) = number.split_once('.')?;
-        if cents.len() != 2 {
-            return None;
-        }
-        Some(whole.parse::<u64>().ok()? * 100 + cents.parse::<u64>().ok()?)
     })
 }
 

@@ -1,8 +1,7 @@
-use std::path::Path;
-
 use super::gpio_trace::{parse_trace_line, TraceEvent};
-use super::log::{module_of, parse_cpu, parse_profile, parse_ram, parse_watchdog};
+use super::log::{module_of, parse_profile, parse_ram, parse_watchdog};
 use super::*;
+use crate::demo::parse_cpu_load;
 
 #[test]
 fn trace_lines() {
@@ -127,8 +126,8 @@ fn budget_lines() {
     let log = "x INFO  ram: statics 5084 B + stack high-water 8364 B = 13448 B of 16384 B (budget 12288 B)\n\
                x INFO  cpu load: 75141188 busy instructions in 25267360 us of firmware time = 2973844 instructions/s = 18.58 % of a 16 MHz Cortex-M0 (128 frames/s, 100 refreshes/s)\n";
     assert_eq!(parse_ram(log), Some((5084, 8364)));
-    assert_eq!(parse_cpu(log), Some(1858));
-    assert_eq!(parse_cpu("cpu load: x = 1.5 % of a 16 MHz"), None);
+    assert_eq!(parse_cpu_load(log), Some(1858));
+    assert_eq!(parse_cpu_load("cpu load: x = 1.5 % of a 16 MHz"), None);
 }
 
 #[test]
@@ -162,54 +161,4 @@ fn modules_of_symbols() {
         module_of("TIMER0"),
         "(symbols without a path: vectors, handlers, builtins)"
     );
-}
-
-#[test]
-fn the_qemu_command_line() {
-    let cmd = qemu_command(
-        Path::new("qemu-system-arm"),
-        Path::new("/t/microbit-v1"),
-        &["--demo".into()],
-    );
-    assert_eq!(
-        process::shown(&cmd),
-        "qemu-system-arm -M microbit -display none -monitor none -nodefaults -icount \
-         shift=7,align=off,sleep=off -semihosting-config \
-         enable=on,target=native,arg=microbit-v1,arg=--demo -kernel /t/microbit-v1"
-    );
-}
-
-#[test]
-fn an_image_is_loaded_by_the_generic_loader_not_as_the_kernel() {
-    let cmd = qemu_image_command(
-        Path::new("qemu-system-arm"),
-        Path::new("/t/a,b/v1.hex"),
-        &["--demo".into()],
-    );
-    let shown = process::shown(&cmd);
-    assert!(
-        shown.ends_with("arg=microbit-v1,arg=--demo -device loader,file=/t/a,,b/v1.hex"),
-        "{shown}"
-    );
-    assert!(!shown.contains("-kernel"), "{shown}");
-}
-
-#[test]
-fn the_image_option() {
-    let strings = |list: &[&str]| list.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-    let (image, rest) = take_image(strings(&["--demo", "--image", "x.hex", "--profile"])).unwrap();
-    assert_eq!(image, Some(PathBuf::from("x.hex")));
-    assert_eq!(rest, ["--demo", "--profile"]);
-    let (image, rest) = take_image(strings(&["--image=y.hex", "--demo"])).unwrap();
-    assert_eq!(image, Some(PathBuf::from("y.hex")));
-    assert_eq!(rest, ["--demo"]);
-    let (image, rest) = take_image(strings(&["--demo", "--images"])).unwrap();
-    assert_eq!((image, rest), (None, strings(&["--demo", "--images"])));
-    assert_eq!(
-        take_image(strings(&["--demo", "--image"]))
-            .unwrap_err()
-            .status,
-        2
-    );
-    assert!(take_image(strings(&["--image=a", "--image=b"])).is_err());
 }
