@@ -56,6 +56,7 @@ mod terminal_input;
 
 pub use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 pub use crate::player::FRAME_HZ;
+pub use demo::{profile_scenes, PROFILE_FRAMES};
 pub use display_task::display_task;
 pub use game_task::{game_task, play_task};
 #[cfg(feature = "ghosts")]

@@ -313,7 +313,7 @@ pub(crate) fn name_of(text: &[u8]) -> Option<&str> {
             break;
         }
         if let Some(value) = line.strip_prefix(b"name:") {
-            return core::str::from_utf8(value).ok().map(str::trim);
+            return core::str::from_utf8(value).ok().map(str::trim_ascii);
         }
     }
     None
