@@ -513,6 +513,19 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_skipped_level_is_named_by_its_header_trimmed_of_ascii_blanks() {
+        assert_eq!(name_of(b"name:  corner \t\r\n---\n#####"), Some("corner"));
+        assert_eq!(name_of(b"effects: rolling\nname:x\n---"), Some("x"));
+        assert_eq!(name_of(b"---\nname: below the grid"), None);
+        assert_eq!(name_of(b"name: \xff\n---"), None);
+        // Only ASCII blanks go, as the level parser trims them.
+        assert_eq!(
+            name_of("name:\u{a0}nbsp\n---".as_bytes()),
+            Some("\u{a0}nbsp")
+        );
+    }
+
+    #[test]
     fn a_full_text_fails_rather_than_cuts() {
         let mut text = Text::<4>::new();
         assert!(write!(text, "abc").is_ok());

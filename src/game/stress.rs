@@ -6,8 +6,10 @@
 //! `e = 1`), many pairs (four marbles shaken in a box), a marble landing on
 //! another (a drop through a hole onto a marble resting below it) and a long free
 //! fall through two holes to the bottom of three storeys. The QEMU demo's
-//! profile (`cargo qemu -- --demo`) counts every frame's instructions on them as
-//! on the levels, and `cargo xtask check-demo` holds both to the same bound;
+//! profile (`cargo qemu -- --demo`) and the micro:bit v1's (`cargo microbit-v1
+//! -- --demo --profile`) count every frame's instructions on them as on the
+//! levels (`app::profile_scenes`); `cargo xtask check-demo` holds both to the
+//! same bound, `cargo xtask check-microbit-v1` reports them against its goal;
 //! `tests/stress.rs` checks on the host that each scene does what it is named
 //! for. Beside them every board's profile (`app::profile_scenes`) plays
 //! [`HARD_MAZES`], generated mazes at the top difficulty.

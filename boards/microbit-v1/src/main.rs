@@ -14,7 +14,10 @@
 //!   with it), every frame that stays on the LEDs for 80 ms or more with its
 //!   time span (`display frame …`, for the GPIO check), then the CPU load,
 //!   the RAM use (statics + stack high-water mark) and a summary, and exits
-//!   0 only if every level was won (101 on a panic). Without `--demo` it
+//!   0 only if every level was won (101 on a panic). `--demo --profile`
+//!   counts each frame's instructions (`profile NAME: …`), then profiles the
+//!   difficulty-9 mazes and the stress scenes as the mps2 board does
+//!   (`app::profile_scenes`). Without `--demo` it
 //!   plays: QEMU's TWI is a stub with no accelerometer behind it, so the
 //!   sensor supervision reports the sensor down and the game waits, showing
 //!   the fault cross, as on a board with a broken sensor (`--seconds=N`
