@@ -111,8 +111,10 @@ pub const PROFILE_FRAMES: u32 = 1024;
 ///
 /// `count` plays one frame of the session on the reading and returns its
 /// phase and the instructions it took: the board's CPU meter around
-/// `Session::frame_in` (the only call of it here, so that it is inlined
-/// once).
+/// `Session::frame_in` (called once here, so that it is inlined once). A
+/// stress scene is played through a player without the autopilot: its
+/// session is the one `Session::new` makes with the player's configuration,
+/// and one loop for both kinds is less flash on the micro:bit v1 than two.
 /// A scene that cannot be set up logs nothing: the checks want every line.
 /// Out of line: the players live in its frame, not in the caller's future.
 #[inline(never)]
