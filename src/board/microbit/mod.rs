@@ -58,7 +58,6 @@
 //! here, so that this module lists everything the v2 runs with; the maze reach
 //! and the ghosts' sizes are `board::game_sizes`', which QEMU runs too.
 
-pub mod power_on;
 pub mod sleep;
 pub mod speaker;
 #[cfg(feature = "shared-flash")]
