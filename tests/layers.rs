@@ -276,8 +276,9 @@ fn imports_point_down_the_layers_and_close_no_loop() {
 /// The boards, each a folder of `src/board/` (its safe half) and the firmware
 /// crates under `boards/` that run it. What more than one board uses lives in
 /// `src/board/` outside every board's folder (the bus clear, the watchdog gate,
-/// the virtual chips), so that a board is described in its own folder and no
-/// board's folder reaches another's.
+/// the virtual chips, the game's sizes), so that a board is described in its
+/// own folder and no board's folder reaches another's, directly or through a
+/// shared part.
 const BOARDS: &[(&str, &[&str])] = &[
     ("board::qemu", &["qemu", "qemu-race"]),
     ("board::microbit", &["microbit"]),
