@@ -35,11 +35,11 @@ use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
 use marble_rolling::board::qemu::terminal::{restore_terminal, Terminal};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
-use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::board::qemu::virtual_matrix::VirtualMatrix;
 use marble_rolling::board::qemu::{
     Options, GHOSTS_BYTES, GHOST_BYTES, HEIGHT, MAZE_REACH, PLAY_TILT, QEMU_RAM, WIDTH,
 };
+use marble_rolling::board::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
