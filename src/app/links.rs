@@ -122,4 +122,4 @@ pub struct Win {
 
 /// Each built-in level's record in frames, if it has one.
 #[cfg(feature = "records")]
-pub type Bests = [Option<u32>; LEVELS.len()];
+pub(crate) type Bests = [Option<u32>; LEVELS.len()];

@@ -62,7 +62,7 @@ pub use game_task::{game_task, play_task};
 pub use ghosts::{replays, GhostKit, GhostStore, LevelGhost};
 pub use input_task::{input_task, TiltInput};
 #[cfg(feature = "records")]
-pub use links::{Bests, Win};
+pub use links::Win;
 pub use links::{Latest, Links, Meter};
 pub use mode::{DemoSummary, GameExit, GameMode};
 pub use race_task::{race_task, Air, AirPacket};

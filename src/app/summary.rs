@@ -84,7 +84,7 @@ impl DemoSummary {
         frames: 0,
     };
 
-    /// Passed when every level played was won ([`Self::all_won`]).
+    /// Passed when every level played was won (`Self::all_won`).
     pub const fn verdict(&self) -> Verdict {
         Verdict {
             pass: self.all_won(),
