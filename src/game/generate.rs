@@ -24,7 +24,7 @@
 //! (`friction`, from 1); pits (holes out of the maze, from 2: on the lowest
 //! storey, in dead ends off the way to the goal, one more every two levels);
 //! a second marble (from 4) and a third (from 7) in dead ends of the top storey
-//! (on mazes of up to [`MAX_SIZE_FOR_MARBLES`] cells a side);
+//! (on mazes of up to `MAX_SIZE_FOR_MARBLES` cells a side);
 //! `board_motion` (from 6, on one or two storeys: see [`Maze::board_motion`]); and a time limit that shrinks from three to one and a
 //! half times the autopilot's measured pace (see [`Maze::time_limit_s`]).
 //!
@@ -70,7 +70,7 @@ pub const MAX_DIFFICULTY: u8 = 9;
 /// passes its range of 128: `survey` in `tests/generate.rs` shows debug builds
 /// panicking from size 9 on, event steps only), and on larger mazes the
 /// autopilot loses some three-marble runs on time. Up to 7 it wins every one.
-pub const MAX_SIZE_FOR_MARBLES: u8 = 7;
+pub(crate) const MAX_SIZE_FOR_MARBLES: u8 = 7;
 /// The longest level text [`Maze`] writes (four storeys of the largest size).
 pub const MAX_TEXT_BYTES: usize = text_bytes(MAX_SIZE, MAX_STOREYS as u8);
 

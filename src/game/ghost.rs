@@ -59,7 +59,7 @@ use crate::physics::Fx;
 use super::session::Session;
 
 mod race;
-pub use race::{race_frame, replay, replay_in, Checking, RaceError, Racer};
+pub use race::{race_frame, replay, Checking, RaceError, Racer};
 
 /// Bytes before the tokens.
 pub const HEADER_BYTES: usize = 24;

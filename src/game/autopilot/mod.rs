@@ -25,7 +25,6 @@ pub mod control;
 pub mod planning;
 
 use planning::FIELD_BYTES;
-pub use planning::MAX_CELLS_XZ;
 
 /// The autopilot for one level (see the module documentation).
 #[derive(Clone, Debug)]
