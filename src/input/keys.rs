@@ -7,9 +7,9 @@ use super::axes::AccelMg;
 use super::event::{Command, InputEvent};
 
 /// Tilt added per key press, milli-g.
-pub const KEY_TILT_STEP_MG: i32 = 100;
+pub(crate) const KEY_TILT_STEP_MG: i32 = 100;
 /// Largest tilt reachable with keys, milli-g per axis.
-pub const KEY_TILT_MAX_MG: i32 = 500;
+pub(crate) const KEY_TILT_MAX_MG: i32 = 500;
 
 /// A key recognised by [`KeyDecoder`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -119,8 +119,8 @@ impl KeyDecoder {
 }
 
 /// A virtual accelerometer driven by keys: each arrow/WASD press tilts the
-/// board one [`KEY_TILT_STEP_MG`] step further that way (up to
-/// [`KEY_TILT_MAX_MG`]); space levels it. A terminal sends no key releases,
+/// board one `KEY_TILT_STEP_MG` step further that way (up to
+/// `KEY_TILT_MAX_MG`); space levels it. A terminal sends no key releases,
 /// so the tilt stays until changed, like a board held tilted.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct KeyTilt {

@@ -23,7 +23,7 @@ pub type Sensor<I2C> = Lsm303agr<I2cInterface<I2C>, MagOneShot>;
 
 /// How long the output takes to become valid after a mode change at 200 Hz
 /// (the datasheet's 1/ODR plus margin).
-pub const SETTLE_MS: u64 = super::accel_timing::ACCEL_SETTLE_MS;
+pub(crate) const SETTLE_MS: u64 = super::accel_timing::ACCEL_SETTLE_MS;
 
 // The driver is configured for the rate the input path names.
 const _: () = assert!(
@@ -55,7 +55,7 @@ impl embedded_hal::delay::DelayNs for NoDelay {
 }
 
 /// Whether the chip on the bus says it is an LSM303AGR accelerometer.
-pub async fn check_identity<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
+pub(crate) async fn check_identity<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
 where
     I2C: I2c,
     I2C::Error: BusFault,
@@ -69,7 +69,7 @@ where
 }
 
 /// (Re)configures the accelerometer: init (block data update), high
-/// resolution at 200 Hz, then waits [`SETTLE_MS`] until the output is valid.
+/// resolution at 200 Hz, then waits `SETTLE_MS` until the output is valid.
 pub async fn configure<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
 where
     I2C: I2c,
@@ -89,7 +89,7 @@ where
 }
 
 /// The (re)init every LSM303AGR board runs: the identity check
-/// ([`check_identity`]), then, if the chip is one, [`configure`]. The
+/// (`check_identity`), then, if the chip is one, [`configure`]. The
 /// outcome goes to `pipeline` ([`TiltPipeline::reinit_done`]) and back to
 /// the board, which logs a failure.
 pub async fn reinit<I2C>(sensor: &mut Sensor<I2C>, pipeline: &mut TiltPipeline) -> Result<(), Fault>

@@ -33,7 +33,7 @@
 //! Everything here is pure: a board feeds bytes, pin levels and samples in,
 //! and host tests drive the same code.
 
-pub mod accel_timing;
+pub(crate) mod accel_timing;
 pub mod axes;
 pub mod event;
 pub mod keys;

@@ -266,14 +266,6 @@ impl<S: Copy> SensorSupervisor<S> {
     }
 }
 
-impl<S: Copy> SensorSupervisor<S> {
-    /// Replaces the plausibility bounds used by [`SensorSupervisor::check`].
-    pub const fn with_plausibility(mut self, plausibility: Plausibility) -> Self {
-        self.plausibility = plausibility;
-        self
-    }
-}
-
 impl SensorSupervisor<AccelMg> {
     /// Feeds a raw read after the plausibility check (an implausible sample
     /// becomes [`Fault::Implausible`]).
