@@ -9,7 +9,7 @@
 //! the acceptor the proposal. So pairing is mutual, a board never proposes to
 //! two boards at once, and since proposals climb the ids a third board on the
 //! channel cannot close a ring of proposals that waits forever: the highest id
-//! only ever accepts. A proposal unanswered for [`PROPOSE_FRAMES`], or whose
+//! only ever accepts. A proposal unanswered for `PROPOSE_FRAMES`, or whose
 //! board is seen racing another, is dropped and the board looks again.
 //!
 //! The race's maze is the proposer's offer: both agree on it because the
@@ -18,7 +18,7 @@
 use super::packet::MazeSpec;
 
 /// How long a proposal waits for an answer: 2 s of frames.
-pub const PROPOSE_FRAMES: u32 = 256;
+pub(crate) const PROPOSE_FRAMES: u32 = 256;
 
 /// Where the handshake stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -31,7 +31,7 @@ pub const RACE_TILT: TiltConfig = SYNTHETIC_TILT;
 /// The most opponent frames replayed per frame of this board: a replay behind
 /// by a second of lost packets catches up in a sixth of a second, and a frame
 /// never costs more than eight of the opponent's.
-pub const CATCH_UP: u32 = 8;
+pub(crate) const CATCH_UP: u32 = 8;
 
 /// A run as far as a board knows it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 //! opponent acknowledges them ([`Outbox`]), and the opponent's readings taken
 //! in order for its replay ([`Inbox`]).
 //!
-//! A block is up to [`BLOCK_FRAMES`] readings in the ghost's coding
+//! A block is up to `BLOCK_FRAMES` readings in the ghost's coding
 //! ([`crate::game::ghost::TokenWriter`]), from the reading before its first
 //! frame, so the receiver, which holds exactly that reading when the block is
 //! the next it needs, decodes it with nothing else. Blocks are cut once and
@@ -21,7 +21,7 @@ use crate::input::axes::AccelMg;
 
 /// The most readings in a block: a block waits at most this many frames
 /// (1/8 s) before it can be sent.
-pub const BLOCK_FRAMES: usize = 16;
+pub(crate) const BLOCK_FRAMES: usize = 16;
 /// Blocks kept for the opponent to acknowledge: 128 blocks, about 12 s of the
 /// autopilot's play (`tests/race.rs` prints 563 frames in 48 blocks), 16 s if
 /// the tilt rests (16 frames a block). 4.5 KiB.
@@ -42,7 +42,7 @@ pub const LEAN_INBOX_READINGS: usize = 96;
 /// [`EARLY_BLOCKS`] on such a board.
 pub const LEAN_EARLY_BLOCKS: usize = 8;
 /// The reading before a run's first frame: a flat board (the ghost's).
-pub const FLAT: AccelMg = AccelMg::LEVEL;
+pub(crate) const FLAT: AccelMg = AccelMg::LEVEL;
 
 /// A block of this board's run.
 #[derive(Clone, Debug)]
@@ -276,7 +276,7 @@ pub enum Taken {
     Kept,
     /// Already held, kept already, or no room: left for its next turn.
     Left,
-    /// The tokens do not decode, or hold more than [`BLOCK_FRAMES`] readings
+    /// The tokens do not decode, or hold more than `BLOCK_FRAMES` readings
     /// or more than the opponent's end.
     Bad,
 }
@@ -325,7 +325,7 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
     }
 
     /// Every frame of the opponent's run and its end are here.
-    pub fn complete(&self) -> bool {
+    pub(crate) fn complete(&self) -> bool {
         self.end.is_some_and(|e| e.frames == self.have)
     }
 
