@@ -2,7 +2,7 @@
 //! ([`crate::game::generate`]), shared by `cargo sim` and `cargo play`.
 //!
 //! The maze's level text goes through the same run-time parser as a level file
-//! ([`super::parse_runtime`]), so a generated level is played exactly as its
+//! (`super::parse_runtime`), so a generated level is played exactly as its
 //! printed text (`cargo sim -- --generate 7 --print-level > my.level`) would be.
 
 use std::format;
@@ -13,7 +13,7 @@ use crate::game::level::LevelView;
 
 /// The options that choose a generated maze.
 #[derive(clap::Args, Debug, Clone)]
-pub struct GenerateArgs {
+pub(crate) struct GenerateArgs {
     /// Play a generated maze: the same seed always gives the same maze
     /// (0..=4294967295).
     // Negative numbers are let through as values so that `--generate -1` is

@@ -56,7 +56,9 @@ pub(crate) fn builtin_names() -> String {
 /// Parses a level source read at run time. The source and the parsed level are
 /// leaked: a tool loads a handful of levels per process. The error is
 /// `line:column: message`.
-pub fn parse_runtime(src: String) -> Result<LevelView<'static>, crate::game::level::LevelError> {
+pub(crate) fn parse_runtime(
+    src: String,
+) -> Result<LevelView<'static>, crate::game::level::LevelError> {
     let src: &'static str = Box::leak(src.into_boxed_str());
     let level = parse::<MAX_WORDS>(src)?;
     let level: &'static _ = Box::leak(Box::new(level));
@@ -92,10 +94,10 @@ pub(crate) fn load_level(arg: &str) -> Result<Loaded, String> {
 }
 
 /// Characters of offending text an error line quotes at most ([`excerpt`]).
-pub const EXCERPT_CHARS: usize = 60;
+pub(crate) const EXCERPT_CHARS: usize = 60;
 
 /// `text` quoted for an error line: in backticks, and when longer than
-/// [`EXCERPT_CHARS`] characters its first ones and an ellipsis (a 100 000-digit
+/// `EXCERPT_CHARS` characters its first ones and an ellipsis (a 100 000-digit
 /// number is reported in a line, not echoed whole).
 pub fn excerpt(text: &str) -> String {
     match text.char_indices().nth(EXCERPT_CHARS) {
@@ -108,7 +110,7 @@ pub fn excerpt(text: &str) -> String {
 /// echoes an argument it refuses whole). Quotes are paired in order; a line
 /// still longer than [`EXCERPT_CHARS`] · 3 characters (an argument with a quote
 /// in it) is cut there.
-pub fn shorten_quotes(message: &str) -> String {
+pub(crate) fn shorten_quotes(message: &str) -> String {
     let mut out = String::with_capacity(message.len().min(4096));
     for (n, line) in message.split('\n').enumerate() {
         if n > 0 {
@@ -141,7 +143,7 @@ pub fn shorten_quotes(message: &str) -> String {
 
 /// A scalar type the physics can run on, chosen by name at run time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Backend {
+pub(crate) enum Backend {
     /// `fixed::types::I8F24`, the firmware's default (`i8f24`).
     I8F24,
     /// `fixed::types::I16F16` (`i16f16`).
@@ -219,7 +221,7 @@ impl core::fmt::Display for Backend {
 }
 
 /// Work that is generic over the scalar type ([`Backend::run`] picks it).
-pub trait WithScalar {
+pub(crate) trait WithScalar {
     /// What the work returns.
     type Output;
     /// Does the work with scalar `S`.
@@ -238,8 +240,8 @@ pub(crate) fn args_without_separator() -> Vec<std::ffi::OsString> {
 
 /// The process arguments (without the aliases' `--`) parsed into `A`; on failure,
 /// clap's message is printed and the exit status returned (2 for an error, 0 for
-/// `--help` and `--version`). An error quotes at most [`EXCERPT_CHARS`] of an
-/// argument ([`shorten_quotes`]).
+/// `--help` and `--version`). An error quotes at most `EXCERPT_CHARS` of an
+/// argument (`shorten_quotes`).
 pub fn parse_args<A: clap::Parser>() -> Result<A, i32> {
     A::try_parse_from(args_without_separator()).map_err(|e| {
         if e.use_stderr() {

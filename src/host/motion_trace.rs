@@ -22,7 +22,7 @@
 //!   the world's state after the step. A state jump at an event instant (a
 //!   bounce) belongs to the flight that starts there.
 //!
-//! Columns ([`trace_header`]): `step,t_s` (the step the instant ends or lies in,
+//! Columns (`trace_header`): `step,t_s` (the step the instant ends or lies in,
 //! 1-based, and the simulated time), then `x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s`
 //! for marble 0 and `xN_mm,yN_mm,zN_mm,vxN_mm_s,vyN_mm_s,vzN_mm_s` for each
 //! further marble `N` — one row per instant, so marble–marble distances are read
@@ -39,7 +39,7 @@ use crate::game::session::Session;
 use crate::physics::{Marble, Scalar, Segment, StepObserver, Vec3, World};
 
 /// The trace's header for `marbles` marbles (see the module doc).
-pub fn trace_header(marbles: usize) -> String {
+pub(crate) fn trace_header(marbles: usize) -> String {
     let mut h = String::from("step,t_s");
     for n in 0..marbles {
         let n = if n == 0 { String::new() } else { n.to_string() };

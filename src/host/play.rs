@@ -79,7 +79,7 @@ pub struct Args {
     pub autopilot: bool,
     /// A generated maze to start with instead of `--level`.
     #[command(flatten)]
-    pub maze: super::generated::GenerateArgs,
+    pub(crate) maze: super::generated::GenerateArgs,
     /// Where each level's best run is kept as a ghost (`NAME.ghost`).
     #[arg(long, value_name = "DIR", default_value = "target/ghosts")]
     pub ghosts: PathBuf,

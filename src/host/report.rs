@@ -49,7 +49,7 @@ pub struct Report {
     /// Wall-clock seconds of the simulation loop.
     pub wall_s: f64,
     /// Rows written by `--trace`.
-    pub trace_rows: u64,
+    pub(crate) trace_rows: u64,
     /// GIF frames written by `--gif`.
     pub gif_frames: usize,
 }

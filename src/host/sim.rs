@@ -105,10 +105,10 @@ pub struct Args {
     pub gif: Option<PathBuf>,
     /// GIF pixels per LED (tile).
     #[arg(long, value_name = "PX", default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub gif_scale: u32,
+    pub(crate) gif_scale: u32,
     /// A GIF image every N game frames (128 frames/s).
     #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
-    pub gif_every: u32,
+    pub(crate) gif_every: u32,
     /// Validate a level file: print `FILE:line:column: message` or `ok`.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["level", "list"])]
     pub check: Option<PathBuf>,
@@ -117,13 +117,13 @@ pub struct Args {
     pub list: bool,
     /// A generated maze instead of `--level` (see `docs/generator.md`).
     #[command(flatten)]
-    pub maze: super::generated::GenerateArgs,
+    pub(crate) maze: super::generated::GenerateArgs,
     /// Print the generated maze's level text (for `--check` and `--level`) and stop.
     // Checked in `run`, not with clap's `requires`: clap would also ask for
     // `--level` (required unless `--generate`), which `--generate` refuses,
     // and lets `--level NAME --print-level` through as a success.
     #[arg(long, conflicts_with_all = ["check", "list"])]
-    pub print_level: bool,
+    pub(crate) print_level: bool,
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {

@@ -31,7 +31,7 @@ pub const HEADER: &str = "t_s,ax_mg,ay_mg,az_mg";
 pub const MAX_READING_MG: f64 = 16_000.0;
 
 /// A flat board's reading.
-pub const FLAT: AccelMg = AccelMg::LEVEL;
+pub(crate) const FLAT: AccelMg = AccelMg::LEVEL;
 
 /// A parsed trace.
 #[derive(Clone, Debug, PartialEq)]
