@@ -10,16 +10,16 @@
 //! Nothing in here is used by the firmware: the module (and its dependencies clap,
 //! gif and crossterm) exists only when the `tools` feature is on.
 
-pub mod generated;
+pub(crate) mod generated;
 pub mod ghost_file;
 pub mod gif_out;
 pub mod play;
 pub mod race;
 pub mod motion_trace;
-pub mod report;
+pub(crate) mod report;
 pub mod sim;
 pub mod storey_maps;
-pub mod tilt_trace;
+pub(crate) mod tilt_trace;
 
 use std::boxed::Box;
 use std::format;
@@ -33,15 +33,15 @@ use crate::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
 /// Occupancy words of the largest level the format allows (127 × 127 tiles on 4
 /// storeys, 16 KiB):
 /// every level read at run time is parsed into a grid of this size.
-pub const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
+pub(crate) const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
 
 /// A level chosen on the command line.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Loaded {
     /// The level.
-    pub view: LevelView<'static>,
+    pub(crate) view: LevelView<'static>,
     /// Its index in [`LEVELS`] when it is a built-in one.
-    pub builtin: Option<usize>,
+    pub(crate) builtin: Option<usize>,
 }
 
 /// Names of the built-in levels, comma separated (for messages).
@@ -99,7 +99,7 @@ pub(crate) const EXCERPT_CHARS: usize = 60;
 /// `text` quoted for an error line: in backticks, and when longer than
 /// `EXCERPT_CHARS` characters its first ones and an ellipsis (a 100 000-digit
 /// number is reported in a line, not echoed whole).
-pub fn excerpt(text: &str) -> String {
+pub(crate) fn excerpt(text: &str) -> String {
     match text.char_indices().nth(EXCERPT_CHARS) {
         Some((cut, _)) => format!("`{}…`", &text[..cut]),
         None => format!("`{text}`"),
@@ -160,7 +160,7 @@ pub(crate) enum Backend {
 
 impl Backend {
     /// Every backend, the default first.
-    pub const ALL: [Backend; 6] = [
+    pub(crate) const ALL: [Backend; 6] = [
         Backend::I8F24,
         Backend::I16F16,
         Backend::I32F32,
@@ -170,7 +170,7 @@ impl Backend {
     ];
 
     /// The name used on the command line and in reports (`Scalar::NAME`).
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         use crate::physics::Scalar;
         match self {
             Backend::I8F24 => fixed::types::I8F24::NAME,
@@ -202,7 +202,7 @@ impl Backend {
     }
 
     /// Runs `job` with this backend's scalar type.
-    pub fn run<J: WithScalar>(self, job: J) -> J::Output {
+    pub(crate) fn run<J: WithScalar>(self, job: J) -> J::Output {
         match self {
             Backend::I8F24 => job.run::<fixed::types::I8F24>(),
             Backend::I16F16 => job.run::<fixed::types::I16F16>(),

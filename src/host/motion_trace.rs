@@ -57,7 +57,7 @@ pub(crate) fn trace_header(marbles: usize) -> String {
 #[derive(Clone, Debug)]
 pub struct FlightLog<S> {
     /// Per marble: `(from, to, segment)`, fractions of the step.
-    pub flights: Vec<Vec<(S, S, Segment<S>)>>,
+    pub(crate) flights: Vec<Vec<(S, S, Segment<S>)>>,
 }
 
 impl<S> Default for FlightLog<S> {
@@ -70,7 +70,7 @@ impl<S> Default for FlightLog<S> {
 
 impl<S> FlightLog<S> {
     /// Forgets the flights so far (keeps the room).
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         for f in &mut self.flights {
             f.clear();
         }
@@ -156,11 +156,11 @@ pub(super) enum ReplayError {
 /// What a frame's replay starts from: the world as it was before the frame.
 pub(super) struct FrameStart<S> {
     /// The marbles.
-    pub marbles: Vec<Marble<S>>,
+    pub(crate) marbles: Vec<Marble<S>>,
     /// The pull (milli-g).
-    pub pull: [i32; 3],
+    pub(crate) pull: [i32; 3],
     /// The step counters.
-    pub stats: crate::physics::StepStats,
+    pub(crate) stats: crate::physics::StepStats,
 }
 
 impl<S: Scalar> FrameStart<S> {
