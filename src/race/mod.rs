@@ -5,14 +5,14 @@
 //!
 //! * [`packet`]: the packet format (version 1) and its checks (CRC-16, magic,
 //!   version, framing); a packet failing any is dropped and counted.
-//! * [`handshake`]: two boards find each other and agree on the maze.
+//! * `handshake`: two boards find each other and agree on the maze.
 //! * [`stream`]: each board's readings, in the ghost's coding, in blocks that
 //!   are repeated until acknowledged.
 //! * [`session`]: one board's protocol state machine ([`RaceLink`]): countdown,
 //!   silence, counters.
 //! * [`replay`]: the opponent's marble replayed bit-exactly from its readings,
 //!   and the verdict (fewer frames wins).
-//! * [`play`]: all of it around this board's own session ([`Race`]).
+//! * `play`: all of it around this board's own session ([`Race`]).
 //! * [`wire`]: the packets on a byte stream (a UART between two boards).
 //! * [`air`]: the packets in radio frames, behind a group byte (the
 //!   micro:bit v2's IEEE 802.15.4 radio).
@@ -20,9 +20,9 @@
 //! docs/race.md describes the protocol and what a lost packet costs.
 
 pub mod air;
-pub mod handshake;
+pub(crate) mod handshake;
 pub mod packet;
-pub mod play;
+pub(crate) mod play;
 pub mod replay;
 pub mod session;
 pub mod stream;

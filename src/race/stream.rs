@@ -88,7 +88,7 @@ impl<const N: usize> Default for Outbox<N> {
 
 impl<const N: usize> Outbox<N> {
     /// Empty, before the first frame.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         Outbox {
             blocks: Deque::new(),
             pending: Vec::new(),
@@ -113,7 +113,7 @@ impl<const N: usize> Outbox<N> {
     }
 
     /// The end, once [`Outbox::end`] was called.
-    pub fn ended(&self) -> Option<End> {
+    pub(crate) fn ended(&self) -> Option<End> {
         self.end
     }
 
@@ -139,7 +139,7 @@ impl<const N: usize> Outbox<N> {
 
     /// Adds the next frame's reading. After an [`Overflow`] the run can no
     /// longer reach the opponent whole: every later push fails too.
-    pub fn push(&mut self, reading: AccelMg) -> Result<(), Overflow> {
+    pub(crate) fn push(&mut self, reading: AccelMg) -> Result<(), Overflow> {
         if self.overflowed || self.end.is_some() {
             return Err(Overflow);
         }
@@ -157,7 +157,7 @@ impl<const N: usize> Outbox<N> {
 
     /// Closes the run: cuts what is pending and keeps `end` to send. After an
     /// [`Overflow`] there is no end to send: the opponent could not reach it.
-    pub fn end(&mut self, end: End) -> Result<(), Overflow> {
+    pub(crate) fn end(&mut self, end: End) -> Result<(), Overflow> {
         if self.overflowed {
             return Err(Overflow);
         }
@@ -214,7 +214,7 @@ impl<const N: usize> Outbox<N> {
 
     /// The opponent holds `frames` of this run in order, and the end if
     /// `have_end`. Acknowledgements of more than was sent are ignored.
-    pub fn ack(&mut self, frames: u32, have_end: bool) {
+    pub(crate) fn ack(&mut self, frames: u32, have_end: bool) {
         let sent = self.frames - self.pending.len() as u32;
         if frames > sent || frames < self.acked {
             return;
@@ -235,7 +235,7 @@ impl<const N: usize> Outbox<N> {
     /// Adds to `w` the oldest unacknowledged block, then the others from the
     /// cursor on, as many as fit, and moves the cursor past them (back to the
     /// start after the newest).
-    pub fn fill(&mut self, w: &mut Writer<'_>) {
+    pub(crate) fn fill(&mut self, w: &mut Writer<'_>) {
         // The oldest block first, in every packet: the one the opponent needs
         // before any other is never more than one packet away.
         let Some(oldest) = self.blocks.front() else {
@@ -268,7 +268,7 @@ impl<const N: usize> Outbox<N> {
 /// What became of a received block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Taken {
+pub(crate) enum Taken {
     /// The next readings: taken, this many frames (with the early blocks it
     /// joined).
     Frames(u32),
@@ -304,7 +304,7 @@ impl<const R: usize, const E: usize> Default for Inbox<R, E> {
 
 impl<const R: usize, const E: usize> Inbox<R, E> {
     /// Empty.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         Inbox {
             readings: Deque::new(),
             early: Vec::new(),
@@ -331,7 +331,7 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
 
     /// Takes a block if it is the next, and the early ones it joins; keeps
     /// it if it comes after a gap.
-    pub fn take(&mut self, first: u32, tokens: &[u8]) -> Taken {
+    pub(crate) fn take(&mut self, first: u32, tokens: &[u8]) -> Taken {
         if first < self.have {
             return Taken::Left;
         }
@@ -431,7 +431,7 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
     }
 
     /// The next reading for the replay.
-    pub fn pop(&mut self) -> Option<AccelMg> {
+    pub(crate) fn pop(&mut self) -> Option<AccelMg> {
         self.readings.pop_front()
     }
 }
