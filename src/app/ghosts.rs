@@ -48,9 +48,9 @@ async fn check<'a, 'g, const EVENTS: bool>(
 /// one flash page: [`crate::records::max_ghost_bytes`]).
 pub struct GhostKit<F: NorFlash, const N: usize> {
     /// The ghosts in flash.
-    pub store: Ghosts<F>,
+    pub(crate) store: Ghosts<F>,
     /// Runs after each write (QEMU saves its flash image there).
-    pub written: fn(&mut F),
+    pub(crate) written: fn(&mut F),
     stored: [u8; N],
     record: [u8; N],
 }
@@ -188,7 +188,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
     /// time, the task yielding between stretches: raced if it wins on its
     /// own state hash, dropped (logged) if not. Call once, before the
     /// attempt's first frame.
-    pub async fn check(&mut self, live: &Session<'_, Fx>) {
+    pub(crate) async fn check(&mut self, live: &Session<'_, Fx>) {
         let Some(checking) = &mut self.racer else {
             return;
         };
@@ -223,7 +223,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
 
     /// After each frame of `live` (the attempt at the level): records it and
     /// moves the ghost to where it races.
-    pub fn frame(&mut self, live: &Session<'_, Fx>) {
+    pub(crate) fn frame(&mut self, live: &Session<'_, Fx>) {
         if let Some(recorder) = &mut self.recorder {
             recorder.observe(live);
         }
@@ -234,7 +234,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
 
     /// Draws the ghost on `frame` (a picture of `live` through `viewport`)
     /// while the attempt is played.
-    pub fn draw<const W: usize, const H: usize>(
+    pub(crate) fn draw<const W: usize, const H: usize>(
         &self,
         frame: &mut Frame<W, H>,
         live: &Session<'_, Fx>,
@@ -307,7 +307,7 @@ pub async fn replays<const EVENTS: bool>(bytes: &[u8], live: &Session<'_, Fx>) -
 }
 
 /// Writes `bytes` as `name`'s ghost through `work`; logs the outcome.
-pub async fn keep<F: NorFlash>(
+pub(crate) async fn keep<F: NorFlash>(
     store: &mut Ghosts<F>,
     written: fn(&mut F),
     name: &str,
