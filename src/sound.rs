@@ -49,7 +49,7 @@ pub struct Sounds {
 
 impl Sounds {
     /// No sound.
-    pub const NONE: Sounds = Sounds {
+    pub(crate) const NONE: Sounds = Sounds {
         list: [None; MAX_SOUNDS],
     };
 

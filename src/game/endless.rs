@@ -453,7 +453,7 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
 
     /// The maze [`MazeSlot::make`] made last, if it made one (a level
     /// [`MazeSlot::load`] loaded, nameless: its name is in its text).
-    pub fn view(&self) -> Option<LevelView<'_>> {
+    pub(crate) fn view(&self) -> Option<LevelView<'_>> {
         let (info, grid) = self.level.as_ref()?;
         // The name was a `str`: its bytes are UTF-8.
         let name = self.name.get(..usize::from(self.name_len))?;

@@ -244,7 +244,7 @@ impl<'a, S: Scalar> Game<'a, S> {
 
     /// [`Game::frame`] with the stepper fixed at compile time ([`World::step_in`]):
     /// `EVENTS` must match the configuration's [`Stepping`].
-    pub fn frame_in<const EVENTS: bool>(&mut self) -> Phase {
+    pub(crate) fn frame_in<const EVENTS: bool>(&mut self) -> Phase {
         if self.phase != Phase::Playing {
             return self.phase;
         }

@@ -60,14 +60,14 @@ pub struct KeyDecoder {
 
 impl KeyDecoder {
     /// A decoder outside any escape sequence.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         Self {
             state: Escape::None,
         }
     }
 
     /// Feeds one byte; returns a key when one is complete.
-    pub fn feed(&mut self, byte: u8) -> Option<Key> {
+    pub(crate) fn feed(&mut self, byte: u8) -> Option<Key> {
         match self.state {
             Escape::None => Self::plain(byte, &mut self.state),
             Escape::Esc => {
@@ -171,7 +171,7 @@ impl KeyTilt {
     }
 
     /// The tilt the keys hold now (flat until the first tilt key).
-    pub fn tilt(&self) -> AccelMg {
+    pub(crate) fn tilt(&self) -> AccelMg {
         AccelMg::from_xz(self.x, self.z)
     }
 }

@@ -451,7 +451,7 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
 
     /// Forgets the viewport (a new level or a restart): the next frame
     /// re-centres on the marble. A level of different size does this by itself.
-    pub fn reset(&mut self) {
+    pub(crate) fn reset(&mut self) {
         self.state = None;
         self.background = None;
         #[cfg(feature = "storeys")]
@@ -483,7 +483,7 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
 
     /// Moves the viewport to follow the world's marble (see the module docs)
     /// and returns it.
-    pub fn follow<S: Scalar, const M: usize>(
+    pub(crate) fn follow<S: Scalar, const M: usize>(
         &mut self,
         level: &LevelView<'_>,
         world: &World<'_, S, M>,

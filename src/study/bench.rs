@@ -23,7 +23,7 @@ pub struct BenchItem {
 
 impl BenchItem {
     /// The effects this item runs with.
-    pub fn effects(&self) -> Effects {
+    pub(crate) fn effects(&self) -> Effects {
         match self.variant {
             Some(v) => EFFECT_VARIANTS[v % EFFECT_VARIANTS.len()].1,
             None => Scene::get(self.scene).spec.effects,
