@@ -16,7 +16,7 @@ pub mod gif_out;
 pub mod play;
 pub mod race;
 pub mod motion_trace;
-pub(crate) mod report;
+pub mod report;
 pub mod sim;
 pub mod storey_maps;
 pub(crate) mod tilt_trace;

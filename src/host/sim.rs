@@ -21,7 +21,7 @@
 //! inputs and backend. `--tilt-trace FILE` feeds recorded readings
 //! (`super::tilt_trace`); `--trace FILE` writes the marbles' motion, sampled
 //! between the game's frames ([`super::motion_trace`]); the outcome is a
-//! `Report`, a JSON line or a summary.
+//! [`Report`], a JSON line or a summary.
 //!
 //! # Exit status
 //!

@@ -5,7 +5,7 @@
 //!
 //! * [`packet`]: the packet format (version 1) and its checks (CRC-16, magic,
 //!   version, framing); a packet failing any is dropped and counted.
-//! * `handshake`: two boards find each other and agree on the maze.
+//! * [`handshake`]: two boards find each other and agree on the maze.
 //! * [`stream`]: each board's readings, in the ghost's coding, in blocks that
 //!   are repeated until acknowledged.
 //! * [`session`]: one board's protocol state machine ([`RaceLink`]): countdown,
@@ -20,7 +20,7 @@
 //! docs/race.md describes the protocol and what a lost packet costs.
 
 pub mod air;
-pub(crate) mod handshake;
+pub mod handshake;
 pub mod packet;
 pub(crate) mod play;
 pub mod replay;

@@ -1,6 +1,6 @@
 //! One board's side of the race protocol, without a radio: bytes in
 //! ([`RaceLink::receive`]), bytes out ([`RaceLink::transmit`]), one
-//! [`RaceLink::tick`] per game frame. The handshake (`super::handshake`), the
+//! [`RaceLink::tick`] per game frame. The handshake ([`super::handshake`]), the
 //! streams with their acknowledgements ([`super::stream`]), the countdown, the
 //! silence watch and the counters of what was dropped live here; the physics
 //! does not (the opponent's replay is [`super::replay`]).
