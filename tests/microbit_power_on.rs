@@ -1,15 +1,15 @@
-//! The micro:bit v2's power-on choices (`board::microbit::power_on`): which
+//! The micro:bit v2's power-on choices (`player::power_on`): which
 //! buttons held ask for what, the records' clear confirmation, the self-test's
 //! frames and the tilt dot's direction (the owner's check of `AXIS_MAP`).
 
-use marble_rolling::board::microbit::power_on::{
-    confirm, confirm_frame, dot, dot_from, power_on, self_test_frame, Confirm, PowerOn, SelfTest,
-    CONFIRM_TIMEOUT_SAMPLES, LEVEL_FRAMES, SWEEP_FRAMES,
-};
 use marble_rolling::board::microbit::{AXIS_MAP, BUTTONS};
 use marble_rolling::input::event::{Command, Fault, InputEvent};
 use marble_rolling::input::sensor::AccelMg;
 use marble_rolling::matrix::MAX_BRIGHTNESS;
+use marble_rolling::player::power_on::{
+    confirm, confirm_frame, dot, dot_from, power_on, self_test_frame, Confirm, PowerOn, SelfTest,
+    CONFIRM_TIMEOUT_SAMPLES, LEVEL_FRAMES, SWEEP_FRAMES,
+};
 
 #[test]
 fn buttons_held_at_power_on() {

@@ -24,7 +24,7 @@ use marble_rolling::board::microbit_v1::sensor::{PollLoop, Polled, Probed};
 use marble_rolling::board::microbit_v1::twi::{Pause, TwiError};
 use marble_rolling::board::microbit_v1::virtual_nxp::{VirtualNxp, RESET_US};
 use marble_rolling::board::microbit_v1::virtual_twi::{VirtualChip, VirtualTwi};
-use marble_rolling::board::qemu::virtual_lsm303agr::{
+use marble_rolling::board::virtual_lsm303agr::{
     ChipControl, InjectedFault, VirtualLsm303agr, MICROBIT_V2,
 };
 use marble_rolling::game::levels::LEVELS;

@@ -1,7 +1,8 @@
 //! The QEMU board models the micro:bit v2 where the demo measures what the v2
-//! runs: the same accelerometer link (shared, `board::accel_link`), and its
-//! own copies of the v2's maze reach and ghost sizes, which must stay the v2's
-//! so that QEMU's stack and flash figures are the v2's.
+//! runs: the same accelerometer link (`board::accel_link`) and the same maze
+//! reach and ghost sizes (`board::game_sizes`), both shared, never imported
+//! from the v2's module; its constants must stay the v2's so that QEMU's stack
+//! and flash figures are the v2's.
 
 use marble_rolling::board::{accel_link, microbit, qemu};
 

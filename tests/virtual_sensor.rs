@@ -16,11 +16,11 @@ use lsm303agr::{AccelMode, AccelOutputDataRate, AccelScale, Lsm303agr};
 
 use marble_rolling::board::microbit::{BusClear, ACCEL_BOOT_MS, LSM303AGR_READY_US};
 use marble_rolling::board::qemu::virtual_i2c::{Ram, RamRange, TwimError, VirtualTwim};
-use marble_rolling::board::qemu::virtual_lsm303agr::{
+use marble_rolling::board::qemu::{QEMU_RAM, SENSOR_AXIS_MAP, SUPERVISOR};
+use marble_rolling::board::virtual_lsm303agr::{
     reg, AccelMode as ChipMode, ChipControl, InjectedFault, Placement, VirtualLsm303agr,
     ACCEL_ADDRESS, CTRL4_BDU, CTRL_REG1_A_RESET, MAG_ADDRESS, MICROBIT_V2,
 };
-use marble_rolling::board::qemu::{QEMU_RAM, SENSOR_AXIS_MAP, SUPERVISOR};
 use marble_rolling::input::sensor::{
     AccelMg, Action, Axis, AxisMap, AxisSource, Fault, Plausibility, Read, TiltPipeline, Transition,
 };

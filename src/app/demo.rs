@@ -18,11 +18,13 @@ use super::mode::{DemoSummary, GameExit};
 use crate::game::endless::{Endless, MazeArgs, MazeSlot, Seeds, StageError, DEMO_MAZES};
 use crate::game::levels::LEVELS;
 use crate::game::rules::Phase;
-use crate::game::session::SYNTHETIC_TILT;
+use crate::game::session::{Session, SYNTHETIC_TILT};
+use crate::game::stress::{HARD_MAZES, STRESS};
 use crate::input::axes::AccelMg;
 use crate::input::event::{Command, InputEvent};
 use crate::matrix::Frame;
 use crate::physics::world::SetupError;
+use crate::physics::Fx;
 use crate::player::{Player, Status, WIN_PAUSE_FRAMES};
 use crate::render::screens::{win_flash, win_frame};
 
@@ -93,6 +95,87 @@ impl Profile {
         );
         let _ = (level, frames);
     }
+}
+
+/// Frames a profile replays of each level, generated maze or stress scene
+/// at most (a scene plays its own count).
+pub const PROFILE_FRAMES: u32 = 1024;
+
+/// Profiles what the built-in levels do not reach, on every board alike:
+/// each of [`HARD_MAZES`] (made in `mazes`), the autopilot playing up to
+/// [`PROFILE_FRAMES`] of its frames, then every stress scene
+/// ([`STRESS`]) with its scripted tilt. Logs for each the `profile NAME: …`
+/// line of a level (the physics only: autopilot and render 0) and how often
+/// the flight budget cut a marble's step (`budget NAME: N marble-steps cut`),
+/// which `cargo xtask check-demo` and `check-microbit-v1` read.
+///
+/// `count` plays one frame of the session on the reading and returns its
+/// phase and the instructions it took: the board's CPU meter around
+/// `Session::frame_in` (called once here, so that it is inlined once). A
+/// stress scene is played through a player without the autopilot: its
+/// session is the one `Session::new` makes with the player's configuration,
+/// and one loop for both kinds is less flash on the micro:bit v1 than two.
+/// A scene that cannot be set up logs nothing: the checks want every line.
+/// Out of line: the players live in its frame, not in the caller's future.
+#[inline(never)]
+pub fn profile_scenes<
+    const W: usize,
+    const H: usize,
+    const PILOT: bool,
+    const EVENTS: bool,
+    const WORDS: usize,
+    const TEXT: usize,
+>(
+    mazes: &mut MazeSlot<WORDS, TEXT>,
+    mut count: impl FnMut(&mut Session<'_, Fx>, AccelMg) -> (Phase, u64),
+) {
+    for number in 0..HARD_MAZES.len() + STRESS.len() {
+        // A maze is played by the autopilot up to PROFILE_FRAMES, a stress
+        // scene by its script for all its frames, the phase aside.
+        let (level, frames, script) = match number.checked_sub(HARD_MAZES.len()) {
+            None => match HARD_MAZES.get(number).map(|&args| mazes.make(args)) {
+                Some(Ok(level)) => (level, PROFILE_FRAMES, None),
+                _ => continue,
+            },
+            Some(k) => match STRESS.get(k) {
+                Some(scene) => (scene.level, scene.frames, Some(scene.tilt)),
+                None => continue,
+            },
+        };
+        // Matched by reference: moving the player out of the result would
+        // copy it through a temporary on the stack (see `demo`).
+        let mut made =
+            Player::<W, H, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, script.is_none());
+        let Ok(player) = &mut made else {
+            continue;
+        };
+        let mut profile = Profile::default();
+        while profile.frames < frames {
+            let reading = match script {
+                Some(tilt) => tilt(profile.frames),
+                None => player.reading(AccelMg::LEVEL),
+            };
+            let (phase, physics) = count(player.session_mut(), reading);
+            profile.frame(0, physics);
+            if script.is_none() && phase != Phase::Playing {
+                break;
+            }
+        }
+        log_scene(player.level_name(), &profile, player.session());
+    }
+}
+
+/// A scene's profile line and its flight budget's cuts
+/// (`physics::world::FLIGHT_BUDGET`).
+fn log_scene(name: &str, profile: &Profile, session: &Session<'_, Fx>) {
+    profile.log(name);
+    #[cfg(feature = "defmt")]
+    defmt::info!(
+        "budget {=str}: {=u32} marble-steps cut",
+        name,
+        session.game().world().stats.budget_cuts
+    );
+    let _ = session;
 }
 
 /// Waits for the next frame tick, taking the input events meanwhile: in the

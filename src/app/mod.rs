@@ -31,6 +31,8 @@
 //! * [`Console`]: a blocking byte sink for an interactive terminal.
 //! * [`race_task`] races a friend's board in place of the game task, its
 //!   packets carried by the board's radio task through an [`Air`].
+//! * [`power_on`]: the flows a 5 × 5 board may run before the game (the
+//!   self-test, the question before the best times are cleared).
 //!
 //! The display size `W`×`H` and whether the autopilot is linked (`PILOT`) are
 //! the board binary's choice, passed as const generics: the micro:bit's 5×5
@@ -46,6 +48,7 @@ mod ghosts;
 mod input_task;
 mod links;
 mod mode;
+pub mod power_on;
 mod race_task;
 #[cfg(feature = "records")]
 mod records_task;
@@ -56,6 +59,7 @@ mod terminal_input;
 
 pub use crate::matrix::output::{Console, MatrixOutput, REFRESH_HZ};
 pub use crate::player::FRAME_HZ;
+pub use demo::{profile_scenes, PROFILE_FRAMES};
 pub use display_task::display_task;
 pub use game_task::{game_task, play_task};
 #[cfg(feature = "ghosts")]

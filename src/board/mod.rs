@@ -25,3 +25,6 @@ pub mod watchdog;
 pub mod virtual_lsm303agr;
 // The levels region both micro:bits read from flash (`cargo xtask hex --level`).
 pub mod levels_region;
+// The maze reach and the ghosts' sizes the micro:bit v2 is built to and the
+// QEMU board runs too.
+pub mod game_sizes;

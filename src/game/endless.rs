@@ -313,7 +313,7 @@ pub(crate) fn name_of(text: &[u8]) -> Option<&str> {
             break;
         }
         if let Some(value) = line.strip_prefix(b"name:") {
-            return core::str::from_utf8(value).ok().map(str::trim);
+            return core::str::from_utf8(value).ok().map(str::trim_ascii);
         }
     }
     None
@@ -511,6 +511,19 @@ impl<const N: usize> Write for Text<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_skipped_level_is_named_by_its_header_trimmed_of_ascii_blanks() {
+        assert_eq!(name_of(b"name:  corner \t\r\n---\n#####"), Some("corner"));
+        assert_eq!(name_of(b"effects: rolling\nname:x\n---"), Some("x"));
+        assert_eq!(name_of(b"---\nname: below the grid"), None);
+        assert_eq!(name_of(b"name: \xff\n---"), None);
+        // Only ASCII blanks go, as the level parser trims them.
+        assert_eq!(
+            name_of("name:\u{a0}nbsp\n---".as_bytes()),
+            Some("\u{a0}nbsp")
+        );
+    }
 
     #[test]
     fn a_full_text_fails_rather_than_cuts() {

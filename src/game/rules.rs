@@ -128,9 +128,9 @@ pub struct Game<'a, S: Scalar> {
     /// Frames played before the clock started: all of them until a marble
     /// rolls (see the module doc), then fixed. A `u16` (an attempt untouched
     /// for `u16::MAX` frames, 8.5 minutes, ends as time up): it fits beside
-    /// `phase` where a `u32` would grow every copy of the game by 8 B, and
-    /// the micro:bit v1 had 24 B of RAM left (`cargo xtask check-microbit-v1`
-    /// measured 12 304 B of 12 288 with a `u32`).
+    /// `phase` where a `u32` would grow every copy of the game by 8 B, which
+    /// the micro:bit v1's 12 KiB of RAM does not have (`cargo xtask
+    /// check-microbit-v1` measures what is left).
     idle: u16,
     phase: Phase,
     board: BoardTrack<S>,

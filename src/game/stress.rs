@@ -6,11 +6,15 @@
 //! `e = 1`), many pairs (four marbles shaken in a box), a marble landing on
 //! another (a drop through a hole onto a marble resting below it) and a long free
 //! fall through two holes to the bottom of three storeys. The QEMU demo's
-//! profile (`cargo qemu -- --demo`) counts every frame's instructions on them as
-//! on the levels, and `cargo xtask check-demo` holds both to the same bound;
+//! profile (`cargo qemu -- --demo`) and the micro:bit v1's (`cargo microbit-v1
+//! -- --demo --profile`) count every frame's instructions on them as on the
+//! levels (`app::profile_scenes`); `cargo xtask check-demo` holds both to the
+//! same bound, `cargo xtask check-microbit-v1` reports them against its goal;
 //! `tests/stress.rs` checks on the host that each scene does what it is named
-//! for.
+//! for. Beside them every board's profile (`app::profile_scenes`) plays
+//! [`HARD_MAZES`], generated mazes at the top difficulty.
 
+use super::endless::MazeArgs;
 use super::level::LevelView;
 use crate::input::axes::AccelMg;
 
@@ -122,3 +126,18 @@ effects: rolling, friction
         tilt: towards_plus_x,
     },
 ];
+
+/// The generated mazes profiled beside the stress scenes: 7 × 7 cells on two
+/// storeys at the top difficulty (two or three marbles), as the endless run
+/// reaches them; seeds 1 to 3. The autopilot plays each.
+pub const HARD_MAZES: [MazeArgs; 3] = [hard_maze(1), hard_maze(2), hard_maze(3)];
+
+/// One of [`HARD_MAZES`].
+const fn hard_maze(seed: u32) -> MazeArgs {
+    MazeArgs {
+        seed,
+        size: 7,
+        storeys: 2,
+        difficulty: 9,
+    }
+}

@@ -10,8 +10,9 @@
 //! the game task with `GameExit::Asleep` for the board to power down: the
 //! micro:bit v2 goes to System OFF (woken by a button, resuming at the start
 //! of the level), QEMU darkens its matrix until a key. The micro:bit v1 leaves
-//! the feature out: wired into `Player::tick` instead, it had cost the v1 2 KB
-//! of stack, over its 12 KiB RAM budget.
+//! the feature out: it has no RAM for it. The timer sits in the app's loop, not
+//! in `Player::tick`, where it would cost the v1 2 KB of stack, over its 12 KiB
+//! RAM budget.
 //!
 //! "No tilt change" cannot mean "the same reading": an accelerometer on a
 //! table reads a few milli-g of noise every sample. It means the reading has

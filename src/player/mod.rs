@@ -23,6 +23,7 @@
 //! read the game's levels and rules, and only the player takes all three
 //! (docs/architecture.md, tests/layers.rs).
 
+pub mod power_on;
 pub mod race;
 mod status;
 

@@ -193,7 +193,7 @@ impl Task {
 
     fn run(self) -> error::Outcome {
         match self {
-            Task::Setup { all } => setup::run(all),
+            Task::Setup { all } => setup::run(all, boards::ALL.iter().map(|b| b.game.target)),
             Task::Qemu { demo, args } => game::play(&boards::QEMU, &with_demo(demo, args)),
             Task::Microbit { args } => game::play(&boards::MICROBIT, &args),
             Task::MicrobitV1 { args } => game::play(&boards::MICROBIT_V1, &args),

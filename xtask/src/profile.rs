@@ -395,7 +395,7 @@ mod tests {
             "QEMU hardware models (virtual accelerometer and I2C, LED on-time)"
         );
         assert_eq!(
-            area("marble_rolling::board::qemu::virtual_lsm303agr::VirtualLsm303agr::read_accel"),
+            area("marble_rolling::board::virtual_lsm303agr::VirtualLsm303agr::read_accel"),
             "QEMU hardware models (virtual accelerometer and I2C, LED on-time)"
         );
         assert_eq!(

@@ -8,7 +8,6 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::boards;
 use crate::error::{say, Failure, Outcome};
 use crate::process;
 use crate::workspace::{self, find_tool, on_path};
@@ -21,10 +20,12 @@ pub struct Qemu {
 }
 
 /// `cargo xtask setup [--all]`: everything the boards' firmware and the
-/// study's target benchmarks need (each board's target, [`boards::ALL`]);
-/// `--all` also reports on probe-rs (micro:bit).
-pub fn run(all: bool) -> Outcome {
-    let mut targets: Vec<&str> = boards::ALL.iter().map(|b| b.game.target).collect();
+/// study's target benchmarks need (`targets`: each board's, from
+/// `boards::ALL`, which the boards' descriptions hold; this module is what
+/// they call on, so it takes them as they come); `--all` also reports on
+/// probe-rs (micro:bit).
+pub fn run<'a>(all: bool, targets: impl IntoIterator<Item = &'a str>) -> Outcome {
+    let mut targets: Vec<&str> = targets.into_iter().collect();
     targets.dedup();
     for triple in targets {
         target(triple)?;
@@ -44,7 +45,7 @@ pub fn run(all: bool) -> Outcome {
 }
 
 /// What a headless QEMU run needs (the firmware's own needs are
-/// [`crate::boards::Firmware::build`]'s): qemu-system-arm, and defmt-print
+/// `boards::Firmware::build`'s): qemu-system-arm, and defmt-print
 /// for a `defmt` log.
 pub fn qemu_tools(defmt: bool) -> Result<Qemu, Failure> {
     let qemu = qemu()?;

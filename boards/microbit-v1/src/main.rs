@@ -14,7 +14,10 @@
 //!   with it), every frame that stays on the LEDs for 80 ms or more with its
 //!   time span (`display frame …`, for the GPIO check), then the CPU load,
 //!   the RAM use (statics + stack high-water mark) and a summary, and exits
-//!   0 only if every level was won (101 on a panic). Without `--demo` it
+//!   0 only if every level was won (101 on a panic). `--demo --profile`
+//!   counts each frame's instructions (`profile NAME: …`), then profiles the
+//!   difficulty-9 mazes and the stress scenes as the mps2 board does
+//!   (`app::profile_scenes`). Without `--demo` it
 //!   plays: QEMU's TWI is a stub with no accelerometer behind it, so the
 //!   sensor supervision reports the sensor down and the game waits, showing
 //!   the fault cross, as on a board with a broken sensor (`--seconds=N`
@@ -62,6 +65,7 @@ use marble_rolling::board::microbit_v1::{
 };
 use marble_rolling::board::watchdog::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::game::endless::{MazeSlot, Seeds};
+use marble_rolling::game::rules::Phase;
 use marble_rolling::input::tilt::TiltConfig;
 
 /// The links between the tasks.
@@ -277,13 +281,32 @@ async fn game(options: Options) {
     // why it is ignored.
     let region = levels_region::at_boot(hw::levels_region());
     let mut mazes = Mazes::new(MAZE_REACH).with_region(region);
-    let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
-        &LINKS, mode, &mut mazes
-    ));
-    // Being polled at the frame rate is the game's proof of life (its loop is
-    // `app::game_task`'s).
-    let exit = poll_beating(|| HEARTBEATS.beat(Task::Game), game).await;
+    let exit = {
+        let game = core::pin::pin!(app::game_task::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
+            &LINKS, mode, &mut mazes
+        ));
+        // Being polled at the frame rate is the game's proof of life (its loop
+        // is `app::game_task`'s).
+        poll_beating(|| HEARTBEATS.beat(Task::Game), game).await
+    };
     let end = hw::cpu_meter::sample();
+    if options.demo && options.profile {
+        // The top-difficulty mazes and the stress scenes, as the mps2 board
+        // profiles them. Seconds without a poll of the other tasks: the
+        // watchdog is petted here after each frame (`--profile` comes from
+        // the semihosting command line, so this runs in QEMU only).
+        // Counted with the meter the levels' profile uses (`app::Meter`).
+        app::profile_scenes::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(
+            &mut mazes,
+            |session, reading| {
+                let mut phase = Phase::Playing;
+                let counted =
+                    hw::cpu_meter::meter(&mut || phase = session.frame_in::<EVENTS>(reading));
+                hw::watchdog::pet();
+                (phase, counted)
+            },
+        );
+    }
     let summary = match exit.demo_summary() {
         Ok(summary) => summary,
         Err(e) => {

@@ -48,12 +48,12 @@ use marble_board_runtime::heartbeat::poll_beating;
 
 use marble_rolling::app::{self, Links};
 use marble_rolling::board::levels_region;
-use marble_rolling::board::microbit::power_on::{self, PowerOn};
 use marble_rolling::board::microbit::{self as board, Heartbeats, Task, Verdict, WatchdogGate};
 use marble_rolling::game::endless::{MazeSlot, Seeds};
 use marble_rolling::input::race_setup;
 use marble_rolling::input::tilt::TiltConfig;
 use marble_rolling::matrix::Frame;
+use marble_rolling::player::power_on::{self, PowerOn};
 
 bind_interrupts!(pub struct Irqs {
     TWISPI0 => twim::InterruptHandler<peripherals::TWISPI0>;
@@ -130,7 +130,7 @@ async fn input(mut input: sensor::MicrobitInput) -> ! {
 type Mazes = MazeSlot<{ board::MAZE_REACH.words() }, { board::MAZE_REACH.text_bytes() }>;
 
 /// The game; first the self-test when B was held at power-on
-/// (`board::power_on`), until A. The generated mazes after the built-in
+/// (`app::power_on::self_test`), until A. The generated mazes after the built-in
 /// levels take their seeds from `seed`, drawn at power-up; each level's
 /// ghost is raced from `ghosts`' store. With `race` (A held at power-on) the
 /// race task instead, for ever (its maze in the same slot, its link of the
@@ -144,7 +144,8 @@ async fn game(
     race: bool,
 ) {
     if self_test {
-        let test = pin!(run_self_test());
+        defmt::info!("self-test: LEDs one by one, brightness levels, then the tilt dot; A to play");
+        let test = pin!(app::power_on::self_test(&LINKS));
         poll_beating(|| HEARTBEATS.beat(Task::Game), test).await;
     }
     // The player's levels (cargo xtask hex --level), played first, parsed
@@ -170,7 +171,7 @@ async fn game(
     // After the race's block, and awaited at one place only: the race never
     // returns, so the levels' future (with the ghosts' kit and its two run
     // buffers) takes the room the race's has in this task's (the kit in a
-    // static of its own, as before, was 1.3 KB more of static RAM).
+    // static of its own would be 1.3 KB more of static RAM).
     play_levels(level, seed, &mut mazes, ghosts).await
 }
 
@@ -235,53 +236,6 @@ async fn play_levels(
         }
         defmt::warn!("game_task returned: {}", exit);
     }
-}
-
-/// The self-test's frames at the game's frame rate, the dot from the live
-/// tilt (none while the sensor is down); returns on A.
-async fn run_self_test() {
-    defmt::info!("self-test: LEDs one by one, brightness levels, then the tilt dot; A to play");
-    let mut ticker = Ticker::every(Duration::from_hz(u64::from(app::FRAME_HZ)));
-    let mut test = power_on::SelfTest::new();
-    loop {
-        ticker.next().await;
-        while let Ok(event) = LINKS.events.try_receive() {
-            if test.event(event) {
-                return;
-            }
-        }
-        LINKS.frames.signal(test.next_frame(LINKS.tilt.get()));
-    }
-}
-
-/// A+B held at power-on: the question mark until one button answers (A
-/// clears every best time and ghost, B or 10 s of nothing keeps them), petting the
-/// watchdog meanwhile (its task is not running yet).
-async fn confirm_clear(
-    stores: &mut storage::Stores,
-    a: &embassy_nrf::gpio::Input<'static>,
-    b: &embassy_nrf::gpio::Input<'static>,
-    wdt: &mut Option<WatchdogHandle>,
-) {
-    defmt::info!("A+B at power-on: clear the best times? A yes, B no");
-    LINKS.frames.signal(power_on::confirm_frame());
-    let mut question = power_on::Confirm::new(board::BUTTONS);
-    let mut ticker = Ticker::every(Duration::from_millis(board::INPUT_PERIOD_MS));
-    let clear = loop {
-        ticker.next().await;
-        if let Some(handle) = wdt {
-            handle.pet();
-        }
-        if let Some(answer) = question.sample(a.is_low(), b.is_low()) {
-            break answer;
-        }
-    };
-    if clear {
-        storage::clear(stores).await;
-    } else {
-        defmt::info!("records kept");
-    }
-    LINKS.frames.signal(Frame::new());
 }
 
 /// The best times in [`board::RECORDS`].
@@ -365,7 +319,7 @@ async fn main(spawner: Spawner) {
         Err(_) => defmt::error!("display task already running"),
     }
 
-    // Buttons A P0.14, B P0.23: what is held now chooses (board::power_on).
+    // Buttons A P0.14, B P0.23: what is held now chooses (player::power_on).
     let (button_a, button_b) = (
         sensor::MicrobitInput::button_pin(p.P0_14),
         sensor::MicrobitInput::button_pin(p.P0_23),
@@ -382,7 +336,26 @@ async fn main(spawner: Spawner) {
     // NVMC shared (storage).
     let mut stores = storage::open(p.NVMC, &HEARTBEATS);
     if choice == PowerOn::ClearRecords {
-        confirm_clear(&mut stores, &button_a, &button_b, &mut wdt).await;
+        // The app's question until a button answers (A clears every best
+        // time and ghost, B or 10 s of nothing keeps them), petting the
+        // watchdog meanwhile (its task is not running yet).
+        defmt::info!("A+B at power-on: clear the best times? A yes, B no");
+        let clear = app::power_on::ask_clear(
+            &LINKS,
+            || (button_a.is_low(), button_b.is_low()),
+            || {
+                if let Some(handle) = &mut wdt {
+                    handle.pet();
+                }
+            },
+        )
+        .await;
+        if clear {
+            storage::clear(&mut stores).await;
+        } else {
+            defmt::info!("records kept");
+        }
+        LINKS.frames.signal(Frame::new());
     }
 
     // Internal I²C: SDA P0.16, SCL P0.08. The driver writes register

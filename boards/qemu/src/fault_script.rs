@@ -30,8 +30,8 @@
 use embassy_time::{Duration, Ticker};
 
 use marble_rolling::app::{Links, FRAME_HZ};
-use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, InjectedFault};
 use marble_rolling::board::qemu::{HEIGHT, PLAY_TILT, WIDTH};
+use marble_rolling::board::virtual_lsm303agr::{ChipControl, InjectedFault};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::input::axes::AccelMg;
 use marble_rolling::input::event::InputEvent;

@@ -268,9 +268,9 @@ pub mod clock {
             count.raw = raw;
             count.ticks += u64::from(delta);
             // Embassy time advances by whole ticks of the delta: a 32-bit divide
-            // by a constant (a multiply), where `ticks / 25` on the 64-bit total
-            // was a library division on every `now()` — 1 000 SysTicks a second
-            // plus every Ticker. The SysTick reads the clock each millisecond,
+            // by a constant (a multiply), not `ticks / 25` on the 64-bit total,
+            // which would be a library division on every `now()` — 1 000
+            // SysTicks a second plus every Ticker. The SysTick reads the clock each millisecond,
             // so `delta + rest` cannot overflow (it would take 171 s).
             let pending = delta.saturating_add(count.rest);
             count.embassy += u64::from(pending / PER_EMBASSY_TICK);

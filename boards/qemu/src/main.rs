@@ -35,11 +35,11 @@ use marble_rolling::board::qemu::cpu_meter::LoadReport;
 use marble_rolling::board::qemu::ram_flash::{self, RamFlash};
 use marble_rolling::board::qemu::terminal::{restore_terminal, Terminal};
 use marble_rolling::board::qemu::virtual_i2c::VirtualTwim;
-use marble_rolling::board::qemu::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::board::qemu::virtual_matrix::VirtualMatrix;
 use marble_rolling::board::qemu::{
     Options, GHOSTS_BYTES, GHOST_BYTES, HEIGHT, MAZE_REACH, PLAY_TILT, QEMU_RAM, WIDTH,
 };
+use marble_rolling::board::virtual_lsm303agr::{ChipControl, VirtualLsm303agr, MICROBIT_V2};
 use marble_rolling::game::endless::{Endless, MazeSlot, Seeds, Stage, DEMO_MAZES};
 use marble_rolling::game::levels::LEVELS;
 use marble_rolling::game::rules::Phase;
@@ -381,14 +381,11 @@ async fn game(options: Options) {
     hw::exit(verdict.exit_code())
 }
 
-/// Instructions of one game frame, replaying up to this many frames of each
-/// level with the autopilot.
-const PROFILE_FRAMES: u32 = 1024;
-
 /// Counts the instructions of the game's per-frame work (autopilot reading,
 /// `Session::frame` = 8 physics steps, rendering) frame by frame, replaying
 /// the start of every level and of the demo's generated mazes (made again in
-/// `mazes`), and logs the averages and maxima.
+/// `mazes`), then the top-difficulty mazes and the stress scenes
+/// (`app::profile_scenes`), and logs the averages and maxima.
 fn profile(mazes: &mut Mazes) {
     use hw::cpu_meter::count_instructions;
     let mut total = Costs::default();
@@ -413,7 +410,7 @@ fn profile(mazes: &mut Mazes) {
             continue;
         };
         let mut costs = Costs::default();
-        while costs.frames < PROFILE_FRAMES {
+        while costs.frames < app::PROFILE_FRAMES {
             let (reading, pilot) = count_instructions(|| player.reading(AccelMg::LEVEL));
             let (phase, frame) =
                 count_instructions(|| player.session_mut().frame_in::<EVENTS>(reading));
@@ -429,54 +426,12 @@ fn profile(mazes: &mut Mazes) {
         total.merge(&costs);
     }
     total.log("all levels");
-    // Three mazes at the top difficulty (two or three marbles, the board's
-    // motion), as the endless run reaches them: profiled, not played in the demo.
-    for seed in 1..=3 {
-        let args = marble_rolling::game::endless::MazeArgs {
-            seed,
-            size: 7,
-            storeys: 2,
-            difficulty: 9,
-        };
-        let Some(Ok(mut player)) = mazes.make(args).ok().map(|level| {
-            Player::<WIDTH, HEIGHT, PILOT, EVENTS>::single(level, SYNTHETIC_TILT, true)
-        }) else {
-            continue;
-        };
-        let mut costs = Costs::default();
-        while costs.frames < PROFILE_FRAMES {
-            let reading = player.reading(AccelMg::LEVEL);
-            let (phase, frame) =
-                count_instructions(|| player.session_mut().frame_in::<EVENTS>(reading));
-            costs.add(0, frame, 0);
-            if phase != Phase::Playing {
-                break;
-            }
-        }
-        costs.log(player.level_name());
-        log_budget_cuts(player.level_name(), player.session_mut());
-    }
-    // The stress scenes (`game::stress`), scripted: the worst frames the levels
-    // do not reach. Held to the same bound (`cargo xtask check-demo`).
-    for scene in &marble_rolling::game::stress::STRESS {
-        let Ok(mut session) =
-            marble_rolling::game::session::Session::<marble_rolling::physics::Fx>::new(
-                scene.level,
-                Player::<WIDTH, HEIGHT, PILOT, EVENTS>::CONFIG,
-                SYNTHETIC_TILT,
-            )
-        else {
-            continue;
-        };
-        let mut costs = Costs::default();
-        for n in 0..scene.frames {
-            let reading = (scene.tilt)(n);
-            let (_, frame) = count_instructions(|| session.frame_in::<EVENTS>(reading));
-            costs.add(0, frame, 0);
-        }
-        costs.log(scene.level.info.name);
-        log_budget_cuts(scene.level.info.name, &mut session);
-    }
+    // What the levels do not reach: three mazes at the top difficulty and the
+    // stress scenes, profiled (not played in the demo) by the code every
+    // board shares. Held to the same bound (`cargo xtask check-demo`).
+    app::profile_scenes::<WIDTH, HEIGHT, PILOT, EVENTS, _, _>(mazes, |session, reading| {
+        count_instructions(|| session.frame_in::<EVENTS>(reading))
+    });
     let substeps = 1u64 << Player::<WIDTH, HEIGHT, PILOT, EVENTS>::CONFIG.substeps_log2;
     defmt::info!(
         "one game frame = {=u64} physics steps: {=u64} instructions on average (max {=u64}), {=u64} per physics step; autopilot {=u64}, render {=u64} per frame",

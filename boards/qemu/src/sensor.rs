@@ -1,7 +1,8 @@
 //! The QEMU board's accelerometer input: the micro:bit's input stack — the
 //! `lsm303agr` 1.1 async driver, a per-transfer timeout, the
 //! [`TiltPipeline`] supervision — running on a virtual LSM303AGR on a virtual
-//! TWIM (`marble_rolling::board::qemu::{virtual_lsm303agr, virtual_i2c}`).
+//! TWIM (`marble_rolling::board::virtual_lsm303agr`, shared with the v1's virtual
+//! bus, and `marble_rolling::board::qemu::virtual_i2c`).
 //!
 //! The terminal's arrow keys do not hand the game a tilt: they set the
 //! virtual chip's tilt, and the game gets what the driver reads back through
@@ -28,10 +29,10 @@ use marble_rolling::app::{ByteSource, Console, TiltInput};
 use marble_rolling::board::i2c::{ClearBus, Recovering};
 use marble_rolling::board::qemu::fault_keys::{FaultKeys, QemuKey, FAULT_KEYS_HELP};
 use marble_rolling::board::qemu::virtual_i2c::{RamRange, TwimError, VirtualTwim};
-use marble_rolling::board::qemu::virtual_lsm303agr::ChipControl;
 use marble_rolling::board::qemu::{
     HEIGHT, INPUT_PERIOD_MS, SENSOR_AXIS_MAP, SUPERVISOR, TRANSFER_TIMEOUT_MS,
 };
+use marble_rolling::board::virtual_lsm303agr::ChipControl;
 use marble_rolling::input::event::InputEvent;
 use marble_rolling::input::lsm303::{self, BusFault};
 use marble_rolling::input::pacing;

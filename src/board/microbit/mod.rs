@@ -55,9 +55,9 @@
 //! The accelerometer link (axis map, polling, supervision, bus deadline:
 //! `board::accel_link`, which the QEMU board models), the bus clear
 //! (`board::i2c`) and the watchdog's rule (`board::watchdog`) are re-exported
-//! here, so that this module lists everything the v2 runs with.
+//! here, so that this module lists everything the v2 runs with; the maze reach
+//! and the ghosts' sizes are `board::game_sizes`', which QEMU runs too.
 
-pub mod power_on;
 pub mod sleep;
 pub mod speaker;
 #[cfg(feature = "shared-flash")]
@@ -67,6 +67,7 @@ pub use super::accel_link::{
     AXIS_MAP, I2C_KHZ, I2C_TIMEOUT_MS, INPUT_PERIOD_MS, LONGEST_TRANSFER_BITS, SUPERVISOR,
     TWIM_COPY_BUFFER_BYTES,
 };
+use super::game_sizes;
 pub use super::i2c::{
     clear_bus, BusClear, BusLines, BUS_CLEAR_HALF_PERIOD_US, BUS_CLEAR_MAX_CLOCKS,
     BUS_CLEAR_STRETCH_LIMIT,
@@ -149,26 +150,28 @@ pub const RAM_BASE: usize = 0x2000_0000;
 /// the v2's stack is measured only on a board).
 pub const STACK_PAINT: u32 = 0x5ac4_5ac4;
 
-/// The ghosts' flash region (`marble_rolling::records::Ghosts`): the four 4 KiB
-/// pages below the levels region, left out of `FLASH` in
-/// `boards/microbit/memory.x`. Each level's best run is one item of at most a
-/// page; a full region makes the oldest ghost give way.
-pub const GHOSTS: core::ops::Range<u32> = 0x7_7000..0x7_B000;
+/// The ghosts' flash region (`marble_rolling::records::Ghosts`): the
+/// [`GHOSTS_BYTES`](game_sizes::GHOSTS_BYTES) (four 4 KiB pages) below the
+/// levels region, left out of `FLASH` in `boards/microbit/memory.x`.
+pub const GHOSTS: core::ops::Range<u32> = 0x7_7000..0x7_7000 + game_sizes::GHOSTS_BYTES as u32;
 
-/// The longest run the v2 records and keeps as a ghost, in bytes (the game
-/// task's two buffers, `app::GhostKit`): about 7 s of the autopilot's play at
-/// its 279 B/s, 4 s of a noisy sensor's at 489 B/s (docs/ghost.md).
-pub const GHOST_BYTES: usize = 2048;
-
-/// The largest generated maze the endless run plays on the v2
-/// ([`crate::game::endless`]): 10 cells a side (21 tiles; the 5 × 5 view follows
-/// the marble) on up to four storeys. Its slot keeps 444 B of tiles in the game
-/// task's static RAM, and its text takes at most 1 992 B of stack while it is
-/// parsed, between two levels (`cargo xtask size-report` has the figures).
-pub const MAZE_REACH: crate::game::endless::Reach = crate::game::endless::Reach {
-    size: 10,
-    storeys: crate::game::endless::MOST_STOREYS,
+// The v2's three flash regions (the levels, the best times, the ghosts) keep
+// apart, and the ghosts' are whole 4 KiB pages: checked when the crate builds.
+const _: () = {
+    let levels = super::levels_region::V2;
+    assert!(levels.end <= RECORDS.start || levels.start >= RECORDS.end);
+    assert!(levels.end <= GHOSTS.start || levels.start >= GHOSTS.end);
+    assert!(GHOSTS.end <= RECORDS.start);
+    assert!(GHOSTS.start.is_multiple_of(4096) && GHOSTS.end.is_multiple_of(4096));
 };
+
+/// The longest run the v2 records and keeps as a ghost, in bytes (shared with
+/// the QEMU board: [`game_sizes`]).
+pub const GHOST_BYTES: usize = game_sizes::GHOST_BYTES;
+
+/// The largest generated maze the endless run plays on the v2 (shared with
+/// the QEMU board: [`game_sizes`]); the 5 × 5 view follows the marble.
+pub const MAZE_REACH: crate::game::endless::Reach = game_sizes::MAZE_REACH;
 
 /// What GPREGRET (the nRF52's general purpose retention register, kept in
 /// System OFF) holds while the toy sleeps: this tag in the high nibble, the

@@ -3,12 +3,12 @@
 //! The nRF52833's PWM ignores a task sent while it is disabled (nRF52833
 //! Product Specification, PWM chapter: the peripheral must be enabled through
 //! `ENABLE` before it is used), and enabling it does not start a sequence by
-//! itself: only `SEQSTART` loads the duty cycle from RAM and makes a wave. The
-//! firmware once set the duty (embassy-nrf's `SimplePwm::set_duty`, which
-//! writes the duty to RAM and fires `SEQSTART`) while the PWM was disabled and
-//! enabled it after: the task was lost and the speaker stayed silent. The order
-//! here is microbit-bsp's (`speaker.rs`, `PwmSpeaker::start_play`): period,
-//! enable, then the duty.
+//! itself: only `SEQSTART` loads the duty cycle from RAM and makes a wave. So
+//! setting the duty (embassy-nrf's `SimplePwm::set_duty`, which writes the
+//! duty to RAM and fires `SEQSTART`) before enabling the PWM loses the task and
+//! leaves the speaker silent. The order here, which prevents that, is
+//! microbit-bsp's (`speaker.rs`, `PwmSpeaker::start_play`): period, enable,
+//! then the duty.
 //!
 //! Each note starts from a stopped PWM ([`start_note`] disables first, as
 //! microbit-bsp stops after each note): embassy-nrf's `set_duty` on an enabled

@@ -1,9 +1,9 @@
-//! Virtual MMA8653FC and FXOS8700CQ: with the QEMU board's virtual LSM303AGR
-//! as a v1.5 carries it, the chips of a virtual v1 TWI
+//! Virtual MMA8653FC and FXOS8700CQ: with the virtual LSM303AGR (shared with
+//! the QEMU board) as a v1.5 carries it, the chips of a virtual v1 TWI
 //! ([`super::virtual_twi`]). The v1's sensor stack (probe,
 //! [`super::nxp_driver`], [`Recovering`](crate::board::i2c::Recovering), the
 //! supervision) runs against them on the host, with the fidelity rules of the
-//! QEMU board's virtual LSM303AGR (`board::qemu::virtual_lsm303agr`) and its
+//! virtual LSM303AGR (`board::virtual_lsm303agr`) and its
 //! [`ChipControl`] for the tilt and the injected faults.
 //!
 //! # What is modelled (MMA8653FC data sheet rev. 2, FXOS8700CQ rev. 8)

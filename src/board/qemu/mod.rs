@@ -6,7 +6,8 @@
 //! (`virtual_matrix`, with feature `app` only: it needs embassy) and the ANSI
 //! terminal screen that shows them with the game's status (`terminal`), and
 //! the virtual accelerometer the firmware reads its tilt from:
-//! a [`virtual_lsm303agr`] on a [`virtual_i2c`] bus that behaves like the
+//! a [`virtual_lsm303agr`](crate::board::virtual_lsm303agr) (shared with the
+//! v1's virtual bus) on a [`virtual_i2c`] bus that behaves like the
 //! micro:bit's TWIM, driven by the terminal's keys ([`fault_keys`]) or the
 //! fault script; and the records' flash, a RAM image with NOR rules
 //! (`ram_flash`, feature `records`). The register-level half (UART and TIMER0 drivers, the WFI
@@ -19,16 +20,13 @@ pub mod fault_keys;
 #[cfg(feature = "records")]
 pub mod ram_flash;
 pub mod virtual_i2c;
-/// The virtual chip the board carries (shared: the v1's virtual bus carries it
-/// too).
-pub use crate::board::virtual_lsm303agr;
 #[cfg(feature = "app")]
 pub mod terminal;
 #[cfg(feature = "app")]
 pub mod virtual_matrix;
 
-use crate::board::accel_link;
-use crate::game::endless::{Reach, MOST_STOREYS};
+use crate::board::{accel_link, game_sizes};
+use crate::game::endless::Reach;
 use crate::input::accel_timing;
 use crate::input::sensor::{AxisMap, SupervisorConfig};
 use crate::input::tilt::TiltConfig;
@@ -71,7 +69,8 @@ pub const QEMU_RAM: RamRange = RamRange {
 
 /// The axis table the QEMU board's input reads through: the micro:bit's
 /// [`AXIS_MAP`](crate::board::accel_link::AXIS_MAP). The virtual chip has its own
-/// placement ([`virtual_lsm303agr::MICROBIT_V2`]), so a sign error here shows.
+/// placement ([`MICROBIT_V2`](crate::board::virtual_lsm303agr::MICROBIT_V2)), so
+/// a sign error here shows.
 pub const SENSOR_AXIS_MAP: AxisMap = accel_link::AXIS_MAP;
 /// Sensor polling period, ms (the micro:bit's).
 pub const INPUT_PERIOD_MS: u64 = accel_link::INPUT_PERIOD_MS;
@@ -183,24 +182,19 @@ impl Options {
     }
 }
 
-/// The largest generated maze the endless run plays here
-/// ([`crate::game::endless`]): the micro:bit v2's, so that the v2's maze code
-/// runs on the same Cortex-M4 code in QEMU, where its stack is measured (there
-/// is no nRF52 emulator). The virtual matrix follows the marble and the storey
-/// maps show a window of a maze too wide for the terminal.
-pub const MAZE_REACH: Reach = Reach {
-    size: 10,
-    storeys: MOST_STOREYS,
-};
+/// The largest generated maze the endless run plays here: the micro:bit v2's
+/// ([`game_sizes`]), so that the v2's maze code runs in QEMU, where its stack
+/// is measured. The virtual matrix follows the marble and the storey maps show
+/// a window of a maze too wide for the terminal.
+pub const MAZE_REACH: Reach = game_sizes::MAZE_REACH;
 
-/// The ghosts' region, bytes: four 4 KiB pages, the micro:bit v2's
-/// (`board::microbit::GHOSTS`), in a RAM image of a flash.
-pub const GHOSTS_BYTES: usize = 4 * 4096;
+/// The ghosts' region, bytes, in a RAM image of a flash: the micro:bit v2's
+/// ([`game_sizes`]).
+pub const GHOSTS_BYTES: usize = game_sizes::GHOSTS_BYTES;
 
 /// The longest run kept as a ghost, bytes: the micro:bit v2's
-/// (`board::microbit::GHOST_BYTES`), so that QEMU keeps and drops the runs the
-/// v2 does.
-pub const GHOST_BYTES: usize = 2048;
+/// ([`game_sizes`]), so that QEMU keeps and drops the runs the v2 does.
+pub const GHOST_BYTES: usize = game_sizes::GHOST_BYTES;
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -31,7 +31,7 @@ use marble_board_runtime::nop::{time_nop_loops, Stopwatch};
 use marble_rolling::study::{bench_one_in, bench_plan, Scene, BACKENDS};
 
 /// The backends this benchmark is built with (bit `n` for `BACKENDS[n]`): with
-/// event stepping the code of all six no longer fits the nRF51's 256 KiB of flash
+/// event stepping the code of all six does not fit the nRF51's 256 KiB of flash
 /// (170 KB over), so the M0 measures i8f24 (the firmware's), i16f16 and f32.
 const M0_BACKENDS: u32 = 0b00_1011;
 use semihosting::println;

@@ -29,7 +29,7 @@ use crate::boards::{Board, QEMU};
 use crate::error::{say, Failure, Outcome};
 use crate::runner::{self, Output};
 use crate::workspace;
-use log::{parse_budget_cuts, parse_worst_frames};
+pub use log::{parse_budget_cuts, parse_worst_frames};
 
 /// The worst physics frame of each level against `bound` instructions (`what`:
 /// the board's CPU): a level's frame over it is a problem. The stress scenes
@@ -64,6 +64,39 @@ fn check_worst_frames(
             );
         } else {
             say!("{name}: worst physics frame {max} {what} instructions");
+        }
+    }
+}
+
+/// What every board's profile plays beside the levels, by the name its
+/// `profile` and `budget` lines give (`app::profile_scenes`): the
+/// top-difficulty mazes (`game::stress::HARD_MAZES`, named as
+/// `game::generate` names a maze), then the stress scenes.
+pub fn profiled_scenes() -> Vec<String> {
+    use marble_rolling::game::stress::{HARD_MAZES, STRESS};
+    let mazes = HARD_MAZES.iter().map(|m| {
+        format!(
+            "maze-{}-{}x{}x{}-d{}",
+            m.seed, m.size, m.size, m.storeys, m.difficulty
+        )
+    });
+    let scenes = STRESS.iter().map(|s| s.level.info.name.to_string());
+    mazes.chain(scenes).collect()
+}
+
+/// Reports each of [`profiled_scenes`] that has no `profile` line or no
+/// `budget` line in `log`: a scene the board could not set up, or a profile
+/// cut short.
+pub fn check_scenes_logged(log: &str, problems: &mut Problems) {
+    let frames = parse_worst_frames(log);
+    let cuts = parse_budget_cuts(log);
+    for name in profiled_scenes() {
+        let profiled = frames.iter().any(|(n, _)| *n == name);
+        let cut = cuts.iter().any(|(n, _)| *n == name);
+        if !profiled || !cut {
+            problems.report(format!(
+                "scene {name}: no `profile {name}:` or `budget {name}:` line in the log"
+            ));
         }
     }
 }
@@ -153,6 +186,7 @@ pub fn run() -> Outcome {
         &mut problems,
     );
     check_budget_cuts(&text, &names, &mut problems);
+    check_scenes_logged(&text, &mut problems);
 
     if problems.count() > 0 {
         return Err(Failure::new(format!(
@@ -299,5 +333,50 @@ INFO  demo summary: 13/13 levels won
             problems.count() > 0,
             "a log without budget lines is a problem"
         );
+    }
+
+    #[test]
+    fn every_profiled_scene_must_have_its_lines() {
+        let names = profiled_scenes();
+        assert_eq!(
+            names,
+            [
+                "maze-1-7x7x2-d9",
+                "maze-2-7x7x2-d9",
+                "maze-3-7x7x2-d9",
+                "rattle-corner",
+                "four-shaken",
+                "drop-onto-marble",
+                "long-fall"
+            ]
+        );
+        let whole: String = names
+            .iter()
+            .map(|name| {
+                format!(
+                    "INFO  profile {name}: 512 frames, instructions per frame: physics 900 (max 30123), autopilot 0, render 0\n\
+                     INFO  budget {name}: 0 marble-steps cut\n"
+                )
+            })
+            .collect();
+        let mut problems = Problems::default();
+        check_scenes_logged(&whole, &mut problems);
+        assert_eq!(problems.count(), 0, "every scene logged");
+        let without_budget: String = whole
+            .lines()
+            .filter(|line| !line.contains("budget long-fall:"))
+            .map(|line| format!("{line}\n"))
+            .collect();
+        let mut problems = Problems::default();
+        check_scenes_logged(&without_budget, &mut problems);
+        assert_eq!(problems.count(), 1, "long-fall's budget line is missing");
+        let without_maze: String = whole
+            .lines()
+            .filter(|line| !line.contains("profile maze-2-"))
+            .map(|line| format!("{line}\n"))
+            .collect();
+        let mut problems = Problems::default();
+        check_scenes_logged(&without_maze, &mut problems);
+        assert_eq!(problems.count(), 1, "a maze's profile line is missing");
     }
 }

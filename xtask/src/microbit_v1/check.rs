@@ -314,10 +314,12 @@ fn check_play_on_stub(
     Ok(())
 }
 
-/// Runs `--demo --profile` and prints each level's frame costs, each worst
-/// frame against `goal` (the board's frame budget, M0 instructions: the goal
-/// the physics work is to bring it under, issue 27, reported, not yet
-/// enforced); it must still win every level and profile each.
+/// Runs `--demo --profile` and prints each level's frame costs, then those of
+/// the top-difficulty mazes and the stress scenes (`app::profile_scenes`),
+/// each worst frame against `goal` (the board's frame budget, M0
+/// instructions: the goal the physics work is to bring it under, issue 27,
+/// reported, not yet enforced); it must still win every level and profile
+/// each, and log every scene's `profile` and `budget` lines.
 fn check_profile(
     tools: &setup::Qemu,
     elf: &Path,
@@ -337,21 +339,39 @@ fn check_profile(
     let text = demo::read_log(&log_path)?;
     let profiles: Vec<_> = text.lines().filter_map(parse_profile).collect();
     let (levels, _) = demo::parse_levels(&text);
-    if status != 0 || profiles.is_empty() || profiles.len() != levels.len() {
+    let scenes = demo::profiled_scenes();
+    let level_profiles = profiles
+        .iter()
+        .filter(|(name, ..)| !scenes.contains(name))
+        .count();
+    if status != 0 || level_profiles == 0 || level_profiles != levels.len() {
         problems.report(format!(
-            "profile run: status {status}, {} profiles for {} levels (log {})",
-            profiles.len(),
+            "profile run: status {status}, {level_profiles} profiles for {} levels (log {})",
             levels.len(),
             log_path.display()
         ));
     }
-    for (level, frames, average, max) in &profiles {
+    demo::check_scenes_logged(&text, problems);
+    let cuts = demo::parse_budget_cuts(&text);
+    for (name, frames, average, max) in &profiles {
+        let scene = scenes.contains(name);
+        let what = if scene { "scene " } else { "" };
+        let cut = match cuts.iter().find(|(n, _)| n == name) {
+            Some((_, cut)) if scene => format!(", flight budget cut {cut} marble-steps"),
+            _ => String::new(),
+        };
         if *max > goal {
             let goal = grouped(goal);
-            say!("profile {level}: {frames} frames, physics {average} per frame, worst {max} (over the {goal} goal)");
+            say!("profile {what}{name}: {frames} frames, physics {average} per frame, worst {max} (over the {goal} goal){cut}");
         } else {
-            say!("profile {level}: {frames} frames, physics {average} per frame, worst {max}");
+            say!("profile {what}{name}: {frames} frames, physics {average} per frame, worst {max}{cut}");
         }
+    }
+    if let Some((statics, stack)) = parse_ram(&text) {
+        say!(
+            "RAM in the profile run (the scenes' players on the stack): statics {statics} B + stack high-water {stack} B = {} B",
+            statics + stack
+        );
     }
     Ok(())
 }

@@ -7,8 +7,10 @@
 //!   rebuilt from QEMU's GPIO trace against the frames the firmware says it
 //!   showed, the sensor path in the demo (`accel=mma8653fc` through QEMU's
 //!   TWI stub, its re-init and fault counts), a `--demo --profile` run's
-//!   per-level frame costs (printed; the 60 000-instruction worst frame is
-//!   the physics' goal), a two-second play without the demo (the stub found
+//!   per-level frame costs, then those of the difficulty-9 mazes and the
+//!   stress scenes (`app::profile_scenes`, as the QEMU demo profiles them;
+//!   printed, each line required; the 60 000-instruction worst frame is the
+//!   physics' goal), a two-second play without the demo (the stub found
 //!   as the MMA8653FC, polled without a panic, the LEDs showing what the
 //!   supervision decided), and the budgets (RAM: statics + stack
 //!   high-water ≤ V1_RAM_BUDGET, 12 KiB; flash ≤ V1_FLASH_BUDGET, 128 KiB,

@@ -1,16 +1,17 @@
-//! What the owner asks for at power-on, by the buttons held while the board
-//! starts: nothing (the game), **B** (the self-test), **A+B** (clear the best
-//! times, after a confirmation); **A** alone races a friend's board
-//! ([`crate::input::race_setup::race_at_power_on`]). Pure: the v2's `main` samples the pins, feeds
-//! these functions and shows their frames; the two flows, [`SelfTest`] and
-//! [`Confirm`], are states here that `main` only ticks, so that what they do is
-//! what the host tests run.
+//! What the owner asks for at power-on, by the buttons held while a 5 × 5
+//! board starts (the micro:bit v2): nothing (the game), **B** (the self-test),
+//! **A+B** (clear the best times, after a confirmation); **A** alone races a
+//! friend's board ([`crate::input::race_setup::race_at_power_on`]). Pure: the
+//! board samples the pins and feeds [`power_on`]; the two flows, [`SelfTest`]
+//! and [`Confirm`], are states here that the app's power-on flows
+//! (`app::power_on`, firmware) tick, so that what they do is what the host
+//! tests run.
 //!
 //! # The self-test
 //!
 //! How an owner checks the LEDs and the accelerometer's axes on a real board
-//! ([`AXIS_MAP`](super::AXIS_MAP) is taken from the micro:bit runtime, never
-//! checked on hardware here):
+//! (the v2's [`AXIS_MAP`](crate::board::accel_link::AXIS_MAP) is taken from the
+//! micro:bit runtime, never checked on hardware here):
 //! 1. every LED alone, at full brightness, left to right and top to bottom
 //!    ([`SWEEP_FRAMES`] each): a dark step is a dead LED;
 //! 2. the whole matrix at each brightness level, dimmest first
@@ -58,8 +59,13 @@ pub const fn power_on(a_held: bool, b_held: bool) -> PowerOn {
     }
 }
 
-/// Button samples (10 ms each) without an answer after which the
-/// confirmation keeps the records: 10 s.
+/// The period the confirmation samples the buttons at, ms: what
+/// [`CONFIRM_TIMEOUT_SAMPLES`] and the buttons' default timing
+/// ([`ButtonConfig::default`]: 30 ms debounce) count in.
+pub const CONFIRM_SAMPLE_MS: u64 = 10;
+
+/// Button samples ([`CONFIRM_SAMPLE_MS`] each) without an answer after which
+/// the confirmation keeps the records: 10 s.
 pub const CONFIRM_TIMEOUT_SAMPLES: u32 = 1000;
 
 /// The answer to "clear the records?" after `samples` button samples, of
@@ -77,8 +83,8 @@ pub const fn confirm(event: Option<ButtonEvent>, samples: u32) -> Option<bool> {
 }
 
 /// The confirmation under way (see the module doc): the buttons' debouncing
-/// and the samples so far. `main` shows [`confirm_frame`] and feeds it the
-/// buttons every sample until it answers.
+/// and the samples so far. `app::power_on::ask_clear` shows [`confirm_frame`]
+/// and feeds it the buttons every sample until it answers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Confirm {
     buttons: Buttons,
@@ -147,8 +153,9 @@ pub fn self_test_frame(n: u32, reading: Option<AccelMg>) -> Frame<5, 5> {
 }
 
 /// The self-test under way (see the module doc): the frame it is at, and
-/// whether the sensor is up (the dot is shown only then). `main` hands it the
-/// input events and, once a frame, the latest reading.
+/// whether the sensor is up (the dot is shown only then).
+/// `app::power_on::self_test` hands it the input events and, once a frame,
+/// the latest reading.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SelfTest {
     frame: u32,
