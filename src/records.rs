@@ -55,7 +55,7 @@ const BUFFER: usize = 16;
 
 mod slot;
 
-pub use slot::{Slot, GHOST_TAG};
+pub use slot::Slot;
 
 /// The map both stores keep (one instantiation: [`Slot`]).
 type Map<F> = MapStorage<Slot, F, Cache<Uncached, Uncached, Uncached, Slot>>;
@@ -213,7 +213,7 @@ impl<F: NorFlash> Records<F> {
     }
 }
 
-/// Where a level's ghost lives in the ghosts' map (with [`GHOST_TAG`] set:
+/// Where a level's ghost lives in the ghosts' map (with `GHOST_TAG` set:
 /// [`Slot::ghost`]): the FNV-1a hash (32 bits) of the level's name (a built-in level's name, or a generated maze's, which
 /// holds its arguments). Two names on one key would share a slot; a ghost is
 /// used only once its replay wins the level on its own state hash, so the
@@ -321,7 +321,7 @@ const MOST_EVICTIONS: u8 = 16;
 /// ([`max_ghost_bytes`]) is refused before anything is written.
 ///
 /// Ghosts an older firmware kept under untagged keys (before [`Slot`]: a key
-/// whose first byte lacks [`GHOST_TAG`] reads back as a record's) would sit
+/// whose first byte lacks `GHOST_TAG` reads back as a record's) would sit
 /// in the region for ever, never loaded nor evicted: the first load or keep
 /// after a power-up looks for them, and finding one erases the region
 /// ([`GhostStoreError::OlderFormat`], said once).

@@ -19,7 +19,7 @@ pub const CLICK_FROM_MM_S: u32 = 40;
 
 /// The impact speed (mm/s) at and above which a click is at full loudness: a
 /// marble thrown at a wall at about 0.6 m/s.
-pub const CLICK_FULL_MM_S: u32 = 640;
+pub(crate) const CLICK_FULL_MM_S: u32 = 640;
 
 /// The most sounds one frame makes: a click per kept impact, and the outcome.
 pub(crate) const MAX_SOUNDS: usize = IMPACTS_KEPT + 1;
@@ -29,7 +29,7 @@ pub(crate) const MAX_SOUNDS: usize = IMPACTS_KEPT + 1;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Sound {
     /// A bounce: `loudness` 1 (at [`CLICK_FROM_MM_S`]) to 255 (from
-    /// [`CLICK_FULL_MM_S`]), growing with the impact speed.
+    /// `CLICK_FULL_MM_S`), growing with the impact speed.
     Click {
         /// 1..=255.
         loudness: u8,
@@ -49,7 +49,7 @@ pub struct Sounds {
 
 impl Sounds {
     /// No sound.
-    pub const NONE: Sounds = Sounds {
+    pub(crate) const NONE: Sounds = Sounds {
         list: [None; MAX_SOUNDS],
     };
 
@@ -71,7 +71,7 @@ impl Sounds {
 }
 
 /// The click for an impact at `speed_mm_s`: none below [`CLICK_FROM_MM_S`], then a
-/// loudness rising linearly to 255 at [`CLICK_FULL_MM_S`].
+/// loudness rising linearly to 255 at `CLICK_FULL_MM_S`.
 pub fn click(speed_mm_s: u32) -> Option<Sound> {
     if speed_mm_s < CLICK_FROM_MM_S {
         return None;

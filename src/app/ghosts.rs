@@ -48,9 +48,9 @@ async fn check<'a, 'g, const EVENTS: bool>(
 /// one flash page: [`crate::records::max_ghost_bytes`]).
 pub struct GhostKit<F: NorFlash, const N: usize> {
     /// The ghosts in flash.
-    pub store: Ghosts<F>,
+    pub(crate) store: Ghosts<F>,
     /// Runs after each write (QEMU saves its flash image there).
-    pub written: fn(&mut F),
+    pub(crate) written: fn(&mut F),
     stored: [u8; N],
     record: [u8; N],
 }
@@ -72,7 +72,7 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
     /// [`LevelGhost::check`], in place) and a recorder of the attempts. Logs
     /// what it found. By reference: an async fn keeps its arguments while it
     /// runs, and a level is large.
-    pub async fn begin<'k, 'a, const EVENTS: bool>(
+    pub(crate) async fn begin<'k, 'a, const EVENTS: bool>(
         &'k mut self,
         live: &Session<'a, Fx>,
     ) -> LevelGhost<'a, 'k, EVENTS> {
@@ -134,7 +134,11 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
 
     /// Writes the run the level's recorder left in its buffer (`len` bytes,
     /// [`LevelGhost::leave`]) as the ghost of `name`; logs the outcome.
-    pub async fn keep_recorded(&mut self, name: &str, len: usize) -> Result<(), GhostStoreError> {
+    pub(crate) async fn keep_recorded(
+        &mut self,
+        name: &str,
+        len: usize,
+    ) -> Result<(), GhostStoreError> {
         let Some(bytes) = self.record.get(..len) else {
             return Err(GhostStoreError::Buffer { needs: len });
         };
@@ -147,13 +151,13 @@ impl<F: NorFlash, const N: usize> GhostKit<F, N> {
 // The firmware's executors are single-threaded: no `Send` bound is wanted.
 #[allow(async_fn_in_trait)]
 pub trait GhostStore {
-    /// See [`GhostKit::begin`].
+    /// See `GhostKit::begin`.
     async fn begin<'k, 'a, const EVENTS: bool>(
         &'k mut self,
         live: &Session<'a, Fx>,
     ) -> LevelGhost<'a, 'k, EVENTS>;
 
-    /// See [`GhostKit::keep_recorded`].
+    /// See `GhostKit::keep_recorded`.
     async fn keep_recorded(&mut self, name: &str, len: usize) -> Result<(), GhostStoreError>;
 }
 
@@ -184,7 +188,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
     /// time, the task yielding between stretches: raced if it wins on its
     /// own state hash, dropped (logged) if not. Call once, before the
     /// attempt's first frame.
-    pub async fn check(&mut self, live: &Session<'_, Fx>) {
+    pub(crate) async fn check(&mut self, live: &Session<'_, Fx>) {
         let Some(checking) = &mut self.racer else {
             return;
         };
@@ -219,7 +223,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
 
     /// After each frame of `live` (the attempt at the level): records it and
     /// moves the ghost to where it races.
-    pub fn frame(&mut self, live: &Session<'_, Fx>) {
+    pub(crate) fn frame(&mut self, live: &Session<'_, Fx>) {
         if let Some(recorder) = &mut self.recorder {
             recorder.observe(live);
         }
@@ -230,7 +234,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
 
     /// Draws the ghost on `frame` (a picture of `live` through `viewport`)
     /// while the attempt is played.
-    pub fn draw<const W: usize, const H: usize>(
+    pub(crate) fn draw<const W: usize, const H: usize>(
         &self,
         frame: &mut Frame<W, H>,
         live: &Session<'_, Fx>,
@@ -254,7 +258,7 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
     /// raced ghost (or the first) is to be kept if its recording replays to
     /// a win on its hash ([`replays`], then [`GhostKit::keep_recorded`],
     /// between levels): the recording. Logs why a win is not kept.
-    pub fn leave(self, live: &Session<'_, Fx>) -> Option<&'k [u8]> {
+    pub(crate) fn leave(self, live: &Session<'_, Fx>) -> Option<&'k [u8]> {
         let game = live.game();
         let name = game.level().info.name;
         let clock = game.clock_frames();
@@ -283,8 +287,8 @@ impl<'a, 'k, const EVENTS: bool> LevelGhost<'a, 'k, EVENTS> {
 }
 
 /// Whether `bytes`, the recording of `live`'s winning attempt
-/// ([`LevelGhost::leave`]), replays to a win on its hash: its length if so
-/// (for [`GhostKit::keep_recorded`]). Logs why not. The replay yields to the
+/// (`LevelGhost::leave`), replays to a win on its hash: its length if so
+/// (for `GhostKit::keep_recorded`). Logs why not. The replay yields to the
 /// executor between stretches.
 pub async fn replays<const EVENTS: bool>(bytes: &[u8], live: &Session<'_, Fx>) -> Option<usize> {
     match check::<EVENTS>(bytes, live).await {
@@ -303,7 +307,7 @@ pub async fn replays<const EVENTS: bool>(bytes: &[u8], live: &Session<'_, Fx>) -
 }
 
 /// Writes `bytes` as `name`'s ghost through `work`; logs the outcome.
-pub async fn keep<F: NorFlash>(
+pub(crate) async fn keep<F: NorFlash>(
     store: &mut Ghosts<F>,
     written: fn(&mut F),
     name: &str,

@@ -25,7 +25,7 @@ pub struct Latest<T: Copy> {
 
 impl<T: Copy> Latest<T> {
     /// Holds `value` until the first [`Latest::set`].
-    pub const fn new(value: T) -> Self {
+    pub(crate) const fn new(value: T) -> Self {
         Self {
             value: Mutex::new(Cell::new(value)),
         }
@@ -62,17 +62,17 @@ pub struct Links<const W: usize, const H: usize> {
     /// Sounds from [`game_task`](super::game_task) to [`sound_task`](super::sound_task), in order (the game never
     /// waits: what does not fit is dropped). Feature `sound` only.
     #[cfg(feature = "sound")]
-    pub sounds: Channel<CriticalSectionRawMutex, Sound, 8>,
+    pub(crate) sounds: Channel<CriticalSectionRawMutex, Sound, 8>,
     /// Levels won by the player (not the autopilot), from [`game_task`](super::game_task) to
     /// `records_task`. Feature `records` only.
     #[cfg(feature = "records")]
-    pub wins: Channel<CriticalSectionRawMutex, Win, 2>,
+    pub(crate) wins: Channel<CriticalSectionRawMutex, Win, 2>,
     /// Every level's record as `records_task` last read or wrote it.
     #[cfg(feature = "records")]
-    pub bests: Latest<Bests>,
+    pub(crate) bests: Latest<Bests>,
     /// The level whose win `records_task` has just stored as a new record.
     #[cfg(feature = "records")]
-    pub new_record: Signal<CriticalSectionRawMutex, u8>,
+    pub(crate) new_record: Signal<CriticalSectionRawMutex, u8>,
 }
 
 impl<const W: usize, const H: usize> Links<W, H> {
@@ -113,13 +113,13 @@ pub type Meter = fn(&mut dyn FnMut()) -> u64;
 #[cfg(feature = "records")]
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Win {
+pub(crate) struct Win {
     /// Index of the level in [`LEVELS`](crate::game::levels::LEVELS).
-    pub level: u8,
+    pub(crate) level: u8,
     /// The time it took.
-    pub frames: u32,
+    pub(crate) frames: u32,
 }
 
 /// Each built-in level's record in frames, if it has one.
 #[cfg(feature = "records")]
-pub type Bests = [Option<u32>; LEVELS.len()];
+pub(crate) type Bests = [Option<u32>; LEVELS.len()];

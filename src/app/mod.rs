@@ -65,8 +65,6 @@ pub use game_task::{game_task, play_task};
 #[cfg(feature = "ghosts")]
 pub use ghosts::{replays, GhostKit, GhostStore, LevelGhost};
 pub use input_task::{input_task, TiltInput};
-#[cfg(feature = "records")]
-pub use links::{Bests, Win};
 pub use links::{Latest, Links, Meter};
 pub use mode::{DemoSummary, GameExit, GameMode};
 pub use race_task::{race_task, Air, AirPacket};

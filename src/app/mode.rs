@@ -77,7 +77,7 @@ pub struct DemoSummary {
 
 impl DemoSummary {
     /// Every level played was won (and there was at least one).
-    pub const fn all_won(&self) -> bool {
+    pub(crate) const fn all_won(&self) -> bool {
         self.levels > 0 && self.won == self.levels
     }
 }

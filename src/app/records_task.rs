@@ -10,8 +10,8 @@ use crate::game::levels::LEVELS;
 use crate::records::{Offer, Records};
 
 /// Keeps the best times (feature `records`): reads every level's record into
-/// [`Links::bests`], then offers each [`Win`](super::Win) from [`Links::wins`] to
-/// `records` and, on a new record, tells the game ([`Links::new_record`]).
+/// `Links::bests`, then offers each `Win` from `Links::wins` to
+/// `records` and, on a new record, tells the game (`Links::new_record`).
 /// `written` runs after each update that wrote (QEMU saves its flash image to
 /// a host file there). Flash errors are logged and the game goes on without
 /// the record.

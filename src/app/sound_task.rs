@@ -14,7 +14,7 @@ pub trait SoundOutput {
     fn play(&mut self, sound: Sound) -> impl Future<Output = ()>;
 }
 
-/// Plays the sounds from [`Links::sounds`] on `output`, in order, forever.
+/// Plays the sounds from `Links::sounds` on `output`, in order, forever.
 pub async fn sound_task<O: SoundOutput, const W: usize, const H: usize>(
     links: &Links<W, H>,
     output: &mut O,

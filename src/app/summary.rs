@@ -25,7 +25,7 @@ impl GameExit {
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub struct Verdict {
     /// The demo passed.
-    pub pass: bool,
+    pub(crate) pass: bool,
 }
 
 impl Verdict {
@@ -69,7 +69,7 @@ impl SensorTotals {
 
     /// No re-init and no fault: what a fault-free demo shows (a long frame
     /// that starves the input task would show here).
-    pub const fn clean(&self) -> bool {
+    pub(crate) const fn clean(&self) -> bool {
         self.reinits == 0 && self.faults == 0
     }
 }
@@ -77,14 +77,14 @@ impl SensorTotals {
 impl DemoSummary {
     /// Zero totals: what a summary reports when the demo did not run to its
     /// end.
-    pub const ZERO: Self = Self {
+    pub(crate) const ZERO: Self = Self {
         levels: 0,
         won: 0,
         steps: 0,
         frames: 0,
     };
 
-    /// Passed when every level played was won ([`Self::all_won`]).
+    /// Passed when every level played was won (`Self::all_won`).
     pub const fn verdict(&self) -> Verdict {
         Verdict {
             pass: self.all_won(),
@@ -92,7 +92,7 @@ impl DemoSummary {
     }
 
     /// Passed when every level was won and the sensor stayed clean
-    /// ([`SensorTotals::clean`]): the verdict of a demo that reads a sensor
+    /// (`SensorTotals::clean`): the verdict of a demo that reads a sensor
     /// and fails on its faults.
     pub const fn verdict_with_sensor(&self, sensor: SensorTotals) -> Verdict {
         Verdict {

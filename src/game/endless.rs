@@ -50,7 +50,7 @@ pub const FIRST_SIZE: u8 = 4;
 
 /// The most storeys a generated maze can have in this build (the generator's
 /// range: 1 without the feature `storeys`).
-pub const MOST_STOREYS: u8 = if cfg!(feature = "storeys") {
+pub(crate) const MOST_STOREYS: u8 = if cfg!(feature = "storeys") {
     crate::physics::geometry::grid::MAX_STOREYS as u8
 } else {
     1
@@ -67,7 +67,7 @@ const NAME_BYTES: usize = 28;
 pub struct Reach {
     /// Cells along a side, at most ([`MIN_SIZE`] ..= [`MAX_SIZE`]).
     pub size: u8,
-    /// Storeys, at most (1 ..= [`MOST_STOREYS`]).
+    /// Storeys, at most (1 ..= `MOST_STOREYS`).
     pub storeys: u8,
 }
 
@@ -453,7 +453,7 @@ impl<const WORDS: usize, const TEXT: usize> MazeSlot<WORDS, TEXT> {
 
     /// The maze [`MazeSlot::make`] made last, if it made one (a level
     /// [`MazeSlot::load`] loaded, nameless: its name is in its text).
-    pub fn view(&self) -> Option<LevelView<'_>> {
+    pub(crate) fn view(&self) -> Option<LevelView<'_>> {
         let (info, grid) = self.level.as_ref()?;
         // The name was a `str`: its bytes are UTF-8.
         let name = self.name.get(..usize::from(self.name_len))?;

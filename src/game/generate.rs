@@ -24,9 +24,9 @@
 //! (`friction`, from 1); pits (holes out of the maze, from 2: on the lowest
 //! storey, in dead ends off the way to the goal, one more every two levels);
 //! a second marble (from 4) and a third (from 7) in dead ends of the top storey
-//! (on mazes of up to [`MAX_SIZE_FOR_MARBLES`] cells a side);
-//! `board_motion` (from 6, on one or two storeys: see [`Maze::board_motion`]); and a time limit that shrinks from three to one and a
-//! half times the autopilot's measured pace (see [`Maze::time_limit_s`]).
+//! (on mazes of up to `MAX_SIZE_FOR_MARBLES` cells a side);
+//! `board_motion` (from 6, on one or two storeys: see `Maze::board_motion`); and a time limit that shrinks from three to one and a
+//! half times the autopilot's measured pace (see `Maze::time_limit_s`).
 //!
 //! # Guarantees
 //!
@@ -70,7 +70,7 @@ pub const MAX_DIFFICULTY: u8 = 9;
 /// passes its range of 128: `survey` in `tests/generate.rs` shows debug builds
 /// panicking from size 9 on, event steps only), and on larger mazes the
 /// autopilot loses some three-marble runs on time. Up to 7 it wins every one.
-pub const MAX_SIZE_FOR_MARBLES: u8 = 7;
+pub(crate) const MAX_SIZE_FOR_MARBLES: u8 = 7;
 /// The longest level text [`Maze`] writes (four storeys of the largest size).
 pub const MAX_TEXT_BYTES: usize = text_bytes(MAX_SIZE, MAX_STOREYS as u8);
 
@@ -162,7 +162,7 @@ pub fn generate(seed: u32, size: u8, storeys: u8, difficulty: u8) -> Result<Maze
 
 impl Maze {
     /// No maze yet: what [`Maze::generate`] fills in.
-    pub const EMPTY: Maze = Maze {
+    pub(crate) const EMPTY: Maze = Maze {
         seed: 0,
         size: 0,
         storeys: 0,
@@ -177,7 +177,7 @@ impl Maze {
     /// so that the 912 bytes are on its stack once, not copied out of the
     /// generator. Out of line, for the same reason.
     #[inline(never)]
-    pub fn generate(
+    pub(crate) fn generate(
         &mut self,
         seed: u32,
         size: u8,
@@ -238,17 +238,9 @@ impl Maze {
     pub fn seed(&self) -> u32 {
         self.seed
     }
-    /// Cells along a side.
-    pub fn size(&self) -> u8 {
-        self.size
-    }
     /// Storeys.
     pub fn storeys(&self) -> u8 {
         self.storeys
-    }
-    /// The difficulty.
-    pub fn difficulty(&self) -> u8 {
-        self.difficulty
     }
     /// Cells on the way from the start to the goal (each drop counts as one).
     pub fn path_cells(&self) -> u16 {
@@ -274,7 +266,7 @@ impl Maze {
     /// autopilot needs at most 0.30 s: it stops at every corner; 1 680 mazes of
     /// every difficulty, both steppers, `survey` in `tests/generate.rs`) times a
     /// margin from 3 (difficulty 0) down to 1.5 (difficulty 9), plus 5 s.
-    pub fn time_limit_s(&self) -> u16 {
+    pub(crate) fn time_limit_s(&self) -> u16 {
         let pace_ds = 35 * (u32::from(self.path_cells) + u32::from(self.turns)) / 10;
         let margin_tenths = 30 - 5 * u32::from(self.difficulty) / 3;
         (5 + pace_ds * margin_tenths / 100).min(3600) as u16
@@ -286,7 +278,7 @@ impl Maze {
     /// there the autopilot lost 33 of 36 mazes at difficulty 6 (sizes 3, 5, 7,
     /// six seeds, event steps; `survey` in `tests/generate.rs`), and won every
     /// one below.
-    pub fn board_motion(&self) -> bool {
+    pub(crate) fn board_motion(&self) -> bool {
         self.difficulty >= 6 && self.storeys <= 2
     }
 

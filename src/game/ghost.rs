@@ -59,7 +59,7 @@ use crate::physics::Fx;
 use super::session::Session;
 
 mod race;
-pub use race::{race_frame, replay, replay_in, Checking, RaceError, Racer};
+pub use race::{race_frame, replay, Checking, RaceError, Racer};
 
 /// Bytes before the tokens.
 pub const HEADER_BYTES: usize = 24;
@@ -192,13 +192,8 @@ impl<'a> TokenWriter<'a> {
 
     /// Bytes written so far; a pending run of repeated readings adds its
     /// token (a varint of twice its frames) when the writer finishes.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.len
-    }
-
-    /// Whether nothing has been written yet.
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
     }
 
     /// Adds one frame's reading. On [`GhostError::Full`] the tokens so far stay

@@ -6,7 +6,7 @@
 //! # The level clock
 //!
 //! One rule for every board, so that records compare: the clock starts with the
-//! first frame that ends with a marble rolling (faster than [`CLOCK_START_SPEED_LOG2`] says
+//! first frame that ends with a marble rolling (faster than `CLOCK_START_SPEED_LOG2` says
 //! in the board's plane), i.e. at the first tilt that moves anything. Looking at
 //! the maze before touching it costs nothing; neither does sensor noise or a
 //! hand that is not quite level, which the rolling resistance holds. A tilt
@@ -90,7 +90,7 @@ impl Default for GameConfig {
 /// a fraction of a millimetre per second). A marble the rolling resistance
 /// holds is still to the bit (`tests/cli.rs`: a flat board's run ends where it
 /// started); a tilt that rolls it passes this within a few frames.
-pub const CLOCK_START_SPEED_LOG2: u32 = 6;
+pub(crate) const CLOCK_START_SPEED_LOG2: u32 = 6;
 
 /// Where an attempt stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -244,7 +244,7 @@ impl<'a, S: Scalar> Game<'a, S> {
 
     /// [`Game::frame`] with the stepper fixed at compile time ([`World::step_in`]):
     /// `EVENTS` must match the configuration's [`Stepping`].
-    pub fn frame_in<const EVENTS: bool>(&mut self) -> Phase {
+    pub(crate) fn frame_in<const EVENTS: bool>(&mut self) -> Phase {
         if self.phase != Phase::Playing {
             return self.phase;
         }

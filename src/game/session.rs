@@ -99,7 +99,7 @@ impl<'a, S: Scalar> Session<'a, S> {
     }
 
     /// [`Session::frame`] with the stepper fixed at compile time (firmware:
-    /// [`Game::frame_in`]).
+    /// `Game::frame_in`).
     pub fn frame_in<const EVENTS: bool>(&mut self, reading: AccelMg) -> Phase {
         self.take(reading);
         self.game.frame_in::<EVENTS>()

@@ -44,7 +44,7 @@ fn palette() -> Vec<u8> {
 }
 
 /// Writes LED images to an animated GIF.
-pub struct GifRecorder {
+pub(crate) struct GifRecorder {
     encoder: gif::Encoder<BufWriter<File>>,
     w: usize,
     h: usize,
@@ -58,7 +58,7 @@ pub struct GifRecorder {
 
 impl GifRecorder {
     /// A GIF of `w`×`h` LEDs, each `scale` pixels square, at `path`.
-    pub fn create(path: &Path, w: usize, h: usize, scale: usize) -> io::Result<GifRecorder> {
+    pub(crate) fn create(path: &Path, w: usize, h: usize, scale: usize) -> io::Result<GifRecorder> {
         let scale = scale.clamp(1, 64);
         let (pw, ph) = (w * scale, h * scale);
         if pw > u16::MAX as usize || ph > u16::MAX as usize || w == 0 || h == 0 {
@@ -81,15 +81,10 @@ impl GifRecorder {
         })
     }
 
-    /// GIF frames written so far (not counting one still pending).
-    pub fn frames(&self) -> usize {
-        self.frames
-    }
-
     /// Adds the image `leds` (`w·h` brightness levels or [`NO_LED`], row-major)
     /// shown from `t_s` seconds on. Images closer than 1/100 s to the previous
     /// one are dropped (GIF delays are whole centiseconds).
-    pub fn push(&mut self, leds: &[u8], t_s: f64) -> io::Result<()> {
+    pub(crate) fn push(&mut self, leds: &[u8], t_s: f64) -> io::Result<()> {
         assert_eq!(leds.len(), self.w * self.h, "image size");
         let cs = (t_s * 100.0).round().max(0.0) as u64;
         let (x0, y0, x1, y1) = match &self.last {
@@ -140,7 +135,7 @@ impl GifRecorder {
 
     /// Writes the last image, held for `hold_s` seconds after `t_end_s`, and closes
     /// the file. Returns the GIF frames written.
-    pub fn finish(mut self, t_end_s: f64, hold_s: f64) -> io::Result<usize> {
+    pub(crate) fn finish(mut self, t_end_s: f64, hold_s: f64) -> io::Result<usize> {
         let end = ((t_end_s + hold_s) * 100.0).round().max(0.0) as u64;
         self.flush_pending(end)?;
         let frames = self.frames;

@@ -10,7 +10,7 @@
 //! Nothing in here is used by the firmware: the module (and its dependencies clap,
 //! gif and crossterm) exists only when the `tools` feature is on.
 
-pub mod generated;
+pub(crate) mod generated;
 pub mod ghost_file;
 pub mod gif_out;
 pub mod play;
@@ -19,7 +19,7 @@ pub mod motion_trace;
 pub mod report;
 pub mod sim;
 pub mod storey_maps;
-pub mod tilt_trace;
+pub(crate) mod tilt_trace;
 
 use std::boxed::Box;
 use std::format;
@@ -33,15 +33,15 @@ use crate::physics::geometry::grid::{words_for, MAX_LAYERS, MAX_TILES_XZ};
 /// Occupancy words of the largest level the format allows (127 × 127 tiles on 4
 /// storeys, 16 KiB):
 /// every level read at run time is parsed into a grid of this size.
-pub const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
+pub(crate) const MAX_WORDS: usize = words_for(MAX_TILES_XZ, MAX_LAYERS, MAX_TILES_XZ);
 
 /// A level chosen on the command line.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Loaded {
     /// The level.
-    pub view: LevelView<'static>,
+    pub(crate) view: LevelView<'static>,
     /// Its index in [`LEVELS`] when it is a built-in one.
-    pub builtin: Option<usize>,
+    pub(crate) builtin: Option<usize>,
 }
 
 /// Names of the built-in levels, comma separated (for messages).
@@ -56,7 +56,9 @@ pub(crate) fn builtin_names() -> String {
 /// Parses a level source read at run time. The source and the parsed level are
 /// leaked: a tool loads a handful of levels per process. The error is
 /// `line:column: message`.
-pub fn parse_runtime(src: String) -> Result<LevelView<'static>, crate::game::level::LevelError> {
+pub(crate) fn parse_runtime(
+    src: String,
+) -> Result<LevelView<'static>, crate::game::level::LevelError> {
     let src: &'static str = Box::leak(src.into_boxed_str());
     let level = parse::<MAX_WORDS>(src)?;
     let level: &'static _ = Box::leak(Box::new(level));
@@ -92,12 +94,12 @@ pub(crate) fn load_level(arg: &str) -> Result<Loaded, String> {
 }
 
 /// Characters of offending text an error line quotes at most ([`excerpt`]).
-pub const EXCERPT_CHARS: usize = 60;
+pub(crate) const EXCERPT_CHARS: usize = 60;
 
 /// `text` quoted for an error line: in backticks, and when longer than
-/// [`EXCERPT_CHARS`] characters its first ones and an ellipsis (a 100 000-digit
+/// `EXCERPT_CHARS` characters its first ones and an ellipsis (a 100 000-digit
 /// number is reported in a line, not echoed whole).
-pub fn excerpt(text: &str) -> String {
+pub(crate) fn excerpt(text: &str) -> String {
     match text.char_indices().nth(EXCERPT_CHARS) {
         Some((cut, _)) => format!("`{}…`", &text[..cut]),
         None => format!("`{text}`"),
@@ -108,7 +110,7 @@ pub fn excerpt(text: &str) -> String {
 /// echoes an argument it refuses whole). Quotes are paired in order; a line
 /// still longer than [`EXCERPT_CHARS`] · 3 characters (an argument with a quote
 /// in it) is cut there.
-pub fn shorten_quotes(message: &str) -> String {
+pub(crate) fn shorten_quotes(message: &str) -> String {
     let mut out = String::with_capacity(message.len().min(4096));
     for (n, line) in message.split('\n').enumerate() {
         if n > 0 {
@@ -141,7 +143,7 @@ pub fn shorten_quotes(message: &str) -> String {
 
 /// A scalar type the physics can run on, chosen by name at run time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Backend {
+pub(crate) enum Backend {
     /// `fixed::types::I8F24`, the firmware's default (`i8f24`).
     I8F24,
     /// `fixed::types::I16F16` (`i16f16`).
@@ -158,7 +160,7 @@ pub enum Backend {
 
 impl Backend {
     /// Every backend, the default first.
-    pub const ALL: [Backend; 6] = [
+    pub(crate) const ALL: [Backend; 6] = [
         Backend::I8F24,
         Backend::I16F16,
         Backend::I32F32,
@@ -168,7 +170,7 @@ impl Backend {
     ];
 
     /// The name used on the command line and in reports (`Scalar::NAME`).
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         use crate::physics::Scalar;
         match self {
             Backend::I8F24 => fixed::types::I8F24::NAME,
@@ -200,7 +202,7 @@ impl Backend {
     }
 
     /// Runs `job` with this backend's scalar type.
-    pub fn run<J: WithScalar>(self, job: J) -> J::Output {
+    pub(crate) fn run<J: WithScalar>(self, job: J) -> J::Output {
         match self {
             Backend::I8F24 => job.run::<fixed::types::I8F24>(),
             Backend::I16F16 => job.run::<fixed::types::I16F16>(),
@@ -219,7 +221,7 @@ impl core::fmt::Display for Backend {
 }
 
 /// Work that is generic over the scalar type ([`Backend::run`] picks it).
-pub trait WithScalar {
+pub(crate) trait WithScalar {
     /// What the work returns.
     type Output;
     /// Does the work with scalar `S`.
@@ -238,8 +240,8 @@ pub(crate) fn args_without_separator() -> Vec<std::ffi::OsString> {
 
 /// The process arguments (without the aliases' `--`) parsed into `A`; on failure,
 /// clap's message is printed and the exit status returned (2 for an error, 0 for
-/// `--help` and `--version`). An error quotes at most [`EXCERPT_CHARS`] of an
-/// argument ([`shorten_quotes`]).
+/// `--help` and `--version`). An error quotes at most `EXCERPT_CHARS` of an
+/// argument (`shorten_quotes`).
 pub fn parse_args<A: clap::Parser>() -> Result<A, i32> {
     A::try_parse_from(args_without_separator()).map_err(|e| {
         if e.use_stderr() {

@@ -22,7 +22,7 @@
 //!   the world's state after the step. A state jump at an event instant (a
 //!   bounce) belongs to the flight that starts there.
 //!
-//! Columns ([`trace_header`]): `step,t_s` (the step the instant ends or lies in,
+//! Columns (`trace_header`): `step,t_s` (the step the instant ends or lies in,
 //! 1-based, and the simulated time), then `x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s`
 //! for marble 0 and `xN_mm,yN_mm,zN_mm,vxN_mm_s,vyN_mm_s,vzN_mm_s` for each
 //! further marble `N` — one row per instant, so marble–marble distances are read
@@ -39,7 +39,7 @@ use crate::game::session::Session;
 use crate::physics::{Marble, Scalar, Segment, StepObserver, Vec3, World};
 
 /// The trace's header for `marbles` marbles (see the module doc).
-pub fn trace_header(marbles: usize) -> String {
+pub(crate) fn trace_header(marbles: usize) -> String {
     let mut h = String::from("step,t_s");
     for n in 0..marbles {
         let n = if n == 0 { String::new() } else { n.to_string() };
@@ -57,7 +57,7 @@ pub fn trace_header(marbles: usize) -> String {
 #[derive(Clone, Debug)]
 pub struct FlightLog<S> {
     /// Per marble: `(from, to, segment)`, fractions of the step.
-    pub flights: Vec<Vec<(S, S, Segment<S>)>>,
+    pub(crate) flights: Vec<Vec<(S, S, Segment<S>)>>,
 }
 
 impl<S> Default for FlightLog<S> {
@@ -70,7 +70,7 @@ impl<S> Default for FlightLog<S> {
 
 impl<S> FlightLog<S> {
     /// Forgets the flights so far (keeps the room).
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         for f in &mut self.flights {
             f.clear();
         }
@@ -156,11 +156,11 @@ pub(super) enum ReplayError {
 /// What a frame's replay starts from: the world as it was before the frame.
 pub(super) struct FrameStart<S> {
     /// The marbles.
-    pub marbles: Vec<Marble<S>>,
+    pub(crate) marbles: Vec<Marble<S>>,
     /// The pull (milli-g).
-    pub pull: [i32; 3],
+    pub(crate) pull: [i32; 3],
     /// The step counters.
-    pub stats: crate::physics::StepStats,
+    pub(crate) stats: crate::physics::StepStats,
 }
 
 impl<S: Scalar> FrameStart<S> {

@@ -73,16 +73,16 @@ pub struct Args {
     /// Level to start with: a built-in name or a level file (default: the first
     /// built-in level).
     #[arg(long, value_name = "NAME|FILE")]
-    pub level: Option<String>,
+    pub(crate) level: Option<String>,
     /// Start with the autopilot at the controls (`p` toggles it).
     #[arg(long)]
-    pub autopilot: bool,
+    pub(crate) autopilot: bool,
     /// A generated maze to start with instead of `--level`.
     #[command(flatten)]
-    pub maze: super::generated::GenerateArgs,
+    pub(crate) maze: super::generated::GenerateArgs,
     /// Where each level's best run is kept as a ghost (`NAME.ghost`).
     #[arg(long, value_name = "DIR", default_value = "target/ghosts")]
-    pub ghosts: PathBuf,
+    pub(crate) ghosts: PathBuf,
     /// Race another terminal on this machine (UDP on localhost): start the
     /// same command in a second terminal. The maze is `--generate`'s (a new
     /// seed without it) of whichever side the handshake picks.
@@ -90,7 +90,7 @@ pub struct Args {
     pub race: bool,
     /// The race's channel: a pair of UDP ports (47400 + 2 N and the next).
     #[arg(long, value_name = "N", default_value_t = 0, requires = "race")]
-    pub channel: u16,
+    pub(crate) channel: u16,
 }
 
 /// Runs the player with `args`, the process arguments (the binary hands

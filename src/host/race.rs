@@ -9,7 +9,7 @@
 //! chooses it, else a new seed) and races the one the handshake agrees on.
 //!
 //! [`UdpBoard`] is one side without a terminal (`tests/race.rs` races two in
-//! one process over real sockets); [`run`] is the terminal around it.
+//! one process over real sockets); `run` is the terminal around it.
 
 use std::io::{self, IsTerminal, Write};
 use std::net::{SocketAddr, UdpSocket};
@@ -94,7 +94,7 @@ pub struct UdpBoard {
     peer: SocketAddr,
     stage: Stage,
     /// The autopilot of the race's maze, made when the race starts.
-    pub autopilot: Option<Autopilot>,
+    pub(crate) autopilot: Option<Autopilot>,
 }
 
 impl UdpBoard {
@@ -120,7 +120,7 @@ impl UdpBoard {
     }
 
     /// The link.
-    pub fn link(&self) -> &RaceLink {
+    pub(crate) fn link(&self) -> &RaceLink {
         match &self.stage {
             Stage::Linking(l) => l,
             Stage::Racing(r) => r.link(),
@@ -186,7 +186,7 @@ impl UdpBoard {
 }
 
 /// `cargo play -- --race`: checks the offer and the terminal, then races
-/// ([`run`]); returns the exit status.
+/// (`run`); returns the exit status.
 pub fn main(args: &Args) -> i32 {
     use super::generated::{DEFAULT_DIFFICULTY, DEFAULT_SIZE};
     let offer = crate::race::MazeSpec {
@@ -214,7 +214,7 @@ pub fn main(args: &Args) -> i32 {
 
 /// `cargo play -- --race`: races in the terminal on `channel`, offering
 /// `offer`; `autopilot` starts with the autopilot at the controls.
-pub fn run(channel: u16, offer: MazeSpec, autopilot: bool) -> Result<(), String> {
+pub(crate) fn run(channel: u16, offer: MazeSpec, autopilot: bool) -> Result<(), String> {
     let (socket, peer) = channel_socket(channel)?;
     let port = socket.local_addr().map(|a| a.port()).unwrap_or(0);
     let board = UdpBoard::new(socket, peer, fresh_id(), offer).map_err(|e| e.to_string())?;

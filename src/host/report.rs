@@ -13,56 +13,56 @@ use crate::physics::{Scalar, Vec3, World};
 #[derive(Clone, Debug)]
 pub struct Report {
     /// The level's name.
-    pub level: String,
+    pub(crate) level: String,
     /// `won`, `fell` or `timeout`.
     pub outcome: &'static str,
     /// Frames played.
     pub frames: u32,
     /// Physics steps taken.
-    pub steps: u64,
+    pub(crate) steps: u64,
     /// Simulated seconds.
-    pub sim_seconds: f64,
+    pub(crate) sim_seconds: f64,
     /// Physics step (s).
-    pub dt_s: f64,
+    pub(crate) dt_s: f64,
     /// Steps per frame.
-    pub substeps: u32,
+    pub(crate) substeps: u32,
     /// Scalar backend.
-    pub backend: &'static str,
+    pub(crate) backend: &'static str,
     /// Short tile width (mm).
-    pub short_mm: f64,
+    pub(crate) short_mm: f64,
     /// Long tile width (mm).
-    pub long_mm: f64,
+    pub(crate) long_mm: f64,
     /// Marble radius (mm).
-    pub marble_radius_mm: f64,
+    pub(crate) marble_radius_mm: f64,
     /// Marbles in the level.
-    pub marbles: usize,
+    pub(crate) marbles: usize,
     /// `fixed` or `events`.
-    pub stepping: &'static str,
+    pub(crate) stepping: &'static str,
     /// Every marble at the start.
-    pub start: Vec<MarbleState>,
+    pub(crate) start: Vec<MarbleState>,
     /// Every marble at the end.
-    pub end: Vec<MarbleState>,
+    pub(crate) end: Vec<MarbleState>,
     /// `Session::state_hash` at the end.
     pub state_hash: u64,
     /// Readings the tilt path rejected.
-    pub tilt_errors: u32,
+    pub(crate) tilt_errors: u32,
     /// Wall-clock seconds of the simulation loop.
-    pub wall_s: f64,
+    pub(crate) wall_s: f64,
     /// Rows written by `--trace`.
-    pub trace_rows: u64,
+    pub(crate) trace_rows: u64,
     /// GIF frames written by `--gif`.
     pub gif_frames: usize,
 }
 
 /// One marble's state in the report (mm and mm/s, tile frame).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MarbleState {
+pub(crate) struct MarbleState {
     /// Centre.
-    pub pos_mm: [f64; 3],
+    pub(crate) pos_mm: [f64; 3],
     /// Velocity.
-    pub vel_mm_s: [f64; 3],
+    pub(crate) vel_mm_s: [f64; 3],
     /// Fallen through a hole or off the board.
-    pub out: bool,
+    pub(crate) out: bool,
 }
 
 impl MarbleState {
@@ -92,7 +92,7 @@ fn marbles_json(ms: &[MarbleState]) -> String {
 
 impl Report {
     /// Simulated seconds per wall-clock second (not deterministic).
-    pub fn speed_x(&self) -> f64 {
+    pub(crate) fn speed_x(&self) -> f64 {
         if self.wall_s > 0.0 {
             self.sim_seconds / self.wall_s
         } else {
@@ -101,7 +101,7 @@ impl Report {
     }
 
     /// The `--json` line.
-    pub fn json(&self) -> String {
+    pub(crate) fn json(&self) -> String {
         format!(
             "{{\"level\":{},\"outcome\":\"{}\",\"steps\":{},\"frames\":{},\"sim_seconds\":{},\"dt_s\":{},\
              \"substeps\":{},\"stepping\":\"{}\",\"backend\":\"{}\",\"short_mm\":{},\"long_mm\":{},\
@@ -130,7 +130,7 @@ impl Report {
     }
 
     /// The human summary.
-    pub fn summary(&self) -> String {
+    pub(crate) fn summary(&self) -> String {
         let mut s = format!(
             "{}: {} after {:.3} s ({} frames, {} steps of 1/{} s, {} substeps, {} stepping, {})\n",
             self.level,

@@ -19,7 +19,7 @@
 //! → tilt path → [`crate::game::rules::Game::frame`] (`substeps` physics steps,
 //! then the judging). So the `state_hash` of a run is the firmware's for the same
 //! inputs and backend. `--tilt-trace FILE` feeds recorded readings
-//! ([`super::tilt_trace`]); `--trace FILE` writes the marbles' motion, sampled
+//! (`super::tilt_trace`); `--trace FILE` writes the marbles' motion, sampled
 //! between the game's frames ([`super::motion_trace`]); the outcome is a
 //! [`Report`], a JSON line or a summary.
 //!
@@ -29,7 +29,7 @@
 //! trace, backend, substeps, unwritable output) with a message on stderr; for
 //! `--check`, 1 when the level is invalid (2 when the file cannot be read or is
 //! not UTF-8). A message quotes at most 60 characters of the text it refuses
-//! ([`super::excerpt`]).
+//! (`super::excerpt`).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -68,62 +68,62 @@ pub struct Args {
     /// Level: a built-in name (first-roll, corner, ...) or a level file.
     #[arg(long, value_name = "FILE|NAME",
           required_unless_present_any = ["check", "list", "generate", "print_level"])]
-    pub level: Option<String>,
+    pub(crate) level: Option<String>,
     /// Tilt readings: CSV `t_s,ax_mg,ay_mg,az_mg` (board frame, flat = 0,1000,0;
     /// ax < 0 rolls towards +x'), each held until the next. Default: flat board.
     #[arg(long, value_name = "FILE", conflicts_with = "autopilot")]
-    pub tilt_trace: Option<PathBuf>,
+    pub(crate) tilt_trace: Option<PathBuf>,
     /// Let the autopilot tilt the board.
     #[arg(long)]
-    pub autopilot: bool,
+    pub(crate) autopilot: bool,
     /// Stop after S seconds of simulated time (default: the level's time limit);
     /// a run stopped this way while still playing ends as `timeout`.
     #[arg(long, value_name = "S", value_parser = parse_seconds)]
-    pub seconds: Option<f64>,
+    pub(crate) seconds: Option<f64>,
     /// Number type of the physics.
     #[arg(long, value_name = "NAME", default_value = "i8f24")]
-    pub backend: String,
+    pub(crate) backend: String,
     /// Physics steps per frame: 1, 2, 4, 8 or 16 (the frame rate stays 128 Hz).
     /// Default: 8 with fixed steps, 1 (one step per frame) with events.
     #[arg(long, value_name = "N", value_parser = parse_substeps)]
-    pub substeps: Option<u32>,
+    pub(crate) substeps: Option<u32>,
     /// How a step is crossed: `events` (each marble flies its closed form from
     /// event to event; what every board plays) or `fixed` (the closed form over
     /// the step, contacts at its end, speed capped; the study's baseline).
     #[arg(long, value_name = "MODE", default_value = "events", value_parser = parse_stepping)]
-    pub stepping: Stepping,
+    pub(crate) stepping: Stepping,
     /// Write every marble's position (mm) and velocity (mm/s) to FILE as CSV: a
     /// row per 1/1024 s with events, a row per step with fixed steps.
     #[arg(long = "trace", value_name = "FILE")]
-    pub motion_trace: Option<PathBuf>,
+    pub(crate) motion_trace: Option<PathBuf>,
     /// Print one JSON line instead of the human summary.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
     /// Render the run to an animated GIF (a level with storeys: every storey's map
     /// beside the matrix, top storey first).
     #[arg(long, value_name = "FILE")]
-    pub gif: Option<PathBuf>,
+    pub(crate) gif: Option<PathBuf>,
     /// GIF pixels per LED (tile).
     #[arg(long, value_name = "PX", default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..=64))]
-    pub gif_scale: u32,
+    pub(crate) gif_scale: u32,
     /// A GIF image every N game frames (128 frames/s).
     #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=1024))]
-    pub gif_every: u32,
+    pub(crate) gif_every: u32,
     /// Validate a level file: print `FILE:line:column: message` or `ok`.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["level", "list"])]
-    pub check: Option<PathBuf>,
+    pub(crate) check: Option<PathBuf>,
     /// List the built-in levels and backends.
     #[arg(long)]
-    pub list: bool,
+    pub(crate) list: bool,
     /// A generated maze instead of `--level` (see `docs/generator.md`).
     #[command(flatten)]
-    pub maze: super::generated::GenerateArgs,
+    pub(crate) maze: super::generated::GenerateArgs,
     /// Print the generated maze's level text (for `--check` and `--level`) and stop.
     // Checked in `run`, not with clap's `requires`: clap would also ask for
     // `--level` (required unless `--generate`), which `--generate` refuses,
     // and lets `--level NAME --print-level` through as a success.
     #[arg(long, conflicts_with_all = ["check", "list"])]
-    pub print_level: bool,
+    pub(crate) print_level: bool,
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {
@@ -383,7 +383,7 @@ pub fn main() -> i32 {
 }
 
 /// Runs the CLI with parsed arguments; returns the exit status.
-pub fn run(args: &Args) -> i32 {
+pub(crate) fn run(args: &Args) -> i32 {
     if args.print_level {
         return match args.maze.level() {
             Ok(Some((text, _))) => {

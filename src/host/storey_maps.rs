@@ -21,9 +21,8 @@
 //! anti-aliased by [`draw_marble`] exactly as on the matrix.
 //!
 //! Everything here is pure (no file): [`game_image`] is what `cargo sim --gif`
-//! records, [`image_size`] the size [`GifRecorder::create`] is given.
+//! records, [`image_size`] the size `GifRecorder::create` is given.
 //!
-//! [`GifRecorder::create`]: super::gif_out::GifRecorder::create
 //! [`TileLayout::storey_of`]: crate::physics::geometry::tiles::TileLayout::storey_of
 
 use std::vec;
@@ -41,7 +40,7 @@ use crate::render::{blink_on, draw_marble, storey_tile, tile_point, TilePoint, V
 pub const GAP_LEDS: usize = 2;
 
 /// An image of LEDs: `(width, height, levels)`, `levels` row-major.
-pub type Image = (usize, usize, Vec<u8>);
+pub(crate) type Image = (usize, usize, Vec<u8>);
 
 /// Storey maps shown for `level`: none for a one-storey level, else one per
 /// storey.

@@ -24,29 +24,29 @@ use super::excerpt;
 use crate::input::axes::AccelMg;
 
 /// The required header.
-pub const HEADER: &str = "t_s,ax_mg,ay_mg,az_mg";
+pub(crate) const HEADER: &str = "t_s,ax_mg,ay_mg,az_mg";
 
 /// Largest reading magnitude accepted per axis (mg): anything beyond the widest
 /// accelerometer range is a typo.
 pub const MAX_READING_MG: f64 = 16_000.0;
 
 /// A flat board's reading.
-pub const FLAT: AccelMg = AccelMg::LEVEL;
+pub(crate) const FLAT: AccelMg = AccelMg::LEVEL;
 
 /// A parsed trace.
 #[derive(Clone, Debug, PartialEq)]
-pub struct TiltTrace {
+pub(crate) struct TiltTrace {
     samples: Vec<(f64, AccelMg)>,
     next: usize,
 }
 
 /// A problem with a trace: the 1-based line and what is wrong.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct TraceError {
+pub(crate) struct TraceError {
     /// 1-based line.
-    pub line: usize,
+    pub(crate) line: usize,
     /// What is wrong.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 impl core::fmt::Display for TraceError {
@@ -58,7 +58,7 @@ impl core::fmt::Display for TraceError {
 impl TiltTrace {
     /// Parses a trace read as bytes: [`Self::parse`] once they are UTF-8, else
     /// an error at the line of the first bad byte, naming it and its column.
-    pub fn from_bytes(bytes: &[u8]) -> Result<TiltTrace, TraceError> {
+    pub(crate) fn from_bytes(bytes: &[u8]) -> Result<TiltTrace, TraceError> {
         match core::str::from_utf8(bytes) {
             Ok(text) => Self::parse(text),
             Err(e) => {
@@ -80,7 +80,7 @@ impl TiltTrace {
 
     /// Parses a trace's text.
     /// A leading UTF-8 byte-order mark is skipped.
-    pub fn parse(text: &str) -> Result<TiltTrace, TraceError> {
+    pub(crate) fn parse(text: &str) -> Result<TiltTrace, TraceError> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut samples = Vec::new();
         let mut header = false;
@@ -152,16 +152,6 @@ impl TiltTrace {
         }
         let samples = samples.into_iter().map(|(t, mg, _)| (t, mg)).collect();
         Ok(TiltTrace { samples, next: 0 })
-    }
-
-    /// Samples in the trace.
-    pub fn len(&self) -> usize {
-        self.samples.len()
-    }
-
-    /// Whether the trace has no samples (the board stays flat).
-    pub fn is_empty(&self) -> bool {
-        self.samples.is_empty()
     }
 
     /// The reading in force at `t` seconds: the last sample at or before `t`, or a

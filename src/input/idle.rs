@@ -2,7 +2,7 @@
 //!
 //! A pure state machine like [`super::buttons`]: fed every frame's tilt
 //! reading and every command, it says when the toy has been idle for
-//! [`IdleConfig::timeout_frames`]. What sleeping means is the board's (for the
+//! `IdleConfig::timeout_frames`. What sleeping means is the board's (for the
 //! micro:bit v2: display off, System OFF, woken by a button).
 //!
 //! Run by the app's game loop (`app::play`, feature `sleep`): every command
@@ -16,7 +16,7 @@
 //!
 //! "No tilt change" cannot mean "the same reading": an accelerometer on a
 //! table reads a few milli-g of noise every sample. It means the reading has
-//! stayed within [`IdleConfig::still_mg`] of where it was at the last activity
+//! stayed within `IdleConfig::still_mg` of where it was at the last activity
 //! on every axis; a tilt past that (about 3° at 60 mg) is someone handling the
 //! toy, and starts the count again from the new reading. Counting in frames,
 //! not reading a clock, keeps it pure; the game's frames are its clock.
@@ -28,10 +28,10 @@ use super::axes::AccelMg;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct IdleConfig {
     /// Frames with no activity before [`Idle::tick`] says sleep (≥ 1).
-    pub timeout_frames: u32,
+    pub(crate) timeout_frames: u32,
     /// A reading further than this from the last activity's, on any axis, is
     /// activity (milli-g).
-    pub still_mg: i32,
+    pub(crate) still_mg: i32,
 }
 
 impl IdleConfig {
@@ -90,11 +90,6 @@ impl Idle {
         }
         self.still = self.still.saturating_add(1);
         self.still >= self.config.timeout_frames.max(1)
-    }
-
-    /// Frames since the last activity.
-    pub fn still_frames(&self) -> u32 {
-        self.still
     }
 }
 

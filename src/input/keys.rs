@@ -7,9 +7,9 @@ use super::axes::AccelMg;
 use super::event::{Command, InputEvent};
 
 /// Tilt added per key press, milli-g.
-pub const KEY_TILT_STEP_MG: i32 = 100;
+pub(crate) const KEY_TILT_STEP_MG: i32 = 100;
 /// Largest tilt reachable with keys, milli-g per axis.
-pub const KEY_TILT_MAX_MG: i32 = 500;
+pub(crate) const KEY_TILT_MAX_MG: i32 = 500;
 
 /// A key recognised by [`KeyDecoder`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -60,14 +60,14 @@ pub struct KeyDecoder {
 
 impl KeyDecoder {
     /// A decoder outside any escape sequence.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         Self {
             state: Escape::None,
         }
     }
 
     /// Feeds one byte; returns a key when one is complete.
-    pub fn feed(&mut self, byte: u8) -> Option<Key> {
+    pub(crate) fn feed(&mut self, byte: u8) -> Option<Key> {
         match self.state {
             Escape::None => Self::plain(byte, &mut self.state),
             Escape::Esc => {
@@ -119,8 +119,8 @@ impl KeyDecoder {
 }
 
 /// A virtual accelerometer driven by keys: each arrow/WASD press tilts the
-/// board one [`KEY_TILT_STEP_MG`] step further that way (up to
-/// [`KEY_TILT_MAX_MG`]); space levels it. A terminal sends no key releases,
+/// board one `KEY_TILT_STEP_MG` step further that way (up to
+/// `KEY_TILT_MAX_MG`); space levels it. A terminal sends no key releases,
 /// so the tilt stays until changed, like a board held tilted.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct KeyTilt {
@@ -171,7 +171,7 @@ impl KeyTilt {
     }
 
     /// The tilt the keys hold now (flat until the first tilt key).
-    pub fn tilt(&self) -> AccelMg {
+    pub(crate) fn tilt(&self) -> AccelMg {
         AccelMg::from_xz(self.x, self.z)
     }
 }

@@ -23,7 +23,7 @@ pub type Sensor<I2C> = Lsm303agr<I2cInterface<I2C>, MagOneShot>;
 
 /// How long the output takes to become valid after a mode change at 200 Hz
 /// (the datasheet's 1/ODR plus margin).
-pub const SETTLE_MS: u64 = super::accel_timing::ACCEL_SETTLE_MS;
+pub(crate) const SETTLE_MS: u64 = super::accel_timing::ACCEL_SETTLE_MS;
 
 // The driver is configured for the rate the input path names.
 const _: () = assert!(
@@ -39,7 +39,7 @@ pub trait BusFault {
 }
 
 /// The supervisor's name for a driver error.
-pub fn fault<E: BusFault>(e: Error<E>) -> Fault {
+pub(crate) fn fault<E: BusFault>(e: Error<E>) -> Fault {
     match e {
         Error::Comm(e) => e.fault(),
         Error::InvalidInputData => Fault::Implausible,
@@ -55,7 +55,7 @@ impl embedded_hal::delay::DelayNs for NoDelay {
 }
 
 /// Whether the chip on the bus says it is an LSM303AGR accelerometer.
-pub async fn check_identity<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
+pub(crate) async fn check_identity<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
 where
     I2C: I2c,
     I2C::Error: BusFault,
@@ -69,8 +69,8 @@ where
 }
 
 /// (Re)configures the accelerometer: init (block data update), high
-/// resolution at 200 Hz, then waits [`SETTLE_MS`] until the output is valid.
-pub async fn configure<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
+/// resolution at 200 Hz, then waits `SETTLE_MS` until the output is valid.
+pub(crate) async fn configure<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
 where
     I2C: I2c,
     I2C::Error: BusFault,
@@ -89,7 +89,7 @@ where
 }
 
 /// The (re)init every LSM303AGR board runs: the identity check
-/// ([`check_identity`]), then, if the chip is one, [`configure`]. The
+/// (`check_identity`), then, if the chip is one, `configure`. The
 /// outcome goes to `pipeline` ([`TiltPipeline::reinit_done`]) and back to
 /// the board, which logs a failure.
 pub async fn reinit<I2C>(sensor: &mut Sensor<I2C>, pipeline: &mut TiltPipeline) -> Result<(), Fault>
@@ -118,7 +118,7 @@ pub struct Polled {
 }
 
 /// One polling period's sensor work, as every LSM303AGR board does it: a
-/// [`read`] fed to `pipeline`, then `on_step` (the board's counts and log
+/// `read` fed to `pipeline`, then `on_step` (the board's counts and log
 /// lines, before any re-init as they always were), then a [`reinit`] when
 /// the pipeline asks for one ([`Action::Reinit`]). The board keeps its own
 /// rule for when to start its ticker over.
@@ -144,7 +144,7 @@ where
 
 /// Powers the accelerometer down (`CTRL_REG1_A` ODR = 0: no conversions;
 /// measuring at 200 Hz it would draw more than the whole nRF in System OFF),
-/// before the board sleeps. [`configure`] brings it back; the magnetometer stays in the
+/// before the board sleeps. `configure` brings it back; the magnetometer stays in the
 /// idle mode it starts in (the driver never starts it).
 pub async fn power_down<I2C>(sensor: &mut Sensor<I2C>) -> Result<(), Fault>
 where
@@ -159,7 +159,7 @@ where
 
 /// One poll in the sensor's frame, milli-g: a new sample, none yet (not a
 /// fault), or the bus's fault.
-pub async fn read<I2C>(sensor: &mut Sensor<I2C>) -> Read<AccelMg>
+pub(crate) async fn read<I2C>(sensor: &mut Sensor<I2C>) -> Read<AccelMg>
 where
     I2C: I2c,
     I2C::Error: BusFault,

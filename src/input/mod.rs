@@ -15,7 +15,7 @@
 //! [`tilt::TiltFilter`], which makes it a [`tilt::GravityMg`]: a sensor's
 //! sample ([`sensor::TiltPipeline::tilt`]), the keys' tilt, the autopilot's, a
 //! trace's, a ghost's and a race opponent's. One rule says which
-//! readings are believed ([`plausible::Plausibility::judge`]), asked once of each
+//! readings are believed (`plausible::Plausibility::judge`), asked once of each
 //! reading (a sensor's sample by its supervision, which counts a refused one as
 //! a fault; any other on entry to the filter), and no stage clamps: a believed
 //! reading keeps to ±[`plausible::MAX_READING_MG`] per axis, so its gravity is
@@ -33,7 +33,7 @@
 //! Everything here is pure: a board feeds bytes, pin levels and samples in,
 //! and host tests drive the same code.
 
-pub mod accel_timing;
+pub(crate) mod accel_timing;
 pub mod axes;
 pub mod event;
 pub mod keys;
@@ -42,7 +42,7 @@ pub mod lsm303;
 pub mod buttons;
 pub mod idle;
 pub mod pacing;
-pub mod plausible;
+pub(crate) mod plausible;
 pub mod race_setup;
 pub mod sensor;
 pub mod tilt;

@@ -105,7 +105,7 @@ impl Plausibility {
     ///
     /// Three comparisons per axis and three 32-bit multiplications: no
     /// division, no 64-bit arithmetic, no overflow for any `i32` input.
-    pub const fn judge(&self, reading: AccelMg) -> Result<(), TiltError> {
+    pub(crate) const fn judge(&self, reading: AccelMg) -> Result<(), TiltError> {
         let AccelMg { x, y, z } = reading;
         if x == 0 && y == 0 && z == 0 {
             return Err(TiltError::AllZero);
@@ -132,7 +132,7 @@ impl Plausibility {
         Ok(())
     }
 
-    /// Whether the sample `s` is believed ([`Plausibility::judge`]).
+    /// Whether the sample `s` is believed (`Plausibility::judge`).
     pub const fn check(&self, s: AccelMg) -> bool {
         self.judge(s).is_ok()
     }

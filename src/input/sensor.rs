@@ -180,7 +180,7 @@ impl<S: Copy> SensorSupervisor<S> {
     }
 
     /// Feeds the outcome of one completed read.
-    pub fn feed(&mut self, read: Result<S, Fault>) -> Action<S> {
+    pub(crate) fn feed(&mut self, read: Result<S, Fault>) -> Action<S> {
         self.not_ready_streak = 0;
         match read {
             Ok(sample) => {
@@ -263,14 +263,6 @@ impl<S: Copy> SensorSupervisor<S> {
                 }
             }
         }
-    }
-}
-
-impl<S: Copy> SensorSupervisor<S> {
-    /// Replaces the plausibility bounds used by [`SensorSupervisor::check`].
-    pub const fn with_plausibility(mut self, plausibility: Plausibility) -> Self {
-        self.plausibility = plausibility;
-        self
     }
 }
 

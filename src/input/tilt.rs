@@ -13,7 +13,7 @@
 //! which: [`TiltConfig::SENSOR`] takes the sensor's samples as judged.
 //!
 //! Nothing is clamped here: a believed reading keeps to ±[`MAX_READING_MG`]
-//! per axis ([`super::plausible`]), so its gravity is within the physics'
+//! per axis (`super::plausible`), so its gravity is within the physics'
 //! largest pull as it is, and the world holds it to its level's own bound.
 //!
 //! # What reaches the physics
@@ -62,7 +62,7 @@
 //! # Fit with [`crate::input::sensor`]
 //!
 //! The plausibility bounds are a [`Plausibility`], judged by the one rule
-//! ([`Plausibility::judge`]) the sensor's
+//! (`Plausibility::judge`) the sensor's
 //! [`TiltPipeline`](crate::input::sensor::TiltPipeline) applies: a filter fed
 //! the pipeline's samples ([`TiltConfig::SENSOR`]) judges them no more, one fed
 //! anything else judges on entry, by the same rule; the "level" offset is a
@@ -127,7 +127,7 @@ const FRAC_BITS: u32 = 12;
 
 /// The largest low-pass shift accepted ([`TiltConfig::filter_shift`] is
 /// clamped to it): a time constant of about 32 767 samples.
-pub const MAX_FILTER_SHIFT: u8 = 15;
+pub(crate) const MAX_FILTER_SHIFT: u8 = 15;
 
 /// Tuning of a [`TiltFilter`]. Every field is public; out-of-range values are
 /// clamped (documented per field), never rejected.
@@ -152,7 +152,7 @@ pub struct TiltConfig {
     /// see [`TiltConfig::time_constant_us`]. Default 3: τ ≈ 7.5 samples =
     /// 75 ms at the firmware's 100 Hz, which smooths the sensor noise (a few
     /// mg) while the marble still answers a tilt within a tenth of a second.
-    /// 0 disables the filter; clamped to [`MAX_FILTER_SHIFT`].
+    /// 0 disables the filter; clamped to `MAX_FILTER_SHIFT`.
     pub filter_shift: u8,
     /// Width `w` of an optional dead zone on the in-plane components (`x`,
     /// `z`) after filtering and calibration, mg. Per component `v`:

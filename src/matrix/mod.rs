@@ -336,11 +336,6 @@ impl<const W: usize, const H: usize> Scanner<W, H> {
         self.row == 0 && self.slot == 0
     }
 
-    /// The row the next step will drive.
-    pub const fn current_row(&self) -> usize {
-        self.row
-    }
-
     /// Restarts scanning at the top of a refresh (a queued frame is shown).
     pub fn restart(&mut self) {
         self.row = 0;

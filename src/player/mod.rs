@@ -258,7 +258,7 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     /// finished attempt stays finished (the game does not step any more).
     /// This is the bare step, without the loop's pauses: [`Player::tick`] is
     /// the game loop.
-    pub fn frame(&mut self, tilt: AccelMg) -> Phase {
+    pub(crate) fn frame(&mut self, tilt: AccelMg) -> Phase {
         let reading = self.reading(tilt);
         self.session.frame_in::<EVENTS>(reading)
     }
@@ -469,7 +469,7 @@ impl<'a, const W: usize, const H: usize, const PILOT: bool, const EVENTS: bool>
     /// Takes the current filtered tilt as level (an implausible one is
     /// refused). This is the one place the game calibrates: a board's
     /// buttons and a terminal's key both send [`Command::Calibrate`].
-    pub fn calibrate(&mut self) {
+    pub(crate) fn calibrate(&mut self) {
         let reading = self.session.tilt().filtered_reading_mg();
         let result = self.session.tilt_mut().calibrate(reading);
         #[cfg(feature = "defmt")]

@@ -128,7 +128,7 @@ pub const SWEEP_FRAMES: u32 = 8;
 /// Frames each brightness level is shown (1/4 s).
 pub const LEVEL_FRAMES: u32 = 32;
 /// Milli-g of tilt per pixel the dot moves (about 17° to the edge).
-pub const DOT_MG_PER_PIXEL: i32 = 150;
+pub(crate) const DOT_MG_PER_PIXEL: i32 = 150;
 
 /// Frame `n` of the self-test (see the module doc), with `reading` the
 /// latest accelerometer reading (for the dot; `None` while the sensor is
@@ -201,7 +201,7 @@ impl SelfTest {
 
 /// Where the dot goes for a board-frame reading: the way the marble rolls
 /// (gravity is the reading negated: `x < 0` rolls towards `+x`, the right),
-/// one pixel per [`DOT_MG_PER_PIXEL`], rounded, held on the matrix.
+/// one pixel per `DOT_MG_PER_PIXEL`, rounded, held on the matrix.
 pub fn dot(x_mg: i32, z_mg: i32) -> (usize, usize) {
     let pixel = |mg: i32| {
         let g = mg.saturating_neg();

@@ -9,7 +9,7 @@
 //! the acceptor the proposal. So pairing is mutual, a board never proposes to
 //! two boards at once, and since proposals climb the ids a third board on the
 //! channel cannot close a ring of proposals that waits forever: the highest id
-//! only ever accepts. A proposal unanswered for [`PROPOSE_FRAMES`], or whose
+//! only ever accepts. A proposal unanswered for `PROPOSE_FRAMES`, or whose
 //! board is seen racing another, is dropped and the board looks again.
 //!
 //! The race's maze is the proposer's offer: both agree on it because the
@@ -18,7 +18,7 @@
 use super::packet::MazeSpec;
 
 /// How long a proposal waits for an answer: 2 s of frames.
-pub const PROPOSE_FRAMES: u32 = 256;
+pub(crate) const PROPOSE_FRAMES: u32 = 256;
 
 /// Where the handshake stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -54,7 +54,7 @@ pub(crate) struct Handshake {
 
 impl Handshake {
     /// Board `me` (not 0) offering `offer`.
-    pub const fn new(me: u32, offer: MazeSpec) -> Self {
+    pub(crate) const fn new(me: u32, offer: MazeSpec) -> Self {
         Handshake {
             me,
             offer,
@@ -63,23 +63,23 @@ impl Handshake {
     }
 
     /// This board's id.
-    pub fn me(&self) -> u32 {
+    pub(crate) fn me(&self) -> u32 {
         self.me
     }
 
     /// The maze this board offers.
-    pub fn offer(&self) -> MazeSpec {
+    pub(crate) fn offer(&self) -> MazeSpec {
         self.offer
     }
 
     /// Where the handshake stands.
-    pub fn stage(&self) -> Stage {
+    pub(crate) fn stage(&self) -> Stage {
         self.stage
     }
 
     /// Who race packets go to, and on which maze: the board proposed to or
     /// paired with.
-    pub fn addressee(&self) -> Option<(u32, MazeSpec)> {
+    pub(crate) fn addressee(&self) -> Option<(u32, MazeSpec)> {
         match self.stage {
             Stage::Searching => None,
             Stage::Proposed { peer, .. } => Some((peer, self.offer)),
@@ -88,7 +88,7 @@ impl Handshake {
     }
 
     /// A hello from `from` heard at frame `now`.
-    pub fn hello(&mut self, from: u32, now: u32) {
+    pub(crate) fn hello(&mut self, from: u32, now: u32) {
         if self.stage == Stage::Searching && from > self.me {
             self.stage = Stage::Proposed {
                 peer: from,
@@ -99,7 +99,7 @@ impl Handshake {
 
     /// A race packet from `from` to `to` on `maze`, at frame `now`: whether it
     /// belongs to this board's race (pairing with its sender if need be).
-    pub fn race(&mut self, from: u32, to: u32, maze: MazeSpec, now: u32) -> bool {
+    pub(crate) fn race(&mut self, from: u32, to: u32, maze: MazeSpec, now: u32) -> bool {
         if to != self.me {
             if matches!(self.stage, Stage::Proposed { peer, .. } if peer == from) {
                 // The board proposed to races another: look again.
@@ -131,7 +131,7 @@ impl Handshake {
     }
 
     /// Frame `now` passes: an unanswered proposal expires.
-    pub fn tick(&mut self, now: u32) {
+    pub(crate) fn tick(&mut self, now: u32) {
         if let Stage::Proposed { since, .. } = self.stage {
             if now.wrapping_sub(since) >= PROPOSE_FRAMES {
                 self.stage = Stage::Searching;

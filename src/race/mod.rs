@@ -12,7 +12,7 @@
 //!   silence, counters.
 //! * [`replay`]: the opponent's marble replayed bit-exactly from its readings,
 //!   and the verdict (fewer frames wins).
-//! * [`play`]: all of it around this board's own session ([`Race`]).
+//! * `play`: all of it around this board's own session ([`Race`]).
 //! * [`wire`]: the packets on a byte stream (a UART between two boards).
 //! * [`air`]: the packets in radio frames, behind a group byte (the
 //!   micro:bit v2's IEEE 802.15.4 radio).
@@ -22,7 +22,7 @@
 pub mod air;
 pub mod handshake;
 pub mod packet;
-pub mod play;
+pub(crate) mod play;
 pub mod replay;
 pub mod session;
 pub mod stream;

@@ -37,7 +37,7 @@ use crate::input::sensor::Calibration;
 /// link would deliver one block a round trip).
 pub const MAX_PACKET: usize = 124;
 /// The protocol's version: a packet of any other is dropped.
-pub const VERSION: u8 = 1;
+pub(crate) const VERSION: u8 = 1;
 /// The most token bytes in a block: three blocks and their heads fit a packet
 /// beside the fixed fields.
 pub const BLOCK_BYTES: usize = 28;

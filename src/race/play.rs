@@ -87,7 +87,7 @@ impl<'a, S: Scalar, const O: usize, const I: usize, const E: usize> Race<'a, S, 
     /// on, it plays the reading `reading` gives for its session as it stands
     /// (asked only then: an autopilot is asked once a frame played); then the
     /// opponent's replay catches up with what has arrived (at most
-    /// [`CATCH_UP`] frames).
+    /// `CATCH_UP` frames).
     pub fn frame(&mut self, reading: impl FnOnce(&Session<'a, S>) -> AccelMg) -> Phase {
         self.link.tick();
         if self.link.stage() == LinkStage::Racing && self.own.game().phase() == Phase::Playing {

@@ -31,7 +31,7 @@ pub const RACE_TILT: TiltConfig = SYNTHETIC_TILT;
 /// The most opponent frames replayed per frame of this board: a replay behind
 /// by a second of lost packets catches up in a sixth of a second, and a frame
 /// never costs more than eight of the opponent's.
-pub const CATCH_UP: u32 = 8;
+pub(crate) const CATCH_UP: u32 = 8;
 
 /// A run as far as a board knows it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,7 +98,7 @@ pub struct Opponent<'a, S: Scalar> {
 
 impl<'a, S: Scalar> Opponent<'a, S> {
     /// A fresh replay of `level` (the race's maze).
-    pub fn new(level: LevelView<'a>) -> Result<Self, SetupError> {
+    pub(crate) fn new(level: LevelView<'a>) -> Result<Self, SetupError> {
         Ok(Opponent {
             session: Session::new(level, RACE_CONFIG, RACE_TILT)?,
             calibrated: false,
@@ -127,7 +127,7 @@ impl<'a, S: Scalar> Opponent<'a, S> {
     }
 
     /// Plays up to `max` of the readings `link` holds; returns how many.
-    pub fn step<const O: usize, const I: usize, const E: usize>(
+    pub(crate) fn step<const O: usize, const I: usize, const E: usize>(
         &mut self,
         link: &mut RaceLink<O, I, E>,
         max: u32,

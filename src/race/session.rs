@@ -54,14 +54,14 @@ pub struct Counters {
     /// Dropped: received before.
     pub replayed: u32,
     /// Dropped: contradicting the opponent's earlier packets.
-    pub inconsistent: u32,
+    pub(crate) inconsistent: u32,
     /// Blocks taken into the opponent's readings, or kept until the gap
     /// before them fills.
     pub blocks_taken: u32,
     /// Blocks left: already held or kept, or no room yet.
-    pub blocks_left: u32,
+    pub(crate) blocks_left: u32,
     /// Blocks whose tokens did not decode.
-    pub blocks_bad: u32,
+    pub(crate) blocks_bad: u32,
 }
 
 impl Counters {
@@ -249,7 +249,7 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
     }
 
     /// This board's calibration during the race.
-    pub fn calibration(&self) -> Calibration {
+    pub(crate) fn calibration(&self) -> Calibration {
         self.calibration
     }
 
@@ -258,7 +258,7 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
         self.peer_calibration
     }
 
-    /// Paired, the race not [complete](RaceLink::complete), and nothing heard
+    /// Paired, the race not complete (`RaceLink::complete`), and nothing heard
     /// from the opponent for [`SILENCE_FRAMES`]. (Once complete, both boards
     /// fall quiet on purpose.)
     pub fn silent(&self) -> bool {
@@ -293,7 +293,7 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
 
     /// Both runs are over and each board holds the other's whole: nothing
     /// left to send but answers.
-    pub fn complete(&self) -> bool {
+    pub(crate) fn complete(&self) -> bool {
         self.out.delivered() && self.inbox.complete()
     }
 
@@ -382,7 +382,7 @@ impl<const O: usize, const I: usize, const E: usize> RaceLink<O, I, E> {
     /// The packet to send now, if one is due (call once a frame): a hello
     /// while searching, else a race packet to the opponent with its
     /// acknowledgement, this board's end if not yet held, and the blocks it
-    /// lacks. Once [`RaceLink::complete`], only answers to the opponent's
+    /// lacks. Once `RaceLink::complete`, only answers to the opponent's
     /// packets.
     pub fn transmit<'b>(&mut self, buf: &'b mut [u8; MAX_PACKET]) -> Option<&'b [u8]> {
         let me = self.me();

@@ -2,7 +2,7 @@
 //! opponent acknowledges them ([`Outbox`]), and the opponent's readings taken
 //! in order for its replay ([`Inbox`]).
 //!
-//! A block is up to [`BLOCK_FRAMES`] readings in the ghost's coding
+//! A block is up to `BLOCK_FRAMES` readings in the ghost's coding
 //! ([`crate::game::ghost::TokenWriter`]), from the reading before its first
 //! frame, so the receiver, which holds exactly that reading when the block is
 //! the next it needs, decodes it with nothing else. Blocks are cut once and
@@ -21,7 +21,7 @@ use crate::input::axes::AccelMg;
 
 /// The most readings in a block: a block waits at most this many frames
 /// (1/8 s) before it can be sent.
-pub const BLOCK_FRAMES: usize = 16;
+pub(crate) const BLOCK_FRAMES: usize = 16;
 /// Blocks kept for the opponent to acknowledge: 128 blocks, about 12 s of the
 /// autopilot's play (`tests/race.rs` prints 563 frames in 48 blocks), 16 s if
 /// the tilt rests (16 frames a block). 4.5 KiB.
@@ -42,7 +42,7 @@ pub const LEAN_INBOX_READINGS: usize = 96;
 /// [`EARLY_BLOCKS`] on such a board.
 pub const LEAN_EARLY_BLOCKS: usize = 8;
 /// The reading before a run's first frame: a flat board (the ghost's).
-pub const FLAT: AccelMg = AccelMg::LEVEL;
+pub(crate) const FLAT: AccelMg = AccelMg::LEVEL;
 
 /// A block of this board's run.
 #[derive(Clone, Debug)]
@@ -88,7 +88,7 @@ impl<const N: usize> Default for Outbox<N> {
 
 impl<const N: usize> Outbox<N> {
     /// Empty, before the first frame.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         Outbox {
             blocks: Deque::new(),
             pending: Vec::new(),
@@ -113,7 +113,7 @@ impl<const N: usize> Outbox<N> {
     }
 
     /// The end, once [`Outbox::end`] was called.
-    pub fn ended(&self) -> Option<End> {
+    pub(crate) fn ended(&self) -> Option<End> {
         self.end
     }
 
@@ -139,7 +139,7 @@ impl<const N: usize> Outbox<N> {
 
     /// Adds the next frame's reading. After an [`Overflow`] the run can no
     /// longer reach the opponent whole: every later push fails too.
-    pub fn push(&mut self, reading: AccelMg) -> Result<(), Overflow> {
+    pub(crate) fn push(&mut self, reading: AccelMg) -> Result<(), Overflow> {
         if self.overflowed || self.end.is_some() {
             return Err(Overflow);
         }
@@ -157,7 +157,7 @@ impl<const N: usize> Outbox<N> {
 
     /// Closes the run: cuts what is pending and keeps `end` to send. After an
     /// [`Overflow`] there is no end to send: the opponent could not reach it.
-    pub fn end(&mut self, end: End) -> Result<(), Overflow> {
+    pub(crate) fn end(&mut self, end: End) -> Result<(), Overflow> {
         if self.overflowed {
             return Err(Overflow);
         }
@@ -214,7 +214,7 @@ impl<const N: usize> Outbox<N> {
 
     /// The opponent holds `frames` of this run in order, and the end if
     /// `have_end`. Acknowledgements of more than was sent are ignored.
-    pub fn ack(&mut self, frames: u32, have_end: bool) {
+    pub(crate) fn ack(&mut self, frames: u32, have_end: bool) {
         let sent = self.frames - self.pending.len() as u32;
         if frames > sent || frames < self.acked {
             return;
@@ -235,7 +235,7 @@ impl<const N: usize> Outbox<N> {
     /// Adds to `w` the oldest unacknowledged block, then the others from the
     /// cursor on, as many as fit, and moves the cursor past them (back to the
     /// start after the newest).
-    pub fn fill(&mut self, w: &mut Writer<'_>) {
+    pub(crate) fn fill(&mut self, w: &mut Writer<'_>) {
         // The oldest block first, in every packet: the one the opponent needs
         // before any other is never more than one packet away.
         let Some(oldest) = self.blocks.front() else {
@@ -268,7 +268,7 @@ impl<const N: usize> Outbox<N> {
 /// What became of a received block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Taken {
+pub(crate) enum Taken {
     /// The next readings: taken, this many frames (with the early blocks it
     /// joined).
     Frames(u32),
@@ -276,7 +276,7 @@ pub enum Taken {
     Kept,
     /// Already held, kept already, or no room: left for its next turn.
     Left,
-    /// The tokens do not decode, or hold more than [`BLOCK_FRAMES`] readings
+    /// The tokens do not decode, or hold more than `BLOCK_FRAMES` readings
     /// or more than the opponent's end.
     Bad,
 }
@@ -304,7 +304,7 @@ impl<const R: usize, const E: usize> Default for Inbox<R, E> {
 
 impl<const R: usize, const E: usize> Inbox<R, E> {
     /// Empty.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         Inbox {
             readings: Deque::new(),
             early: Vec::new(),
@@ -325,13 +325,13 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
     }
 
     /// Every frame of the opponent's run and its end are here.
-    pub fn complete(&self) -> bool {
+    pub(crate) fn complete(&self) -> bool {
         self.end.is_some_and(|e| e.frames == self.have)
     }
 
     /// Takes a block if it is the next, and the early ones it joins; keeps
     /// it if it comes after a gap.
-    pub fn take(&mut self, first: u32, tokens: &[u8]) -> Taken {
+    pub(crate) fn take(&mut self, first: u32, tokens: &[u8]) -> Taken {
         if first < self.have {
             return Taken::Left;
         }
@@ -431,7 +431,7 @@ impl<const R: usize, const E: usize> Inbox<R, E> {
     }
 
     /// The next reading for the replay.
-    pub fn pop(&mut self) -> Option<AccelMg> {
+    pub(crate) fn pop(&mut self) -> Option<AccelMg> {
         self.readings.pop_front()
     }
 }

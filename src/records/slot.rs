@@ -12,7 +12,7 @@ use super::ghost_key;
 ///
 /// On flash a record's key is the level's index, one byte, as it has always
 /// been; a ghost's is its 32-bit [`ghost_key`] (little-endian) with
-/// [`GHOST_TAG`] set in its first byte. The first byte tells the two apart:
+/// `GHOST_TAG` set in its first byte. The first byte tells the two apart:
 /// the map hands the key's reader the item's bytes, not their length. So a
 /// record's level is below 128 ([`Slot::level`]).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -25,11 +25,11 @@ pub struct Slot(
 
 /// The bit set in the first byte of every ghost's key on flash, clear in a
 /// record's.
-pub const GHOST_TAG: u8 = 0x80;
+pub(crate) const GHOST_TAG: u8 = 0x80;
 
 impl Slot {
     /// The record of the level `index`; `None` from 128 on (a byte with
-    /// [`GHOST_TAG`] would read back as a ghost's key).
+    /// `GHOST_TAG` would read back as a ghost's key).
     pub const fn level(index: u8) -> Option<Slot> {
         if index & GHOST_TAG == 0 {
             Some(Slot(index as u32))
@@ -39,7 +39,7 @@ impl Slot {
     }
 
     /// The ghost of the level named `name`: [`ghost_key`] with
-    /// [`GHOST_TAG`] set.
+    /// `GHOST_TAG` set.
     pub const fn ghost(name: &str) -> Slot {
         Slot(ghost_key(name) | GHOST_TAG as u32)
     }

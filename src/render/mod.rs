@@ -30,7 +30,7 @@
 //! `l ≈ 5/6`), but pixels are. The marble's `x'` is therefore mapped to a
 //! continuous *tile-index* coordinate `u`, where tile `i` spans `[i, i + 1)`:
 //! `u = i + (x' − lo_i) / (hi_i − lo_i)`. The quotient is found by bisection
-//! ([`SUBPIXEL_BITS`] halvings and compares of the tile's width) rather than by
+//! (`SUBPIXEL_BITS` halvings and compares of the tile's width) rather than by
 //! a division or a per-level reciprocal: it costs a few shifts per axis, is
 //! exact at a cell's centre, and cannot overflow however thin the walls are.
 //! The result is a [`TilePoint`] in 1/64 tile.
@@ -68,9 +68,9 @@ use crate::physics::world::World;
 use crate::physics::Scalar;
 
 /// Fraction bits of a [`TilePoint`] (1/64 tile).
-pub const SUBPIXEL_BITS: u32 = 6;
+pub(crate) const SUBPIXEL_BITS: u32 = 6;
 /// One tile in [`TilePoint`] units.
-pub const SUBPIXEL_ONE: i32 = 1 << SUBPIXEL_BITS;
+pub(crate) const SUBPIXEL_ONE: i32 = 1 << SUBPIXEL_BITS;
 
 /// The tile shown at pixel `(0, 0)`; negative when a small maze is centred.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -89,7 +89,7 @@ impl Viewport {
     }
 }
 
-/// A point in tile-index space, in 1/[`SUBPIXEL_ONE`] tile: tile `i` spans
+/// A point in tile-index space, in 1/`SUBPIXEL_ONE` tile: tile `i` spans
 /// `[i·64, (i + 1)·64)` along `u` (x') and likewise along `v` (z').
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -451,7 +451,7 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
 
     /// Forgets the viewport (a new level or a restart): the next frame
     /// re-centres on the marble. A level of different size does this by itself.
-    pub fn reset(&mut self) {
+    pub(crate) fn reset(&mut self) {
         self.state = None;
         self.background = None;
         #[cfg(feature = "storeys")]
@@ -483,7 +483,7 @@ impl<const W: usize, const H: usize> Renderer<W, H> {
 
     /// Moves the viewport to follow the world's marble (see the module docs)
     /// and returns it.
-    pub fn follow<S: Scalar, const M: usize>(
+    pub(crate) fn follow<S: Scalar, const M: usize>(
         &mut self,
         level: &LevelView<'_>,
         world: &World<'_, S, M>,

@@ -23,7 +23,7 @@ pub struct BenchItem {
 
 impl BenchItem {
     /// The effects this item runs with.
-    pub fn effects(&self) -> Effects {
+    pub(crate) fn effects(&self) -> Effects {
         match self.variant {
             Some(v) => EFFECT_VARIANTS[v % EFFECT_VARIANTS.len()].1,
             None => Scene::get(self.scene).spec.effects,
@@ -105,7 +105,7 @@ pub fn bench_one(
     bench_one_in::<ALL_BACKENDS>(item, count)
 }
 
-/// [`bench_one`] compiled for the backends in `MASK` only (see [`with_backend_in`]).
+/// [`bench_one`] compiled for the backends in `MASK` only (see `with_backend_in`).
 pub fn bench_one_in<const MASK: u32>(
     item: &BenchItem,
     count: &mut dyn FnMut(&mut dyn FnMut()) -> u64,

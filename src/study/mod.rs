@@ -63,7 +63,7 @@ pub fn with_backend<J: Job>(index: usize, job: J) -> Option<J::Output> {
 /// [`with_backend`] compiled for the backends in `MASK` only (bit `n` for
 /// [`BACKENDS`]`[n]`; `None` for the others): a benchmark whose flash cannot hold
 /// the code of every backend leaves the rest out of its binary.
-pub fn with_backend_in<const MASK: u32, J: Job>(index: usize, job: J) -> Option<J::Output> {
+pub(crate) fn with_backend_in<const MASK: u32, J: Job>(index: usize, job: J) -> Option<J::Output> {
     let has = |n: u32| MASK & (1 << n) != 0;
     Some(match index {
         0 if has(0) => job.run::<fixed::types::I8F24>(),

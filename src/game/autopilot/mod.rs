@@ -19,13 +19,12 @@
 //! its cell's centre.
 //!
 //! The plan (a distance field to the goals, made once per level) is
-//! [`planning`]'s; following it frame by frame with a tilt is [`control`]'s.
+//! `planning`'s; following it frame by frame with a tilt is `control`'s.
 
-pub mod control;
-pub mod planning;
+pub(crate) mod control;
+pub(crate) mod planning;
 
 use planning::FIELD_BYTES;
-pub use planning::MAX_CELLS_XZ;
 
 /// The autopilot for one level (see the module documentation).
 #[derive(Clone, Debug)]

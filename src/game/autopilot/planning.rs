@@ -29,7 +29,7 @@ use crate::physics::geometry::grid::{Tiles, MAX_TILES_XZ};
 use crate::physics::geometry::tiles::TileIndex;
 
 /// The most cells along x' or z' (63 for 127 tiles).
-pub const MAX_CELLS_XZ: usize = MAX_TILES_XZ / 2;
+pub(crate) const MAX_CELLS_XZ: usize = MAX_TILES_XZ / 2;
 /// Whether the game has storeys (feature `storeys`): without, every storey
 /// test below is a constant and the plan is the one-storey plan.
 pub(super) const STOREYS: bool = cfg!(feature = "storeys");

@@ -41,7 +41,7 @@ impl Maze {
     }
 }
 
-/// The level text (see [`crate::game::level`]): [`Maze::write_text`].
+/// The level text (see [`crate::game::level`]): `Maze::write_text`.
 impl fmt::Display for Maze {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         self.write_text(f)
@@ -54,7 +54,7 @@ impl Maze {
     /// digits only, no format machinery: a board writes its mazes with this,
     /// and `core::fmt`'s number formatting is kilobytes of flash the micro:bit
     /// v1 does not have to spare.
-    pub fn write_text<W: fmt::Write>(&self, w: &mut W) -> fmt::Result {
+    pub(crate) fn write_text<W: fmt::Write>(&self, w: &mut W) -> fmt::Result {
         w.write_str("name: maze-")?;
         decimal(w, self.seed)?;
         w.write_char('-')?;

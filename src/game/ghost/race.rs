@@ -23,7 +23,7 @@ pub fn replay<S: Scalar>(
     replay_by(session, ghost, Session::frame)
 }
 
-/// [`replay`] and [`replay_in`]: the ghost's readings fed to `frame`.
+/// [`replay`]: the ghost's readings fed to `frame`.
 fn replay_by<'a, S: Scalar>(
     session: &mut Session<'a, S>,
     ghost: &Ghost<'_>,
@@ -47,15 +47,6 @@ fn replay_by<'a, S: Scalar>(
 /// has played means that `live` started over: replay from the start.
 pub fn race_frame<S: Scalar>(idle: u32, live: &Game<'_, S>) -> u32 {
     idle.saturating_add(live.clock_frames())
-}
-
-/// [`replay`] with the stepper fixed at compile time (firmware: a board links
-/// only its own stepper, [`Session::frame_in`]).
-pub fn replay_in<const EVENTS: bool>(
-    session: &mut Session<'_, Fx>,
-    ghost: &Ghost<'_>,
-) -> Result<(Phase, bool), GhostError> {
-    replay_by(session, ghost, Session::frame_in::<EVENTS>)
 }
 
 /// Why a stored ghost is not raced.
@@ -99,7 +90,7 @@ pub struct Racer<'a, 'g, const EVENTS: bool> {
 /// so that a board can let its other tasks run between stretches: a long run
 /// replayed at once would hold the CPU for as long as the physics of every
 /// frame of it takes. [`Racer::new`] plays it whole. The replay's session is
-/// the racer's: checked in place ([`Checking::verify`]), a board keeps one
+/// the racer's: checked in place (`Checking::verify`), a board keeps one
 /// session for the ghost, not a second beside it while the first is made.
 #[derive(Clone, Debug)]
 pub struct Checking<'a, 'g, const EVENTS: bool> {
@@ -141,7 +132,7 @@ impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
     }
 
     /// Plays up to `frames` more frames of the run; whether the replay is
-    /// over (then [`Checking::verify`] says how it ended).
+    /// over (then `Checking::verify` says how it ended).
     pub fn play(&mut self, frames: u32) -> bool {
         for _ in 0..frames {
             if self.ended || self.phase != Phase::Playing {
@@ -163,7 +154,7 @@ impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
     /// The racer, at its start, once the replay (played to its end here if
     /// it was not) won the level on the ghost's own state hash; or why not.
     /// Again after a good verdict: the same racer, as it is.
-    pub fn verify(&mut self) -> Result<&mut Racer<'a, 'g, EVENTS>, RaceError> {
+    pub(crate) fn verify(&mut self) -> Result<&mut Racer<'a, 'g, EVENTS>, RaceError> {
         if self.verified {
             return Ok(&mut self.racer);
         }
@@ -189,7 +180,7 @@ impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
         Ok(racer)
     }
 
-    /// The racer once [`Checking::verify`] found the replay good.
+    /// The racer once `Checking::verify` found the replay good.
     pub fn racer(&self) -> Option<&Racer<'a, 'g, EVENTS>> {
         self.verified.then_some(&self.racer)
     }
@@ -199,7 +190,7 @@ impl<'a, 'g, const EVENTS: bool> Checking<'a, 'g, EVENTS> {
         self.verified.then_some(&mut self.racer)
     }
 
-    /// [`Checking::verify`], the racer moved out.
+    /// `Checking::verify`, the racer moved out.
     pub fn finish(mut self) -> Result<Racer<'a, 'g, EVENTS>, RaceError> {
         self.verify()?;
         Ok(self.racer)

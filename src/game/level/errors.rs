@@ -37,7 +37,7 @@ pub enum LevelErrorKind {
     NotACell,
     /// No `S`, or more than [`MAX_MARBLES`](super::MAX_MARBLES).
     StartCount,
-    /// No `G`, or more than [`MAX_GOALS`](super::MAX_GOALS).
+    /// No `G`, or more than `MAX_GOALS`.
     GoalCount,
     /// The cell pitch `s + l` is outside [`MIN_PITCH_UM`] ..= [`MAX_PITCH_UM`].
     PitchOutOfRange {

@@ -88,7 +88,7 @@ use scan::{grid_shape, grid_start, without_bom};
 /// Most marbles a level may start (several `S`).
 pub const MAX_MARBLES: usize = 4;
 /// Most goal cells a level may have.
-pub const MAX_GOALS: usize = 4;
+pub(crate) const MAX_GOALS: usize = 4;
 
 /// A long×long cell on a storey (odd `i`, odd `k`; storey 0 is the lowest):
 /// where a marble starts or a goal lies.
@@ -135,7 +135,7 @@ impl LevelInfo<'_> {
     /// The same header under `name`: a level kept after the text it was parsed
     /// from is gone (a generated maze, whose text is written, parsed and
     /// dropped) borrows its name from a buffer of its own.
-    pub const fn renamed<'n>(self, name: &'n str) -> LevelInfo<'n> {
+    pub(crate) const fn renamed<'n>(self, name: &'n str) -> LevelInfo<'n> {
         LevelInfo {
             name,
             spec: self.spec,
