@@ -31,12 +31,17 @@ use crate::runner::{self, Output};
 use crate::workspace;
 pub use log::{parse_budget_cuts, parse_worst_frames};
 
+/// The scenes whose worst frame is still over the goal (docs/performance.md has
+/// the figures): held to the flight budget's bound and reported against the
+/// goal, until they meet it. A landing on a marble: its pair slices.
+const OVER_THE_GOAL: &[&str] = &["drop-onto-marble"];
+
 /// The worst physics frame of each level against `bound` instructions (`what`:
-/// the board's CPU): a level's frame over it is a problem. The stress scenes
-/// (`game::stress`) and the top-difficulty mazes (every other `profile` line)
-/// are held to `cap`, what the flight budget guarantees (docs/physics.md, "A
-/// frame's work is bounded"), and reported against `bound`, which they do not
-/// all meet yet (docs/performance.md has the figures).
+/// the board's CPU): a level's frame over it is a problem, and so is a stress
+/// scene's (`game::stress`) or a top-difficulty maze's (every other `profile`
+/// line) once it has met the goal; the scenes of [`OVER_THE_GOAL`] are held to
+/// `cap`, what the flight budget guarantees (docs/physics.md, "A frame's work
+/// is bounded"), and reported against `bound`.
 fn check_worst_frames(
     log: &str,
     levels: &[String],
@@ -49,8 +54,8 @@ fn check_worst_frames(
         problems.report("no `profile` lines in the demo log".to_string());
     }
     for (name, max) in frames {
-        let level = levels.contains(&name);
-        if level && max > bound {
+        let held = levels.contains(&name) || !OVER_THE_GOAL.contains(&name.as_str());
+        if held && max > bound {
             problems.report(format!(
                 "{name}: worst physics frame {max} {what} instructions, over the bound of {bound}"
             ));
@@ -268,14 +273,14 @@ mod tests {
         let log = "\
 34.4 INFO  profile first-roll: 73 frames, instructions per frame: physics 1722 (max 1934), autopilot 2261, render 1532
 38.7 INFO  profile all levels: 2981 frames, instructions per frame: physics 3926 (max 65765), autopilot 2741, render 1727
-38.8 INFO  profile long-fall: 384 frames, instructions per frame: physics 900 (max 30123), autopilot 0, render 0
+38.8 INFO  profile drop-onto-marble: 384 frames, instructions per frame: physics 900 (max 30123), autopilot 0, render 0
 INFO  demo summary: 13/13 levels won
 ";
         assert_eq!(
             parse_worst_frames(log),
             [
                 ("first-roll".to_string(), 1934),
-                ("long-fall".to_string(), 30123)
+                ("drop-onto-marble".to_string(), 30123)
             ]
         );
         let levels = ["first-roll".to_string()];
@@ -286,13 +291,20 @@ INFO  demo summary: 13/13 levels won
         check_worst_frames(log, &levels, (30_000, 40_000), "M4", &mut problems);
         assert!(
             problems.count() == 0,
-            "a stress scene over the goal, within the budget's bound, is reported only"
+            "a scene not yet within the goal, within the budget's bound, is reported only"
         );
         let mut problems = Problems::default();
         check_worst_frames(log, &levels, (30_000, 30_100), "M4", &mut problems);
         assert!(
             problems.count() > 0,
             "a stress scene over the budget's bound is a problem"
+        );
+        let met = log.replace("drop-onto-marble", "long-fall");
+        let mut problems = Problems::default();
+        check_worst_frames(&met, &levels, (30_000, 40_000), "M4", &mut problems);
+        assert!(
+            problems.count() > 0,
+            "a scene that has met the goal is held to it, as a level is"
         );
         let mut problems = Problems::default();
         check_worst_frames(
