@@ -18,7 +18,7 @@
 //!   set, else every byte of a burst is the same register (datasheet §6.1.1).
 //! * Output data rate from `CTRL_REG1_A` (ODR bits and `LPen`; 1 Hz to
 //!   5.376 kHz): the n-th sample is taken `n / ODR` after the rate was set,
-//!   on the caller's clock ([`VirtualLsm303agr::advance_to`]). A new sample
+//!   on the caller's clock (`VirtualLsm303agr::advance_to`). A new sample
 //!   sets `XDA`/`YDA`/`ZDA` and `ZYXDA`; reading an axis's high byte clears
 //!   its bit (and `ZYXDA`); a sample that overwrites an unread one sets the
 //!   overrun bits.
@@ -40,7 +40,7 @@
 //!   own table, `board::accel_link::AXIS_MAP`; the two are written apart, so a
 //!   sign or axis wrong in either reads a wrong tilt in the tests and in QEMU.
 //! * Power-on values: `CTRL_REG1_A` = 0x07 (power-down, axes enabled), the
-//!   other control registers 0, no data ready; [`VirtualLsm303agr::power_on_reset`]
+//!   other control registers 0, no data ready; `VirtualLsm303agr::power_on_reset`
 //!   brings them back (the injected chip reset).
 //! * Magnetometer (I²C address [`MAG_ADDRESS`]): only enough for the driver's
 //!   `init()` (it writes `CFG_REG_C_M`): `WHO_AM_I_M` (0x40), the
@@ -98,7 +98,7 @@ const MAG_COUNT: usize = 0x30;
 
 /// The virtual chip: registers, sampling clock, output latch. Transfers come
 /// from its bus ([`VirtualTwim`](crate::board::qemu::virtual_i2c::VirtualTwim)), which
-/// also feeds it the time ([`VirtualLsm303agr::advance_to`]), the tilt and
+/// also feeds it the time (`VirtualLsm303agr::advance_to`), the tilt and
 /// the sample source; host tests can drive it directly too.
 #[derive(Clone, Debug)]
 pub struct VirtualLsm303agr {
@@ -168,7 +168,7 @@ impl VirtualLsm303agr {
 
     /// Back to the power-on state (registers, outputs, flags, pointers); the
     /// clock, the tilt and the sample source are kept.
-    pub fn power_on_reset(&mut self) {
+    pub(crate) fn power_on_reset(&mut self) {
         let fresh = Self::placed(self.placement);
         self.accel = fresh.accel;
         self.mag = fresh.mag;
@@ -274,7 +274,7 @@ impl VirtualLsm303agr {
 
     /// Runs the sampling clock up to `now_us` (earlier times are ignored):
     /// latches a new sample when one is due and the output is not held.
-    pub fn advance_to(&mut self, now_us: u64) {
+    pub(crate) fn advance_to(&mut self, now_us: u64) {
         if now_us > self.now_us {
             self.now_us = now_us;
         }

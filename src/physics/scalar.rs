@@ -119,7 +119,7 @@ pub trait Scalar:
     fn div(self, rhs: Self) -> Self;
     /// `1/√self` for `self > 0` (zero otherwise): what normalising a vector takes.
     /// Fixed point computes it with integer Newton steps and no division (see
-    /// [`rsqrt_bits`]); floating point with a root and a division.
+    /// `rsqrt_bits`); floating point with a root and a division.
     fn rsqrt(self) -> Self {
         if self <= Self::ZERO {
             Self::ZERO
@@ -208,4 +208,4 @@ mod rsqrt;
 mod tests;
 
 pub use micro::MicroF32;
-pub use rsqrt::rsqrt_bits;
+pub(crate) use rsqrt::rsqrt_bits;

@@ -44,7 +44,7 @@ impl<S: Scalar> Vec3<S> {
     /// Every component times `2^n` (see [`Scalar::shl`]).
     #[allow(clippy::should_implement_trait)]
     #[inline]
-    pub fn shl(self, n: u32) -> Self {
+    pub(crate) fn shl(self, n: u32) -> Self {
         Vec3::new(self.x.shl(n), self.y.shl(n), self.z.shl(n))
     }
     /// Dot product.
@@ -63,7 +63,7 @@ impl<S: Scalar> Vec3<S> {
     }
     /// `|v|²`. Callers keep `v` small (per-step units) so this cannot overflow.
     #[inline]
-    pub fn length_sq(self) -> S {
+    pub(crate) fn length_sq(self) -> S {
         self.dot(self)
     }
     /// The component along the axis `axis` (0 = x', 1 = y', 2 = z').
@@ -78,7 +78,7 @@ impl<S: Scalar> Vec3<S> {
 
     /// Sets the component along the axis `axis` (0 = x', 1 = y', 2 = z').
     #[inline]
-    pub fn set_axis(&mut self, axis: usize, value: S) {
+    pub(crate) fn set_axis(&mut self, axis: usize, value: S) {
         match axis {
             0 => self.x = value,
             1 => self.y = value,
@@ -97,7 +97,7 @@ impl<S: Scalar> Vec3<S> {
     /// Component-wise sum saturating at the type's range (equal to `+` whenever
     /// that does not overflow).
     #[inline]
-    pub fn sat_add(self, o: Self) -> Self {
+    pub(crate) fn sat_add(self, o: Self) -> Self {
         Vec3::new(
             self.x.sat_add(o.x),
             self.y.sat_add(o.y),

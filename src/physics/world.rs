@@ -314,7 +314,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// Advances the world by one step `dt` (fixed, or by events: see [`Stepping`]).
     ///
     /// Both steppers are linked wherever this is called. Firmware, whose mode is
-    /// a constant, calls [`World::step_in`] and links only its own.
+    /// a constant, calls `World::step_in` and links only its own.
     pub fn step(&mut self) {
         if self.params.events() {
             self.step_in::<true>();
@@ -331,7 +331,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// for that mode); the game's [`Player`](crate::player::Player) sets up
     /// both from one constant.
     #[inline]
-    pub fn step_in<const EVENTS: bool>(&mut self) {
+    pub(crate) fn step_in<const EVENTS: bool>(&mut self) {
         debug_assert_eq!(EVENTS, self.params.events(), "stepper and spec disagree");
         if EVENTS {
             self.step_events(&mut ());
@@ -396,7 +396,12 @@ fn lid_height<S: Scalar>(layout: &TileLayout<S>, tiles: Tiles<'_>) -> S {
 /// Whether a marble at `c` overlaps any solid tile (start validation, tests).
 /// A floor slab below the centre does not count: a marble resting on it may
 /// overlap it by a rounding (`n + r − r` in floating point on storey `n`).
-pub fn overlaps_any<S: Scalar>(layout: &TileLayout<S>, tiles: Tiles<'_>, c: Vec3<S>, r: S) -> bool {
+pub(crate) fn overlaps_any<S: Scalar>(
+    layout: &TileLayout<S>,
+    tiles: Tiles<'_>,
+    c: Vec3<S>,
+    r: S,
+) -> bool {
     candidates(layout, c, r)
         .solid(tiles)
         // Slab `j = 2n` (eq. 5) tops out at `y' = n`.

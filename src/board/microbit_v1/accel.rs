@@ -108,7 +108,7 @@ impl Accelerometer {
     }
 
     /// Chip axes → board frame on the micro:bit v1 (module doc).
-    pub const fn axis_map(self) -> AxisMap {
+    pub(crate) const fn axis_map(self) -> AxisMap {
         match self {
             Accelerometer::Mma8653fc | Accelerometer::Fxos8700cq => NXP_AXIS_MAP,
             Accelerometer::Lsm303agr => LSM303AGR_AXIS_MAP,
@@ -142,7 +142,7 @@ pub(crate) const NXP_AXIS_MAP: AxisMap = AxisMap {
 
 /// LSM303AGR axes → board frame on the v1.5: `m = (c_x, −c_y, c_z)`, board
 /// `= (−c_x, −c_z, c_y)`: the v2's map (the DAL and CODAL agree).
-pub const LSM303AGR_AXIS_MAP: AxisMap = V2_LSM303AGR_AXIS_MAP;
+pub(crate) const LSM303AGR_AXIS_MAP: AxisMap = V2_LSM303AGR_AXIS_MAP;
 
 /// The register map both NXP chips share for their accelerometer (MMA8653FC
 /// data sheet rev. 2 §6, FXOS8700CQ data sheet rev. 8 §14).
@@ -216,7 +216,7 @@ pub struct NxpChip {
     /// Significant bits of a sample, left-justified in 16.
     pub bits: u32,
     /// Counts per g at ±2 g (the data sheets' sensitivity).
-    pub counts_per_g: i32,
+    pub(crate) counts_per_g: i32,
 }
 
 /// MMA8653FC: 0x1D, `WHO_AM_I` 0x5A, 10-bit samples, 256 counts/g at ±2 g

@@ -78,11 +78,11 @@ pub const FLASH_BUDGET_BYTES: u32 = 128 * 1024;
 /// (`board::watchdog::WatchdogGate`).
 pub const WATCHDOG_TIMEOUT_TICKS: u32 = 2 * 32_768;
 
-/// Budget: the demo's CPU load, hundredths of a percent of [`CPU_HZ`].
+/// Budget: the demo's CPU load, hundredths of a percent of `CPU_HZ`.
 pub const CPU_BUDGET_CENTIPERCENT: u64 = 2000;
 
 /// The nRF51822's core clock (HFCLK), Hz.
-pub const CPU_HZ: u64 = 16_000_000;
+pub(crate) const CPU_HZ: u64 = 16_000_000;
 /// The firmware's TIMERs count at 16 MHz / 2^4 = 1 MHz: one tick a µs.
 pub const TIMER_PRESCALER: u8 = 4;
 /// Ticks per second of the TIMERs at [`TIMER_PRESCALER`].
@@ -383,7 +383,7 @@ pub struct LoadReport {
     pub busy_instructions: u64,
     /// Busy instructions per second of firmware time.
     pub instructions_per_second: u64,
-    /// That as a share of a [`CPU_HZ`] core at one instruction per cycle, in
+    /// That as a share of a `CPU_HZ` core at one instruction per cycle, in
     /// hundredths of a percent. A Cortex-M0 takes more than one cycle for
     /// loads, stores and taken branches, so this is a lower bound of the
     /// real load.

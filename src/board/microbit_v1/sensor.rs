@@ -10,7 +10,7 @@
 //! * bring-up: while no chip is known, probes every accelerometer a v1 may
 //!   carry by identity ([`nxp_driver::probe`]), then configures the chip it
 //!   found; its samples are turned into the board frame by that chip's axis
-//!   map ([`Accelerometer::axis_map`]) before the supervision sees them, so
+//!   map (`Accelerometer::axis_map`) before the supervision sees them, so
 //!   one supervision runs from boot on: a sensor the game was told is down
 //!   (no chip answered) comes back up through it once a chip is found;
 //! * one poll: a read (the NXP burst, or the `lsm303agr` driver's), fed to

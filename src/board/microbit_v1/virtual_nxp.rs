@@ -40,7 +40,7 @@
 //!   one period after going active; a new sample sets `ZYXDR` (and `ZYXOW`
 //!   if the previous one was unread); reading the three MSBs clears them.
 //! * Samples: the tilt (board frame, milli-g) turned into the chip's axes by
-//!   [`MOUNTING`] — the chip's place on the board in its own words, not the
+//!   `MOUNTING` — the chip's place on the board in its own words, not the
 //!   firmware's axis map — quantised at the range in force (±2/4/8 g) to the
 //!   chip's 10 or 14 bits, left-justified, MSB first. Counts per g are
 //!   derived here from the bit count and the range, not taken from the
@@ -68,7 +68,7 @@ use crate::input::axes::AccelMg;
 /// frame), restated as directions: X along the board's right, Y towards the
 /// edge connector, Z out of the back (a flat board, screen up, reads −1 g on
 /// Z).
-pub const MOUNTING: [(usize, i32); 3] = [(0, 1), (2, 1), (1, -1)];
+pub(crate) const MOUNTING: [(usize, i32); 3] = [(0, 1), (2, 1), (1, -1)];
 
 /// `CTRL_REG4` (interrupt enables) and `CTRL_REG5` (interrupt routing):
 /// stored, without effect (the firmware polls); the DAL sets both to route

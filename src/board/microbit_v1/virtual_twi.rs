@@ -20,7 +20,7 @@ pub enum VirtualChip {
     Nxp(VirtualNxp),
     /// The LSM303AGR of a v1.5: accelerometer at 0x19, magnetometer at
     /// 0x1E, the FXOS8700CQ's address; mounted as on the v2 (the DAL's and
-    /// CODAL's LSM303 tables agree, [`super::accel::LSM303AGR_AXIS_MAP`]).
+    /// CODAL's LSM303 tables agree, `super::accel::LSM303AGR_AXIS_MAP`).
     Lsm303agr(VirtualLsm303agr),
 }
 

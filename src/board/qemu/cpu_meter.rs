@@ -24,7 +24,7 @@ pub(crate) const EXPECTED_MILLITICKS_PER_INSTRUCTION: u64 =
     super::SYSCLK_HZ as u64 * (1 << super::ICOUNT_SHIFT) / 1_000_000;
 
 /// Reference core clock for the load percentage: the nRF52833's 64 MHz M4F.
-pub const REFERENCE_HZ: u64 = 64_000_000;
+pub(crate) const REFERENCE_HZ: u64 = 64_000_000;
 
 /// Timer ticks per instruction, measured by timing a block of known
 /// instruction count (the fixed cost of reading the timer subtracted).
@@ -92,12 +92,12 @@ pub struct LoadReport {
     /// Firmware (virtual) time covered, µs.
     pub firmware_us: u64,
     /// Timer ticks spent outside WFI.
-    pub busy_ticks: u64,
+    pub(crate) busy_ticks: u64,
     /// Instructions executed outside WFI.
     pub busy_instructions: u64,
     /// Busy instructions per second of firmware time.
     pub instructions_per_second: u64,
-    /// `instructions_per_second` as a share of [`REFERENCE_HZ`], in
+    /// `instructions_per_second` as a share of `REFERENCE_HZ`, in
     /// hundredths of a percent (1234 = 12.34 %).
     pub centipercent_of_64mhz: u64,
 }

@@ -49,16 +49,16 @@ use crate::board::virtual_lsm303agr::{ChipControl, InjectedFault, SampleSource, 
 
 /// The largest transfer the TWIM's EasyDMA takes (nRF52833, embassy-nrf's
 /// `EASY_DMA_SIZE`).
-pub const EASY_DMA_SIZE: usize = (1 << 16) - 1;
+pub(crate) const EASY_DMA_SIZE: usize = (1 << 16) - 1;
 
 /// Why a transfer failed: embassy-nrf's `twim::Error` variants that can occur
 /// here, plus [`TwimError::Unsupported`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum TwimError {
-    /// A write buffer over [`EASY_DMA_SIZE`].
+    /// A write buffer over `EASY_DMA_SIZE`.
     TxBufferTooLong,
-    /// A read buffer over [`EASY_DMA_SIZE`].
+    /// A read buffer over `EASY_DMA_SIZE`.
     RxBufferTooLong,
     /// A write buffer not in RAM and longer than the copy buffer: refused
     /// before anything reached the bus.

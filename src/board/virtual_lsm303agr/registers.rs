@@ -8,20 +8,20 @@ pub const ACCEL_ADDRESS: u8 = 0x19;
 /// The magnetometer's 7-bit I²C address.
 pub const MAG_ADDRESS: u8 = 0x1E;
 /// What `WHO_AM_I_A` reads.
-pub const WHO_AM_I_A_VALUE: u8 = 0x33;
+pub(crate) const WHO_AM_I_A_VALUE: u8 = 0x33;
 /// What `WHO_AM_I_M` reads.
-pub const WHO_AM_I_M_VALUE: u8 = 0x40;
+pub(crate) const WHO_AM_I_M_VALUE: u8 = 0x40;
 /// Sub-address bit 7: auto-increment the register pointer (accelerometer).
-pub const AUTO_INCREMENT: u8 = 0x80;
+pub(crate) const AUTO_INCREMENT: u8 = 0x80;
 
 /// Register addresses (datasheet table 21).
 pub mod reg {
     /// Temperature status.
-    pub const STATUS_REG_AUX_A: u8 = 0x07;
+    pub(crate) const STATUS_REG_AUX_A: u8 = 0x07;
     /// Temperature output, low byte.
-    pub const OUT_TEMP_L_A: u8 = 0x0C;
+    pub(crate) const OUT_TEMP_L_A: u8 = 0x0C;
     /// Temperature output, high byte.
-    pub const OUT_TEMP_H_A: u8 = 0x0D;
+    pub(crate) const OUT_TEMP_H_A: u8 = 0x0D;
     /// Accelerometer identity.
     pub const WHO_AM_I_A: u8 = 0x0F;
     /// Temperature sensor enable.
@@ -35,7 +35,7 @@ pub mod reg {
     /// BDU, BLE, full scale, high resolution, self-test, SPI mode.
     pub const CTRL_REG4_A: u8 = 0x23;
     /// Boot, FIFO enable, interrupt latching.
-    pub const CTRL_REG5_A: u8 = 0x24;
+    pub(crate) const CTRL_REG5_A: u8 = 0x24;
     /// INT2 routing.
     pub const CTRL_REG6_A: u8 = 0x25;
     /// Reference for the interrupt generation.
@@ -43,15 +43,15 @@ pub mod reg {
     /// Data ready and overrun flags.
     pub const STATUS_REG_A: u8 = 0x27;
     /// X output, low byte (the first of six: X, Y, Z, low byte first).
-    pub const OUT_X_L_A: u8 = 0x28;
+    pub(crate) const OUT_X_L_A: u8 = 0x28;
     /// Z output, high byte (the last of six).
-    pub const OUT_Z_H_A: u8 = 0x2D;
+    pub(crate) const OUT_Z_H_A: u8 = 0x2D;
     /// FIFO mode and threshold.
     pub const FIFO_CTRL_REG_A: u8 = 0x2E;
     /// Magnetometer identity.
-    pub const WHO_AM_I_M: u8 = 0x4F;
+    pub(crate) const WHO_AM_I_M: u8 = 0x4F;
     /// Magnetometer configuration A (mode, ODR, reset).
-    pub const CFG_REG_A_M: u8 = 0x60;
+    pub(crate) const CFG_REG_A_M: u8 = 0x60;
     /// Magnetometer configuration B (filter, offset cancellation).
     pub const CFG_REG_B_M: u8 = 0x61;
     /// Magnetometer configuration C (BDU, interrupt pin).
@@ -59,25 +59,25 @@ pub mod reg {
 }
 
 /// `CTRL_REG1_A`: output data rate bits.
-pub const CTRL1_ODR: u8 = 0xF0;
+pub(crate) const CTRL1_ODR: u8 = 0xF0;
 /// `CTRL_REG1_A`: low-power mode.
-pub const CTRL1_LPEN: u8 = 0x08;
+pub(crate) const CTRL1_LPEN: u8 = 0x08;
 /// `CTRL_REG4_A`: block data update.
 pub const CTRL4_BDU: u8 = 0x80;
 /// `CTRL_REG4_A`: big-endian output (MSB at the lower address).
-pub const CTRL4_BLE: u8 = 0x40;
+pub(crate) const CTRL4_BLE: u8 = 0x40;
 /// `CTRL_REG4_A`: full-scale bits.
-pub const CTRL4_FS: u8 = 0x30;
+pub(crate) const CTRL4_FS: u8 = 0x30;
 /// `CTRL_REG4_A`: high-resolution mode.
-pub const CTRL4_HR: u8 = 0x08;
+pub(crate) const CTRL4_HR: u8 = 0x08;
 /// `STATUS_REG_A`: a new X, Y and Z sample is available.
-pub const STATUS_ZYXDA: u8 = 0x08;
+pub(crate) const STATUS_ZYXDA: u8 = 0x08;
 /// `STATUS_REG_A`: a new X, Y and Z sample overwrote an unread one.
-pub const STATUS_ZYXOR: u8 = 0x80;
+pub(crate) const STATUS_ZYXOR: u8 = 0x80;
 /// `CTRL_REG1_A` at power-on: power-down, every axis enabled.
 pub const CTRL_REG1_A_RESET: u8 = 0x07;
 /// `CFG_REG_A_M` at power-on: idle mode.
-pub const CFG_REG_A_M_RESET: u8 = 0x03;
+pub(crate) const CFG_REG_A_M_RESET: u8 = 0x03;
 
 /// The accelerometer's power and resolution mode.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -120,7 +120,7 @@ impl AccelMode {
 /// A sample in milli-g, quantised as the chip outputs it in `mode` at
 /// ±`full_scale_g` g: rounded to the nearest LSB, saturated at the mode's
 /// range, left-justified in 16 bits (two's complement).
-pub const fn quantise(mode: AccelMode, full_scale_g: u32, mg: i32) -> u16 {
+pub(crate) const fn quantise(mode: AccelMode, full_scale_g: u32, mg: i32) -> u16 {
     let bits = mode.bits();
     let step = mode.mg_per_lsb(full_scale_g);
     if bits == 0 || step <= 0 {

@@ -5,7 +5,7 @@
 //!
 //! A board turned by the small angle θ sees gravity `(−θz, −1, θx)·|g|`, so the
 //! angle is read off `g/|g|`; `1/|g|` comes from the division-free inverse root
-//! ([`rsqrt_bits`]: `2^60/|g|` as an integer, `|g|²` read as a number with 40
+//! (`rsqrt_bits`: `2^60/|g|` as an integer, `|g|²` read as a number with 40
 //! fraction bits), so following the board costs no division on any target.
 
 use super::super::geometry::frame::Frame;
@@ -16,7 +16,7 @@ use super::effects::BoardMotion;
 /// The board's last frame and angular velocity (per step), from the pulls so
 /// far; `None` before the first, which starts the board at rest.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct BoardTrack<S> {
+pub(crate) struct BoardTrack<S> {
     last: Option<(Frame<S>, Vec3<S>)>,
 }
 
@@ -50,7 +50,7 @@ impl<S: Scalar> BoardTrack<S> {
 
 /// The frame of a board that feels the pull `g` (milli-g), turned about
 /// `pivot`: the small angle `(g_z, 0, −g_x)/|g|` through [`Frame::rotated`].
-pub fn tilted_frame<S: Scalar>(g: [i32; 3], pivot: Vec3<S>) -> Frame<S> {
+pub(crate) fn tilted_frame<S: Scalar>(g: [i32; 3], pivot: Vec3<S>) -> Frame<S> {
     let norm2 = (g[0] as i64).pow(2) + (g[1] as i64).pow(2) + (g[2] as i64).pow(2);
     let inv = rsqrt_bits(norm2.max(1) as u64, 40) as i128;
     let angle = Vec3::new(

@@ -235,7 +235,7 @@ impl<S: Scalar> BoardMotion<S> {
     /// The rotation from frame `prev` to frame `cur` (eq. 4 frames of the board),
     /// expressed in `prev`'s tile frame, as a small rotation vector (radians):
     /// `Bₚᵀ B_c ≈ I + [θ]×`.
-    pub fn rotation_between(prev: &Frame<S>, cur: &Frame<S>) -> Vec3<S> {
+    pub(crate) fn rotation_between(prev: &Frame<S>, cur: &Frame<S>) -> Vec3<S> {
         // Columns of B_cur in prev's tile coordinates (eq. 4 applied to directions).
         let cx = prev.dir_to_tile(cur.basis[0]);
         let cy = prev.dir_to_tile(cur.basis[1]);
@@ -249,7 +249,7 @@ impl<S: Scalar> BoardMotion<S> {
 
     /// Velocity of the board surface at tile point `p` (pitch/step): `ω × (p − pivot)`.
     #[inline]
-    pub fn surface_velocity(&self, p: Vec3<S>) -> Vec3<S> {
+    pub(crate) fn surface_velocity(&self, p: Vec3<S>) -> Vec3<S> {
         self.omega.cross(p - self.pivot)
     }
 
@@ -259,7 +259,7 @@ impl<S: Scalar> BoardMotion<S> {
     /// turns by at most 1/64 rad (halving the interval down to `rem/16`) keeps that
     /// change under 2 % of a term that is itself small. A still board: the whole
     /// interval.
-    pub fn flight_len(&self, rem: S) -> S {
+    pub(crate) fn flight_len(&self, rem: S) -> S {
         let w = self
             .omega
             .x
@@ -298,7 +298,7 @@ impl<S: Scalar> BoardMotion<S> {
 /// with `e`, closing faster than `threshold`), their closing speed (else zero: for
 /// the impacts a game clicks on). The pair's relative motion obeys eq. 1 with the
 /// other marble as the "board", each taking half of the momentum change.
-pub fn marble_pair<S: Scalar>(
+pub(crate) fn marble_pair<S: Scalar>(
     v1: Vec3<S>,
     v2: Vec3<S>,
     n: Vec3<S>,

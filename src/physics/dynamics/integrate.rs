@@ -76,13 +76,13 @@ impl<S: Scalar> Kick<S> {
     /// with the displacement limited to `±reach` (the step bound against tunnelling;
     /// it only binds for strong pulls at low step rates). Each axis depends on that
     /// axis of the pull alone, so a tilt that moves one axis recomputes one.
-    pub fn axis_of(mg: i32, scale: PullScale, reach: S, k: u32) -> (S, S) {
+    pub(crate) fn axis_of(mg: i32, scale: PullScale, reach: S, k: u32) -> (S, S) {
         let (dv, dp) = scale.kick::<S>(mg, k);
         (dv, dp.clamp(-reach, reach))
     }
 
     /// Sets axis `axis` (0 = x', 1 = y', 2 = z') to `(dv, dp)`.
-    pub fn set_axis(&mut self, axis: usize, (dv, dp): (S, S)) {
+    pub(crate) fn set_axis(&mut self, axis: usize, (dv, dp): (S, S)) {
         self.dv.set_axis(axis, dv);
         self.dp.set_axis(axis, dp);
     }
@@ -114,7 +114,7 @@ pub fn advance<S: Scalar>(p: &mut Vec3<S>, v: &mut Vec3<S>, kick: &Kick<S>, k: u
 
 /// The flat-maze version of [`advance`]: the marble stays on the floor, y' is left alone.
 #[inline]
-pub fn advance_plane<S: Scalar>(p: &mut Vec3<S>, v: &mut Vec3<S>, kick: &Kick<S>, k: u32) {
+pub(crate) fn advance_plane<S: Scalar>(p: &mut Vec3<S>, v: &mut Vec3<S>, kick: &Kick<S>, k: u32) {
     p.x += v.x.shr(k) + kick.dp.x;
     p.z += v.z.shr(k) + kick.dp.z;
     v.x += kick.dv.x;

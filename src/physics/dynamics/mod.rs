@@ -7,4 +7,4 @@ pub mod board_motion;
 pub mod effects;
 pub mod integrate;
 pub mod respond;
-pub mod toi;
+pub(crate) mod toi;

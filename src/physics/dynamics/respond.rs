@@ -47,11 +47,11 @@ pub enum Outcome {
 }
 
 /// `log2` of the solver's time unit: `T = 2^-5 s`.
-pub const T_LOG2: u32 = 5;
+pub(crate) const T_LOG2: u32 = 5;
 
 /// One contact to resolve, in solver units (pitch, `T`).
 #[derive(Clone, Copy, Debug)]
-pub struct Impact<S> {
+pub(crate) struct Impact<S> {
     /// Unit normal out of the board, towards the marble.
     pub n: Vec3<S>,
     /// Penetration depth at the end of the step (pitch, `> 0`).
@@ -59,9 +59,9 @@ pub struct Impact<S> {
     /// Marble velocity (pitch/T).
     pub v: Vec3<S>,
     /// Board velocity at the contact (pitch/T); zero unless the board moves.
-    pub v_board: Vec3<S>,
+    pub(crate) v_board: Vec3<S>,
     /// Acceleration over the step (pitch/T²).
-    pub acc: Vec3<S>,
+    pub(crate) acc: Vec3<S>,
     /// The step's length in `T` (the latest the impact can have been).
     pub dt: S,
 }
@@ -69,14 +69,14 @@ pub struct Impact<S> {
 /// How to move the marble: along `n` by `push` (pitch), and its normal velocity
 /// relative to the board becomes `vn` (pitch/T).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Resolution<S> {
+pub(crate) struct Resolution<S> {
     /// Distance to move along the normal (`depth + lift`).
     pub push: S,
     /// How far off the surface the marble ends (0 unless it bounced).
     pub lift: S,
     /// Energy per unit mass (pitch²/T²) the push-out costs beyond what the normal
     /// speed could pay: the caller takes it from the tangential speed.
-    pub deficit: S,
+    pub(crate) deficit: S,
     /// New normal velocity relative to the board (pitch/T).
     pub vn: S,
     /// A bounce's normal speed at the instant of impact, relative to the board
@@ -88,7 +88,7 @@ pub struct Resolution<S> {
 
 /// Resolves one contact with restitution `e` and restitution threshold `threshold`
 /// (pitch/T).
-pub fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
+pub(crate) fn resolve<S: Scalar>(c: &Impact<S>, e: S, threshold: S) -> Resolution<S> {
     let two = S::from_int(2);
     let vn = (c.v - c.v_board).dot(c.n);
     let w = -vn;

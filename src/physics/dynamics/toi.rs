@@ -36,7 +36,7 @@ use super::super::scalar::Scalar;
 use super::super::vec::Vec3;
 
 /// Separating-plane advances before a search gives up with [`Toi::Later`].
-pub const CA_STEPS: u32 = 8;
+pub(crate) const CA_STEPS: u32 = 8;
 
 /// Constant-acceleration flight from a known state: the closed form between events.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,7 +109,7 @@ impl<S: Scalar> Segment<S> {
 
     /// The velocity in pitch per step after `s` steps: `u + 2h·s`.
     #[inline]
-    pub fn u_at(&self, s: S) -> Vec3<S> {
+    pub(crate) fn u_at(&self, s: S) -> Vec3<S> {
         self.u + (self.h + self.h).scale(s)
     }
 }
@@ -134,7 +134,7 @@ fn up<S: Scalar>(x: S, y: S) -> S {
 /// are first scaled by a power of two ([`normal_shift`]) that puts the largest near
 /// ½: the squares then keep every bit, even for a slow marble in the 16-bit format.
 #[inline]
-pub fn first_root<S: Scalar>(gap: S, w: S, beta: S) -> Option<S> {
+pub(crate) fn first_root<S: Scalar>(gap: S, w: S, beta: S) -> Option<S> {
     let gap = gap.max(S::ZERO);
     if beta == S::ZERO {
         return if w > S::ZERO { Some(gap.div(w)) } else { None };
@@ -158,7 +158,7 @@ pub fn first_root<S: Scalar>(gap: S, w: S, beta: S) -> Option<S> {
 /// The power of two `m` that puts `big · 2^m` in `[¼, ½)` (none for values already
 /// at least ¼; at most 2^30): exact scaling for the quadratics.
 #[inline]
-pub fn normal_shift<S: Scalar>(big: S) -> u32 {
+pub(crate) fn normal_shift<S: Scalar>(big: S) -> u32 {
     let e = big.ilog2();
     if e >= -2 {
         0
@@ -171,7 +171,7 @@ pub fn normal_shift<S: Scalar>(big: S) -> u32 {
 /// (pitch/step) with half its acceleration `beta` (pitch/step²) towards it, still
 /// `d` away (pitch; negative: past it): `√(w² + 4β·d)` — the energy along the
 /// normal — or zero when that is not positive. Scaled like [`first_root`].
-pub fn impact_speed<S: Scalar>(w: S, beta: S, d: S, k: u32) -> S {
+pub(crate) fn impact_speed<S: Scalar>(w: S, beta: S, d: S, k: u32) -> S {
     let m = normal_shift(w.abs().max(beta.abs()).max(d.abs()));
     let (w, beta, d) = (w.shl(m), beta.shl(m), d.shl(m));
     let q = w.times(w) + beta.times(d).shl(2);
@@ -189,7 +189,7 @@ pub fn impact_speed<S: Scalar>(w: S, beta: S, d: S, k: u32) -> S {
 
 /// The answer of [`toi_box`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Toi<S> {
+pub(crate) enum Toi<S> {
     /// No contact within the interval.
     Miss,
     /// Touching after `at` steps and moving in (or pulled in): the contact there
@@ -222,7 +222,7 @@ fn unit<S: Scalar>(axis: usize, positive: bool) -> Vec3<S> {
 /// The first contact, within `len` steps, of a marble of radius `r` flying `seg`
 /// with the box `b`, by conservative advancement along separating planes (see the
 /// module doc). Touching means within `tol` of the rounded box.
-pub fn toi_box<S: Scalar>(seg: &Segment<S>, r: S, b: &Aabb<S>, len: S, tol: S) -> Toi<S> {
+pub(crate) fn toi_box<S: Scalar>(seg: &Segment<S>, r: S, b: &Aabb<S>, len: S, tol: S) -> Toi<S> {
     let mut s = S::ZERO;
     for _ in 0..CA_STEPS {
         let c = if s == S::ZERO { seg.p } else { seg.pos_at(s) };

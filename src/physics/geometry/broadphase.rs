@@ -21,7 +21,7 @@ impl TileRange {
     /// The low and high bound along `axis` (0 = i, 1 = j, 2 = k), to narrow or
     /// widen the range on one axis.
     #[inline]
-    pub fn axis_mut(&mut self, axis: usize) -> (&mut i32, &mut i32) {
+    pub(crate) fn axis_mut(&mut self, axis: usize) -> (&mut i32, &mut i32) {
         match axis {
             0 => (&mut self.lo.i, &mut self.hi.i),
             1 => (&mut self.lo.j, &mut self.hi.j),
@@ -50,7 +50,7 @@ pub fn candidates<S: Scalar>(layout: &TileLayout<S>, c: Vec3<S>, r: S) -> TileRa
 /// Eq. 7 for a marble on the floor of a flat maze: only the wall layer `j = 1` can
 /// be touched (the floor is implicit), so `j- = j+ = 1`.
 #[inline]
-pub fn candidates_plane<S: Scalar>(layout: &TileLayout<S>, c: Vec3<S>, r: S) -> TileRange {
+pub(crate) fn candidates_plane<S: Scalar>(layout: &TileLayout<S>, c: Vec3<S>, r: S) -> TileRange {
     TileRange {
         lo: TileIndex::new(layout.index_xz(c.x - r), 1, layout.index_xz(c.z - r)),
         hi: TileIndex::new(layout.index_xz(c.x + r), 1, layout.index_xz(c.z + r)),

@@ -35,7 +35,7 @@ impl<S: Scalar> Frame<S> {
 
     /// Eq. 4 for a direction or velocity (no origin): `Bᵀ v`.
     #[inline]
-    pub fn dir_to_tile(&self, v: Vec3<S>) -> Vec3<S> {
+    pub(crate) fn dir_to_tile(&self, v: Vec3<S>) -> Vec3<S> {
         Vec3::new(
             self.basis[0].dot(v),
             self.basis[1].dot(v),
@@ -51,7 +51,7 @@ impl<S: Scalar> Frame<S> {
 
     /// `B v'` for a direction or velocity.
     #[inline]
-    pub fn dir_to_world(&self, v: Vec3<S>) -> Vec3<S> {
+    pub(crate) fn dir_to_world(&self, v: Vec3<S>) -> Vec3<S> {
         self.basis[0].scale(v.x) + self.basis[1].scale(v.y) + self.basis[2].scale(v.z)
     }
 
@@ -78,7 +78,7 @@ impl<S: Scalar> Frame<S> {
 }
 
 /// `v / |v|` (zero stays zero), through the inverse root: no division.
-pub fn normalize<S: Scalar>(v: Vec3<S>) -> Vec3<S> {
+pub(crate) fn normalize<S: Scalar>(v: Vec3<S>) -> Vec3<S> {
     let inv = v.length_sq().rsqrt();
     if inv == S::ZERO {
         return v;

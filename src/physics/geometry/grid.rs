@@ -80,7 +80,7 @@ impl<const WORDS: usize> TileGrid<WORDS> {
 
     /// Whether tile `[i, j, k]` is present (outside the grid: no), in a
     /// `const` context (the level parser's).
-    pub const fn is_set(&self, i: usize, j: usize, k: usize) -> bool {
+    pub(crate) const fn is_set(&self, i: usize, j: usize, k: usize) -> bool {
         if i >= self.nx as usize || j >= self.ny as usize || k >= self.nz as usize {
             return false;
         }

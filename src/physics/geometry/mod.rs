@@ -5,5 +5,5 @@ pub mod broadphase;
 pub mod frame;
 pub mod grid;
 pub mod narrowphase;
-pub mod sweep;
+pub(crate) mod sweep;
 pub mod tiles;

@@ -51,7 +51,7 @@ pub fn distance<S: Scalar>(c: Vec3<S>, r: S, b: &Aabb<S>) -> S {
 /// the marble cannot touch it, and [`contact`] says so at its first test (the very
 /// same comparisons). The step asks this before running the contact passes at all.
 #[inline]
-pub fn out_of_reach<S: Scalar>(c: Vec3<S>, r: S, b: &Aabb<S>) -> bool {
+pub(crate) fn out_of_reach<S: Scalar>(c: Vec3<S>, r: S, b: &Aabb<S>) -> bool {
     beyond(offset(c, b), r)
 }
 
@@ -180,7 +180,7 @@ pub fn contact<S: Scalar>(
 /// The ghost-bump rule on its own: whether the closest point of tile `t` to a centre
 /// at offset `d` (see [`offset`]) lies on a face shared with a solid neighbour, which
 /// then owns the contact ([`contact`] skips such tiles the same way).
-pub fn shadowed<S: Scalar>(t: TileIndex, d: Vec3<S>, tiles: Tiles<'_>) -> bool {
+pub(crate) fn shadowed<S: Scalar>(t: TileIndex, d: Vec3<S>, tiles: Tiles<'_>) -> bool {
     (0..3).any(|axis| {
         let v = d.axis(axis);
         v != S::ZERO && tiles.is_solid(neighbour(t, axis, v > S::ZERO))
@@ -285,7 +285,7 @@ fn inside<S: Scalar>(
 /// only matters in 3-D scenes (the flat maze keeps the marble on the floor anyway):
 /// shaken upside down, the marble stays in the maze instead of flying out of it.
 #[inline]
-pub fn lid_contact<S: Scalar>(c: Vec3<S>, r: S, top: S) -> Option<Contact<S>> {
+pub(crate) fn lid_contact<S: Scalar>(c: Vec3<S>, r: S, top: S) -> Option<Contact<S>> {
     let depth = c.y + r - top;
     if depth <= S::ZERO {
         return None;

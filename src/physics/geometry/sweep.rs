@@ -19,7 +19,7 @@ use super::tiles::{Aabb, TileIndex, TileLayout};
 /// The box holding the centre's path from `p` (at 0) to `end` (at `len`) bending
 /// with `h` (half the acceleration, per step²).
 #[inline]
-pub fn swept<S: Scalar>(p: Vec3<S>, end: Vec3<S>, h: Vec3<S>, len: S) -> Aabb<S> {
+pub(crate) fn swept<S: Scalar>(p: Vec3<S>, end: Vec3<S>, h: Vec3<S>, len: S) -> Aabb<S> {
     let quarter = if len == S::ONE {
         None
     } else {

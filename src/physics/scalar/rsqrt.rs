@@ -15,7 +15,7 @@ use super::product::mul_wide;
 /// 16-bit multiplies on a Cortex-M0: `mul_wide`) take it
 /// to 10⁻⁴, then 1.5·10⁻⁸ — enough for 24 fraction bits — and a third step for
 /// wider formats.
-pub fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
+pub(crate) fn rsqrt_bits(bits: u64, frac: u32) -> u64 {
     if bits == 0 {
         return 0;
     }
@@ -84,7 +84,7 @@ fn rsqrt_q31(m: u32, steps: u32) -> u32 {
 /// `1.5·10⁻⁸`, within a few units of the result, and comparing squares with
 /// `bits·2^FRAC` makes it exact.
 #[inline(never)]
-pub fn sqrt_bits<const FRAC: u32>(bits: u32) -> u32 {
+pub(crate) fn sqrt_bits<const FRAC: u32>(bits: u32) -> u32 {
     debug_assert!(FRAC <= 27, "the high word's shift needs FRAC ≤ 27");
     if bits == 0 {
         return 0;

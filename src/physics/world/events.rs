@@ -6,7 +6,7 @@
 //! instead flies the closed form ([`Segment`]) to its next **event**, handles it,
 //! and flies on, as many times as the physics asks, in time order:
 //!
-//! 1. **The reach test** ([`sweep`](super::super::geometry::sweep)): the box the
+//! 1. **The reach test** (`sweep`): the box the
 //!    centre sweeps until the end of the step, widened by the radius, against the
 //!    grid (eq. 7). No root, no division. A tile behind a face the marble is held
 //!    on cannot be touched (the centre stays a radius in front of the face) and is
@@ -15,7 +15,7 @@
 //!    nothing leaves the marble a *free region* (`events/free.rs`): later flights
 //!    whose swept box stays inside it skip the test.
 //! 2. Otherwise **the earliest event** (`events/search.rs`): for every tile in
-//!    reach, the time of impact ([`toi`](crate::physics::dynamics::toi): exact for
+//!    reach, the time of impact (`toi`: exact for
 //!    faces, converging separating planes for edges and corners; the ghost-bump
 //!    rule of eq. 8's narrowphase decides who owns a contact on a seam), the lid,
 //!    the instant a held face's tile runs out under the contact point, the instant
