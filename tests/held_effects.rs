@@ -25,23 +25,30 @@ fn fictitious(w: [f64; 3], r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|a| -wwr[a] - 2.0 * wv[a])
 }
 
-/// RK4 over `t` seconds from `(r, v)`, in the plane (y' held).
-fn reference(w: [f64; 3], mut r: [f64; 3], mut v: [f64; 3], t: f64) -> [f64; 3] {
+/// The position after `t` seconds from `(r, v)` under the acceleration
+/// `a(r, v)`, by RK4 at a microsecond.
+fn rk4<const N: usize>(
+    mut r: [f64; N],
+    mut v: [f64; N],
+    t: f64,
+    a: impl Fn([f64; N], [f64; N]) -> [f64; N],
+) -> [f64; N] {
     let n = (t * 1.0e6).round() as usize;
     let h = t / n as f64;
-    let f = |r: [f64; 3], v: [f64; 3]| {
-        let mut a = fictitious(w, r, v);
-        a[1] = 0.0;
-        (v, a)
+    let f = |r: [f64; N], v: [f64; N]| (v, a(r, v));
+    let add = |x: [f64; N], d: [f64; N], s: f64| core::array::from_fn(|i| x[i] + d[i] * s);
+    let sum = |x: [f64; N], k: [[f64; N]; 4]| {
+        core::array::from_fn(|i| {
+            x[i] + h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i])
+        })
     };
-    let add = |x: [f64; 3], d: [f64; 3], s: f64| [0, 1, 2].map(|a| x[a] + d[a] * s);
     for _ in 0..n {
         let (k1r, k1v) = f(r, v);
         let (k2r, k2v) = f(add(r, k1r, h / 2.0), add(v, k1v, h / 2.0));
         let (k3r, k3v) = f(add(r, k2r, h / 2.0), add(v, k2v, h / 2.0));
         let (k4r, k4v) = f(add(r, k3r, h), add(v, k3v, h));
-        r = [0, 1, 2].map(|a| r[a] + h / 6.0 * (k1r[a] + 2.0 * k2r[a] + 2.0 * k3r[a] + k4r[a]));
-        v = [0, 1, 2].map(|a| v[a] + h / 6.0 * (k1v[a] + 2.0 * k2v[a] + 2.0 * k3v[a] + k4v[a]));
+        r = sum(r, [k1r, k2r, k3r, k4r]);
+        v = sum(v, [k1v, k2v, k3v, k4v]);
     }
     r
 }
@@ -79,7 +86,12 @@ fn spun<S: Scalar>(st: Stepping, rate: f64, seconds: f64) -> f64 {
     let end = w.marbles()[0].pos.to_f64();
     let (s0, pv) = (start.to_f64(), pivot.to_f64());
     let r0 = [0, 1, 2].map(|a| s0[a] - pv[a]);
-    let want = reference([0.0, rate, 0.0], r0, v0, steps as f64 * dt);
+    // In the plane: y' held.
+    let want = rk4(r0, v0, steps as f64 * dt, |r, v| {
+        let mut a = fictitious([0.0, rate, 0.0], r, v);
+        a[1] = 0.0;
+        a
+    });
     let d: f64 = (0..3).map(|a| (end[a] - pv[a] - want[a]).powi(2)).sum();
     d.sqrt()
 }
@@ -115,26 +127,10 @@ fn thrown<S: Scalar>(gx_mg: i32, speed: f64, crr_ppm: u32, seconds: f64) -> f64 
     let gp = 9806.65 / pitch_mm;
     let a = gp * gx_mg as f64 / 1000.0;
     let d = crr_ppm as f64 / 1.0e6 * gp;
-    let f = |v: [f64; 2]| {
+    let x = rk4([0.0; 2], [0.0, speed], steps as f64 * dt, |_, v| {
         let s = (v[0] * v[0] + v[1] * v[1]).sqrt();
         [a - d * v[0] / s, -d * v[1] / s]
-    };
-    let (mut x, mut v) = ([0.0f64; 2], [0.0, speed]);
-    let n = (steps as f64 * dt * 1.0e6).round() as usize;
-    let h = steps as f64 * dt / n as f64;
-    for _ in 0..n {
-        let k1 = (v, f(v));
-        let v2 = [v[0] + h / 2.0 * k1.1[0], v[1] + h / 2.0 * k1.1[1]];
-        let k2 = (v2, f(v2));
-        let v3 = [v[0] + h / 2.0 * k2.1[0], v[1] + h / 2.0 * k2.1[1]];
-        let k3 = (v3, f(v3));
-        let v4 = [v[0] + h * k3.1[0], v[1] + h * k3.1[1]];
-        let k4 = (v4, f(v4));
-        for i in 0..2 {
-            x[i] += h / 6.0 * (k1.0[i] + 2.0 * k2.0[i] + 2.0 * k3.0[i] + k4.0[i]);
-            v[i] += h / 6.0 * (k1.1[i] + 2.0 * k2.1[i] + 2.0 * k3.1[i] + k4.1[i]);
-        }
-    }
+    });
     ((end[0] - start[0] - x[0]).powi(2) + (end[2] - start[2] - x[1]).powi(2)).sqrt()
 }
 
