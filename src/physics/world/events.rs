@@ -282,18 +282,21 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 && skip != LID
                 && rail.is_some_and(|first| self.rail_hold(m, f, first, skip, point));
             if pivot || around != Around::Rolling {
-                let len = if pivot || rail {
-                    self.pivot_len(f, point)
+                // A touched edge the marble leaves is left out like a pivot's
+                // (`pivot_len`); an event inside ends that like a rail slice.
+                let long = if pivot || rail || around == Around::Touched {
+                    self.pivot_len(f, point, !pivot && !rail)
                 } else {
-                    self.slice_len(&f.seg).min(f.len)
+                    None
                 };
+                let len = long.unwrap_or_else(|| self.slice_len(&f.seg).min(f.len));
                 f.slice = Some(Slice {
                     skip,
                     start: m.pos,
                     from: f.t,
                     to: f.after(len),
                     pivot,
-                    rail,
+                    rail: !pivot && long.is_some(),
                 });
                 self.stats.slices = self.stats.slices.wrapping_add(1);
             }

@@ -42,7 +42,8 @@ pub(super) struct Slice<S> {
     /// A pivot slice (`pivot.rs`): `skip` is an edge the marble rolls around.
     pub(super) pivot: bool,
     /// A rail slice (`pivot.rs`): the marble rests on `skip` and another edge
-    /// along the same axis.
+    /// along the same axis; or a slice past edge `skip`, which the marble leaves
+    /// (`pivot_len`). An event inside either makes the rest a plain slice.
     pub(super) rail: bool,
 }
 
