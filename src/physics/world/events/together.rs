@@ -44,7 +44,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let keep = count > 2;
         loop {
             if self.out_of_flights() {
-                self.cut_together::<SPACE, O>(&live, &mut fl, &mut no_sleep, now, obs);
+                self.cut_together(SPACE, &live, &mut fl, &mut no_sleep, now, obs);
                 break;
             }
             rounds += 1;
@@ -279,10 +279,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// ahead). A marble in a slice gets the slice's contact passes there, as at
     /// the slice's end: a slice may sink it up to `2^-12·r` into the tile it
     /// leaves to them. Marks in `no_sleep` those that flew none of the step. Out
-    /// of line: the step's own frame stays as small as the v1's stack needs.
+    /// of line: the step's own frame stays as small as the v1's stack needs; the
+    /// kind of world a value, not a parameter of the type: one copy for both (the
+    /// v1's flash).
     #[inline(never)]
-    fn cut_together<const SPACE: bool, O: StepObserver<S>>(
+    fn cut_together<O: StepObserver<S>>(
         &mut self,
+        space: bool,
         live: &[bool; M],
         fl: &mut [Flight<S>; M],
         no_sleep: &mut [bool; M],
@@ -298,7 +301,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let s = now - fl[n].t;
                 self.fly(n, &mut m, &mut fl[n], s, obs);
             }
-            self.end_slice::<SPACE>(&mut m, &mut fl[n]);
+            if space {
+                self.end_slice::<true>(&mut m, &mut fl[n]);
+            } else {
+                self.end_slice::<false>(&mut m, &mut fl[n]);
+            }
             self.marbles[n] = m;
             no_sleep[n] = !self.cut(&fl[n]);
         }
