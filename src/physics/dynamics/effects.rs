@@ -152,7 +152,7 @@ impl<S: Scalar> Drag<S> {
             holds,
             dir: (S::ZERO, S::ZERO),
         };
-        let (dx, dz, len2) = if v.x == S::ZERO && v.z == S::ZERO {
+        let (dx, dz) = if v.x == S::ZERO && v.z == S::ZERO {
             if holds {
                 kick.dv.x = S::ZERO;
                 kick.dv.z = S::ZERO;
@@ -160,7 +160,7 @@ impl<S: Scalar> Drag<S> {
                 kick.dp.z = S::ZERO;
                 return out;
             }
-            (qx, qz, pull2)
+            (qx, qz)
         } else {
             let (sx, sz) = (v.x.shr(SC), v.z.shr(SC));
             let v2 = sx.times(sx) + sz.times(sz);
@@ -182,13 +182,23 @@ impl<S: Scalar> Drag<S> {
                 v.z.sat_add(az.times(half)).shr(SC),
             );
             if mx.times(sx) + mz.times(sz) > S::ZERO {
-                (mx, mz, mx.times(mx) + mz.times(mz))
+                (mx, mz)
             } else {
-                (sx, sz, v2)
+                (sx, sz)
             }
         };
-        let inv = len2.rsqrt_fine();
-        let (ux, uz) = (dx.times(inv), dz.times(inv));
+        // Along an axis (a marble rolling along a wall it is held on: the held
+        // axis of its velocity and pull are zero) the unit is that axis, exactly;
+        // the reciprocal root would be a few LSB off it, at a root's cost.
+        let axis = |d: S| if d > S::ZERO { S::ONE } else { -S::ONE };
+        let (ux, uz) = if dz == S::ZERO {
+            (if dx == S::ZERO { S::ZERO } else { axis(dx) }, S::ZERO)
+        } else if dx == S::ZERO {
+            (S::ZERO, axis(dz))
+        } else {
+            let inv = (dx.times(dx) + dz.times(dz)).rsqrt_fine();
+            (dx.times(inv), dz.times(inv))
+        };
         out.dir = (ux, uz);
         kick.dv.x = kick.dv.x.sat_add(-self.decel.times(ux));
         kick.dv.z = kick.dv.z.sat_add(-self.decel.times(uz));
@@ -315,4 +325,43 @@ pub(crate) fn marble_pair<S: Scalar>(
     let dv = (restitution(v2, v1, n, e) - v2).shr(1);
     let bounce = if e > S::ZERO { -vn } else { S::ZERO };
     (v1 - dv, v2 + dv, bounce)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type S = fixed::types::I8F24;
+
+    /// A marble rolling along a wall it is held on moves along one axis: the drag
+    /// takes its whole deceleration off that axis and nothing off the other, to the
+    /// bit (a unit from a reciprocal root would be a few LSB short of one).
+    #[test]
+    fn along_an_axis_the_drag_is_the_whole_deceleration() {
+        let f = S::from_num;
+        let drag = Drag::<S>::new(f(0.004), 7);
+        // (velocity x, z; pull x, z; the drag's direction): moving, moving against
+        // the pull, starting from rest along the pull.
+        let cases = [
+            ((0.5, 0.0), (0.02, 0.0), (1, 0)),
+            ((0.0, -0.3), (0.0, 0.01), (0, -1)),
+            ((-0.7, 0.0), (0.0, 0.0), (-1, 0)),
+            ((0.0, 0.0), (0.0, -0.2), (0, -1)),
+        ];
+        for ((vx, vz), (ax, az), (ux, uz)) in cases {
+            let v = Vec3::new(f(vx), S::ZERO, f(vz));
+            let (dv, dp) = (
+                Vec3::new(f(ax), S::ZERO, f(az)),
+                Vec3::new(f(ax / 2.0), S::ZERO, f(az / 2.0)),
+            );
+            let mut kick = Kick { dv, dp };
+            let d = drag.flight(v, &mut kick, S::ONE);
+            let (ux, uz) = (S::from_num(ux), S::from_num(uz));
+            assert_eq!(d.dir, (ux, uz), "v ({vx}, {vz}), pull ({ax}, {az})");
+            assert_eq!(kick.dv.x, dv.x - drag.decel * ux, "v ({vx}, {vz})");
+            assert_eq!(kick.dv.z, dv.z - drag.decel * uz, "v ({vx}, {vz})");
+            assert_eq!(kick.dp.x, dp.x - drag.half_step * ux, "v ({vx}, {vz})");
+            assert_eq!(kick.dp.z, dp.z - drag.half_step * uz, "v ({vx}, {vz})");
+        }
+    }
 }
