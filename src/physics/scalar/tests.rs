@@ -1,7 +1,7 @@
 //! The backends against each other and against exact arithmetic.
 
 use super::fixed_point::scaled_bits;
-use super::product::{mul_shr_halves, mul_wide_halves};
+use super::product::{mul_shr_halves, mul_shr_short, mul_shr_split, mul_wide_halves};
 use super::quotient::{div_frac, divide_words};
 use super::rsqrt::{sqrt_bits, RSQRT_SEED};
 use super::*;
@@ -96,6 +96,70 @@ fn halves_product_is_the_wide_product() {
             ((h << 16) ^ (l & 0xffff)) as i32
         };
         check(near(&mut state), near(&mut state));
+    }
+}
+
+/// The Cortex-M0's product with a 16-bit operand against the 64-bit one: every
+/// 16-bit operand against the extremes of each half of the other, and random
+/// pairs; then the dispatch by the first operand's size ([`mul_shr_split`]) on
+/// operands at and beside the 16-bit limits, in both orders, and random ones.
+#[test]
+fn short_product_is_the_wide_product() {
+    fn check(a: i32, b: i32) {
+        let wide = a as i64 * b as i64;
+        assert_eq!(mul_shr_split::<24>(a, b), (wide >> 24) as i32, "{a} · {b}");
+        assert_eq!(mul_shr_split::<16>(a, b), (wide >> 16) as i32, "{a} · {b}");
+        assert_eq!(mul_shr_split::<31>(a, b), (wide >> 31) as i32, "{a} · {b}");
+    }
+    let halves = [0u32, 1, 2, 0x7ffe, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff];
+    let edge = |i: usize| ((halves[i / 9] << 16) | halves[i % 9]) as i32;
+    for short in i16::MIN..=i16::MAX {
+        let short = short as i32;
+        for i in 0..81 {
+            let a = edge(i);
+            let wide = a as i64 * short as i64;
+            assert_eq!(
+                mul_shr_short::<24>(a, short),
+                (wide >> 24) as i32,
+                "{a} · {short}"
+            );
+            assert_eq!(
+                mul_shr_short::<16>(a, short),
+                (wide >> 16) as i32,
+                "{a} · {short}"
+            );
+            assert_eq!(
+                mul_shr_short::<31>(a, short),
+                (wide >> 31) as i32,
+                "{a} · {short}"
+            );
+        }
+    }
+    let limits = [
+        i32::MIN,
+        -0x8001,
+        -0x8000,
+        -0x7fff,
+        -1,
+        0,
+        1,
+        0x7ffe,
+        0x7fff,
+        0x8000,
+        0x1_0000,
+        i32::MAX,
+    ];
+    for a in limits {
+        for b in limits {
+            check(a, b);
+        }
+    }
+    let mut state = 0x6a09_e667_f3bc_c908;
+    for _ in 0..1_000_000 {
+        let (a, b) = (rng(&mut state) as i32, rng(&mut state) as i32);
+        check(a, b);
+        check(a, b as i16 as i32);
+        check(a as i16 as i32, b);
     }
 }
 
