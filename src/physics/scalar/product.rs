@@ -29,11 +29,11 @@ pub(super) fn mul_shr<const FRAC: u32>(a: i32, b: i32) -> i32 {
 
 /// `mul_shr` for `16 ≤ FRAC < 32`, by the first operand's size: two 16-bit
 /// products ([`mul_shr_short`]) when it fits 16 signed bits, four
-/// ([`mul_shr_halves`]) otherwise. Velocities and accelerations per step are
-/// small in the pitch unit (1 pitch/s is 2¹⁴ LSB a step at 1 024 steps/s): in
-/// the host simulator's plays of grand-tour and of a difficulty-9 maze, 54 %
-/// and 52 % of the step's products have a 16-bit first operand (31 % and 20 %
-/// a 16-bit second one). The test (`a >> 15` against its low half's sign,
+/// ([`mul_shr_halves`]) otherwise. Many of the step's first operands are small
+/// in the pitch unit (2¹⁵ LSB is 2⁻⁹ pitch, about 20 µm): in the host
+/// simulator's plays of grand-tour and of a difficulty-9 maze, 54 % and 52 % of
+/// the step's products have a 16-bit first operand (31 % and 20 % a 16-bit
+/// second one). The test (`a >> 15` against its low half's sign,
 /// which shares a shift with the split) costs 4 instructions on the long path
 /// and saves 9 on the short one (15 with the call frame, against 24); testing
 /// the second operand too cost more on the worst frames than it saved.
