@@ -231,7 +231,8 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // axis at a time — the others keep their kicks, bit for bit. Plain
         // compares, no array of flags: this runs every frame the tilt moves.
         let (old, fresh) = (self.gravity_mg, !self.kicks_ready);
-        if !fresh && g == old {
+        // Axis by axis: `==` on the arrays is a `memcmp` call on the Cortex-M.
+        if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
             return;
         }
         self.kicks_ready = true;
