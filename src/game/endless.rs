@@ -137,6 +137,13 @@ pub struct MazeArgs {
     pub difficulty: u8,
 }
 
+/// The maze's name, as its level text names it (`maze-SEED-NxNxS-dD`).
+impl fmt::Display for MazeArgs {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        generate::write_name(f, self.seed, self.size, self.storeys, self.difficulty)
+    }
+}
+
 /// What the `n`-th level of a run is.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -511,6 +518,37 @@ impl<const N: usize> Write for Text<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The arguments' name is the one the generated level text gives itself
+    /// (the demos' checks look for it in the boards' `profile` lines).
+    #[test]
+    fn a_maze_is_named_by_its_arguments_as_its_text_names_it() {
+        let cases = [(1, 7, 2, 9), (12, 4, 2, 1), (4_000_000, 15, 4, 0)];
+        for (seed, size, storeys, difficulty) in cases {
+            let args = MazeArgs {
+                seed,
+                size,
+                storeys,
+                difficulty,
+            };
+            let mut text = heapless::String::<4096>::new();
+            let maze = generate::generate(seed, size, storeys, difficulty).expect("a maze");
+            write!(text, "{maze}").expect("the text fits");
+            let mut name = heapless::String::<32>::new();
+            write!(name, "{args}").expect("the name fits");
+            let first = text.lines().next().and_then(|l| l.strip_prefix("name: "));
+            assert_eq!(first, Some(name.as_str()));
+        }
+        let mut name = heapless::String::<32>::new();
+        let args = MazeArgs {
+            seed: 3,
+            size: 7,
+            storeys: 2,
+            difficulty: 9,
+        };
+        write!(name, "{args}").expect("the name fits");
+        assert_eq!(name.as_str(), "maze-3-7x7x2-d9");
+    }
 
     #[test]
     fn a_skipped_level_is_named_by_its_header_trimmed_of_ascii_blanks() {

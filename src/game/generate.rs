@@ -57,6 +57,8 @@ mod carve;
 mod check;
 mod text;
 
+pub(crate) use text::write_name;
+
 /// The fewest cells along a side.
 pub const MIN_SIZE: u8 = 2;
 /// The most cells along a side: 31 tiles, within the autopilot's plan on four

@@ -224,13 +224,15 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
         let lim = self.params.mg_max;
         // max then min, not `clamp`: its `min <= max` assertion would link core::fmt.
-        let g = g.map(|v| v.max(-lim).min(lim));
+        let clamp = |v: i32| v.max(-lim).min(lim);
+        let g = [clamp(g[0]), clamp(g[1]), clamp(g[2])];
         // Per axis: each axis of the kicks depends on that axis of the pull alone
         // (the displacement clamp is per axis too), and a tilt usually moves one
-        // axis at a time — the others keep their kicks, bit for bit.
-        let fresh = !self.kicks_ready;
-        let changed = [0, 1, 2].map(|a| fresh || g[a] != self.gravity_mg[a]);
-        if !(changed[0] || changed[1] || changed[2]) {
+        // axis at a time — the others keep their kicks, bit for bit. Plain
+        // compares, no array of flags: this runs every frame the tilt moves.
+        let (old, fresh) = (self.gravity_mg, !self.kicks_ready);
+        // Axis by axis: `==` on the arrays is a `memcmp` call on the Cortex-M.
+        if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
             return;
         }
         self.kicks_ready = true;
@@ -249,7 +251,10 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         };
         let [full, roll, resist] = self.pulls;
         let falls = self.params.spec.effects.holes;
-        for axis in (0..3).filter(|&a| changed[a]) {
+        for axis in 0..3 {
+            if !fresh && g[axis] == old[axis] {
+                continue;
+            }
             // Rolling scales the tangential axes only (x', z'): the normal is full.
             let rolls = axis != 1 && roll != full;
             let rolling = Kick::axis_of(g[axis], if rolls { roll } else { full }, reach, k);
@@ -265,7 +270,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             }
         }
         // Rolling resistance decelerates by c_rr·g_n (·5/7 when rolling), g_n = −g_y.
-        if changed[1] && self.params.spec.effects.friction {
+        if (fresh || g[1] != old[1]) && self.params.spec.effects.friction {
             self.drag = Drag::new(resist.kick::<S>((-g[1]).max(0), k).0, k);
         }
     }

@@ -43,6 +43,9 @@ pub struct Firmware {
     /// Seconds a headless run may take before it is killed (QEMU_TIMEOUT
     /// overrides): a hung firmware (a CPU lockup) never exits.
     pub timeout: u64,
+    /// The cargo feature a `--profile` run needs, if the image for a board
+    /// leaves the profile's code out (the micro:bit v1's flash).
+    pub profile: Option<&'static str>,
 }
 
 impl Firmware {
@@ -54,6 +57,7 @@ impl Firmware {
             target,
             log: Log::Defmt,
             timeout: 600,
+            profile: None,
         }
     }
 
@@ -63,6 +67,31 @@ impl Firmware {
         setup::target(self.target)?;
         setup::flip_link()?;
         firmware::build(&Artifact::firmware(self.package, self.bin, self.target))
+    }
+
+    /// Builds it for a `--profile` run: with its [`Firmware::profile`]
+    /// feature, copied to `<bin>-profile` beside the plain build (the two share
+    /// cargo's output path, and the checks use both). Without such a feature,
+    /// the plain build.
+    pub fn build_profiled(&self) -> Result<PathBuf, Failure> {
+        let Some(feature) = self.profile else {
+            return self.build();
+        };
+        setup::target(self.target)?;
+        setup::flip_link()?;
+        let elf = firmware::build(&Artifact {
+            features: Some(feature),
+            ..Artifact::firmware(self.package, self.bin, self.target)
+        })?;
+        let copy = elf.with_file_name(format!("{}-profile", self.bin));
+        std::fs::copy(&elf, &copy).map_err(|e| {
+            Failure::new(format!(
+                "cannot copy {} to {}: {e}",
+                elf.display(),
+                copy.display()
+            ))
+        })?;
+        Ok(copy)
     }
 
     /// Where cargo puts it (for `--no-build`).
@@ -261,7 +290,10 @@ pub const MICROBIT: Board = Board {
 /// machine too: `cargo microbit-v1`, `cargo xtask check-microbit-v1`.
 pub const MICROBIT_V1: Board = Board {
     name: "micro:bit v1",
-    game: Firmware::new("marble-microbit-v1", "microbit-v1", M0),
+    game: Firmware {
+        profile: Some("profile"),
+        ..Firmware::new("marble-microbit-v1", "microbit-v1", M0)
+    },
     qemu: Some(NRF51),
     chip: Some("nRF51822_xxAA"),
     core: "M0",
@@ -330,6 +362,42 @@ mod tests {
             .filter_map(|b| b.hex.as_ref().map(|h| h.block))
             .collect();
         assert_eq!(sections, [hex::BOARD_V2, hex::BOARD_V1]);
+    }
+
+    /// A firmware's profile feature is one its crate declares (else `cargo
+    /// build --features` fails only when a check runs), and a firmware without
+    /// one keeps the profile in every image.
+    #[test]
+    fn a_profile_feature_is_declared_by_its_crate() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        for board in ALL {
+            let Some(feature) = board.game.profile else {
+                continue;
+            };
+            let folder = match board.game.package {
+                "marble-microbit-v1" => "microbit-v1",
+                other => panic!("{other}: which folder under boards/?"),
+            };
+            let manifest =
+                std::fs::read_to_string(root.join("boards").join(folder).join("Cargo.toml"))
+                    .expect("the board's manifest");
+            let features = manifest
+                .split("[features]")
+                .nth(1)
+                .expect("a [features] table")
+                .split("\n[")
+                .next()
+                .unwrap_or_default();
+            assert!(
+                features
+                    .lines()
+                    .any(|l| l.trim_start().starts_with(&format!("{feature} ="))),
+                "{}: no `{feature}` feature in boards/{folder}/Cargo.toml",
+                board.name
+            );
+        }
+        assert_eq!(MICROBIT_V1.game.profile, Some("profile"));
+        assert_eq!(QEMU.game.profile, None, "QEMU's image keeps its profile");
     }
 
     #[test]

@@ -52,7 +52,14 @@ pub fn build(what: &Artifact) -> Result<PathBuf, Failure> {
     let shown = process::shown(&cmd);
     let target = what.target.unwrap_or("the host");
     if !what.quiet {
-        say!("building {} ({}) for {target}", what.bin, what.package);
+        match what.features {
+            Some(features) => say!(
+                "building {} ({}, features {features}) for {target}",
+                what.bin,
+                what.package
+            ),
+            None => say!("building {} ({}) for {target}", what.bin, what.package),
+        }
     }
     cmd.stdin(Stdio::null()).stdout(Stdio::piped());
     let mut child = process::spawn(&mut cmd)?;

@@ -56,7 +56,11 @@ pub fn play(board: &Board, args: &[String]) -> Outcome {
     };
     let limit = runner::timeout(board.game.timeout)?;
     let tools = board.game.qemu_tools()?;
-    let elf = board.game.build()?;
+    let elf = if has(&args, "--profile") {
+        board.game.build_profiled()?
+    } else {
+        board.game.build()?
+    };
     let headless = !machine.interactive || has(&args, "--demo") || !std::io::stdin().is_terminal();
     if !headless {
         // Relative to where the user is, since it is the user's path.

@@ -396,7 +396,8 @@ pub mod cpu_meter {
 
     /// `f`'s result and the instructions it took (interrupts off; the
     /// timing's own overhead removed; resolution one µs, 7.8 instructions
-    /// under `-icount shift=7`).
+    /// under `-icount shift=7`). The profile build's only.
+    #[cfg(feature = "profile")]
     pub fn count_instructions<R>(f: impl FnOnce() -> R) -> (R, u64) {
         let calibration = calibration();
         let (out, us) = critical_section::with(|_| {
@@ -409,6 +410,7 @@ pub mod cpu_meter {
     }
 
     /// [`count_instructions`] as the app's `Meter` (the demo's profile).
+    #[cfg(feature = "profile")]
     pub fn meter(f: &mut dyn FnMut()) -> u64 {
         count_instructions(f).1
     }

@@ -17,7 +17,9 @@
 //!   0 only if every level was won (101 on a panic). `--demo --profile`
 //!   counts each frame's instructions (`profile NAME: …`), then profiles the
 //!   difficulty-9 mazes and the stress scenes as the mps2 board does
-//!   (`app::profile_scenes`). Without `--demo` it
+//!   (`app::profile_scenes`): in a build with the `profile` feature (the
+//!   xtask builds one for it), whose code the image for a board leaves out;
+//!   an image without it says so and plays the plain demo. Without `--demo` it
 //!   plays: QEMU's TWI is a stub with no accelerometer behind it, so the
 //!   sensor supervision reports the sensor down and the game waits, showing
 //!   the fault cross, as on a board with a broken sensor (`--seconds=N`
@@ -65,6 +67,7 @@ use marble_rolling::board::microbit_v1::{
 };
 use marble_rolling::board::watchdog::{Heartbeats, Task, Verdict, WatchdogGate, WATCHDOG_CHECK_MS};
 use marble_rolling::game::endless::{MazeSlot, Seeds};
+#[cfg(feature = "profile")]
 use marble_rolling::game::rules::Phase;
 use marble_rolling::input::tilt::TiltConfig;
 
@@ -271,7 +274,14 @@ async fn game(options: Options) {
         );
     }
     let start = hw::cpu_meter::sample();
-    if options.demo && options.profile {
+    let profile = options.demo && options.profile;
+    if profile && !cfg!(feature = "profile") {
+        defmt::warn!(
+            "--profile: this image has no profile (build it with the `profile` feature, as `cargo microbit-v1 -- --demo --profile` does); playing the demo"
+        );
+    }
+    #[cfg(feature = "profile")]
+    if profile {
         // Interrupts off while a frame is counted: the display's slices
         // stretch, so this run's LEDs and CPU load are not the demo's.
         LINKS.meter.set(Some(hw::cpu_meter::meter));
@@ -290,7 +300,8 @@ async fn game(options: Options) {
         poll_beating(|| HEARTBEATS.beat(Task::Game), game).await
     };
     let end = hw::cpu_meter::sample();
-    if options.demo && options.profile {
+    #[cfg(feature = "profile")]
+    if profile {
         // The top-difficulty mazes and the stress scenes, as the mps2 board
         // profiles them. Seconds without a poll of the other tasks: the
         // watchdog is petted here after each frame (`--profile` comes from

@@ -55,16 +55,8 @@ impl Maze {
     /// and `core::fmt`'s number formatting is kilobytes of flash the micro:bit
     /// v1 does not have to spare.
     pub(crate) fn write_text<W: fmt::Write>(&self, w: &mut W) -> fmt::Result {
-        w.write_str("name: maze-")?;
-        decimal(w, self.seed)?;
-        w.write_char('-')?;
-        decimal(w, self.size.into())?;
-        w.write_char('x')?;
-        decimal(w, self.size.into())?;
-        w.write_char('x')?;
-        decimal(w, self.storeys.into())?;
-        w.write_str("-d")?;
-        decimal(w, self.difficulty.into())?;
+        w.write_str("name: ")?;
+        write_name(w, self.seed, self.size, self.storeys, self.difficulty)?;
         w.write_str("\neffects: rolling")?;
         if self.difficulty >= 1 {
             w.write_str(", friction")?;
@@ -89,6 +81,28 @@ impl Maze {
         }
         Ok(())
     }
+}
+
+/// A generated maze's name, `maze-SEED-NxNxS-dD` (seed, cells a side twice,
+/// storeys, difficulty): its level text's `name:`, which the boards log and the
+/// demos' checks look for. Digits without `core::fmt`, as [`Maze::write_text`].
+pub(crate) fn write_name<W: fmt::Write>(
+    w: &mut W,
+    seed: u32,
+    size: u8,
+    storeys: u8,
+    difficulty: u8,
+) -> fmt::Result {
+    w.write_str("maze-")?;
+    decimal(w, seed)?;
+    w.write_char('-')?;
+    decimal(w, size.into())?;
+    w.write_char('x')?;
+    decimal(w, size.into())?;
+    w.write_char('x')?;
+    decimal(w, storeys.into())?;
+    w.write_str("-d")?;
+    decimal(w, difficulty.into())
 }
 
 /// `n` in decimal, without leading zeros: from the largest power of ten not

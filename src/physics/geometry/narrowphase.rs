@@ -67,7 +67,7 @@ pub fn overlaps<S: Scalar>(c: Vec3<S>, r: S, b: &Aabb<S>) -> bool {
     if beyond(d, r) {
         return false;
     }
-    d.length_sq() < r * r
+    d.length_sq() < r.times(r)
 }
 
 /// Which part of the tile the marble touches.
@@ -159,7 +159,7 @@ pub fn contact<S: Scalar>(
         }
         _ => {
             let len2 = d.length_sq();
-            if len2 >= r * r {
+            if len2 >= r.times(r) {
                 return None;
             }
             // The normal from an inverse root: no root, no division.
@@ -169,7 +169,7 @@ pub fn contact<S: Scalar>(
             }
             Some(Contact {
                 normal: d.scale(inv),
-                depth: r - len2 * inv,
+                depth: r - len2.times(inv),
                 feature: Feature::Edge,
                 plane: S::ZERO,
             })

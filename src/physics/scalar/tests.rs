@@ -1,7 +1,7 @@
 //! The backends against each other and against exact arithmetic.
 
 use super::fixed_point::scaled_bits;
-use super::product::{mul_shr_halves, mul_wide_halves};
+use super::product::{mul_shr_halves, mul_shr_short, mul_shr_split, mul_wide_halves};
 use super::quotient::{div_frac, divide_words};
 use super::rsqrt::{sqrt_bits, RSQRT_SEED};
 use super::*;
@@ -60,40 +60,106 @@ fn fixed_rsqrt_is_within_an_lsb() {
 }
 
 /// The Cortex-M0's product from 16-bit halves against the 64-bit one, bit for
-/// bit: every sign and carry combination of the halves, the extremes, and
-/// random operands (the M0 end-state hashes in the study check it on the chip).
+/// bit: every pair of operands built from the extremes of each half (signed and
+/// unsigned: the split's `ah = 2¹⁵` and `s = −2³¹ + 2¹⁴` cases among them),
+/// and random operands (the M0 end-state hashes in the study check it on the
+/// chip).
 #[test]
 fn halves_product_is_the_wide_product() {
     fn check(a: i32, b: i32) {
         let wide = a as i64 * b as i64;
         assert_eq!(mul_shr_halves::<24>(a, b), (wide >> 24) as i32, "{a} · {b}");
         assert_eq!(mul_shr_halves::<16>(a, b), (wide >> 16) as i32, "{a} · {b}");
-        assert_eq!(mul_shr_halves::<0>(a, b), wide as i32, "{a} · {b}");
+        assert_eq!(mul_shr_halves::<31>(a, b), (wide >> 31) as i32, "{a} · {b}");
     }
-    let edges = [
-        i32::MIN,
-        i32::MIN + 1,
-        -65_537,
-        -65_536,
-        -65_535,
-        -32_768,
-        -1,
-        0,
-        1,
-        0xffff,
-        0x1_0000,
-        0x7fff_0000,
-        0x7fff_ffff,
-        -0x7fff_0001,
-    ];
-    for a in edges {
-        for b in edges {
-            check(a, b);
+    let halves = [0u32, 1, 2, 0x7ffe, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff];
+    let edge = |i: usize| ((halves[i / 9] << 16) | halves[i % 9]) as i32;
+    for i in 0..81 {
+        for j in 0..81 {
+            check(edge(i), edge(j));
         }
     }
     let mut state = 0x9e37_79b9_7f4a_7c15;
-    for _ in 0..200_000 {
+    for _ in 0..1_000_000 {
         check(rng(&mut state) as i32, rng(&mut state) as i32);
+    }
+    // Operands near the edges of a half, where a carry or a sign changes.
+    for _ in 0..200_000 {
+        let near = |state: &mut u64| {
+            let r = rng(state);
+            let h = halves[(r % 9) as usize]
+                .wrapping_add((r >> 8) as u32 % 5)
+                .wrapping_sub(2);
+            let l = halves[((r >> 16) % 9) as usize]
+                .wrapping_add((r >> 24) as u32 % 5)
+                .wrapping_sub(2);
+            ((h << 16) ^ (l & 0xffff)) as i32
+        };
+        check(near(&mut state), near(&mut state));
+    }
+}
+
+/// The Cortex-M0's product with a 16-bit operand against the 64-bit one: every
+/// 16-bit operand against the extremes of each half of the other, and random
+/// pairs; then the dispatch by the first operand's size ([`mul_shr_split`]) on
+/// operands at and beside the 16-bit limits, in both orders, and random ones.
+#[test]
+fn short_product_is_the_wide_product() {
+    fn check(a: i32, b: i32) {
+        let wide = a as i64 * b as i64;
+        assert_eq!(mul_shr_split::<24>(a, b), (wide >> 24) as i32, "{a} · {b}");
+        assert_eq!(mul_shr_split::<16>(a, b), (wide >> 16) as i32, "{a} · {b}");
+        assert_eq!(mul_shr_split::<31>(a, b), (wide >> 31) as i32, "{a} · {b}");
+    }
+    let halves = [0u32, 1, 2, 0x7ffe, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff];
+    let edge = |i: usize| ((halves[i / 9] << 16) | halves[i % 9]) as i32;
+    for short in i16::MIN..=i16::MAX {
+        let short = short as i32;
+        for i in 0..81 {
+            let a = edge(i);
+            let wide = a as i64 * short as i64;
+            assert_eq!(
+                mul_shr_short::<24>(a, short),
+                (wide >> 24) as i32,
+                "{a} · {short}"
+            );
+            assert_eq!(
+                mul_shr_short::<16>(a, short),
+                (wide >> 16) as i32,
+                "{a} · {short}"
+            );
+            assert_eq!(
+                mul_shr_short::<31>(a, short),
+                (wide >> 31) as i32,
+                "{a} · {short}"
+            );
+        }
+    }
+    let limits = [
+        i32::MIN,
+        -0x8001,
+        -0x8000,
+        -0x7fff,
+        -1,
+        0,
+        1,
+        0x7ffe,
+        0x7fff,
+        0x8000,
+        0x1_0000,
+        i32::MAX,
+    ];
+    for a in limits {
+        for b in limits {
+            check(a, b);
+        }
+    }
+    let mut state = 0x6a09_e667_f3bc_c908;
+    for _ in 0..1_000_000 {
+        let (a, b) = (rng(&mut state) as i32, rng(&mut state) as i32);
+        check(a, b);
+        check(a, b as i16 as i32);
+        check(a as i16 as i32, b);
     }
 }
 

@@ -132,7 +132,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// still there under the contact point, the kick's normal part is dropped. Any of
     /// these failing releases the face (the contact passes take over again). Returns
     /// whether it is held on the floor.
-    pub(super) fn hold<const SPACE: bool>(&self, m: &mut Marble<S>, kick: &mut Kick<S>) -> bool {
+    ///
+    /// `backed`: the tiles behind the held faces are known to be there (the
+    /// marble's free region says so), and the grid is not asked.
+    pub(super) fn hold<const SPACE: bool>(
+        &self,
+        m: &mut Marble<S>,
+        kick: &mut Kick<S>,
+        backed: bool,
+    ) -> bool {
         let r = self.params.radius;
         let mut on_floor = false;
         // The set bits only, lowest first (the same order as a scan of all six: the
@@ -147,7 +155,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             let pull = kick.dv.axis(axis);
             let presses = if up { pull < S::ZERO } else { pull > S::ZERO };
             let mut keep = m.pos.axis(axis) == at && m.vel.axis(axis) == S::ZERO && presses;
-            if keep {
+            // The region's word is the grid's (debug builds ask the grid too).
+            debug_assert!(!backed || self.behind_solid::<SPACE>(m.pos, axis, up, plane));
+            if keep && !backed {
                 keep = self.behind_solid::<SPACE>(m.pos, axis, up, plane);
             }
             if keep {

@@ -258,7 +258,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         f: &mut Flight<S>,
     ) -> (S, Event<S>) {
         self.spend(1, 1);
-        self.prepare::<SPACE>(m, f);
+        self.prepare::<SPACE>(n, m, f);
         if f.events >= 2 * MAX_EVENTS && f.slice.is_none() {
             // Past every bound: blind slices to the end of the step.
             f.want = Some(EVERY);
@@ -362,7 +362,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The flight from the marble's state at `f.t`: the pull (rolling when on the
     /// floor), rolling resistance and the board's motion over their intervals, the
     /// held faces' normal parts dropped.
-    fn prepare<const SPACE: bool>(&self, m: &mut Marble<S>, f: &mut Flight<S>) {
+    fn prepare<const SPACE: bool>(&self, n: usize, m: &mut Marble<S>, f: &mut Flight<S>) {
         let p = &self.params;
         let (k, fx) = (p.k, p.spec.effects);
         let rem = S::ONE - f.t;
@@ -397,7 +397,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             };
             len = len.min(self.motion.flight_len(rem));
         }
-        if m.rest_mask != 0 && self.hold::<SPACE>(m, &mut kick) {
+        if m.rest_mask != 0 && self.hold::<SPACE>(m, &mut kick, self.free[n].under_held(m, SPACE)) {
             m.supported = true;
         }
         if fx.friction && supported {

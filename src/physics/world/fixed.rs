@@ -75,7 +75,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         let mut held_on_floor = false;
         if m.rest_mask != 0 {
-            held_on_floor = self.hold::<SPACE>(m, &mut kick);
+            held_on_floor = self.hold::<SPACE>(m, &mut kick, false);
         }
         let start = m.pos;
         if SPACE {

@@ -56,12 +56,7 @@ fn check_worst_frames(log: &str, bound: u64, what: &str, problems: &mut Problems
 /// `game::generate` names a maze), then the stress scenes.
 pub fn profiled_scenes() -> Vec<String> {
     use marble_rolling::game::stress::{HARD_MAZES, STRESS};
-    let mazes = HARD_MAZES.iter().map(|m| {
-        format!(
-            "maze-{}-{}x{}x{}-d{}",
-            m.seed, m.size, m.size, m.storeys, m.difficulty
-        )
-    });
+    let mazes = HARD_MAZES.iter().map(|m| m.to_string());
     let scenes = STRESS.iter().map(|s| s.level.info.name.to_string());
     mazes.chain(scenes).collect()
 }

@@ -30,6 +30,9 @@ pub fn check() -> Outcome {
     let mut problems = Problems::default();
 
     let tools = board.game.qemu_tools()?;
+    // The profile's image first: the plain one, built last, is what cargo's
+    // output path then holds (and what a board is flashed with).
+    let profiled = board.game.build_profiled()?;
     let elf = board.game.build()?;
     let file = demo::create_log(&log_path)?;
     say!("running the demo in QEMU microbit with the GPIO trace…");
@@ -91,7 +94,13 @@ pub fn check() -> Outcome {
     }
 
     // 2c. Each level's frame costs (a second run: counting stops interrupts).
-    check_profile(&tools, &elf, &target, (limit, frame_goal), &mut problems)?;
+    check_profile(
+        &tools,
+        &profiled,
+        &target,
+        (limit, frame_goal),
+        &mut problems,
+    )?;
 
     // 3. Without the demo: play on QEMU's stub accelerometer.
     check_play_on_stub(&tools, &elf, &target, limit, &mut problems)?;

@@ -34,16 +34,16 @@
 //! state at a cut never repeats). `docs/performance.md` has the figures.
 //!
 //! `StepStats::budget_cuts` counts the marble-steps it cut, `StepStats::work` the
-//! units spent; no built-in level reaches the budget (at most 12 units in a frame,
-//! `three-floors`, since a marble rolling off an edge flies one slice past it; 17
-//! before, on `two-floors`: `tests/budget.rs`), the stress scenes of a landing on a
+//! units spent; no built-in level reaches the budget (at most 9 units in a frame,
+//! `two-floors` and `three-floors`, since a marble rolling off an edge flies one
+//! slice past it; 17 before, on `two-floors`: `tests/budget.rs`), the stress scenes of a landing on a
 //! marble and of four marbles shaken do.
 
 use super::{Flight, Scalar, World};
 
 /// Units of work (flights) a step may spend, all marbles together, unless
 /// [`World::set_flight_budget`] sets another budget (see the module doc). Every
-/// built-in level stays under it (at most 12 in a frame, on `three-floors`).
+/// built-in level stays under it (at most 9 in a frame, on `two-floors`).
 pub const FLIGHT_BUDGET: u32 = 18;
 
 /// A pair's time of impact, in flights of the budget.

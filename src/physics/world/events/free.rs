@@ -79,6 +79,22 @@ impl<S: Scalar> FreeRegion<S> {
         true
     }
 
+    /// Whether the tile behind every face the marble is held on is there under
+    /// its centre (what `World::behind_solid` asks the grid for each), known
+    /// without the grid: the region was built with those faces and every tile
+    /// behind them under it solid. `space`: the world has holes (3-D).
+    #[inline]
+    pub(in crate::physics::world) fn under_held(&self, m: &Marble<S>, space: bool) -> bool {
+        let (c, lo, hi) = (m.pos, self.lo, self.hi);
+        // Eq. 5's tiles are `[lo, hi)`, as eq. 6 indexes the centre.
+        self.holds(m)
+            && lo.x <= c.x
+            && c.x < hi.x
+            && lo.z <= c.z
+            && c.z < hi.z
+            && (!space || (lo.y <= c.y && c.y < hi.y))
+    }
+
     /// Whether a flight of the marble whose centre sweeps `path` can meet
     /// nothing: the search would return the flight's own end or stop. `space`:
     /// the world has holes (3-D). Out of line, one copy for both kinds of world:

@@ -379,7 +379,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let mut len = S::ONE.shr(3);
         for n in [a, b] {
             let mut m = self.marbles[n];
-            self.prepare::<SPACE>(&mut m, &mut fl[n]);
+            self.prepare::<SPACE>(n, &mut m, &mut fl[n]);
             self.marbles[n] = m;
             let seg = fl[n].seg;
             let (um, hm) = (max_abs(seg.u), max_abs(seg.h));
