@@ -180,3 +180,70 @@ fn a_turning_board_follows_the_rotating_frame() {
         assert!(fixed < 600.0, "{rate} rad/s: fixed steps {fixed} µm off");
     }
 }
+
+/// A marble reaching a wall that the turning board moves away from it faster
+/// than it comes (eq. 1's speed against the surface parts them): no impact, but
+/// the wall does not let it through either. Eq. 1 applied anyway reflected the
+/// parting speed and sent the marble back into the wall, where the next flight
+/// touched again with no time passing, until the idle rule's blind slices took
+/// over: here it is a contact, one event, and the marble is not faster into the
+/// wall than it came.
+#[test]
+fn a_wall_the_board_moves_away_is_a_contact_not_a_bounce() {
+    type S = marble_rolling::physics::Fx;
+    let g = closed_box(3);
+    let p = params::<S>(spec_in(
+        Stepping::Events,
+        Effects {
+            board_motion: true,
+            ..Effects::NONE
+        },
+    ));
+    let (cx, cz) = cell_centre(&p, 5, 3);
+    let wall = p.layout.span_xz(6).0;
+    let r = p.radius;
+    let x = wall - r - S::from_f64(0.01);
+    let mut w: World<'_, S, 4> = world(p, &g, &[(cx, cz)]);
+    w.set_sleeping(false);
+    w.set_gravity_mg([0, -1000, 0]);
+    let dt = p.dt().to_f64();
+    // Turning about the vertical through a point four pitches behind the marble
+    // (−z): the wall at the contact moves along +x at 2 rad/s · 4 pitch = 8
+    // pitch/s, the marble comes at 4 (above the restitution threshold, 1.7).
+    let pivot = Vec3::new(x + r, w.marbles()[0].pos.y, cz - S::from_f64(4.0));
+    w.set_board_motion(BoardMotion {
+        omega: Vec3::new(S::ZERO, S::from_f64(2.0 * dt), S::ZERO),
+        omega_dot: Vec3::ZERO,
+        pivot,
+    });
+    {
+        let m = &mut w.marbles_mut()[0];
+        m.pos.x = x;
+        m.vel = Vec3::new(S::from_f64(4.0), S::ZERO, S::ZERO);
+    }
+    let surface = w.marbles()[0].pos + Vec3::new(r, S::ZERO, S::ZERO) - pivot;
+    // ω × (q − pivot) along x: ω_y · (q − pivot)_z.
+    let along = 2.0 * surface.z.to_f64();
+    assert!(
+        along > 1.0,
+        "the wall must move away along +x, at {along} pitch/s"
+    );
+    let events = w.stats.events;
+    w.step();
+    let m = w.marbles()[0];
+    assert!(
+        w.stats.events - events <= 2,
+        "{} events in one step: the touch came back with no time passing",
+        w.stats.events - events
+    );
+    assert!(
+        m.vel.x.to_f64() <= 0.5 + 1e-3,
+        "into the wall at {} pitch/s",
+        m.vel.x.to_f64()
+    );
+    assert!(
+        min_clearance(&w, 0) > -5e-4,
+        "{} pitch into the wall",
+        -min_clearance(&w, 0)
+    );
+}
