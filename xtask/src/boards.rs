@@ -64,9 +64,17 @@ impl Firmware {
     /// Installs what building it needs (its target's standard library, and
     /// flip-link, its linker in .cargo/config.toml) and builds it, release.
     pub fn build(&self) -> Result<PathBuf, Failure> {
+        self.build_with(None)
+    }
+
+    /// [`Firmware::build`] with cargo `features`.
+    fn build_with(&self, features: Option<&str>) -> Result<PathBuf, Failure> {
         setup::target(self.target)?;
         setup::flip_link()?;
-        firmware::build(&Artifact::firmware(self.package, self.bin, self.target))
+        firmware::build(&Artifact {
+            features,
+            ..Artifact::firmware(self.package, self.bin, self.target)
+        })
     }
 
     /// Builds it for a `--profile` run: with its [`Firmware::profile`]
@@ -77,12 +85,7 @@ impl Firmware {
         let Some(feature) = self.profile else {
             return self.build();
         };
-        setup::target(self.target)?;
-        setup::flip_link()?;
-        let elf = firmware::build(&Artifact {
-            features: Some(feature),
-            ..Artifact::firmware(self.package, self.bin, self.target)
-        })?;
+        let elf = self.build_with(Some(feature))?;
         let copy = elf.with_file_name(format!("{}-profile", self.bin));
         std::fs::copy(&elf, &copy).map_err(|e| {
             Failure::new(format!(
