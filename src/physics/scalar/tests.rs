@@ -64,16 +64,30 @@ fn fixed_rsqrt_is_within_an_lsb() {
 /// unsigned: the split's `ah = 2¹⁵` and `s = −2³¹ + 2¹⁴` cases among them),
 /// and random operands (the M0 end-state hashes in the study check it on the
 /// chip).
+/// Half-words where a split's carry or sign changes.
+const HALVES: [u32; 9] = [0, 1, 2, 0x7ffe, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff];
+
+/// Operand `i` of 81: a high and a low half from [`HALVES`].
+fn edge(i: usize) -> i32 {
+    ((HALVES[i / 9] << 16) | HALVES[i % 9]) as i32
+}
+
+/// `product` at 24, 16 and 31 fraction bits against the 64-bit product.
+fn is_wide(product: [fn(i32, i32) -> i32; 3], a: i32, b: i32) {
+    let wide = a as i64 * b as i64;
+    for (f, frac) in product.into_iter().zip([24, 16, 31]) {
+        assert_eq!(f(a, b), (wide >> frac) as i32, "{a} · {b} at {frac}");
+    }
+}
+
 #[test]
 fn halves_product_is_the_wide_product() {
-    fn check(a: i32, b: i32) {
-        let wide = a as i64 * b as i64;
-        assert_eq!(mul_shr_halves::<24>(a, b), (wide >> 24) as i32, "{a} · {b}");
-        assert_eq!(mul_shr_halves::<16>(a, b), (wide >> 16) as i32, "{a} · {b}");
-        assert_eq!(mul_shr_halves::<31>(a, b), (wide >> 31) as i32, "{a} · {b}");
-    }
-    let halves = [0u32, 1, 2, 0x7ffe, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff];
-    let edge = |i: usize| ((halves[i / 9] << 16) | halves[i % 9]) as i32;
+    let halves = [
+        mul_shr_halves::<24> as fn(i32, i32) -> i32,
+        mul_shr_halves::<16>,
+        mul_shr_halves::<31>,
+    ];
+    let check = |a, b| is_wide(halves, a, b);
     for i in 0..81 {
         for j in 0..81 {
             check(edge(i), edge(j));
@@ -87,10 +101,10 @@ fn halves_product_is_the_wide_product() {
     for _ in 0..200_000 {
         let near = |state: &mut u64| {
             let r = rng(state);
-            let h = halves[(r % 9) as usize]
+            let h = HALVES[(r % 9) as usize]
                 .wrapping_add((r >> 8) as u32 % 5)
                 .wrapping_sub(2);
-            let l = halves[((r >> 16) % 9) as usize]
+            let l = HALVES[((r >> 16) % 9) as usize]
                 .wrapping_add((r >> 24) as u32 % 5)
                 .wrapping_sub(2);
             ((h << 16) ^ (l & 0xffff)) as i32
@@ -105,34 +119,20 @@ fn halves_product_is_the_wide_product() {
 /// operands at and beside the 16-bit limits, in both orders, and random ones.
 #[test]
 fn short_product_is_the_wide_product() {
-    fn check(a: i32, b: i32) {
-        let wide = a as i64 * b as i64;
-        assert_eq!(mul_shr_split::<24>(a, b), (wide >> 24) as i32, "{a} · {b}");
-        assert_eq!(mul_shr_split::<16>(a, b), (wide >> 16) as i32, "{a} · {b}");
-        assert_eq!(mul_shr_split::<31>(a, b), (wide >> 31) as i32, "{a} · {b}");
-    }
-    let halves = [0u32, 1, 2, 0x7ffe, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff];
-    let edge = |i: usize| ((halves[i / 9] << 16) | halves[i % 9]) as i32;
+    let split = [
+        mul_shr_split::<24> as fn(i32, i32) -> i32,
+        mul_shr_split::<16>,
+        mul_shr_split::<31>,
+    ];
+    let short_product = [
+        mul_shr_short::<24> as fn(i32, i32) -> i32,
+        mul_shr_short::<16>,
+        mul_shr_short::<31>,
+    ];
+    let check = |a, b| is_wide(split, a, b);
     for short in i16::MIN..=i16::MAX {
-        let short = short as i32;
         for i in 0..81 {
-            let a = edge(i);
-            let wide = a as i64 * short as i64;
-            assert_eq!(
-                mul_shr_short::<24>(a, short),
-                (wide >> 24) as i32,
-                "{a} · {short}"
-            );
-            assert_eq!(
-                mul_shr_short::<16>(a, short),
-                (wide >> 16) as i32,
-                "{a} · {short}"
-            );
-            assert_eq!(
-                mul_shr_short::<31>(a, short),
-                (wide >> 31) as i32,
-                "{a} · {short}"
-            );
+            is_wide(short_product, edge(i), short as i32);
         }
     }
     let limits = [
