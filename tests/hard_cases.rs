@@ -790,3 +790,55 @@ fn slot_rest<S: Scalar>() {
     );
 }
 for_each_backend!(slot_rest_is_held_on_both_edges, slot_rest);
+
+/// **Leaving a wall past a seam.** A marble rolling along a wall of many tiles,
+/// touching it, its pull drawing it off the wall, crosses the seam between two of
+/// the wall's tiles. Within the touching tolerance of the seam the next tile's
+/// rounded edge reads as approached (its normal leans along the wall, against the
+/// motion), and the ghost-bump rule hands that touch to the wall's face, which
+/// the marble is leaving: no touch at all. The step takes at most two events
+/// (five before: the touch came back with no time passing until the idle rule's
+/// blind slices flew the rest), and the marble rolls on, off the wall, at its
+/// speed.
+fn leaving_a_wall_past_a_seam<S: Scalar>() {
+    let g = closed_box(31);
+    let p = params::<S>(events_spec(Effects::NONE));
+    let r = p.radius;
+    let wall = p.layout.span_xz(0).1;
+    let seam = p.layout.span_xz(4).0;
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 1)]);
+    w.set_sleeping(false);
+    // Off the top wall (+z), gently.
+    w.set_gravity_mg([0, -1000, 50]);
+    let v = S::from_int(4);
+    {
+        let m = &mut w.marbles_mut()[0];
+        m.pos.x = seam - S::from_f64(0.002);
+        m.pos.z = wall + r;
+        m.vel = Vec3::new(v, S::ZERO, S::ZERO);
+    }
+    let (x0, z0) = (w.marbles()[0].pos.x, w.marbles()[0].pos.z);
+    let events = w.stats.events;
+    w.step();
+    let m = w.marbles()[0];
+    assert!(
+        w.stats.events - events <= 2,
+        "{}: {} events in one step past the seam",
+        S::NAME,
+        w.stats.events - events
+    );
+    let dt = p.dt().to_f64();
+    let dx = (m.pos.x - x0).to_f64();
+    assert!(
+        (dx - v.to_f64() * dt).abs() < 1e-3 * dx,
+        "{}: rolled {dx} pitch along the wall, not {}",
+        S::NAME,
+        v.to_f64() * dt
+    );
+    assert!(m.pos.z >= z0, "{}: into the wall", S::NAME);
+    assert!(m.vel.z >= S::ZERO, "{}: towards the wall", S::NAME);
+}
+for_each_backend!(
+    leaving_a_wall_past_a_seam_is_no_touch,
+    leaving_a_wall_past_a_seam
+);

@@ -3,8 +3,8 @@
 //! a slice leaves out.
 
 use super::{
-    entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Event, Flight, Marble, Scalar,
-    Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
+    entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Contact, Event, Feature, Flight,
+    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -95,7 +95,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                                     // The ghost-bump rule: a touch on a seam
                                     // belongs to the surface of the tiles.
                                     let c = if shadowed(t, d, tiles) {
-                                        owned(t, &b, d, r, tiles)
+                                        owned(t, &b, d, r, tiles).filter(|c| closes(seg, at, c))
                                     } else {
                                         Some(contact)
                                     };
@@ -283,6 +283,21 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         first
     }
+}
+
+/// Whether a touch that the ghost-bump rule moved from a seam onto the face of
+/// the tiles' union (`owned`) is one: the marble comes towards that face, now or
+/// pulled back later. A marble rolling along a wall past the seam of two of its
+/// tiles, its pull away from the wall, meets the seam's rounded edge at once (the
+/// edge's normal leans along the wall, into the marble's motion) and the face it
+/// belongs to not at all: the distance to the face never shrinks, and it bounds
+/// the distance to the tile. Taken as a touch it came back with no time passing
+/// until the idle rule's blind slices flew the rest of the step.
+fn closes<S: Scalar>(seg: &Segment<S>, at: S, c: &Contact<S>) -> bool {
+    if !matches!(c.feature, Feature::Face(_)) {
+        return true;
+    }
+    seg.u_at(at).dot(c.normal) < S::ZERO || seg.h.dot(c.normal) < S::ZERO
 }
 
 /// Whether the box `b` lies behind a face the marble is held on (then it cannot be
