@@ -161,6 +161,18 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         self.params.radius.shr(14).max(lsb + lsb + lsb + lsb)
     }
 
+    /// The restitution threshold in pitch a step: slower than it, a marble's
+    /// motion against a surface is a resting contact's.
+    #[inline]
+    fn threshold_per_step(&self) -> S {
+        let p = &self.params;
+        if p.k >= T_LOG2 {
+            p.threshold.shr(p.k - T_LOG2)
+        } else {
+            p.threshold.shl(T_LOG2 - p.k)
+        }
+    }
+
     /// The effect counters, once per marble-step (as the fixed step counts them).
     fn count_runs<const SPACE: bool>(&mut self, m: &Marble<S>) {
         let fx = self.params.spec.effects;

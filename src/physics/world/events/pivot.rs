@@ -99,6 +99,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // The turn needs a_c = u_t²/r; held while −a·n = −2·h·n exceeds it. In
         // pitch/step, |u| < 1 per axis: the squares stay under 3.
         let un = seg.u.dot(n);
+        // An edge does not pull: a marble leaving it faster than the threshold
+        // (a bounce off another tile inside the slice: the far rim of a gap) is
+        // not held, and keeps that speed.
+        if un > self.threshold_per_step() {
+            return false;
+        }
         let ut2 = seg.u.length_sq() - un.times(un);
         if (p.radius + p.radius).times(S::ZERO - hn) <= ut2 {
             return false;
@@ -260,11 +266,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // Across the edges slower than the threshold (pitch/step, in squares).
         let mut across = seg.u;
         across.set_axis(a1, S::ZERO);
-        let w_t = if p.k >= T_LOG2 {
-            p.threshold.shr(p.k - T_LOG2)
-        } else {
-            p.threshold.shl(T_LOG2 - p.k)
-        };
+        let w_t = self.threshold_per_step();
         if across.length_sq() > w_t.times(w_t) {
             return false;
         }

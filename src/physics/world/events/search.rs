@@ -4,7 +4,7 @@
 
 use super::{
     entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Contact, Event, Feature, Flight,
-    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, T_LOG2,
+    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -208,11 +208,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // Closing at `w = −u·d/|d|` (pitch/step) faster than the threshold, in
         // squares: (u·d)² > w_t²·|d|².
         let ud = seg.u.dot(d);
-        let w_t = if p.k >= T_LOG2 {
-            p.threshold.shr(p.k - T_LOG2)
-        } else {
-            p.threshold.shl(T_LOG2 - p.k)
-        };
+        let w_t = self.threshold_per_step();
         if ud >= S::ZERO {
             return true;
         }
