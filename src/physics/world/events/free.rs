@@ -208,8 +208,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 /// (the row `behind[axis]` across the other two axes) is solid.
 #[inline(never)]
 fn fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3]) -> bool {
-    // Axis 3: the range itself, whose tiles must be empty.
-    for axis in 0..4 {
+    // Axis 3: the range itself, whose tiles must be empty; first, so that a row
+    // that meets a wall fails on it before the tiles behind the held faces are
+    // read.
+    for axis in [3, 0, 1, 2] {
         let mut s = *r;
         match behind.get(axis) {
             Some(Some(row)) => {
