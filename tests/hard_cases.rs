@@ -872,3 +872,60 @@ fn gap_at_walking_pace<S: Scalar>() {
     );
 }
 for_each_backend!(a_2_mm_gap_at_walking_pace_is_crossed, gap_at_walking_pace);
+
+/// **Just too fast for a post's corner.** Rolling round the vertical edge of a post
+/// 7 % faster than the pull towards the edge can hold it (`v² > r·a_n`), the pull
+/// leaning back along the path: the marble leaves the edge, slowly at first, and
+/// the pull's lean would bring it back only after the slice (the squared distance's
+/// `s³` term, negative, is outweighed by its `s²` term over the slice's length). The
+/// step takes at most three events (four or five in the fixed-point formats before:
+/// a touch and a plain slice, again and again; sixteen in a step of
+/// `maze-2-7x7x2-d9`), and the marble is never in the post.
+fn just_too_fast_for_a_corner<S: Scalar>() {
+    let g = grid(&[
+        "#########",
+        "#.......#",
+        "#.#.....#",
+        "#.......#",
+        "#.......#",
+        "#########",
+    ]);
+    let p = params::<S>(events_spec(Effects::NONE));
+    let post = p
+        .layout
+        .tile_box(marble_rolling::physics::TileIndex::new(2, 1, 2));
+    let r = p.radius.to_f64();
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let (nx, nz) = (c, s);
+    let (tx, tz) = (-s, c);
+    // Touching: within the touching tolerance (`r/16384` or four LSB) of the edge.
+    let lsb = (S::ZERO - S::ZERO.next_down()).to_f64();
+    let gap = 0.9 * (r / 16384.0).max(4.0 * lsb);
+    let cx = post.max.x.to_f64() + (r + gap) * nx;
+    let cz = post.max.z.to_f64() + (r + gap) * nz;
+    let mut w: W4<'_, S> = world(p, &g, &[(S::from_f64(cx), S::from_f64(cz))]);
+    w.set_sleeping(false);
+    // 150 mg towards the edge, 100 mg back along the path.
+    let (gx, gz) = (-150.0 * nx - 100.0 * tx, -150.0 * nz - 100.0 * tz);
+    w.set_gravity_mg([gx.round() as i32, -1000, gz.round() as i32]);
+    // The default spec's pitch: 2 mm + 10 mm.
+    let pitch_mm = 12.0;
+    let a_n = 0.150 * 9806.65 / pitch_mm;
+    let v = 1.07 * (r * a_n).sqrt();
+    w.marbles_mut()[0].vel = Vec3::new(S::from_f64(v * tx), S::ZERO, S::from_f64(v * tz));
+    let events = w.stats.events;
+    w.step();
+    assert!(
+        w.stats.events - events <= 3,
+        "{}: {} events in one step",
+        S::NAME,
+        w.stats.events - events
+    );
+    assert!(
+        min_clearance(&w, 0) > -1e-3 * r,
+        "{}: {} pitch into the post",
+        S::NAME,
+        -min_clearance(&w, 0)
+    );
+}
+for_each_backend!(just_too_fast_for_a_posts_corner, just_too_fast_for_a_corner);

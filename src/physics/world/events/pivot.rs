@@ -126,8 +126,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// same length, the edge left out and the whole pull kept: its distance from
     /// the edge, `|r·n + u⊥·s + h⊥·s²|² = r² + 2r(u⊥·n)s +
     /// (|u⊥|² + 2r(h⊥·n))s² + 2(u⊥·h⊥)s³ + |h⊥|²s⁴` (`⊥`: across the edge; a
-    /// corner takes the whole vectors), never shrinks when the three coefficients
-    /// are not negative, so there is no sink to bound the slice by (the first
+    /// corner takes the whole vectors), never shrinks over the slice's `len` steps
+    /// when the first two coefficients are not negative and the third takes no more
+    /// than the second gives (`a + 2(u⊥·h⊥)·len ≥ 0`, `a` the `s²` coefficient: a
+    /// marble just too fast for the edge, its pull leaning back along its path),
+    /// so there is no sink to bound the slice by (the first
     /// may be rounding's `−r/16384` a step: the marble then comes at most that far
     /// in over the slice's step or less, within the touching tolerance). Otherwise
     /// `None`: a plain slice. (Plain slices, `2^-5` of the step, took 16 of the 18 units of
@@ -150,20 +153,6 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             across_u.set_axis(a, S::ZERO);
             across_h.set_axis(a, S::ZERO);
         }
-        if touched {
-            let (_, n, _) = point?;
-            // Pitch per step: components under 1, squares under 3. What the
-            // touch left of the speed into the edge is rounding (`−2^-24` pitch
-            // a step in most touches that did not leave), so up to `r/16384` a
-            // step counts as none; taken as an approach it sent the marble back
-            // to plain slices and a touch each.
-            if across_u.dot(n) < S::ZERO - r.shr(14)
-                || across_u.length_sq() + (r + r).times(across_h.dot(n)) < S::ZERO
-                || across_u.dot(across_h) < S::ZERO
-            {
-                return None;
-            }
-        }
         let (um, hm) = (max_abs(seg.u), max_abs(seg.h));
         let (cu, ch) = (max_abs(across_u), max_abs(across_h));
         let mut len = f.len;
@@ -176,6 +165,22 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         {
             len = len.half();
             j += 1;
+        }
+        if touched {
+            let (_, n, _) = point?;
+            // Pitch per step: components under 1, squares under 3. What the
+            // touch left of the speed into the edge is rounding (`−2^-24` pitch
+            // a step in most touches that did not leave), so up to `r/16384` a
+            // step counts as none; taken as an approach it sent the marble back
+            // to plain slices and a touch each.
+            let a = across_u.length_sq() + (r + r).times(across_h.dot(n));
+            let b = across_u.dot(across_h);
+            if across_u.dot(n) < S::ZERO - r.shr(14)
+                || a < S::ZERO
+                || (b < S::ZERO && a + (b + b).times(len) < S::ZERO)
+            {
+                return None;
+            }
         }
         Some(len)
     }
