@@ -35,8 +35,8 @@
 //!   relative travel (squares under 48: `events/together.rs`, `pairs.rs`), speeds in
 //!   pitch per 1/32 s (components ≤ 4, squares ≤ 48), the quadratics of the time of
 //!   impact in step units (squares under 16, `dynamics/toi.rs`). Sums saturate where
-//!   a velocity meets a kick (`sat_add`); the board's surface velocity and kick are
-//!   clamped before they are added.
+//!   a velocity meets a kick (`sat_add`); the board's kick is clamped before it
+//!   is added.
 //! * **Checked**: `tests/far_pairs.rs` puts two marbles at the largest separations
 //!   of the largest grid on every combination of axes (across the storeys too), at
 //!   the top speed, on every backend and both steppers, in the test profile (where

@@ -19,8 +19,8 @@ pub struct Effects {
     /// Rolling resistance (a constant deceleration opposing motion, and a static
     /// threshold below which the marble stays put).
     pub friction: bool,
-    /// The board's own rotation: fictitious forces in the board frame and eq. 1's
-    /// `v_b` at contacts.
+    /// The board's own rotation: fictitious forces in the board frame, where eq. 1
+    /// then takes the surface at rest (`world::contact`'s doc).
     pub board_motion: bool,
     /// Holes in the floor: full 3-D motion (falling). Off: the plane only.
     pub holes: bool,
@@ -341,12 +341,6 @@ impl<S: Scalar> BoardMotion<S> {
             (cz.x - cx.z).half(),
             (cx.y - cy.x).half(),
         )
-    }
-
-    /// Velocity of the board surface at tile point `p` (pitch/step): `ω × (p − pivot)`.
-    #[inline]
-    pub(crate) fn surface_velocity(&self, p: Vec3<S>) -> Vec3<S> {
-        self.omega.cross(p - self.pivot)
     }
 
     /// Event stepping: how long (steps, at most `rem`) the fictitious accelerations

@@ -58,7 +58,8 @@ pub(crate) struct Impact<S> {
     pub depth: S,
     /// Marble velocity (pitch/T).
     pub v: Vec3<S>,
-    /// Board velocity at the contact (pitch/T); zero unless the board moves.
+    /// Board velocity at the contact (pitch/T), eq. 1's `v_b`: the world passes
+    /// zero, as it works in the board's frame (`world::contact`'s doc).
     pub(crate) v_board: Vec3<S>,
     /// Acceleration over the step (pitch/T²).
     pub(crate) acc: Vec3<S>,

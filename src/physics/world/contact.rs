@@ -2,6 +2,15 @@
 //! (the fixed step's, and the event stepper's at the end of a slice), the held
 //! faces a resting marble keeps, and one contact's response (eq. 1 through
 //! `respond`).
+//!
+//! Eq. 1 is taken in the board's frame (the tile frame, eq. 4). A marble's
+//! velocity there is the board-relative one: a turning board's motion reaches it
+//! as the fictitious forces of that frame (`BoardMotion::kick`), and the surface
+//! is at rest, `v_b = 0`. The seed's `v_m − v_b` in the world frame is the same
+//! vector at the contact, up to `ω × (r·n)`, which lies along the surface and
+//! leaves the normal part alone. Subtracting the board's surface velocity from the
+//! board-relative velocity as well would count the board's motion twice: a wall
+//! swept into a marble would throw it off at `(1 + 2e)` times the wall's speed.
 
 use super::{
     candidates, candidates_plane, contact, events, lid_contact, resolve, Contact, Feature, Impact,
@@ -204,22 +213,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Resolves one contact (eq. 1 at the instant of impact, see `respond`).
     fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, kick: &Solver<S>) -> Outcome {
         let p = &self.params;
-        let sub = p.k - T_LOG2;
-        let v_board = if p.spec.effects.board_motion {
-            // The board's surface is held to the marble's speed range (64 pitch/s):
-            // faster is no toy, and it keeps the solver's squares in range.
-            self.motion
-                .surface_velocity(m.pos - c.normal.scale(p.radius))
-                .shl(sub)
-                .clamp_abs(p.v_max.shr(T_LOG2))
-        } else {
-            Vec3::ZERO
-        };
         let imp = Impact {
             n: c.normal,
             depth: c.depth,
             v: m.vel.shr(T_LOG2),
-            v_board,
+            // In the board's frame its surface is at rest (the module doc).
+            v_board: Vec3::ZERO,
             acc: kick.acc,
             dt: kick.dt,
         };
@@ -247,9 +246,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // does not (it wraps to −128 in release builds; the property
         // `step_survives_arbitrary_states` drives such states).
         let top = p.v_max.min(S::from_int(127));
-        let vn_new = (res.vn + v_board.dot(c.normal))
-            .shl(T_LOG2)
-            .clamp(-top, top);
+        let vn_new = res.vn.shl(T_LOG2).clamp(-top, top);
         let mut tangential = m.vel - c.normal.scale(vn_now);
         if res.deficit > S::ZERO {
             // Pay the rest of the push-out's energy from the tangential speed (rare:

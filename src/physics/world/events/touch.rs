@@ -4,7 +4,7 @@
 
 use super::{
     cap_speed, impact_speed, max_abs, no_faster, Around, Contact, Event, Feature, Flight, Marble,
-    Scalar, Segment, Solver, Vec3, World, EVERY, IDLE_EVENTS, MAX_EVENTS, T_LOG2,
+    Scalar, Segment, Solver, World, EVERY, IDLE_EVENTS, MAX_EVENTS, T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -119,19 +119,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         };
         let wc = impact_speed(w, beta, d, k);
         let vn = m.vel.dot(n);
-        // On a turning board eq. 1 takes the speed against the surface's own: a
-        // surface moving away at least as fast as the marble comes is no impact
-        // (eq. 1 would send it back into the face, and the next flight would
-        // touch again with no time passing), but the face does not let it
-        // through either: a contact.
-        let parting = |m: &Marble<S>| {
-            let v_c = m.vel - n.scale(vn + wc.min((-vn).max(S::ZERO)));
-            (v_c.shr(T_LOG2) - self.surface_at(m.pos - n.scale(r))).dot(n) >= S::ZERO
-        };
-        if wc <= p.threshold.shl(T_LOG2)
-            || e == S::ZERO
-            || (p.spec.effects.board_motion && parting(m))
-        {
+        if wc <= p.threshold.shl(T_LOG2) || e == S::ZERO {
             // A contact: no normal speed left (no bounce, no jitter, no Zeno).
             m.vel -= n.scale(vn);
             if beta <= S::ZERO {
@@ -162,41 +150,19 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // flight's own.
         let wc = wc.min((-vn).max(S::ZERO));
         let v_c = m.vel - n.scale(vn + wc);
-        // Eq. 1, `v' = v − (1 + e)((v − v_b)·n)n`, with its `(1 + e)` split so that
-        // no intermediate leaves the format's range at top speed.
-        let out = if p.spec.effects.board_motion {
-            // Against the board's surface velocity.
-            let v_b = self.surface_at(m.pos - n.scale(r));
-            let vt = v_c.shr(T_LOG2);
-            let vn_rel = (vt - v_b).dot(n);
-            (vt - n.scale(vn_rel) - n.scale(e.times(vn_rel))).shl(T_LOG2)
-        } else {
-            // v_c's normal part is −w_c: v' = (v_c + w_c·n) + e·w_c·n.
-            m.vel - n.scale(vn) + n.scale(e.times(wc))
-        };
-        // A still board takes no energy in and gives none: a slanted normal's
-        // rounding (or an approximate root's) must not either.
-        m.vel = if p.spec.effects.board_motion {
-            cap_speed(out)
-        } else {
-            no_faster(cap_speed(out), v_c)
-        };
+        // Eq. 1, `v' = v − (1 + e)((v − v_b)·n)n`, in the board's frame, where the
+        // surface is at rest (`v_b = 0`: the velocity is the board-relative one,
+        // see `physics::world::contact`): v_c's normal part is −w_c, so
+        // v' = (v_c + w_c·n) + e·w_c·n. A bounce takes no energy in: a slanted
+        // normal's rounding (or an approximate root's) must not either.
+        let out = m.vel - n.scale(vn) + n.scale(e.times(wc));
+        m.vel = no_faster(cap_speed(out), v_c);
         self.stats.collisions = self.stats.collisions.wrapping_add(1);
         self.impacts.record(wc);
         if SPACE && n.y > S::ONE.half() {
             m.supported = false;
         }
         false
-    }
-
-    /// The board's surface velocity at tile point `q` (pitch/T, 1/32 s, where eq.
-    /// 1's sums with the marble's fit), held to half the speed range.
-    fn surface_at(&self, q: Vec3<S>) -> Vec3<S> {
-        let p = &self.params;
-        self.motion
-            .surface_velocity(q)
-            .shl(p.k - T_LOG2)
-            .clamp_abs(p.v_max.shr(T_LOG2 + 1))
     }
 
     /// A slice's length: `2^-j` of the step, `j ≥ 3` (1/1024 s at 128 steps/s), short
