@@ -81,19 +81,28 @@ fn pull_product(mg: i32, scale: u64) -> (u32, u64) {
     (low_product as u32, high_product + (low_product >> 32))
 }
 
-/// `from_scaled`'s rounding of a kick's product `(low, high)` (see
-/// [`pull_product`]) by `2^-s`, `s` in `32..64`, on 64-bit words: the bias's low
-/// word carries into the high one, which stays below 2⁶³, so the quotient fits
-/// an i64 and its negation too.
+/// `from_scaled`'s rounding of a kick's product `P = (low, high)` (see
+/// [`pull_product`]) by `2^-s`, `s` in `32..64`, on 64-bit words and without a
+/// 64-bit bias: each rounding is one shift of the high word by `s − 32` (below
+/// 32, which the mask tells the compiler: a 64-bit shift by a variable amount
+/// is then a few word shifts, where one that may pass 32 takes twice as many).
+/// To nearest, `⌊(P + 2^(s−1))/2^s⌋ = ⌊(⌊P/2^(s−1)⌋ + 1)/2⌋`; away from zero,
+/// `⌈P/2^s⌉ = ⌊(P − 1)/2^s⌋ + 1` for `P ≥ 1` (the borrow of `P − 1` reaches
+/// the high word only when the low one is zero). `high` is below `2^62 + 2^32`,
+/// so `⌊P/2^31⌋` fits a word pair and the quotient an i64, its negation too.
 #[inline(always)]
 fn pull_quotient((low, high): (u32, u64), negative: bool, s: u32, away: bool) -> i64 {
-    let bias = if away {
-        (1u64 << s) - 1
+    let t = (s - 32) & 31;
+    let q = if away {
+        if high == 0 && low == 0 {
+            0
+        } else {
+            ((high - u64::from(low == 0)) >> t) + 1
+        }
     } else {
-        1u64 << (s - 1)
+        ((((high << 1) | u64::from(low >> 31)) >> t) + 1) >> 1
     };
-    let carry = (low as u64 + (bias as u32) as u64) >> 32;
-    let q = ((high + (bias >> 32) + carry) >> (s - 32)) as i64;
+    let q = q as i64;
     if negative {
         -q
     } else {
