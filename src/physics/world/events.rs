@@ -198,7 +198,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 (left / to_fly).max(1)
             };
             self.flights_left = share;
-            let mut f = Flight::start();
+            let mut f = Flight::begin();
             self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
             left = left.saturating_sub(share - self.flights_left);
             to_fly = to_fly.saturating_sub(1);
