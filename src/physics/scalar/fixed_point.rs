@@ -89,9 +89,17 @@ fn pull_product(mg: i32, scale: u64) -> (u32, u64) {
 /// To nearest, `⌊(P + 2^(s−1))/2^s⌋ = ⌊(⌊P/2^(s−1)⌋ + 1)/2⌋`; away from zero,
 /// `⌈P/2^s⌉ = ⌊(P − 1)/2^s⌋ + 1` for `P ≥ 1` (the borrow of `P − 1` reaches
 /// the high word only when the low one is zero). `high` is below `2^62 + 2^32`,
-/// so `⌊P/2^31⌋` fits a word pair and the quotient an i64, its negation too.
+/// so `⌊P/2^31⌋` fits a word pair. The result is the bits of the format
+/// `[lo, hi]`: the quotient saturated before its sign is applied (at `hi`, or
+/// at `−lo` below zero), which for a 32-bit format is a compare of words.
 #[inline(always)]
-fn pull_quotient((low, high): (u32, u64), negative: bool, s: u32, away: bool) -> i64 {
+fn pull_quotient(
+    (low, high): (u32, u64),
+    negative: bool,
+    s: u32,
+    away: bool,
+    (lo, hi): (i64, i64),
+) -> i64 {
     let t = (s - 32) & 31;
     let q = if away {
         if high == 0 && low == 0 {
@@ -102,11 +110,10 @@ fn pull_quotient((low, high): (u32, u64), negative: bool, s: u32, away: bool) ->
     } else {
         ((((high << 1) | u64::from(low >> 31)) >> t) + 1) >> 1
     };
-    let q = q as i64;
     if negative {
-        -q
+        (q.min(lo.unsigned_abs()) as i64).wrapping_neg()
     } else {
-        q
+        q.min(hi as u64) as i64
     }
 }
 
@@ -269,13 +276,10 @@ macro_rules! fixed_scalar {
                     );
                 }
                 let product = pull_product(mg, scale as u64);
-                let (lo, hi) = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
-                let dv = pull_quotient(product, mg < 0, dv_shift - frac, false);
-                let dp = pull_quotient(product, mg < 0, dp_shift - frac, true);
-                (
-                    <$t>::from_bits(dv.clamp(lo, hi) as _),
-                    <$t>::from_bits(dp.clamp(lo, hi) as _),
-                )
+                let range = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
+                let dv = pull_quotient(product, mg < 0, dv_shift - frac, false, range);
+                let dp = pull_quotient(product, mg < 0, dp_shift - frac, true, range);
+                (<$t>::from_bits(dv as _), <$t>::from_bits(dp as _))
             }
             fn rsqrt(self) -> Self {
                 let bits = self.to_bits();
