@@ -235,12 +235,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // array of flags, and no `==` on the arrays (a `memcmp` call on the
         // Cortex-M).
         let (old, fresh) = (self.gravity_mg, !self.kicks_ready);
-        let moved = [
-            fresh || g[0] != old[0],
-            fresh || g[1] != old[1],
-            fresh || g[2] != old[2],
-        ];
-        if !(moved[0] || moved[1] || moved[2]) {
+        if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
             return;
         }
         self.kicks_ready = true;
@@ -249,10 +244,14 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         for m in self.marbles.iter_mut() {
             m.asleep = false;
         }
-        for axis in 0..3 {
-            if moved[axis] {
-                self.pull_axis(axis, g[axis]);
-            }
+        if fresh || g[0] != old[0] {
+            self.pull_axis(0, g[0]);
+        }
+        if fresh || g[1] != old[1] {
+            self.pull_axis(1, g[1]);
+        }
+        if fresh || g[2] != old[2] {
+            self.pull_axis(2, g[2]);
         }
     }
 
