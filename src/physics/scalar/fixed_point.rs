@@ -117,6 +117,19 @@ fn pull_quotient(
     }
 }
 
+/// [`Scalar::from_pull`] by the 128-bit product (shifts outside `32..64` of the
+/// format's fraction, a negative scale): out of line and cold, so that the word
+/// path every tilt sample takes saves and restores only the registers it uses.
+#[cold]
+#[inline(never)]
+fn pull_wide<T: Scalar>(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (T, T) {
+    let n = mg as i128 * scale as i128;
+    (
+        T::from_scaled(n, dv_shift, false),
+        T::from_scaled(n, dp_shift, true),
+    )
+}
+
 macro_rules! fixed_scalar {
     ($t:ty, $wide:ty, $name:literal) => {
         impl Scalar for $t {
@@ -269,11 +282,7 @@ macro_rules! fixed_scalar {
                 let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
                     && (32..64).contains(&dp_shift.wrapping_sub(frac));
                 if scale < 0 || !words {
-                    let n = mg as i128 * scale as i128;
-                    return (
-                        Self::from_scaled(n, dv_shift, false),
-                        Self::from_scaled(n, dp_shift, true),
-                    );
+                    return pull_wide(mg, scale, dv_shift, dp_shift);
                 }
                 let product = pull_product(mg, scale as u64);
                 let range = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
