@@ -226,12 +226,15 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // max then min, not `clamp`: its `min <= max` assertion would link core::fmt.
         let clamp = |v: i32| v.max(-lim).min(lim);
         let g = [clamp(g[0]), clamp(g[1]), clamp(g[2])];
-        // Per axis: each axis of the kicks depends on that axis of the pull alone
-        // (the displacement clamp is per axis too), and a tilt usually moves one
-        // axis at a time — the others keep their kicks, bit for bit. Plain
-        // compares, no array of flags: this runs every frame the tilt moves.
+        // Axis by axis: each axis of the kicks depends on that axis of the pull
+        // alone (the displacement clamp is per axis too), and a tilt sample
+        // usually moves one plane axis by a milli-g or two — the others keep
+        // their kicks, bit for bit. An unchanged axis costs a compare; the work
+        // of a moved one is out of line (`pull_axis`), so that a frame whose tilt
+        // moved one axis does not pay for the setup of three. Plain compares, no
+        // array of flags, and no `==` on the arrays (a `memcmp` call on the
+        // Cortex-M).
         let (old, fresh) = (self.gravity_mg, !self.kicks_ready);
-        // Axis by axis: `==` on the arrays is a `memcmp` call on the Cortex-M.
         if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
             return;
         }
@@ -241,6 +244,21 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         for m in self.marbles.iter_mut() {
             m.asleep = false;
         }
+        if fresh || g[0] != old[0] {
+            self.pull_axis(0, g[0]);
+        }
+        if fresh || g[1] != old[1] {
+            self.pull_axis(1, g[1]);
+        }
+        if fresh || g[2] != old[2] {
+            self.pull_axis(2, g[2]);
+        }
+    }
+
+    /// The kicks of axis `axis` of a pull of `mg` milli-g (clamped), and for the
+    /// normal axis rolling resistance's deceleration.
+    #[inline(never)]
+    fn pull_axis(&mut self, axis: usize, mg: i32) {
         let k = self.params.k;
         // Fixed steps bound the kick's displacement (no tunnelling); events need no
         // bound (|½·a·dt²| < 1 pitch by `mg_max`).
@@ -250,28 +268,22 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             self.params.radius.shr(3)
         };
         let [full, roll, resist] = self.pulls;
-        let falls = self.params.spec.effects.holes;
-        for axis in 0..3 {
-            if !fresh && g[axis] == old[axis] {
-                continue;
-            }
-            // Rolling scales the tangential axes only (x', z'): the normal is full.
-            let rolls = axis != 1 && roll != full;
-            let rolling = Kick::axis_of(g[axis], if rolls { roll } else { full }, reach, k);
-            self.kick_roll.set_axis(axis, rolling);
-            // What a scene does not use costs nothing: a flat world never flies
-            // free, and the free kick's plane axes would be two more exact
-            // products per tilt sample (a tenth of a maze frame, `cargo accuracy`).
-            if !rolls {
-                self.kick_free.set_axis(axis, rolling);
-            } else if falls {
-                self.kick_free
-                    .set_axis(axis, Kick::axis_of(g[axis], full, reach, k));
-            }
+        // Rolling scales the tangential axes only (x', z'): the normal is full.
+        let rolls = axis != 1 && roll != full;
+        let rolling = Kick::axis_of(mg, if rolls { roll } else { full }, reach, k);
+        self.kick_roll.set_axis(axis, rolling);
+        // What a scene does not use costs nothing: a flat world never flies
+        // free, and the free kick's plane axes would be two more exact
+        // products per tilt sample (a tenth of a maze frame, `cargo accuracy`).
+        if !rolls {
+            self.kick_free.set_axis(axis, rolling);
+        } else if self.params.spec.effects.holes {
+            self.kick_free
+                .set_axis(axis, Kick::axis_of(mg, full, reach, k));
         }
         // Rolling resistance decelerates by c_rr·g_n (·5/7 when rolling), g_n = −g_y.
-        if (fresh || g[1] != old[1]) && self.params.spec.effects.friction {
-            self.drag = Drag::new(resist.kick::<S>((-g[1]).max(0), k).0, k);
+        if axis == 1 && self.params.spec.effects.friction {
+            self.drag = Drag::new(resist.kick::<S>((-mg).max(0), k).0, k);
         }
     }
 

@@ -67,6 +67,10 @@ pub struct Drag<S> {
     limit2: S,
     /// `½·decel·dt`: the displacement the deceleration takes in a step.
     half_step: S,
+    /// Event stepping's static threshold's square, `(decel/32)²` (its speeds
+    /// are scaled by 1/32): one per pull, not two rounding shifts and a product
+    /// every flight.
+    flight_limit2: S,
 }
 
 impl<S: Scalar> Drag<S> {
@@ -75,10 +79,12 @@ impl<S: Scalar> Drag<S> {
     /// The drag of a deceleration `decel` per step at `dt = 2^-k`.
     pub fn new(decel: S, k: u32) -> Self {
         let limit = decel.shr(Self::SCALE);
+        let flight_limit = decel.shr(FLIGHT_SCALE);
         Drag {
             decel,
             limit2: limit.times(limit),
             half_step: decel.shr(k + 1),
+            flight_limit2: flight_limit.times(flight_limit),
         }
     }
 
@@ -113,6 +119,10 @@ impl<S: Scalar> Drag<S> {
         kick.dp.z -= self.half_step.times(uz);
     }
 }
+
+/// Event stepping scales rolling resistance's speeds by `2^-5` before squaring
+/// them (128 pitch/s fits the narrowest format).
+const FLIGHT_SCALE: u32 = 5;
 
 /// What rolling resistance does to one event flight ([`Drag::flight`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -179,12 +189,11 @@ impl<S: Scalar> Drag<S> {
     /// [`Drag::flight`] in the plane x'–z'.
     #[inline]
     fn plane(&self, v: Vec3<S>, kick: &mut Kick<S>, rem: S) -> DragFlight<S> {
-        const SC: u32 = 5;
+        const SC: u32 = FLIGHT_SCALE;
         let (ax, az) = (kick.dv.x, kick.dv.z);
         let (qx, qz) = (ax.shr(SC), az.shr(SC));
         let pull2 = qx.times(qx) + qz.times(qz);
-        let lim = self.decel.shr(SC);
-        let holds = pull2 <= lim.times(lim);
+        let holds = pull2 <= self.flight_limit2;
         let mut out = DragFlight {
             len: rem,
             stop: None,
@@ -262,11 +271,10 @@ impl<S: Scalar> Drag<S> {
     /// that stays put (the caller drops the plane's kick).
     #[inline]
     fn along(&self, va: S, dv: &mut S, dp: &mut S, rem: S) -> Option<(S, Option<S>, bool)> {
-        const SC: u32 = 5;
+        const SC: u32 = FLIGHT_SCALE;
         let a = *dv;
         let q = a.shr(SC);
-        let lim = self.decel.shr(SC);
-        let holds = q.times(q) <= lim.times(lim);
+        let holds = q.times(q) <= self.flight_limit2;
         let d = if va == S::ZERO {
             if holds {
                 return None;

@@ -81,24 +81,53 @@ fn pull_product(mg: i32, scale: u64) -> (u32, u64) {
     (low_product as u32, high_product + (low_product >> 32))
 }
 
-/// `from_scaled`'s rounding of a kick's product `(low, high)` (see
-/// [`pull_product`]) by `2^-s`, `s` in `32..64`, on 64-bit words: the bias's low
-/// word carries into the high one, which stays below 2⁶³, so the quotient fits
-/// an i64 and its negation too.
+/// `from_scaled`'s rounding of a kick's product `P = (low, high)` (see
+/// [`pull_product`]) by `2^-s`, `s` in `32..64`, on 64-bit words and without a
+/// 64-bit bias: each rounding is one shift of the high word by `s − 32` (below
+/// 32, which the mask tells the compiler: a 64-bit shift by a variable amount
+/// is then a few word shifts, where one that may pass 32 takes twice as many).
+/// To nearest, `⌊(P + 2^(s−1))/2^s⌋ = ⌊(⌊P/2^(s−1)⌋ + 1)/2⌋`; away from zero,
+/// `⌈P/2^s⌉ = ⌊(P − 1)/2^s⌋ + 1` for `P ≥ 1` (the borrow of `P − 1` reaches
+/// the high word only when the low one is zero). `high` is below `2^62 + 2^32`,
+/// so `⌊P/2^31⌋` fits a word pair. The result is the bits of the format
+/// `[lo, hi]`: the quotient saturated before its sign is applied (at `hi`, or
+/// at `−lo` below zero), which for a 32-bit format is a compare of words.
 #[inline(always)]
-fn pull_quotient((low, high): (u32, u64), negative: bool, s: u32, away: bool) -> i64 {
-    let bias = if away {
-        (1u64 << s) - 1
+fn pull_quotient(
+    (low, high): (u32, u64),
+    negative: bool,
+    s: u32,
+    away: bool,
+    (lo, hi): (i64, i64),
+) -> i64 {
+    let t = (s - 32) & 31;
+    let q = if away {
+        if high == 0 && low == 0 {
+            0
+        } else {
+            ((high - u64::from(low == 0)) >> t) + 1
+        }
     } else {
-        1u64 << (s - 1)
+        ((((high << 1) | u64::from(low >> 31)) >> t) + 1) >> 1
     };
-    let carry = (low as u64 + (bias as u32) as u64) >> 32;
-    let q = ((high + (bias >> 32) + carry) >> (s - 32)) as i64;
     if negative {
-        -q
+        (q.min(lo.unsigned_abs()) as i64).wrapping_neg()
     } else {
-        q
+        q.min(hi as u64) as i64
     }
+}
+
+/// [`Scalar::from_pull`] by the 128-bit product (shifts outside `32..64` of the
+/// format's fraction, a negative scale): out of line and cold, so that the word
+/// path every tilt sample takes saves and restores only the registers it uses.
+#[cold]
+#[inline(never)]
+fn pull_wide<T: Scalar>(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (T, T) {
+    let n = mg as i128 * scale as i128;
+    (
+        T::from_scaled(n, dv_shift, false),
+        T::from_scaled(n, dp_shift, true),
+    )
 }
 
 macro_rules! fixed_scalar {
@@ -253,20 +282,13 @@ macro_rules! fixed_scalar {
                 let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
                     && (32..64).contains(&dp_shift.wrapping_sub(frac));
                 if scale < 0 || !words {
-                    let n = mg as i128 * scale as i128;
-                    return (
-                        Self::from_scaled(n, dv_shift, false),
-                        Self::from_scaled(n, dp_shift, true),
-                    );
+                    return pull_wide(mg, scale, dv_shift, dp_shift);
                 }
                 let product = pull_product(mg, scale as u64);
-                let (lo, hi) = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
-                let dv = pull_quotient(product, mg < 0, dv_shift - frac, false);
-                let dp = pull_quotient(product, mg < 0, dp_shift - frac, true);
-                (
-                    <$t>::from_bits(dv.clamp(lo, hi) as _),
-                    <$t>::from_bits(dp.clamp(lo, hi) as _),
-                )
+                let range = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
+                let dv = pull_quotient(product, mg < 0, dv_shift - frac, false, range);
+                let dp = pull_quotient(product, mg < 0, dp_shift - frac, true, range);
+                (<$t>::from_bits(dv as _), <$t>::from_bits(dp as _))
             }
             fn rsqrt(self) -> Self {
                 let bits = self.to_bits();
