@@ -130,9 +130,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// when the first two coefficients are not negative and the third takes no more
     /// than the second gives (`a + 2(u⊥·h⊥)·len ≥ 0`, `a` the `s²` coefficient: a
     /// marble just too fast for the edge, its pull leaning back along its path),
-    /// so there is no sink to bound the slice by (the first
-    /// may be rounding's `−r/16384` a step: the marble then comes at most that far
-    /// in over the slice's step or less, within the touching tolerance). Otherwise
+    /// so there is no sink to bound the slice by. Otherwise
     /// `None`: a plain slice. (Plain slices, `2^-5` of the step, took 16 of the 18 units of
     /// drop-onto-marble's worst frame: its marble rolling off a hole's rim nearly
     /// fast enough to leave it, each slice's pull brought it back to the edge for
@@ -168,14 +166,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         if touched {
             let (_, n, _) = point?;
-            // Pitch per step: components under 1, squares under 3. What the
-            // touch left of the speed into the edge is rounding (`−2^-24` pitch
-            // a step in most touches that did not leave), so up to `r/16384` a
-            // step counts as none; taken as an approach it sent the marble back
-            // to plain slices and a touch each.
+            // Pitch per step: components under 1, squares under 3.
             let a = across_u.length_sq() + (r + r).times(across_h.dot(n));
             let b = across_u.dot(across_h);
-            if across_u.dot(n) < S::ZERO - r.shr(14)
+            if across_u.dot(n) < S::ZERO
                 || a < S::ZERO
                 || (b < S::ZERO && a + (b + b).times(len) < S::ZERO)
             {
