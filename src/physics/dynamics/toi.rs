@@ -259,9 +259,25 @@ pub(crate) fn toi_box<S: Scalar>(seg: &Segment<S>, r: S, b: &Aabb<S>, len: S, to
         let gap = dist - r;
         // At the start the velocity is the flight's own (no `2h·0` to add: three
         // products fewer for every tile a search asks).
-        let u = if s == S::ZERO { seg.u } else { seg.u_at(s) };
-        let w = -u.dot(n);
-        let beta = -seg.h.dot(n);
+        let (w, beta) = if let Feature::Face(_) = feature {
+            // A face's normal is a unit axis: the dot products are that axis's
+            // velocity and pull, negated towards the face (bit for bit: `x·±1`
+            // and `x·0` are exact), one product where the vectors take nine.
+            let (u, h) = (seg.u.axis(axis), seg.h.axis(axis));
+            let u = if s == S::ZERO {
+                u
+            } else {
+                u + (h + h).times(s)
+            };
+            if n.axis(axis) > S::ZERO {
+                (-u, -h)
+            } else {
+                (u, h)
+            }
+        } else {
+            let u = if s == S::ZERO { seg.u } else { seg.u_at(s) };
+            (-u.dot(n), -seg.h.dot(n))
+        };
         let contact = || Toi::Hit {
             at: s,
             contact: Contact {
