@@ -135,6 +135,11 @@ fn up<S: Scalar>(x: S, y: S) -> S {
 /// ½: the squares then keep every bit, even for a slow marble in the 16-bit format.
 #[inline]
 pub(crate) fn first_root<S: Scalar>(gap: S, w: S, beta: S) -> Option<S> {
+    if w <= S::ZERO && beta <= S::ZERO {
+        // Not closing and not pulled in: never, without the square root that
+        // the last branch below came to after it.
+        return None;
+    }
     let gap = gap.max(S::ZERO);
     if beta == S::ZERO {
         return if w > S::ZERO { Some(gap.div(w)) } else { None };
