@@ -164,6 +164,11 @@ pub(crate) fn first_root<S: Scalar>(gap: S, w: S, beta: S) -> Option<S> {
 /// at least ¼; at most 2^30): exact scaling for the quadratics.
 #[inline]
 pub(crate) fn normal_shift<S: Scalar>(big: S) -> u32 {
+    if big >= S::ONE.shr(2) {
+        // Already at least ¼: no count of leading zeros (a library call on
+        // the M0) to find it.
+        return 0;
+    }
     let e = big.ilog2();
     if e >= -2 {
         0
