@@ -130,6 +130,11 @@ enum Task {
         /// (one call a physics step).
         #[arg(long, value_name = "FUNCTION:FROM-TO")]
         window: Option<String>,
+        /// With --v1: trace its `--demo --profile` run (an image with the
+        /// `profile` feature), which plays the difficulty-9 mazes and the
+        /// stress scenes after the levels.
+        #[arg(long, requires = "v1")]
+        scenes: bool,
     },
     /// Build the game for the browser (wasm32-unknown-unknown) and serve the
     /// page on 127.0.0.1 (`cargo web`).
@@ -209,6 +214,7 @@ impl Task {
                 v1,
                 bench,
                 window,
+                scenes,
             } => {
                 let subject = match bench {
                     Some(scene) => profile::Subject::Bench(
@@ -218,6 +224,7 @@ impl Task {
                             .position(|&s| s == scene)
                             .unwrap_or(0),
                     ),
+                    None if v1 && scenes => profile::Subject::Scenes(&boards::MICROBIT_V1),
                     None if v1 => profile::Subject::Demo(&boards::MICROBIT_V1),
                     None => profile::Subject::Demo(&boards::QEMU),
                 };
@@ -329,12 +336,22 @@ mod tests {
                 top: 20,
                 v1: false,
                 bench: None,
-                window: None
+                window: None,
+                scenes: false
             }
         ));
         assert!(matches!(
+            parse(&["qemu-profile", "--v1", "--scenes"]),
+            Task::QemuProfile {
+                v1: true,
+                scenes: true,
+                ..
+            }
+        ));
+        assert!(Cli::try_parse_from(["xtask", "qemu-profile", "--scenes"]).is_err());
+        assert!(matches!(
             parse(&["qemu-profile", "--bench", "maze"]),
-            Task::QemuProfile { top: 40, v1: false, bench: Some(scene), window: None } if scene == "maze"
+            Task::QemuProfile { top: 40, v1: false, bench: Some(scene), window: None, scenes: false } if scene == "maze"
         ));
         assert!(Cli::try_parse_from(["xtask", "qemu-profile", "--bench", "mazes"]).is_err());
         assert!(matches!(

@@ -1,6 +1,7 @@
-//! `cargo xtask qemu-profile [TOP] [--v1 | --bench SCENE]`: where the QEMU
+//! `cargo xtask qemu-profile [TOP] [--v1 [--scenes] | --bench SCENE]`: where the QEMU
 //! firmware's instructions go, by function (the mps2-an386 board's, or with
-//! `--v1` the micro:bit v1's in QEMU microbit, or with `--bench` the study's
+//! `--v1` the micro:bit v1's in QEMU microbit, with `--scenes` its `--demo
+//! --profile` run and so the stress scenes too, or with `--bench` the study's
 //! Cortex-M4F benchmark running one scene with the firmware's backend and
 //! event stepping: where `cargo accuracy`'s M4 instructions per step go; any
 //! board of [`crate::boards`] with a QEMU machine can be profiled, its
@@ -39,6 +40,10 @@ pub const SCENES: [&str; 4] = ["incline", "bounce", "maze", "corner"];
 pub enum Subject {
     /// A board's headless demo in its QEMU machine.
     Demo(&'static Board),
+    /// A board's `--demo --profile` run, built with its profile feature (the
+    /// micro:bit v1's: the levels, then the difficulty-9 mazes and the
+    /// stress scenes).
+    Scenes(&'static Board),
     /// A board's benchmark, one scene (index in [`SCENES`]), backend i8f24,
     /// event stepping (the study's scene mask; QEMU mps2-an386's is the M4's).
     Bench(&'static Board, usize),
@@ -48,7 +53,7 @@ impl Subject {
     /// The board it runs on and the firmware.
     fn firmware(self) -> Result<(&'static Board, &'static Firmware), Failure> {
         match self {
-            Subject::Demo(board) => Ok((board, &board.game)),
+            Subject::Demo(board) | Subject::Scenes(board) => Ok((board, &board.game)),
             Subject::Bench(board, _) => match &board.bench {
                 Some(bench) => Ok((board, bench)),
                 None => Err(Failure::new(format!("the {} has no benchmark", board.name))),
@@ -66,7 +71,10 @@ pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
     let (board, firmware) = subject.firmware()?;
     let machine = board.machine()?;
     let qemu = setup::qemu()?;
-    let elf = firmware.build()?;
+    let elf = match subject {
+        Subject::Scenes(_) => firmware.build_profiled()?,
+        _ => firmware.build()?,
+    };
     let dir = workspace::env_path("PROFILE_DIR", workspace::target_dir()?.join("qemu-profile"));
     std::fs::create_dir_all(&dir)
         .map_err(|e| Failure::new(format!("cannot create {}: {e}", dir.display())))?;
@@ -81,7 +89,8 @@ pub fn run(top: usize, subject: Subject, window: Option<&str>) -> Outcome {
             format!("--scenes={}", 1u32 << scene),
             "--variants=0".to_string(),
         ],
-        _ => vec!["--demo".to_string()],
+        Subject::Scenes(_) => vec!["--demo".to_string(), "--profile".to_string()],
+        Subject::Demo(_) => vec!["--demo".to_string()],
     };
     let mut cmd = runner::headless_command(machine, &qemu, &Load::Elf(&elf), &demo);
     cmd.args(["-d", "in_asm,exec,nochain", "-D"])

@@ -27,10 +27,6 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         let (p, tol) = (self.params, self.tol());
         let r2 = p.radius + p.radius;
-        let point = Aabb {
-            min: Vec3::ZERO,
-            max: Vec3::ZERO,
-        };
         let mut now = S::ZERO;
         let mut rounds = 0u32;
         let mut no_sleep = [false; M];
@@ -97,7 +93,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             let Some((mut when, mut who)) = first else {
                 break;
             };
-            // Pairs, in their relative motion: each a sphere of radius 2r.
+            // Pairs, each a sphere of radius 2r in its relative motion.
             let mut pair: Option<(usize, usize, Option<Contact<S>>)> = None;
             for a in 0..count {
                 for b in a + 1..count {
@@ -116,23 +112,6 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     if t0 >= when || when <= apart[a][b] {
                         continue;
                     }
-                    let at = |n: usize| {
-                        let g = &fl[n].seg;
-                        let s = t0 - fl[n].t;
-                        if s == S::ZERO {
-                            // Where its flight starts: no closed form to evaluate.
-                            return (g.p, g.u, g.h);
-                        }
-                        (g.pos_at(s), g.u_at(s), g.h)
-                    };
-                    let ((pa, ua, ha), (pb, ub, hb)) = (at(a), at(b));
-                    let rel = Segment {
-                        p: pb - pa,
-                        v: Vec3::ZERO,
-                        u: ub - ua,
-                        dv: Vec3::ZERO,
-                        h: hb - ha,
-                    };
                     // Over both plans, not only to the round's first event: what
                     // is found past it holds for the rounds after, until either
                     // marble is planned anew. The advance is the same up to
@@ -143,27 +122,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     } else {
                         when - t0
                     };
-                    // Out of reach over the horizon: no touch, and no square of a
-                    // far separation (I8F24's |d|² leaves its range past 11.3
-                    // pitch; wrapped, a pair 16 pitches apart read as touching).
-                    // Within reach every axis is under 2r + tol plus a step's
-                    // relative travel (2 pitch at 127 pitch/s): squares under 48.
-                    let path = swept(rel.p, rel.pos_at(horizon), rel.h, horizon);
-                    let near = r2 + tol;
-                    if path.min.x > near
-                        || path.max.x < -near
-                        || path.min.y > near
-                        || path.max.y < -near
-                        || path.min.z > near
-                        || path.max.z < -near
-                    {
+                    let Some(toi) = pair_toi(&fl[a], &fl[b], t0, horizon, r2, tol) else {
                         if keep {
                             apart[a][b] = t0 + horizon;
                         }
                         continue;
-                    }
+                    };
                     self.spend(0, PAIR_TEST);
-                    let toi = toi_box(&rel, r2, &point, horizon, tol);
                     if keep {
                         apart[a][b] = t0
                             + match toi {
@@ -428,5 +393,175 @@ fn forget<S: Scalar, const M: usize>(apart: &mut [[S; M]; M], n: usize) {
         } else if a == n {
             *row = [S::ZERO; M];
         }
+    }
+}
+
+/// The first contact of marbles flying `fa` and `fb`, from `t0` (steps, at or
+/// after both flights' starts) over `horizon`: in their relative motion, a
+/// sphere of radius `r2` about a point (`toi_box`), or `None` when the pair is
+/// out of reach over that horizon. Out of line and with the kind of world out
+/// of its type: the timeline has four copies (the two kinds of world, two
+/// marbles or more), this code one (the v1's flash).
+#[inline(never)]
+fn pair_toi<S: Scalar>(
+    fa: &Flight<S>,
+    fb: &Flight<S>,
+    t0: S,
+    horizon: S,
+    r2: S,
+    tol: S,
+) -> Option<Toi<S>> {
+    let near = r2 + tol;
+    // Nearly half of four-shaken's pair tests end here, three in five of those
+    // the swept test finds out of reach, which took them 31 products each.
+    if beyond(&fa.seg, &fb.seg, near + r2.shr(4)) {
+        return None;
+    }
+    let rel = relative(fa, fb, t0);
+    if !within(&rel, horizon, near) {
+        return None;
+    }
+    let point = Aabb {
+        min: Vec3::ZERO,
+        max: Vec3::ZERO,
+    };
+    Some(toi_box(&rel, r2, &point, horizon, tol))
+}
+
+/// Whether two flights are further apart on some axis than `far` and all that
+/// both can travel in a whole step: `|u| + |h|` each (each segment starts within
+/// the step, and a pair's horizon ends no later than the step), `|h|` more
+/// for the swept box's bulge. With `far` above [`within`]'s reach by a margin
+/// far above the rounding of its positions (`r/8`, against a few LSB), such
+/// a pair is out of its reach too: the same answer, without a product.
+#[inline]
+fn beyond<S: Scalar>(ga: &Segment<S>, gb: &Segment<S>, far: S) -> bool {
+    let apart = |d: S, ua: S, ha: S, ub: S, hb: S| {
+        let h = ha.abs() + hb.abs();
+        d.abs() > far + ua.abs() + ub.abs() + h + h
+    };
+    let d = gb.p - ga.p;
+    apart(d.x, ga.u.x, ga.h.x, gb.u.x, gb.h.x)
+        || apart(d.z, ga.u.z, ga.h.z, gb.u.z, gb.h.z)
+        || apart(d.y, ga.u.y, ga.h.y, gb.u.y, gb.h.y)
+}
+
+/// The pair's relative motion from `t0`: `fb`'s less `fa`'s, both where their
+/// flights are then.
+#[inline]
+fn relative<S: Scalar>(fa: &Flight<S>, fb: &Flight<S>, t0: S) -> Segment<S> {
+    let at = |f: &Flight<S>| {
+        let g = &f.seg;
+        let s = t0 - f.t;
+        if s == S::ZERO {
+            // Where its flight starts: no closed form to evaluate.
+            return (g.p, g.u, g.h);
+        }
+        (g.pos_at(s), g.u_at(s), g.h)
+    };
+    let ((pa, ua, ha), (pb, ub, hb)) = (at(fa), at(fb));
+    Segment {
+        p: pb - pa,
+        v: Vec3::ZERO,
+        u: ub - ua,
+        dv: Vec3::ZERO,
+        h: hb - ha,
+    }
+}
+
+/// Whether the relative motion `rel` comes within `near` on every axis over
+/// `horizon`. Out of reach: no touch, and no square of a far separation
+/// (I8F24's |d|² leaves its range past 11.3 pitch; wrapped, a pair 16 pitches
+/// apart read as touching). Within reach every axis is under 2r + tol plus a
+/// step's relative travel (2 pitch at 127 pitch/s): squares under 48.
+#[inline]
+fn within<S: Scalar>(rel: &Segment<S>, horizon: S, near: S) -> bool {
+    // The swept box holds the start: within `near` there on every axis, the
+    // box is too (the same answer without the end point and the box, eleven
+    // products: pairs that touch or nearly do, four-shaken's worst frames).
+    if max_abs(rel.p) <= near {
+        return true;
+    }
+    let path = swept(rel.p, rel.pos_at(horizon), rel.h, horizon);
+    path.min.x <= near
+        && path.max.x >= -near
+        && path.min.y <= near
+        && path.max.y >= -near
+        && path.min.z <= near
+        && path.max.z >= -near
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fixed::types::I8F24;
+
+    type S = I8F24;
+
+    /// [`beyond`] never says out of reach where the swept box reaches, and
+    /// [`within`] is the swept box's answer, in the firmware's format: random
+    /// pairs of flights (positions a few pitches apart, velocities and pulls up
+    /// to the step's bounds, start times and horizons across the step); both
+    /// shortcuts are taken for many of them.
+    #[test]
+    fn beyond_reach_is_out_of_the_swept_reach() {
+        let mut state = 0x853c_49e6_748f_ea9bu64;
+        let mut next = |scale: f64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            S::from_f64(((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * scale)
+        };
+        let (r2, tol) = (S::from_f64(0.5), S::from_f64(0.5 / 16384.0));
+        let near = r2 + tol;
+        let (mut beyond_count, mut started_near) = (0, 0);
+        for _ in 0..200_000 {
+            let mut flight = || {
+                let mut f = Flight::START;
+                f.t = next(1.0).abs();
+                f.seg = Segment {
+                    p: Vec3::new(next(3.0), next(1.0), next(3.0)),
+                    v: Vec3::ZERO,
+                    u: Vec3::new(next(1.0), next(1.0), next(1.0)),
+                    dv: Vec3::ZERO,
+                    h: Vec3::new(next(0.5), next(0.5), next(0.5)),
+                };
+                f
+            };
+            let (fa, fb) = (flight(), flight());
+            let (ta, tb) = (fa.t, fb.t);
+            let t0 = Scalar::max(ta, tb);
+            let horizon = (S::ONE - t0).times(next(1.0).abs());
+            let rel = relative(&fa, &fb, t0);
+            // The swept box itself, without `within`'s shortcut for a start
+            // already within reach.
+            let path = swept(rel.p, rel.pos_at(horizon), rel.h, horizon);
+            let reach = path.min.x <= near
+                && path.max.x >= -near
+                && path.min.y <= near
+                && path.max.y >= -near
+                && path.min.z <= near
+                && path.max.z >= -near;
+            assert_eq!(
+                within(&rel, horizon, near),
+                reach,
+                "{rel:?} over {horizon:?}"
+            );
+            if max_abs(rel.p) <= near {
+                started_near += 1;
+            }
+            if beyond(&fa.seg, &fb.seg, near + r2.shr(4)) {
+                beyond_count += 1;
+                assert!(!reach, "{fa:?} {fb:?} from {t0:?} over {horizon:?}");
+            }
+        }
+        assert!(
+            beyond_count > 20_000,
+            "only {beyond_count} pairs beyond reach"
+        );
+        assert!(
+            started_near > 1_000,
+            "only {started_near} pairs starting near"
+        );
     }
 }
