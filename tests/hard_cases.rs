@@ -589,20 +589,24 @@ fn post_corridor<S: Scalar>() {
 }
 for_each_backend!(bounce_down_a_corridor_of_posts, post_corridor);
 
-/// **Grazing a post's corner** at top speed: aimed to pass a post's corner 2 µm
-/// clear it is not touched at all (same velocity to the bit, no contact); aimed
-/// 2 µm into it, it is touched once and deflected, never inside the post, never
-/// faster.
-fn graze<S: Scalar>() {
-    // One post at tile (2, 1, 2), free space around it.
-    let g = grid(&[
+/// One post at tile (2, 1, 2), free space around it.
+fn one_post() -> Grid {
+    grid(&[
         "#########",
         "#.......#",
         "#.#.....#",
         "#.......#",
         "#.......#",
         "#########",
-    ]);
+    ])
+}
+
+/// **Grazing a post's corner** at top speed: aimed to pass a post's corner 2 µm
+/// clear it is not touched at all (same velocity to the bit, no contact); aimed
+/// 2 µm into it, it is touched once and deflected, never inside the post, never
+/// faster.
+fn graze<S: Scalar>() {
+    let g = one_post();
     let p = params::<S>(PhysicsSpec {
         restitution_milli: 1000,
         ..events_spec(Effects::NONE)
@@ -882,14 +886,7 @@ for_each_backend!(a_2_mm_gap_at_walking_pace_is_crossed, gap_at_walking_pace);
 /// a touch and a plain slice, again and again; sixteen in a step of
 /// `maze-2-7x7x2-d9`), and the marble is never in the post.
 fn just_too_fast_for_a_corner<S: Scalar>() {
-    let g = grid(&[
-        "#########",
-        "#.......#",
-        "#.#.....#",
-        "#.......#",
-        "#.......#",
-        "#########",
-    ]);
+    let g = one_post();
     let p = params::<S>(events_spec(Effects::NONE));
     let post = p
         .layout
