@@ -194,12 +194,12 @@ fn a_turning_board_follows_the_rotating_frame() {
 /// again counted the board's motion twice: it parted them (a contact, the marble
 /// left against the wall), and a wall swept into a marble threw it off at
 /// `(1 + 2e)` times the wall's speed instead of `e` times its own.
-#[test]
-fn a_turning_board_bounces_by_the_speed_relative_to_it() {
+/// Both steppers share the contact layer; each is held to it.
+fn turning_board_bounce(stepping: Stepping) {
     type S = marble_rolling::physics::Fx;
     let g = closed_box(3);
     let p = params::<S>(spec_in(
-        Stepping::Events,
+        stepping,
         Effects {
             board_motion: true,
             ..Effects::NONE
@@ -226,7 +226,10 @@ fn a_turning_board_bounces_by_the_speed_relative_to_it() {
     }
     let events = w.stats.events;
     let bounces = w.stats.collisions;
-    w.step();
+    // One frame, 1/128 s: the marble reaches the wall after 1/400 s.
+    for _ in 0..steps_of(&p, 8) {
+        w.step();
+    }
     let m = w.marbles()[0];
     assert_eq!(w.stats.collisions - bounces, 1, "no bounce off the wall");
     assert!(
@@ -246,4 +249,14 @@ fn a_turning_board_bounces_by_the_speed_relative_to_it() {
         "{} pitch into the wall",
         -min_clearance(&w, 0)
     );
+}
+
+#[test]
+fn a_turning_board_bounces_by_the_speed_relative_to_it() {
+    turning_board_bounce(Stepping::Events);
+}
+
+#[test]
+fn a_turning_board_bounces_by_the_speed_relative_to_it_with_fixed_steps() {
+    turning_board_bounce(Stepping::Fixed);
 }
