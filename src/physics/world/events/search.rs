@@ -284,8 +284,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 /// Whether a touch that the ghost-bump rule moved from a seam onto the face of
 /// the tiles' union (`owned`) is one: the marble comes towards that face, now or
 /// pulled back later. A marble rolling along a wall past the seam of two of its
-/// tiles, its pull away from the wall, meets the seam's rounded edge at once (the
-/// edge's normal leans along the wall, into the marble's motion) and the face it
+/// tiles, its pull away from the wall, is within the touching tolerance of the
+/// seam's rounded edge for a while (the edge's normal leans along the wall, against
+/// the marble's motion, so the edge reads as approached) and meets the face it
 /// belongs to not at all: the distance to the face never shrinks, and it bounds
 /// the distance to the tile. Taken as a touch it came back with no time passing
 /// until the idle rule's blind slices flew the rest of the step.
