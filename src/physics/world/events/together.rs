@@ -495,6 +495,8 @@ fn within<S: Scalar>(rel: &Segment<S>, horizon: S, near: S) -> bool {
 mod tests {
     use super::*;
     use fixed::types::I8F24;
+    use rand_core::{Rng, SeedableRng};
+    use rand_xorshift::XorShiftRng;
 
     type S = I8F24;
 
@@ -505,12 +507,9 @@ mod tests {
     /// shortcuts are taken for many of them.
     #[test]
     fn beyond_reach_is_out_of_the_swept_reach() {
-        let mut state = 0x853c_49e6_748f_ea9bu64;
+        let mut rng = XorShiftRng::seed_from_u64(0x853c_49e6_748f_ea9b);
         let mut next = |scale: f64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            S::from_f64(((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * scale)
+            S::from_f64(((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * scale)
         };
         let (r2, tol) = (S::from_f64(0.5), S::from_f64(0.5 / 16384.0));
         let near = r2 + tol;
