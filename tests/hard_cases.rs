@@ -926,3 +926,30 @@ fn just_too_fast_for_a_corner<S: Scalar>() {
     );
 }
 for_each_backend!(just_too_fast_for_a_posts_corner, just_too_fast_for_a_corner);
+
+/// **Round a rim from step to step.** A marble tilted gently off the rim of a hole
+/// rolls round the rim's edge for several steps before it drops. A step that ends
+/// in a pivot slice hands the edge to the next, which goes on round it as a step
+/// does after a pivot slice of its own: the edge is touched when the marble comes
+/// to it, not again at every step's start (9 touches before, where the roll and
+/// the drop need 5), and the marble drops in at the same step.
+#[test]
+fn round_a_rim_from_step_to_step() {
+    type S = marble_rolling::physics::Fx;
+    let g = grid(&["###########", "#....O....#", "###########"]);
+    let p = params::<S>(events_spec(space()));
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 1)]);
+    w.set_sleeping(false);
+    w.set_gravity_mg([30, -1000, 0]);
+    let mut steps = 0;
+    while !w.marbles()[0].out && steps < steps_of(&p, 4000) {
+        w.step();
+        steps += 1;
+    }
+    assert!(w.marbles()[0].out, "never dropped in");
+    assert!(
+        w.stats.contacts <= 5,
+        "{} touches in {steps} steps",
+        w.stats.contacts
+    );
+}

@@ -73,6 +73,11 @@ pub struct World<'a, S: Scalar, const M: usize> {
     clear: [TileRange; M],
     /// Per marble, event stepping's free region (`events/free.rs`).
     free: [events::FreeRegion<S>; M],
+    /// Per marble, the edge a pivot slice ended the last step on (event
+    /// stepping): the next step goes on round it, as a step does after a pivot
+    /// slice of its own, without the touch that would find the edge again at
+    /// once. Forgotten when the marbles are set from outside.
+    pivots: [events::CarriedEdge; M],
     /// Whether searches build free regions (tests turn it off to compare).
     free_regions: bool,
     /// Flights a step may take in all ([`events::FLIGHT_BUDGET`] unless set).
@@ -170,6 +175,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             },
             clear: [TileRange::EMPTY; M],
             free: [events::FreeRegion::EMPTY; M],
+            pivots: [events::CarriedEdge::NONE; M],
             free_regions: true,
             flight_budget: events::FLIGHT_BUDGET,
             flights_left: 0,
@@ -198,6 +204,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         for m in self.marbles.iter_mut() {
             m.asleep = false;
         }
+        self.pivots = [events::CarriedEdge::NONE; M];
         &mut self.marbles
     }
     /// The gravity last set (milli-g, tile frame).

@@ -205,6 +205,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         for n in 0..self.marbles.len() {
             let mut m = self.marbles[n];
             if m.out || m.asleep {
+                self.pivots[n] = CarriedEdge::NONE;
                 continue;
             }
             self.count_runs::<SPACE>(&m);
@@ -217,11 +218,22 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             };
             self.flights_left = share;
             let mut f = Flight::begin();
+            self.go_on_round(n, &mut f);
             self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
+            self.pivots[n] = ended_round(&f);
             left = left.saturating_sub(share - self.flights_left);
             to_fly = to_fly.saturating_sub(1);
             let may_sleep = f.t >= S::ONE || self.cut(&f);
             self.finish::<SPACE>(n, &mut m, may_sleep);
+        }
+    }
+
+    /// A flight that begins round the edge marble `n`'s last step ended on.
+    #[inline]
+    fn go_on_round(&mut self, n: usize, f: &mut Flight<S>) {
+        if let Some(t) = self.pivots[n].take() {
+            f.want = Some(t);
+            f.around = Around::Rolling;
         }
     }
 
@@ -464,5 +476,45 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         };
         m.vel = cap_speed(f.seg.vel_at(s));
         f.t = to;
+    }
+}
+
+/// The edge a flight's step ended on in a pivot slice, to go on round at the
+/// next step's start (`World::go_on_round`).
+fn ended_round<S: Scalar>(f: &Flight<S>) -> CarriedEdge {
+    if f.t >= S::ONE && f.around == Around::Rolling {
+        CarriedEdge::new(f.want)
+    } else {
+        CarriedEdge::NONE
+    }
+}
+
+/// The tile of the edge a step ended on ([`ended_round`]), kept per marble
+/// in the world in 3 bytes: the level's setup keeps several copies of the
+/// world on the micro:bit v1's stack, where a `TileIndex` a marble (16 B with
+/// its `Option`) cost 396 B of its 12 KiB. An edge is a solid tile's, inside
+/// the grid (at most 127 columns, rows and layers:
+/// [`MAX_TILES_XZ`](crate::physics::geometry::grid::MAX_TILES_XZ)), so each
+/// index fits 7 bits; one that would not is not carried, and the next step
+/// finds the edge by its touch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(in crate::physics::world) struct CarriedEdge([u8; 3]);
+
+impl CarriedEdge {
+    pub(in crate::physics::world) const NONE: Self = CarriedEdge([u8::MAX; 3]);
+
+    fn new(tile: Option<TileIndex>) -> Self {
+        match tile {
+            Some(t) if (t.i | t.j | t.k) as u32 <= 127 => {
+                CarriedEdge([t.i as u8, t.j as u8, t.k as u8])
+            }
+            _ => Self::NONE,
+        }
+    }
+
+    /// The tile, leaving none.
+    fn take(&mut self) -> Option<TileIndex> {
+        let [i, j, k] = core::mem::replace(self, Self::NONE).0;
+        (i != u8::MAX).then(|| TileIndex::new(i.into(), j.into(), k.into()))
     }
 }

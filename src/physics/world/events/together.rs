@@ -4,8 +4,9 @@
 
 use super::budget::{PAIR_SLICE, PAIR_TEST};
 use super::{
-    cap_speed, marble_pair, max_abs, swept, toi_box, Aabb, Contact, Event, Flight, Marble, Scalar,
-    Segment, Solver, StepObserver, Toi, Vec3, World, MAX_EVENTS, T_LOG2,
+    cap_speed, ended_round, marble_pair, max_abs, swept, toi_box, Aabb, CarriedEdge, Contact,
+    Event, Flight, Marble, Scalar, Segment, Solver, StepObserver, Toi, Vec3, World, MAX_EVENTS,
+    T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -16,6 +17,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let count = self.marbles.len();
         let before = self.marbles.clone();
         let mut fl = [Flight::START; M];
+        for (n, f) in fl.iter_mut().enumerate().take(count) {
+            self.go_on_round(n, f);
+        }
         let mut plan: [Option<(S, Event<S>)>; M] = [None; M];
         let mut live = [false; M];
         for (n, alive) in live.iter_mut().enumerate().take(count) {
@@ -233,6 +237,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 && !no_sleep[n]
                 && m == before[n]
                 && !self.params.spec.effects.board_motion;
+            self.pivots[n] = if m.asleep || m.out {
+                CarriedEdge::NONE
+            } else {
+                ended_round(&fl[n])
+            };
             self.marbles[n] = m;
         }
     }
