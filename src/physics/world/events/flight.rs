@@ -78,6 +78,10 @@ pub(super) struct Flight<S> {
     pub(super) events: u32,
     /// Out of events at full restitution: impacts are inelastic.
     pub(super) inelastic: bool,
+    /// A free region was built in this step (`free.rs`): one a step. A slow
+    /// marble turning about in a maze's corridor left each region at its next
+    /// flight, and its rebuilds were a quarter of the maze's worst frames.
+    pub(super) built: bool,
     /// Events in a row with no time passing.
     pub(super) idle: u32,
     /// A slice asked for (around this tile), started at the next flight.
@@ -116,6 +120,7 @@ impl<S: Scalar> Flight<S> {
             dir: (S::ZERO, S::ZERO),
             events: 0,
             inelastic: false,
+            built: false,
             idle: 0,
             want: None,
             rail: None,
@@ -151,6 +156,7 @@ impl<S: Scalar> Flight<S> {
             dir: (z, z),
             events: 0,
             inelastic: false,
+            built: false,
             idle: 0,
             want: None,
             rail: None,

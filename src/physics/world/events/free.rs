@@ -128,12 +128,20 @@ impl<S: Scalar> FreeRegion<S> {
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Builds marble `n`'s region around `path` (its flight's swept box, whose
-    /// widened tiles the search just found empty); none if the support of a held
-    /// face already runs out under them. `space`: the world has holes (3-D).
+    /// widened tiles the search just found empty: `searched`, the range it
+    /// read); none if the support of a held face already runs out under them.
+    /// `space`: the world has holes (3-D).
     /// Out of line and not generic over `space`: it runs a few times a second,
     /// and one copy keeps the micro:bit v1 within its flash.
     #[inline(never)]
-    pub(super) fn build_free(&mut self, n: usize, m: &Marble<S>, path: &Aabb<S>, space: bool) {
+    pub(super) fn build_free(
+        &mut self,
+        n: usize,
+        m: &Marble<S>,
+        path: &Aabb<S>,
+        searched: &TileRange,
+        space: bool,
+    ) {
         self.free[n] = FreeRegion::EMPTY;
         let layout = self.params.layout;
         let mut range = reach(&layout, path, self.params.radius + self.tol(), space);
@@ -166,7 +174,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
         }
         self.leave_out_held(m, &mut range);
-        if !fits(self.tiles, &range, &behind) {
+        // The search read these very tiles (the same reach, narrowed alike,
+        // unless a held face's row lies beyond it): only the rows behind the
+        // held faces are new.
+        if !fits(self.tiles, &range, &behind, range != *searched) {
             return;
         }
         // Grow each side that no held face bounds, a row at a time.
@@ -182,7 +193,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut row = range;
                 let (row_lo, row_hi) = row.axis_mut(axis);
                 (*row_lo, *row_hi) = (next, next);
-                if !fits(self.tiles, &row, &behind) {
+                if !fits(self.tiles, &row, &behind, true) {
                     break;
                 }
                 let (lo, hi) = range.axis_mut(axis);
@@ -204,14 +215,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     }
 }
 
-/// Whether every tile of `r` is empty and every tile behind a held face under it
-/// (the row `behind[axis]` across the other two axes) is solid.
+/// Whether every tile behind a held face under `r` (the row `behind[axis]`
+/// across the other two axes) is solid and, if `own`, every tile of `r` empty.
 #[inline(never)]
-fn fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3]) -> bool {
+fn fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], own: bool) -> bool {
     // Axis 3: the range itself, whose tiles must be empty; first, so that a row
     // that meets a wall fails on it before the tiles behind the held faces are
     // read.
     for axis in [3, 0, 1, 2] {
+        if axis == 3 && !own {
+            continue;
+        }
         let mut s = *r;
         match behind.get(axis) {
             Some(Some(row)) => {

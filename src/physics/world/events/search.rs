@@ -140,8 +140,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 }
             }
         }
-        if empty && self.free_regions && matches!(best.1, Event::End | Event::Stop) {
-            self.build_free(n, m, &path, SPACE);
+        if empty && self.free_regions && !f.built && matches!(best.1, Event::End | Event::Stop) {
+            f.built = true;
+            self.build_free(n, m, &path, &range, SPACE);
         }
         best
     }
