@@ -12,6 +12,8 @@
 //! Bit for bit `fixed`'s result, saturation included: the tests sweep it
 //! against the crate.
 
+use super::product::mul_wide;
+
 /// `(a · 2^FRAC) / b` rounded toward zero, saturated to `i32` as `fixed`'s
 /// `saturating_div` does (by the operands' signs); `b != 0`, `FRAC < 32`.
 #[inline(never)]
@@ -46,48 +48,101 @@ pub(super) fn div_frac<const FRAC: u32>(a: i32, b: i32) -> i32 {
 }
 
 /// `(high · 2³² + low) / d`, truncated, for `high < d` (the quotient fits 32
-/// bits): Algorithm D on 16-bit digits. `d` is shifted until its top bit is set
-/// (the numerator with it), so that each quotient digit estimated from the top
-/// digits is at most 2 too large; the estimate is brought down while its
-/// product with the divisor's second digit shows it too large.
+/// bits), without a division: `d` is shifted until its top bit is set (the
+/// numerator with it), its reciprocal taken by Newton's iteration
+/// ([`reciprocal`], from below), the quotient estimated from it (from below,
+/// a few units short at most) and raised while the exact remainder allows.
+///
+/// The Cortex-M0 has no divider: Algorithm D on 16-bit digits took two calls
+/// of the library's 32 ÷ 32 division (a loop over the quotient's bits, about
+/// 150 instructions each), 450 instructions a quotient in all, every time of
+/// impact of the event step (30 in four-shaken's worst frame); this takes ten
+/// 32 × 32 → 64 products (`mul_wide`: four 16-bit multiplies each there).
 pub(super) fn divide_words(high: u32, low: u32, d: u32) -> u32 {
     debug_assert!(high < d, "the quotient must fit 32 bits");
     let shift = d.leading_zeros();
     let d = d << shift;
-    let (d1, d0) = (d >> 16, d & 0xffff);
-    // The numerator's top word and its two low digits, shifted like `d`.
-    let top = if shift == 0 {
-        high
+    let (high, low) = if shift == 0 {
+        (high, low)
     } else {
-        (high << shift) | (low >> (32 - shift))
+        ((high << shift) | (low >> (32 - shift)), low << shift)
     };
-    let low = low << shift;
-    let (n1, n0) = (low >> 16, low & 0xffff);
-    let q1 = digit(top, n1, d1, d0);
-    // The partial remainder `top·2¹⁶ + n1 − q1·d`: below `d`, so the wrapping
-    // arithmetic gives it exactly.
-    let rest = (top << 16)
-        .wrapping_add(n1)
-        .wrapping_sub(q1.wrapping_mul(d));
-    let q0 = digit(rest, n0, d1, d0);
-    (q1 << 16) | q0
-}
-
-/// One quotient digit of `(top·2¹⁶ + next) / (d1·2¹⁶ + d0)`, where `top <
-/// d1·2¹⁶ + d0` and `d1 ≥ 2¹⁵`: `top / d1`, lowered while it is not a digit or
-/// its product with `d0` exceeds what the remainder and `next` allow.
-#[inline(always)]
-fn digit(top: u32, next: u32, d1: u32, d0: u32) -> u32 {
-    let mut q = top / d1;
-    let mut r = top - q * d1;
-    // `r < 2¹⁶` while the loop runs (it stops once `r` reaches 2¹⁶), so
-    // `(r << 16) + next` fits; `q · d0` is only formed once `q < 2¹⁶`.
-    while q > 0xffff || q * d0 > (r << 16) + next {
-        q -= 1;
-        r += d1;
-        if r > 0xffff {
-            break;
-        }
+    let y = reciprocal(d);
+    // ⌊n·y / 2⁶³⌋ with n = high·2³² + low, each partial product floored: at
+    // most n/d, so the remainder below is not negative. `high·y < 2⁶³ + 2³⁵`
+    // (`high < d`, `y ≤ 2⁶³/d`), so the sum fits.
+    let sum = mul_wide(high, y) + (mul_wide(low, y) >> 32);
+    let mut q = (sum >> 31) as u32;
+    let n = (high as u64) << 32 | low as u64;
+    let d = d as u64;
+    let mut r = n - mul_wide(q, d as u32);
+    while r >= d {
+        q += 1;
+        r -= d;
     }
     q
+}
+
+/// `2⁶³ / d` for `d ≥ 2³¹`, from below (the exact reciprocal or up to a few
+/// parts in 2³⁰ short of it, and below 2³²): 1/e for `e = d/2³²` in `[½, 1)` in
+/// Q31, from the linear seed `48/17 − 32/17·e` (within 1/17) by three Newton
+/// steps `y·(2 − e·y)` (1/17 squared three times: under 2⁻³²), each rounded
+/// down; the last step may round up by up to two units, which the margin
+/// takes back.
+#[inline(always)]
+fn reciprocal(d: u32) -> u32 {
+    // 48/17 in Q31, and 16/17 in Q32 (`32/17·e` in Q31 is `16/17·d`).
+    const C48: u64 = 6_063_483_241;
+    const C16: u32 = 4_042_322_160;
+    let mut y = C48 - (mul_wide(d, C16) >> 32);
+    for _ in 0..3 {
+        // e·y in Q31: at most 1 and a few units (Newton's steps stay below
+        // 1/e, up to the rounding).
+        let t = (mul_wide(d, y as u32) >> 32) as u32;
+        // 2 − e·y in Q31 is 2³² − t (t > 0).
+        y = mul_wide(y as u32, 0u32.wrapping_sub(t)) >> 31;
+        y = y.min(u32::MAX as u64);
+    }
+    (y as u32).saturating_sub(3)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reciprocal is at most `2⁶³/d` and at most 8 units short of it
+    /// (the quotient's estimate then at most 9 short): both ends of the range,
+    /// powers of two and their neighbours, random divisors.
+    #[test]
+    fn the_reciprocal_is_from_below_and_close() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state as u32
+        };
+        let (mut worst, mut checked) = (0, 0);
+        let mut check = |d: u32| {
+            let exact = (1u128 << 63) / d as u128;
+            let y = reciprocal(d) as u128;
+            assert!(y <= exact, "{d}: {y} above {exact}");
+            worst = worst.max(exact - y);
+            checked += 1;
+        };
+        for k in 0..31 {
+            let p = 1u32 << 31 | 1 << k;
+            for d in [p - 1, p, p + 1] {
+                check(d.max(1 << 31));
+            }
+        }
+        for d in [1 << 31, (1 << 31) + 1, u32::MAX - 1, u32::MAX] {
+            check(d);
+        }
+        for _ in 0..1_000_000 {
+            check(next() | 1 << 31);
+        }
+        assert!(checked > 1_000_000);
+        assert!(worst <= 8, "{worst} units short");
+    }
 }
