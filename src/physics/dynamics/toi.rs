@@ -114,6 +114,24 @@ impl<S: Scalar> Segment<S> {
     }
 }
 
+/// `s²` as [`Segment::pos_at`] bends by it (rounded away from zero), for
+/// [`along`].
+#[inline]
+pub(crate) fn bend_of<S: Scalar>(s: S) -> S {
+    up(s, s)
+}
+
+/// One axis of [`Segment::pos_at`], bit for bit: from `p` at `u` per step bending
+/// with `h`, after `s` steps (`s2`: [`bend_of`]`(s)`, unused for a whole step).
+#[inline]
+pub(crate) fn along<S: Scalar>(p: S, u: S, h: S, s: S, s2: S) -> S {
+    if s == S::ONE {
+        p + (u + h)
+    } else {
+        p + (u.times(s) + up(h, s2))
+    }
+}
+
 /// `x·y` for `y ≥ 0`, rounded away from zero (fixed point; floating point rounds).
 #[inline]
 fn up<S: Scalar>(x: S, y: S) -> S {

@@ -20,34 +20,45 @@ use super::tiles::{Aabb, TileIndex, TileLayout};
 /// with `h` (half the acceleration, per step²).
 #[inline]
 pub(crate) fn swept<S: Scalar>(p: Vec3<S>, end: Vec3<S>, h: Vec3<S>, len: S) -> Aabb<S> {
-    let quarter = if len == S::ONE {
-        None
-    } else {
-        Some(len.times(len).shr(2))
-    };
-    let axis = |a: S, b: S, h: S| {
-        let bulge = match quarter {
-            None => h.abs().shr(2),
-            Some(q) => h.abs().times(q),
-        };
-        let (mut lo, mut hi) = if a < b { (a, b) } else { (b, a) };
-        // A positive h bends the path down from the chord, a negative one up; one
-        // LSB more for the rounding of the ends.
-        let lsb = S::ZERO - S::ZERO.next_down();
-        if h > S::ZERO {
-            lo = lo - bulge - lsb;
-        } else if h < S::ZERO {
-            hi = hi + bulge + lsb;
-        }
-        (lo, hi)
-    };
-    let (x0, x1) = axis(p.x, end.x, h.x);
-    let (y0, y1) = axis(p.y, end.y, h.y);
-    let (z0, z1) = axis(p.z, end.z, h.z);
+    let quarter = quarter(len);
+    let (x0, x1) = swept_axis(p.x, end.x, h.x, quarter);
+    let (y0, y1) = swept_axis(p.y, end.y, h.y, quarter);
+    let (z0, z1) = swept_axis(p.z, end.z, h.z, quarter);
     Aabb {
         min: Vec3::new(x0, y0, z0),
         max: Vec3::new(x1, y1, z1),
     }
+}
+
+/// `len²/4`, the bulge's factor over `len` steps (`None` for a whole step:
+/// a shift instead).
+#[inline]
+pub(crate) fn quarter<S: Scalar>(len: S) -> Option<S> {
+    if len == S::ONE {
+        None
+    } else {
+        Some(len.times(len).shr(2))
+    }
+}
+
+/// One axis of [`swept`]: from `a` to `b` bending with `h`, `quarter` from
+/// [`quarter`].
+#[inline]
+pub(crate) fn swept_axis<S: Scalar>(a: S, b: S, h: S, quarter: Option<S>) -> (S, S) {
+    let bulge = match quarter {
+        None => h.abs().shr(2),
+        Some(q) => h.abs().times(q),
+    };
+    let (mut lo, mut hi) = if a < b { (a, b) } else { (b, a) };
+    // A positive h bends the path down from the chord, a negative one up; one
+    // LSB more for the rounding of the ends.
+    let lsb = S::ZERO - S::ZERO.next_down();
+    if h > S::ZERO {
+        lo = lo - bulge - lsb;
+    } else if h < S::ZERO {
+        hi = hi + bulge + lsb;
+    }
+    (lo, hi)
 }
 
 /// The tiles within `r` of the box `b` (eq. 7 on the swept box); in the plane

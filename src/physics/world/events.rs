@@ -77,10 +77,10 @@
 
 use super::super::dynamics::integrate::Kick;
 use super::super::dynamics::respond::T_LOG2;
-use super::super::dynamics::toi::{entry, impact_speed, toi_box, Segment, Toi};
+use super::super::dynamics::toi::{along, bend_of, entry, impact_speed, toi_box, Segment, Toi};
 use super::super::geometry::broadphase::TileRange;
 use super::super::geometry::narrowphase::{offset, owned, shadowed, Contact, Feature};
-use super::super::geometry::sweep::{reach, swept};
+use super::super::geometry::sweep::{quarter, reach, swept, swept_axis};
 use super::super::geometry::tiles::{Aabb, TileIndex};
 pub use budget::FLIGHT_BUDGET;
 pub(super) use free::FreeRegion;
@@ -94,6 +94,7 @@ use speed::{max_abs, no_faster};
 mod budget;
 mod flight;
 mod free;
+mod pair_test;
 mod pivot;
 mod search;
 mod speed;
