@@ -48,17 +48,36 @@ pub(super) fn div_frac<const FRAC: u32>(a: i32, b: i32) -> i32 {
 }
 
 /// `(high · 2³² + low) / d`, truncated, for `high < d` (the quotient fits 32
-/// bits), without a division: `d` is shifted until its top bit is set (the
+/// bits): [`divide_digits`] where the core has a divider.
+#[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+#[inline(always)]
+pub(super) fn divide_words(high: u32, low: u32, d: u32) -> u32 {
+    divide_digits(high, low, d)
+}
+
+/// [`divide_words`] on ARMv6-M: [`divide_reciprocal`].
+#[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+#[inline(always)]
+pub(super) fn divide_words(high: u32, low: u32, d: u32) -> u32 {
+    divide_reciprocal(high, low, d)
+}
+
+/// [`divide_words`] without a division (the Cortex-M0's): `d` is shifted until its top bit is set (the
 /// numerator with it), its reciprocal taken by Newton's iteration
 /// ([`reciprocal`], from below), the quotient estimated from it (from below,
 /// a few units short at most) and raised while the exact remainder allows.
 ///
-/// The Cortex-M0 has no divider: Algorithm D on 16-bit digits took two calls
+/// The Cortex-M0 has no divider: [`divide_digits`] took two calls
 /// of the library's 32 ÷ 32 division (a loop over the quotient's bits, about
 /// 150 instructions each), 450 instructions a quotient in all, every time of
 /// impact of the event step (30 in four-shaken's worst frame); this takes ten
-/// 32 × 32 → 64 products (`mul_wide`: four 16-bit multiplies each there).
-pub(super) fn divide_words(high: u32, low: u32, d: u32) -> u32 {
+/// 32 × 32 → 64 products (`mul_wide`: four 16-bit multiplies each there). Where
+/// a core divides words (the M4) the digits are cheaper: they stay there.
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+pub(super) fn divide_reciprocal(high: u32, low: u32, d: u32) -> u32 {
     debug_assert!(high < d, "the quotient must fit 32 bits");
     let shift = d.leading_zeros();
     let d = d << shift;
@@ -104,6 +123,57 @@ fn reciprocal(d: u32) -> u32 {
         y = y.min(u32::MAX as u64);
     }
     (y as u32).saturating_sub(3)
+}
+
+/// [`divide_words`] where the core divides words (one `udiv` a digit):
+/// Algorithm D on 16-bit digits. `d` is shifted until its top bit is set
+/// (the numerator with it), so that each quotient digit estimated from the top
+/// digits is at most 2 too large; the estimate is brought down while its
+/// product with the divisor's second digit shows it too large.
+#[cfg_attr(
+    all(target_arch = "arm", not(target_has_atomic = "32")),
+    allow(dead_code)
+)]
+pub(super) fn divide_digits(high: u32, low: u32, d: u32) -> u32 {
+    debug_assert!(high < d, "the quotient must fit 32 bits");
+    let shift = d.leading_zeros();
+    let d = d << shift;
+    let (d1, d0) = (d >> 16, d & 0xffff);
+    // The numerator's top word and its two low digits, shifted like `d`.
+    let top = if shift == 0 {
+        high
+    } else {
+        (high << shift) | (low >> (32 - shift))
+    };
+    let low = low << shift;
+    let (n1, n0) = (low >> 16, low & 0xffff);
+    let q1 = digit(top, n1, d1, d0);
+    // The partial remainder `top·2¹⁶ + n1 − q1·d`: below `d`, so the wrapping
+    // arithmetic gives it exactly.
+    let rest = (top << 16)
+        .wrapping_add(n1)
+        .wrapping_sub(q1.wrapping_mul(d));
+    let q0 = digit(rest, n0, d1, d0);
+    (q1 << 16) | q0
+}
+
+/// One quotient digit of `(top·2¹⁶ + next) / (d1·2¹⁶ + d0)`, where `top <
+/// d1·2¹⁶ + d0` and `d1 ≥ 2¹⁵`: `top / d1`, lowered while it is not a digit or
+/// its product with `d0` exceeds what the remainder and `next` allow.
+#[inline(always)]
+fn digit(top: u32, next: u32, d1: u32, d0: u32) -> u32 {
+    let mut q = top / d1;
+    let mut r = top - q * d1;
+    // `r < 2¹⁶` while the loop runs (it stops once `r` reaches 2¹⁶), so
+    // `(r << 16) + next` fits; `q · d0` is only formed once `q < 2¹⁶`.
+    while q > 0xffff || q * d0 > (r << 16) + next {
+        q -= 1;
+        r += d1;
+        if r > 0xffff {
+            break;
+        }
+    }
+    q
 }
 
 #[cfg(test)]

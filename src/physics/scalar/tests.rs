@@ -2,7 +2,7 @@
 
 use super::fixed_point::scaled_bits;
 use super::product::{mul_shr_halves, mul_shr_short, mul_shr_split, mul_wide_halves};
-use super::quotient::{div_frac, divide_words};
+use super::quotient::{div_frac, divide_digits, divide_reciprocal, divide_words};
 use super::rsqrt::{sqrt_bits, RSQRT_SEED};
 use super::*;
 
@@ -232,6 +232,17 @@ fn word_division_is_the_64_bit_division() {
     fn check(high: u32, low: u32, d: u32) {
         let n = (high as u64) << 32 | low as u64;
         assert_eq!(divide_words(high, low, d) as u64, n / d as u64, "{n} / {d}");
+        // Both ways, whichever this target takes.
+        assert_eq!(
+            divide_digits(high, low, d) as u64,
+            n / d as u64,
+            "{n} / {d}"
+        );
+        assert_eq!(
+            divide_reciprocal(high, low, d) as u64,
+            n / d as u64,
+            "{n} / {d}"
+        );
     }
     let mut state = 0x51_7cc1_b727_220a;
     for shift in 0..32 {

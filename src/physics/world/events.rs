@@ -94,6 +94,7 @@ use speed::{max_abs, no_faster};
 mod budget;
 mod flight;
 mod free;
+mod pair_test;
 mod pivot;
 mod search;
 mod speed;
