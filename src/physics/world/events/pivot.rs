@@ -96,6 +96,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if hn >= S::ZERO {
             return false;
         }
+        // A pull of 64 pitch/s a step or more on an axis (10 g at the default
+        // pitch, beyond any board's tilt and motion) is not held: the part of
+        // `dv` along `n` could leave the format (the property test's arbitrary
+        // states, 8 g on every axis: `dv·n` was 128.6 pitch/s).
+        if max_abs(seg.dv) >= S::from_int(64) {
+            return false;
+        }
         // The turn needs a_c = u_t²/r; held while −a·n = −2·h·n exceeds it. In
         // pitch/step, |u| < 1 per axis: the squares stay under 3.
         let un = seg.u.dot(n);
