@@ -27,7 +27,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// [`World::collide_pair`] with the kind of world a value: one copy for both
     /// (the micro:bit v1's flash; the pair is rare, the branch costs nothing).
     #[inline(never)]
-    fn collide_pair_in(&mut self, a: usize, b: usize, space: bool) -> bool {
+    pub(super) fn collide_pair_in(&mut self, a: usize, b: usize, space: bool) -> bool {
         let p = self.params;
         let r2 = p.radius + p.radius;
         let (ma, mb) = (self.marbles[a], self.marbles[b]);
