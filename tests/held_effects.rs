@@ -141,9 +141,11 @@ type S = fixed::types::I8F24;
 
 /// A marble rolled across a slope, slow enough that the pull turns its velocity
 /// by a right angle within the run, under rolling resistance from the default
-/// 1 % up to 20 %: within 10 µm of the model's path after 0.1 s (7.5 µm at
-/// most). Holding the drag's direction at the interval's start instead of its
-/// midpoint (an error of second order) is 17 µm off here.
+/// 1 % up to 20 %: within 10 µm of the model's path after 0.1 s (8.3 µm at
+/// most, the intervals held while they move the marble at most 1 µm off it).
+/// Holding the drag's direction at the interval's start instead of its
+/// midpoint (an error of second order) was 17 µm off here with intervals of
+/// a quarter of a radian's turn.
 #[test]
 fn rolling_resistance_follows_a_turning_velocity() {
     for (gx, speed, crr) in [

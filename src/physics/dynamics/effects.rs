@@ -71,6 +71,9 @@ pub struct Drag<S> {
     /// are scaled by 1/32): one per pull, not two rounding shifts and a product
     /// every flight.
     flight_limit2: S,
+    /// `decel·dt·2^10` (see [`Drag::flight`]): what a held direction's turn
+    /// weighs against the squared speed.
+    turn_weight: S,
 }
 
 impl<S: Scalar> Drag<S> {
@@ -85,6 +88,11 @@ impl<S: Scalar> Drag<S> {
             limit2: limit.times(limit),
             half_step: decel.shr(k + 1),
             flight_limit2: flight_limit.times(flight_limit),
+            turn_weight: if k <= TURN_LOG2 {
+                decel.times(S::from_int(1 << (TURN_LOG2 - k)))
+            } else {
+                decel.shr(k - TURN_LOG2)
+            },
         }
     }
 
@@ -124,6 +132,10 @@ impl<S: Scalar> Drag<S> {
 /// them (128 pitch/s fits the narrowest format).
 const FLIGHT_SCALE: u32 = 5;
 
+/// `12·ε = 2^-TURN_LOG2` pitch, `ε` the most a held drag direction may move a
+/// marble off the model's path in one flight ([`Drag::flight`]).
+const TURN_LOG2: u32 = 10;
+
 /// What rolling resistance does to one event flight ([`Drag::flight`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DragFlight<S> {
@@ -141,11 +153,17 @@ pub struct DragFlight<S> {
 impl<S: Scalar> Drag<S> {
     /// Event stepping's rolling resistance over up to `rem` steps: adds the drag to
     /// the kick as a constant deceleration, which is exact as long as its direction
-    /// is. It opposes the velocity, which the pull turns, so its direction is held
-    /// for at most the time the pull turns the velocity by 1/4 rad
-    /// (`|pull × v̂|·len ≤ |v|/4`, halving the interval down to 1/4 step), and taken
-    /// at the interval's midpoint (`v + pull·len/2`): the error of a held direction
-    /// is then of third order in the interval. A marble at rest stays at rest if
+    /// is. It opposes the velocity, which the pull turns, so its direction is
+    /// taken at the interval's midpoint (`v + pull·len/2`) and held for as long as
+    /// that moves the marble at most `ε` off the model's path. Over an interval
+    /// `T` in which the velocity turns by `θ = |a⊥|·T/|v|` the held direction is
+    /// off by `θ·(t/T − ½)`, whose velocity error integrates to nothing and whose
+    /// position error to `decel·θ·T²/12`: so `decel·|a⊥|·T³/(12|v|) ≤ ε`, in step
+    /// units `decel·dt·|pull × v|·len³ ≤ 12ε·|v|²` with `12ε = 2^-10` pitch
+    /// (1 µm at the default 12 mm pitch), halving the interval down to 1/4 step.
+    /// The bound weighs the drag itself: at the default 1 % a slow marble turning
+    /// under the board's pull keeps one direction a whole step, where a bound on
+    /// the turn alone (1/4 rad) cut it to an eighth. A marble at rest stays at rest if
     /// the pull does not beat the drag (static friction), and otherwise starts along
     /// the pull, which keeps the direction fixed. Speeds are scaled by 1/32 before
     /// squaring (128 pitch/s fits).
@@ -221,8 +239,17 @@ impl<S: Scalar> Drag<S> {
             // error is of third order: a marble rolled across a slope stays within
             // 8 µm of the exact path (`tests/held_effects.rs`).
             let floor = S::ONE.shr(2).min(rem);
-            while out.len > floor && cross.times(out.len) > v2.shr(2) {
-                out.len = out.len.half();
+            // The bound's left side for the whole time left, then an eighth of it
+            // a halving: three products, not three a halving.
+            if out.len > floor {
+                let mut off = self
+                    .turn_weight
+                    .times(cross)
+                    .times(rem.times(rem).times(rem));
+                while out.len > floor && off > v2 {
+                    out.len = out.len.half();
+                    off = off.shr(3);
+                }
             }
             let half = out.len.half();
             let (mx, mz) = (
