@@ -207,7 +207,7 @@ fn ghost_replay_of_another_run_misses_the_hash() {
     let config = GameConfig::EVENTS;
     let (mut readings, _, hash) = record(level, config);
     // One reading 50 mg off, halfway through. (1 mg can vanish in the tilt
-    // path's rounding: it leaves the run as it was at a third of switchback's
+    // path's rounding: it leaves the run as it was at many of switchback's
     // frames, the halfway one among them since rolling resistance's intervals
     // are held by the error they make.)
     let n = readings.len() / 2;
