@@ -137,7 +137,10 @@ pub struct Game<'a, S: Scalar> {
 }
 
 impl<'a, S: Scalar> Game<'a, S> {
-    /// A fresh attempt at `level`.
+    /// A fresh attempt at `level`. Inlined into its callers: built in their
+    /// frame, the level's setup (`Player::on`, the micro:bit v1's deepest call)
+    /// holds one copy of the world fewer, 1.9 KB of the v1's stack.
+    #[inline(always)]
     pub fn new(level: LevelView<'a>, config: GameConfig) -> Result<Self, SetupError> {
         let mut spec = level.info.spec;
         spec.step_log2 = config.frame_log2 + config.substeps_log2;

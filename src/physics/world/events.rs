@@ -386,7 +386,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         match ev {
             Event::End => {}
             Event::SliceEnd => self.end_slice::<SPACE>(m, f),
-            _ => self.handle::<SPACE>(m, f, s, ev),
+            _ => self.handle(m, f, s, ev, SPACE),
         }
     }
 

@@ -8,13 +8,18 @@ use super::{
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
-    /// Handles event `ev`, reached after a flight of `s` steps.
-    pub(super) fn handle<const SPACE: bool>(
+    /// Handles event `ev`, reached after a flight of `s` steps. `space`: the
+    /// world has holes (3-D). Out of line and not generic over it: one copy for
+    /// both kinds of world, where two (inlined into each `land`) took 1.8 KB of
+    /// the micro:bit v1's flash; an event is rare beside the branches it costs.
+    #[inline(never)]
+    pub(super) fn handle(
         &mut self,
         m: &mut Marble<S>,
         f: &mut Flight<S>,
         s: S,
         ev: Event<S>,
+        space: bool,
     ) {
         self.stats.events = self.stats.events.wrapping_add(1);
         f.events += 1;
@@ -28,7 +33,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let edge = matches!(ev, Event::Touch(c, _) if c.feature == Feature::Edge)
             && !f.slice.is_some_and(|sl| sl.pivot);
         let slice = match ev {
-            Event::Touch(c, t) => self.touch::<SPACE>(m, &f.seg, &c, f.inelastic).then_some(t),
+            Event::Touch(c, t) => self.touch(m, &f.seg, &c, f.inelastic, space).then_some(t),
             Event::Inside(t) => Some(t),
             Event::Release(bit) => {
                 m.rest_mask &= !(1 << bit);
@@ -58,7 +63,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             };
             if f.slice.is_some() {
                 // A slice under way ends here (its passes), the new one begins.
-                self.end_slice::<SPACE>(m, f);
+                if space {
+                    self.end_slice::<true>(m, f);
+                } else {
+                    self.end_slice::<false>(m, f);
+                }
                 // Ending a pivot slice turns the velocity to the old edge's
                 // tangent, which can point back into the contact just made: a
                 // marble over a slot, rolling on one edge, touches the other and
@@ -83,12 +92,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// A touch (the marble is at the contact, `seg` the flight that brought it):
     /// eq. 1 at this instant, or a contact. Returns `true` when the marble must go on
     /// in slices (a slow contact with an edge it is pulled against).
-    fn touch<const SPACE: bool>(
+    fn touch(
         &mut self,
         m: &mut Marble<S>,
         seg: &Segment<S>,
         c: &Contact<S>,
         inelastic: bool,
+        space: bool,
     ) -> bool {
         let p = self.params;
         let e = if inelastic { S::ZERO } else { p.restitution };
@@ -135,10 +145,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             if let Feature::Face(a) = c.feature {
                 let a = a as usize;
                 let up = n.axis(a) > S::ZERO;
-                if self.behind_solid::<SPACE>(m.pos, a, up, c.plane) {
+                let behind = if space {
+                    self.behind_solid::<true>(m.pos, a, up, c.plane)
+                } else {
+                    self.behind_solid::<false>(m.pos, a, up, c.plane)
+                };
+                if behind {
                     m.rest_mask |= 1 << (2 * a + up as usize);
                     m.rest_plane[a] = c.plane;
-                    if SPACE && a == 1 && up {
+                    if space && a == 1 && up {
                         m.supported = true;
                     }
                     return false;
@@ -159,7 +174,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         m.vel = no_faster(cap_speed(out), v_c);
         self.stats.collisions = self.stats.collisions.wrapping_add(1);
         self.impacts.record(wc);
-        if SPACE && n.y > S::ONE.half() {
+        if space && n.y > S::ONE.half() {
             m.supported = false;
         }
         false
