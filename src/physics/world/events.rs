@@ -31,10 +31,10 @@
 //! **Effects whose acceleration is not piecewise constant** get an interval of
 //! their own: rolling resistance opposes the velocity, which the pull turns, so its
 //! direction is taken at the interval's midpoint and held while that moves the
-//! marble at most 1 µm off the model's path (`Drag::flight`); the board's fictitious forces depend on position and velocity
-//! and are held while the board turns by 1/64 rad (`BoardMotion::flight_len`). Both
-//! give one interval per frame when the velocity does not turn and the board is
-//! still.
+//! marble at most 1 µm off the model's path (`Drag::flight`); the board's
+//! fictitious forces depend on position and velocity and are held while the board
+//! turns by 1/64 rad (`BoardMotion::flight_len`). Both give one interval per frame
+//! when the velocity does not turn and the board is still.
 //!
 //! **Slices.** What is not a parabola between events — a marble rolling slowly
 //! around a convex edge under a pull, or starting inside a tile — is flown in

@@ -10,9 +10,16 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// of them inside it.
     pub(super) fn collide_marbles<const SPACE: bool>(&mut self) {
         self.stats.pair_runs = self.stats.pair_runs.wrapping_add(1);
+        self.collide_pairs(SPACE);
+    }
+
+    /// Every pair once, in order, by [`World::collide_pair`]'s code (a marble
+    /// out is left out there); `space`: the world has holes (3-D).
+    #[inline]
+    pub(super) fn collide_pairs(&mut self, space: bool) {
         for a in 0..self.marbles.len() {
             for b in a + 1..self.marbles.len() {
-                self.collide_pair::<SPACE>(a, b);
+                self.collide_pair_in(a, b, space);
             }
         }
     }
@@ -27,7 +34,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// [`World::collide_pair`] with the kind of world a value: one copy for both
     /// (the micro:bit v1's flash; the pair is rare, the branch costs nothing).
     #[inline(never)]
-    pub(super) fn collide_pair_in(&mut self, a: usize, b: usize, space: bool) -> bool {
+    fn collide_pair_in(&mut self, a: usize, b: usize, space: bool) -> bool {
         let p = self.params;
         let r2 = p.radius + p.radius;
         let (ma, mb) = (self.marbles[a], self.marbles[b]);

@@ -289,23 +289,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         // Four shaken marbles: one flown to `now` and one a pair slice ahead were
         // left 2.1·10⁻³ pitch into each other (`tests/stress.rs`).
-        let count = self.marbles.len();
-        let mut mixed = false;
-        for a in 0..count {
-            for b in a + 1..count {
-                mixed |= live[a] && live[b] && fl[a].t.max(now) != fl[b].t.max(now);
-            }
+        let (mut at, mut mixed) = (None, false);
+        for n in (0..self.marbles.len()).filter(|&n| live[n]) {
+            let t = fl[n].t.max(now);
+            mixed |= *at.get_or_insert(t) != t;
         }
         if mixed {
-            for _ in 0..2 {
-                for a in 0..count {
-                    for b in a + 1..count {
-                        if live[a] && live[b] {
-                            self.collide_pair_in(a, b, space);
-                        }
-                    }
-                }
-            }
+            // Twice: a pair pushed apart can push one of them into a third.
+            self.collide_pairs(space);
+            self.collide_pairs(space);
         }
     }
 
