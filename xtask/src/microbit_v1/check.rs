@@ -369,11 +369,16 @@ fn check_profile(
             Some((_, cut)) if scene => format!(", flight budget cut {cut} marble-steps"),
             _ => String::new(),
         };
-        if *max > goal {
-            let goal = grouped(goal);
-            say!("profile {what}{name}: {frames} frames, physics {average} per frame, worst {max} (over the {goal} goal){cut}");
-        } else {
-            say!("profile {what}{name}: {frames} frames, physics {average} per frame, worst {max}{cut}");
+        let line = format!(
+            "profile {what}{name}: {frames} frames, physics {average} per frame, worst {max}"
+        );
+        match judge_frame(scene, *max, goal) {
+            Frame::Within => say!("{line}{cut}"),
+            Frame::OverGoal => say!("{line} (over the {} goal){cut}", grouped(goal)),
+            Frame::OverBound => problems.report(format!(
+                "{line}: a level's worst frame over the bound of {} M0 instructions",
+                grouped(goal)
+            )),
         }
     }
     if let Some((statics, stack)) = parse_ram(&text) {
@@ -383,6 +388,27 @@ fn check_profile(
         );
     }
     Ok(())
+}
+
+/// A profiled worst frame against the M0's frame bound.
+#[derive(Debug, PartialEq, Eq)]
+enum Frame {
+    Within,
+    /// A top-difficulty maze's or a stress scene's: reported, not enforced
+    /// until every one of them is within it (issue 40).
+    OverGoal,
+    /// A built-in level's: the check fails.
+    OverBound,
+}
+
+/// Judges a worst frame of `max` instructions against `bound`: enforced on the
+/// built-in levels, a goal on the profiled scenes (`scene`).
+fn judge_frame(scene: bool, max: u64, bound: u64) -> Frame {
+    match (max > bound, scene) {
+        (false, _) => Frame::Within,
+        (true, true) => Frame::OverGoal,
+        (true, false) => Frame::OverBound,
+    }
 }
 
 /// Checks the logged frames against the trace (see the module doc).
@@ -454,5 +480,14 @@ mod tests {
         assert_eq!(super::grouped(1_234_567), "1 234 567");
         assert_eq!(super::grouped(999), "999");
         assert_eq!(super::grouped(0), "0");
+    }
+
+    #[test]
+    fn a_level_over_the_bound_fails_and_a_scene_over_it_is_reported() {
+        use super::{judge_frame, Frame};
+        assert_eq!(judge_frame(false, 60_000, 60_000), Frame::Within);
+        assert_eq!(judge_frame(false, 60_001, 60_000), Frame::OverBound);
+        assert_eq!(judge_frame(true, 60_001, 60_000), Frame::OverGoal);
+        assert_eq!(judge_frame(true, 59_999, 60_000), Frame::Within);
     }
 }
