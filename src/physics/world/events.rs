@@ -253,7 +253,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         while f.t < S::ONE {
             if self.out_of_flights() {
                 // A slice under way gets its passes here, as at its end.
-                self.end_slice::<SPACE>(m, f, false);
+                self.end_slice::<SPACE>(m, f);
                 return;
             }
             flights += 1;
@@ -385,7 +385,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         self.fly(n, m, f, s, obs);
         match ev {
             Event::End => {}
-            Event::SliceEnd => self.end_slice::<SPACE>(m, f, true),
+            Event::SliceEnd => self.end_slice::<SPACE>(m, f),
             _ => self.handle(m, f, s, ev, SPACE),
         }
     }

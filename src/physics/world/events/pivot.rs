@@ -25,9 +25,7 @@
 //! still hold a marble, where plain slices took 32. Every other tile is searched
 //! as in any slice — a second tile it rests on too (two edges under a marble over
 //! a slot), which then hands the marble to plain slices — and the fixed step's
-//! passes run at each end for what the search leaves to them, unless the
-//! search left them nothing: a pivot slice that reaches its end with no event
-//! and no held face, the centre put back off its edge (`end_slice`). A marble that
+//! passes run at each end for what the search leaves to them. A marble that
 //! touches an edge slowly but turns round it faster than the edge can hold it,
 //! and cannot come closer to it on its flight, flies one slice of the same length
 //! past it with its whole pull (`pivot_len`): it leaves the edge, as a real one
@@ -212,11 +210,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 
     /// The end of a pivot slice: the centre back on the sphere about edge tile `t`
     /// (`r` and a tolerance from it) and the velocity along the new tangent, no
-    /// faster than it was. Returns whether it was put back (the centre is still
-    /// off the tile's edge or corner, not over a face).
-    pub(super) fn onto_pivot(&self, m: &mut Marble<S>, t: TileIndex) -> bool {
+    /// faster than it was.
+    pub(super) fn onto_pivot(&self, m: &mut Marble<S>, t: TileIndex) {
         let Some((q, n, _)) = self.pivot_point(m.pos, t) else {
-            return false;
+            return;
         };
         m.pos = q + n.scale(self.params.radius + self.tol());
         // In pitch/T (1/32 s): components ≤ 4, squares ≤ 48.
@@ -233,7 +230,6 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             };
             m.vel = wt.shl(T_LOG2);
         }
-        true
     }
 
     /// Whether a marble resting on two parallel edges at once — over a slot, the

@@ -280,9 +280,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 self.fly(n, &mut m, &mut fl[n], s, obs);
             }
             if space {
-                self.end_slice::<true>(&mut m, &mut fl[n], false);
+                self.end_slice::<true>(&mut m, &mut fl[n]);
             } else {
-                self.end_slice::<false>(&mut m, &mut fl[n], false);
+                self.end_slice::<false>(&mut m, &mut fl[n]);
             }
             self.marbles[n] = m;
             no_sleep[n] = !self.cut(&fl[n]);

@@ -68,9 +68,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             if f.slice.is_some() {
                 // A slice under way ends here (its passes), the new one begins.
                 if space {
-                    self.end_slice::<true>(m, f, false);
+                    self.end_slice::<true>(m, f);
                 } else {
-                    self.end_slice::<false>(m, f, false);
+                    self.end_slice::<false>(m, f);
                 }
                 // Ending a pivot slice turns the velocity to the old edge's
                 // tangent, which can point back into the contact just made: a
@@ -244,45 +244,24 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     }
 
     /// The end of a slice: the fixed step's contact passes, over the slice, from
-    /// where it started. `clear`: the slice's search found nothing up to its end
-    /// (`Event::SliceEnd`).
-    ///
-    /// A pivot slice that ends so, the centre put back `r` and the tolerance from
-    /// its edge and no face held, skips the passes: they would find nothing. The
-    /// edge's tile is out of reach (a contact needs `|d| < r`), every other tile
-    /// and the lid were searched up to the slice's end like any flight's, which
-    /// ends without passes, and a held face, whose tile the search leaves out,
-    /// is not there to be sunk into by the putting back. The passes were a fifth
-    /// of a roll round a rim's frame (five pivot slices, `maze-2-7x7x2-d9`'s
-    /// worst: 3.7 k of 29.8 k host instructions; hash-exact).
-    pub(super) fn end_slice<const SPACE: bool>(
-        &mut self,
-        m: &mut Marble<S>,
-        f: &mut Flight<S>,
-        clear: bool,
-    ) {
+    /// where it started.
+    pub(super) fn end_slice<const SPACE: bool>(&mut self, m: &mut Marble<S>, f: &mut Flight<S>) {
         let Some(sl) = f.slice.take() else {
             return;
         };
-        let round = sl.pivot && self.onto_pivot(m, sl.skip);
-        if round && clear && m.rest_mask == 0 {
-            // What the passes leave when they find no contact.
-            m.vel = cap_speed(m.vel);
-            if SPACE {
-                m.supported = false;
-            }
-        } else {
-            let k = self.params.k;
-            let solver = Solver {
-                acc: self.solver(f.seg.dv, k).acc,
-                dt: (f.t - sl.from).shr(k - T_LOG2),
-            };
-            let floor = m.rest_mask & (1 << 3) != 0;
-            let supported = self.contact_passes::<SPACE>(m, &solver, sl.start);
-            m.vel = cap_speed(m.vel);
-            if SPACE {
-                m.supported = supported || floor;
-            }
+        if sl.pivot {
+            self.onto_pivot(m, sl.skip);
+        }
+        let k = self.params.k;
+        let solver = Solver {
+            acc: self.solver(f.seg.dv, k).acc,
+            dt: (f.t - sl.from).shr(k - T_LOG2),
+        };
+        let floor = m.rest_mask & (1 << 3) != 0;
+        let supported = self.contact_passes::<SPACE>(m, &solver, sl.start);
+        m.vel = cap_speed(m.vel);
+        if SPACE {
+            m.supported = supported || floor;
         }
         if sl.pivot {
             // On round the edge while it holds (asked at the next flight).
