@@ -349,7 +349,6 @@ fn check_profile(
     let profiles: Vec<_> = text.lines().filter_map(parse_profile).collect();
     let (levels, _) = demo::parse_levels(&text);
     let scenes = demo::profiled_scenes();
-    let stress = demo::stress_scenes();
     let level_profiles = profiles
         .iter()
         .filter(|(name, ..)| !scenes.contains(name))
@@ -373,7 +372,7 @@ fn check_profile(
         let line = format!(
             "profile {what}{name}: {frames} frames, physics {average} per frame, worst {max}"
         );
-        match judge_frame(stress.contains(name), *max, goal) {
+        match judge_frame(scene, *max, goal) {
             Frame::Within => say!("{line}{cut}"),
             Frame::OverGoal => say!("{line} (over the {} goal){cut}", grouped(goal)),
             Frame::OverBound => problems.report(format!(
@@ -395,18 +394,18 @@ fn check_profile(
 #[derive(Debug, PartialEq, Eq)]
 enum Frame {
     Within,
-    /// A stress scene's: reported, not enforced until every one of them is
-    /// within it (issue 40).
+    /// A top-difficulty maze's or a stress scene's: reported, not enforced
+    /// until every one of them is within it (issue 40).
     OverGoal,
-    /// A built-in level's or a top-difficulty maze's: the check fails.
+    /// A built-in level's: the check fails.
     OverBound,
 }
 
 /// Judges a worst frame of `max` instructions against `bound`: enforced on the
-/// built-in levels and the top-difficulty mazes, a goal on the stress scenes
-/// (`stress`).
-fn judge_frame(stress: bool, max: u64, bound: u64) -> Frame {
-    match (max > bound, stress) {
+/// built-in levels, a goal on the profiled scenes (`scene`: the top-difficulty
+/// mazes and the stress scenes).
+fn judge_frame(scene: bool, max: u64, bound: u64) -> Frame {
+    match (max > bound, scene) {
         (false, _) => Frame::Within,
         (true, true) => Frame::OverGoal,
         (true, false) => Frame::OverBound,
@@ -485,7 +484,7 @@ mod tests {
     }
 
     #[test]
-    fn a_level_or_maze_over_the_bound_fails_and_a_stress_scene_over_it_is_reported() {
+    fn a_level_over_the_bound_fails_and_a_scene_over_it_is_reported() {
         use super::{judge_frame, Frame};
         assert_eq!(judge_frame(false, 60_000, 60_000), Frame::Within);
         assert_eq!(judge_frame(false, 60_001, 60_000), Frame::OverBound);
