@@ -214,10 +214,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Resolves one contact (eq. 1 at the instant of impact, see `respond`).
     fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, kick: &Solver<S>) -> Outcome {
         let p = &self.params;
+        // A face's normal is a unit axis (`narrowphase::contact`, `lid_contact`),
+        // which `normal_part` takes as such.
         let face = match c.feature {
             Feature::Face(_) => Some(axis_of(c.normal)),
             _ => None,
         };
+        debug_assert!(face.is_none_or(|(axis, up)| {
+            let mut unit = Vec3::ZERO;
+            unit.set_axis(axis, if up { S::ONE } else { -S::ONE });
+            c.normal == unit
+        }));
         let imp = Impact {
             n: c.normal,
             depth: c.depth,
