@@ -57,6 +57,12 @@ pub trait Scalar:
     const NAME: &'static str;
     /// Whether [`Scalar::sqrt`] is correctly rounded (all but micromath's).
     const EXACT_SQRT: bool = true;
+    /// Whether a dot product with a unit axis (one component ±1, the others 0)
+    /// is that component of the other vector, ± and bit for bit, and such an
+    /// axis scaled by `k` is `±k` there and 0 elsewhere: the fixed-point
+    /// formats, whose products by 0 and ±1 are exact; not the floating-point
+    /// ones, where a sum with a product by 0 can turn a −0 into +0.
+    const EXACT_UNIT: bool = false;
     /// The integer `n`, exactly (`|n| < 128` for the narrowest format).
     fn from_int(n: i32) -> Self;
     /// `self · rhs`: the value of `*`, bit for bit, and its overflow check in debug

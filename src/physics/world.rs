@@ -19,7 +19,7 @@ use heapless::Vec as HVec;
 
 use super::dynamics::effects::{marble_pair, BoardMotion, Drag, Effects};
 use super::dynamics::integrate::{advance, advance_plane, Kick, PullScale};
-use super::dynamics::respond::{resolve, Impact, Outcome, T_LOG2};
+use super::dynamics::respond::{along_normal, normal_part, resolve, Impact, Outcome, T_LOG2};
 
 use super::geometry::broadphase::{candidates, candidates_plane, TileRange};
 use super::geometry::grid::Tiles;

@@ -240,12 +240,14 @@ impl<S: Scalar> Drag<S> {
             // 8 µm of the exact path (`tests/held_effects.rs`).
             let floor = S::ONE.shr(2).min(rem);
             // The bound's left side for the whole time left, then an eighth of it
-            // a halving: three products, not three a halving.
+            // a halving: three products, not three a halving; one at a step's
+            // first flight, whose whole step left cubes to 1 (a product by 1 is
+            // the same bits in every format).
             if out.len > floor {
-                let mut off = self
-                    .turn_weight
-                    .times(cross)
-                    .times(rem.times(rem).times(rem));
+                let mut off = self.turn_weight.times(cross);
+                if rem != S::ONE {
+                    off = off.times(rem.times(rem).times(rem));
+                }
                 while out.len > floor && off > v2 {
                     out.len = out.len.half();
                     off = off.shr(3);

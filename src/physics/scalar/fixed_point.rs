@@ -136,6 +136,7 @@ macro_rules! fixed_scalar {
             const ZERO: Self = <$t>::ZERO;
             const ONE: Self = <$t>::ONE;
             const NAME: &'static str = $name;
+            const EXACT_UNIT: bool = true;
             #[inline(always)]
             fn times(self, rhs: Self) -> Self {
                 // The operator keeps bits NBITS..2·NBITS of `a · (b << INT_NBITS)`,

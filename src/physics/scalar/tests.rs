@@ -116,7 +116,8 @@ fn halves_product_is_the_wide_product() {
 /// The Cortex-M0's product with a 16-bit operand against the 64-bit one: every
 /// 16-bit operand against the extremes of each half of the other, and random
 /// pairs; then the dispatch by the first operand's size ([`mul_shr_split`]) on
-/// operands at and beside the 16-bit limits, in both orders, and random ones.
+/// operands at and beside the 16-bit limits, zero among them (answered before
+/// any product), in both orders, and random ones.
 #[test]
 fn short_product_is_the_wide_product() {
     let split = [

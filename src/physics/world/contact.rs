@@ -13,8 +13,9 @@
 //! swept into a marble would throw it off at `(1 + 2e)` times the wall's speed.
 
 use super::{
-    candidates, candidates_plane, contact, events, lid_contact, resolve, Contact, Feature, Impact,
-    Kick, Marble, Outcome, Scalar, Solver, TileIndex, Vec3, World, T_LOG2,
+    along_normal, candidates, candidates_plane, contact, events, lid_contact, normal_part, resolve,
+    Contact, Feature, Impact, Kick, Marble, Outcome, Scalar, Solver, TileIndex, Vec3, World,
+    T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -213,6 +214,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Resolves one contact (eq. 1 at the instant of impact, see `respond`).
     fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, kick: &Solver<S>) -> Outcome {
         let p = &self.params;
+        // A face's normal is a unit axis (`narrowphase::contact`, `lid_contact`),
+        // which `normal_part` takes as such.
+        let face = match c.feature {
+            Feature::Face(_) => Some(axis_of(c.normal)),
+            _ => None,
+        };
+        debug_assert!(face.is_none_or(|(axis, up)| {
+            let mut unit = Vec3::ZERO;
+            unit.set_axis(axis, if up { S::ONE } else { -S::ONE });
+            c.normal == unit
+        }));
         let imp = Impact {
             n: c.normal,
             depth: c.depth,
@@ -221,6 +233,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             v_board: Vec3::ZERO,
             acc: kick.acc,
             dt: kick.dt,
+            face,
         };
         let res = resolve(&imp, p.restitution, p.threshold);
         match c.feature {
@@ -240,14 +253,14 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
             Feature::Edge => m.pos += c.normal.scale(res.push),
         }
-        let vn_now = m.vel.dot(c.normal);
+        let vn_now = normal_part(m.vel, c.normal, face);
         // Under the format's top (127 pitch/s, the event step's limit; fixed steps
         // cap lower): `normal × vn_new` below must fit, and a unit normal times 128
         // does not (it wraps to −128 in release builds; the property
         // `step_survives_arbitrary_states` drives such states).
         let top = p.v_max.min(S::from_int(127));
         let vn_new = res.vn.shl(T_LOG2).clamp(-top, top);
-        let mut tangential = m.vel - c.normal.scale(vn_now);
+        let mut tangential = m.vel - along_normal(c.normal, vn_now, face);
         if res.deficit > S::ZERO {
             // Pay the rest of the push-out's energy from the tangential speed (rare:
             // a fast marble grazing an edge under a strong pull). In T units: ½|v_t|².
@@ -264,7 +277,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // (the no-tunnelling bound is per axis). The sum saturates only past the
         // range, at event stepping's speeds, which keeps its magnitude under it.
         m.vel = tangential
-            .sat_add(c.normal.scale(vn_new))
+            .sat_add(along_normal(c.normal, vn_new, face))
             .clamp_abs(p.v_max);
         if p.events() {
             m.vel = events::cap_speed(m.vel);
