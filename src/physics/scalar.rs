@@ -159,6 +159,12 @@ pub trait Scalar:
     }
     /// The next representable value below `self` (tests probe tile boundaries with it).
     fn next_down(self) -> Self;
+    /// The format's least positive step at zero: one LSB of a fixed-point
+    /// format (the rounding margin of the swept boxes, the tolerances).
+    #[inline]
+    fn lsb() -> Self {
+        Self::ZERO - Self::ZERO.next_down()
+    }
     /// `⌊log2 |self|⌋` (`i32::MIN` for zero): the event step scales its quadratics by
     /// a power of two with it, so that their squares keep every bit.
     fn ilog2(self) -> i32;

@@ -52,7 +52,7 @@ pub(crate) fn swept_axis<S: Scalar>(a: S, b: S, h: S, quarter: Option<S>) -> (S,
     let (mut lo, mut hi) = if a < b { (a, b) } else { (b, a) };
     // A positive h bends the path down from the chord, a negative one up; one
     // LSB more for the rounding of the ends.
-    let lsb = S::ZERO - S::ZERO.next_down();
+    let lsb = S::lsb();
     if h > S::ZERO {
         lo = lo - bulge - lsb;
     } else if h < S::ZERO {

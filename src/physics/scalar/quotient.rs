@@ -179,19 +179,15 @@ fn digit(top: u32, next: u32, d1: u32, d0: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_core::{Rng, SeedableRng};
+    use rand_xorshift::XorShiftRng;
 
     /// The reciprocal is at most `2⁶³/d` and at most 8 units short of it
     /// (the quotient's estimate then at most 9 short): both ends of the range,
     /// powers of two and their neighbours, random divisors.
     #[test]
     fn the_reciprocal_is_from_below_and_close() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state as u32
-        };
+        let mut rng = XorShiftRng::seed_from_u64(0x2545_f491_4f6c_dd1d);
         let (mut worst, mut checked) = (0, 0);
         let mut check = |d: u32| {
             let exact = (1u128 << 63) / d as u128;
@@ -210,7 +206,7 @@ mod tests {
             check(d);
         }
         for _ in 0..1_000_000 {
-            check(next() | 1 << 31);
+            check(rng.next_u32() | 1 << 31);
         }
         assert!(checked > 1_000_000);
         assert!(worst <= 8, "{worst} units short");

@@ -214,12 +214,14 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Resolves one contact (eq. 1 at the instant of impact, see `respond`).
     fn apply_contact(&mut self, m: &mut Marble<S>, c: &Contact<S>, kick: &Solver<S>) -> Outcome {
         let p = &self.params;
-        // A face's normal is a unit axis (`narrowphase::contact`, `lid_contact`),
-        // which `normal_part` takes as such.
-        let face = match c.feature {
-            Feature::Face(_) => Some(axis_of(c.normal)),
-            _ => None,
+        // A face's or an inside contact's normal is a unit axis
+        // (`narrowphase::contact`, `lid_contact`); `normal_part` takes a face's
+        // as such.
+        let aligned = match c.feature {
+            Feature::Face(_) | Feature::Inside => Some(axis_of(c.normal)),
+            Feature::Edge => None,
         };
+        let face = aligned.filter(|_| matches!(c.feature, Feature::Face(_)));
         debug_assert!(face.is_none_or(|(axis, up)| {
             let mut unit = Vec3::ZERO;
             unit.set_axis(axis, if up { S::ONE } else { -S::ONE });
@@ -236,10 +238,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             face,
         };
         let res = resolve(&imp, p.restitution, p.threshold);
-        match c.feature {
+        match aligned {
             // Axis-aligned: put the centre exactly at `plane ± (r + lift)`.
-            Feature::Face(_) | Feature::Inside => {
-                let (axis, up) = axis_of(c.normal);
+            Some((axis, up)) => {
                 let at = if up {
                     c.plane + p.radius + res.lift
                 } else {
@@ -251,7 +252,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     _ => m.pos.z = at,
                 }
             }
-            Feature::Edge => m.pos += c.normal.scale(res.push),
+            None => m.pos += c.normal.scale(res.push),
         }
         let vn_now = normal_part(m.vel, c.normal, face);
         // Under the format's top (127 pitch/s, the event step's limit; fixed steps

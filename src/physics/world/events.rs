@@ -158,7 +158,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// The touching tolerance: a ten-thousandth of the radius or four LSB.
     #[inline]
     fn tol(&self) -> S {
-        let lsb = S::ZERO - S::ZERO.next_down();
+        let lsb = S::lsb();
         self.params.radius.shr(14).max(lsb + lsb + lsb + lsb)
     }
 

@@ -157,7 +157,7 @@ fn apart_axis<S: Scalar>(p: S, u: S, h: S, near: S) -> bool {
     if !(within(u, step) && within(h, step) && within(p, far)) {
         return false;
     }
-    let lsb = S::ZERO - S::ZERO.next_down();
+    let lsb = S::lsb();
     let slack = h.abs() + lsb + near.shr(12);
     if p > S::ZERO {
         p + u.min(S::ZERO) - slack > near

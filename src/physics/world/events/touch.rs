@@ -37,13 +37,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             Event::Inside(t) => Some(t),
             Event::Release(bit) => {
                 m.rest_mask &= !(1 << bit);
-                if bit == 3 {
-                    m.supported = false;
-                }
-                if bit == 3 && space {
-                    self.rim_under(m)
-                } else {
+                if bit != 3 {
                     None
+                } else {
+                    m.supported = false;
+                    if space {
+                        self.rim_under(m)
+                    } else {
+                        None
+                    }
                 }
             }
             Event::Stop => {
@@ -109,7 +111,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     fn rim_under(&self, m: &Marble<S>) -> Option<TileIndex> {
         let layout = &self.params.layout;
         let j = layout.index_y(m.rest_plane[1].next_down());
-        let lsb = S::ZERO - S::ZERO.next_down();
+        let lsb = S::lsb();
         // The columns on either side of a centre on a seam (one column elsewhere).
         let xs = [
             layout.index_xz(m.pos.x - lsb),
