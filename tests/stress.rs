@@ -30,9 +30,9 @@ struct Seen {
     closest_pair: f64,
     /// The least clearance of any marble from any tile, minus its radius (pitch).
     deepest: f64,
-    /// Each frame's units of work (`StepStats::work`) and marble-steps the
-    /// flight budget cut.
-    work: Vec<(u32, u32)>,
+    /// Each frame's flights (`StepStats::flights`) and marble-steps the flight
+    /// budget cut.
+    flights: Vec<(u32, u32)>,
     /// Each frame's drop of the first marble below where it was after the
     /// first frame, in radii.
     drop: Vec<f64>,
@@ -51,8 +51,8 @@ fn play(s: &StressScene) -> Seen {
         let before = session.game_mut().world_mut().stats;
         session.frame((s.tilt)(frame));
         let w = session.game_mut().world_mut();
-        seen.work.push((
-            w.stats.work - before.work,
+        seen.flights.push((
+            w.stats.flights - before.flights,
             w.stats.budget_cuts - before.budget_cuts,
         ));
         seen.bounces += u32::from(w.take_impacts().count);
@@ -130,7 +130,7 @@ fn stress_drop_lands_on_the_marble_below() {
 /// A marble rolling off a hole's rim nearly fast enough to leave it (the top
 /// marble of drop-onto-marble, of long-fall) flies one slice past the edge, not
 /// plain slices that its pull kept bringing back to the edge: those took 17 or 18
-/// units a frame and the flight budget cut the landing's frame.
+/// flights a frame and the flight budget cut the landing's frame.
 #[test]
 fn stress_rolling_off_a_rim_takes_a_few_flights() {
     for name in ["drop-onto-marble", "long-fall"] {
@@ -140,10 +140,10 @@ fn stress_rolling_off_a_rim_takes_a_few_flights() {
         // Until its centre is below the rim, the top of the floor it rolled on.
         let rim = seen.drop.iter().take_while(|&&d| d < 1.0).count();
         assert!(rim > 8, "{name}: off the rim at frame {rim}");
-        for (frame, &(work, cuts)) in seen.work.iter().enumerate().take(rim) {
+        for (frame, &(flights, cuts)) in seen.flights.iter().enumerate().take(rim) {
             assert!(
-                work <= 8 && cuts == 0,
-                "{name} frame {frame}: {work} units, {cuts} cut, rolling off the rim"
+                flights <= 8 && cuts == 0,
+                "{name} frame {frame}: {flights} flights, {cuts} cut, rolling off the rim"
             );
         }
     }

@@ -49,8 +49,9 @@
 //! 8 a frame where plain slices took 32.
 //!
 //! **Bounded work.** A step spends at most [`FLIGHT_BUDGET`] units of work, all
-//! marbles together (a flight is one, a pair's time of impact one, a pair slice
-//! three); past it the rest of the step is carried over to the next
+//! marbles together, each piece of work weighed by its cost (a search, the tiles
+//! it tests, a slice's passes, every pair's time of impact, a pair slice); past
+//! it the rest of the step is carried over to the next
 //! (`events/budget.rs`), so a marble landing on another or four marbles shaken in
 //! a box cost a bounded frame. No built-in level gets there. Within the budget a
 //! marble gets at most [`MAX_EVENTS`] events per step (reachable only with a
@@ -83,6 +84,7 @@ use super::super::geometry::narrowphase::{offset, owned, shadowed, Contact, Feat
 use super::super::geometry::sweep::{quarter, reach, swept, swept_axis};
 use super::super::geometry::tiles::{Aabb, TileIndex};
 pub use budget::FLIGHT_BUDGET;
+use budget::{SEARCH, SLICE_END, TILE};
 pub(super) use free::FreeRegion;
 
 use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
@@ -288,7 +290,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         m: &mut Marble<S>,
         f: &mut Flight<S>,
     ) -> (S, Event<S>) {
-        self.spend(1, 1);
+        self.spend(1, SEARCH);
         self.prepare::<SPACE>(n, m, f);
         if f.events >= 2 * MAX_EVENTS && f.slice.is_none() {
             // Past every bound: blind slices to the end of the step.

@@ -35,14 +35,13 @@ pub struct StepStats {
     /// and finished in slices. Physics does not get there: 0 in every test.
     pub event_limits: u32,
     /// Events stepping: flights flown (each search for a marble's next event,
-    /// and each marble's slice of a pair slice): the unit of a step's work that
-    /// [`events::FLIGHT_BUDGET`](super::events::FLIGHT_BUDGET) bounds.
+    /// and each marble's slice of a pair slice).
     pub flights: u32,
     /// Events stepping: searches a marble's free region answered without
     /// looking at a tile (`events/free.rs`).
     pub free_served: u32,
-    /// Events stepping: the flight budget's units spent (a flight 1, a pair's time
-    /// of impact 1, a pair slice 3; see [`events::FLIGHT_BUDGET`](super::events::FLIGHT_BUDGET)).
+    /// Events stepping: the flight budget's units spent, each piece of work
+    /// weighed by its cost (see [`events::FLIGHT_BUDGET`](super::events::FLIGHT_BUDGET)).
     pub work: u32,
     /// Events stepping: marble-steps whose rest was left unflown because the
     /// step's flight budget ran out (see [`events`](super::events)). 0 on every built-in level.

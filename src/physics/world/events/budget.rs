@@ -3,15 +3,23 @@
 //! The events of a step are as many as the physics asks for, and some scenes ask
 //! for many: a marble pressed on another flies plain pair slices, 32 or more a
 //! step; four marbles shaken in a box re-check every pair at every flight. A step
-//! may spend [`FLIGHT_BUDGET`] units of work, counted in flights: every marble's
-//! search for its next event is one, a pair's time of impact one, a pair slice
-//! three (both marbles flown, their contact passes, the pair's push). Once they
-//! are spent, the rest of the step is **carried over**: every marble still under
-//! way stays where its last flight left it, with that flight's velocity, and goes
-//! on from there in the next step, as if the clock had paused for it. The check
-//! is made before each round of the step, and one round spends at most a search
-//! per marble, a time of impact per pair and a pair slice, so a step spends at
-//! most `FLIGHT_BUDGET − 1 + M + M(M − 1)/2 + 3` units (30 with four marbles),
+//! may spend [`FLIGHT_BUDGET`] units of work, weighed by what each piece of work
+//! costs (one unit is about 300 host instructions, 650 on the Cortex-M0: the
+//! weights below were fitted to callgrind's count of every frame of the levels,
+//! the top-difficulty mazes and the stress scenes, `docs/performance.md`): a
+//! search's fixed part, each tile's time of impact in it, a slice's contact
+//! passes, every pair's time of impact (those its quick bound
+//! rejects too: four shaken marbles test 20 to 30 pairs a frame, and only those
+//! past the bound counted before), a pair slice. A free region's building is
+//! not counted: it is a cache, and a step cuts at the same place with or without
+//! it (`tests/free_region.rs`). Once they are spent, the rest
+//! of the step is **carried over**: every marble still under way stays where its
+//! last flight left it, with that flight's velocity, and goes on from there in
+//! the next step, as if the clock had paused for it. The check is made before
+//! each unit from a step's second round (the first, a search per marble and a
+//! time of impact per pair, is never cut, so that every marble's step gets
+//! somewhere), so a step spends at most the first round, or `FLIGHT_BUDGET − 1`
+//! and the last unit (a search and the tiles it tested, or a pair slice),
 //! whatever the scene; the scene that asks for more plays slower than real time
 //! while it does.
 //!
@@ -38,28 +46,35 @@
 //! state at a cut never repeats). `docs/performance.md` has the figures.
 //!
 //! `StepStats::budget_cuts` counts the marble-steps it cut, `StepStats::work` the
-//! units spent; no built-in level reaches the budget (at most 9 units in a frame,
-//! `two-floors` and `three-floors`, since a marble rolling off an edge flies one
-//! slice past it; 17 before, on `two-floors`: `tests/budget.rs`), the stress scenes of a landing on a
-//! marble and of four marbles shaken do.
+//! units spent; no built-in level reaches the budget (at most 86 units in a
+//! frame, `grand-tour`; the top-difficulty mazes 103: `tests/budget.rs`), the
+//! stress scenes of a landing on a marble and of four marbles shaken do.
 
 use super::{Flight, Scalar, World};
 
-/// Units of work (flights) a step may spend, all marbles together, unless
-/// [`World::set_flight_budget`] sets another budget (see the module doc). Every
-/// built-in level stays under it (at most 9 in a frame, on `two-floors`).
-pub const FLIGHT_BUDGET: u32 = 18;
+/// Units of work a step may spend, all marbles together, unless
+/// [`World::set_flight_budget`] sets another budget (see the module doc).
+pub const FLIGHT_BUDGET: u32 = 16 * SEARCH;
 
-/// A pair's time of impact, in flights of the budget.
-pub(super) const PAIR_TEST: u32 = 1;
+/// A search for a marble's next event, its fixed part (the swept box, the held
+/// faces' supports, the flight's acceleration).
+pub(super) const SEARCH: u32 = 8;
 
-/// A pair slice (both marbles flown, their passes and the pair's push), in
-/// flights of the budget.
-pub(super) const PAIR_SLICE: u32 = 3;
+/// A tile's time of impact in a search.
+pub(super) const TILE: u32 = 3;
+
+/// A slice's end: the contact passes.
+pub(super) const SLICE_END: u32 = 5;
+
+/// A pair's time of impact, whatever ends it.
+pub(super) const PAIR_TEST: u32 = 2;
+
+/// A pair slice: both marbles flown, their passes and the pair's push.
+pub(super) const PAIR_SLICE: u32 = 16;
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
-    /// Sets the units of work (flights) a step may spend, all marbles together (at
-    /// least 1; [`FLIGHT_BUDGET`] by default).
+    /// Sets the units of work a step may spend, all marbles together (at least 1;
+    /// [`FLIGHT_BUDGET`] by default).
     pub fn set_flight_budget(&mut self, flights: u32) {
         self.flight_budget = flights.max(1);
     }
@@ -79,6 +94,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     #[inline]
     pub(super) fn spend(&mut self, flights: u32, units: u32) {
         self.stats.flights = self.stats.flights.wrapping_add(flights);
+        self.stats.work = self.stats.work.wrapping_add(units);
+        self.flights_left = self.flights_left.saturating_sub(units);
+    }
+
+    /// Counts `units` of work that are not a flight.
+    #[inline]
+    pub(super) fn charge(&mut self, units: u32) {
         self.stats.work = self.stats.work.wrapping_add(units);
         self.flights_left = self.flights_left.saturating_sub(units);
     }

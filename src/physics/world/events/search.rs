@@ -4,7 +4,7 @@
 
 use super::{
     entry, offset, owned, reach, shadowed, swept, toi_box, Aabb, Contact, Event, Feature, Flight,
-    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID,
+    Marble, Scalar, Segment, TileIndex, TileRange, Toi, Vec3, World, EVERY, LID, TILE,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -95,6 +95,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         let b = layout.tile_box(t);
                         // `leave_out_held` left exactly the tiles not behind a held face.
                         debug_assert!(!behind_held(m, &b));
+                        // Charged as it goes (`charge` inlined: `p` borrows the params).
+                        self.stats.work = self.stats.work.wrapping_add(TILE);
+                        self.flights_left = self.flights_left.saturating_sub(TILE);
                         match toi_box(seg, r, &b, best.0, tol) {
                             Toi::Hit { at, contact, d } => {
                                 if at < best.0 {

@@ -64,10 +64,20 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 self.collide_marbles::<SPACE>();
                 break;
             }
-            // Each moving marble's next event of its own.
+            // Each moving marble's next event of its own. From the second round
+            // the budget is checked before each unit of work, not only each
+            // round (four marbles' round can search four times and test six
+            // pairs); the first round is never cut, so that every marble's step
+            // gets somewhere, however small the budget.
+            let mut spent = false;
+            let check = rounds > 1;
             for n in 0..count {
                 if !live[n] || plan[n].is_some() {
                     continue;
+                }
+                if check && self.out_of_flights() {
+                    spent = true;
+                    break;
                 }
                 let mut m = self.marbles[n];
                 if m.asleep || fl[n].t >= S::ONE {
@@ -86,6 +96,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     forget(&mut apart, n);
                 }
             }
+            if spent {
+                self.cut_together(SPACE, &live, &mut fl, &mut no_sleep, now, obs);
+                break;
+            }
             let mut first: Option<(S, usize)> = None;
             for (n, pl) in plan.iter().enumerate().take(count) {
                 if let (true, Some((t, _))) = (live[n], pl) {
@@ -99,7 +113,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             };
             // Pairs, each a sphere of radius 2r in its relative motion.
             let mut pair: Option<(usize, usize, Option<Contact<S>>)> = None;
-            for a in 0..count {
+            'pairs: for a in 0..count {
                 for b in a + 1..count {
                     // Two marbles asleep against each other stay so: they fell
                     // asleep because a whole step under this same pull changed
@@ -126,13 +140,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     } else {
                         when - t0
                     };
+                    if check && self.out_of_flights() {
+                        spent = true;
+                        break 'pairs;
+                    }
+                    self.charge(PAIR_TEST);
                     let Some(toi) = pair_toi(&fl[a], &fl[b], t0, horizon, r2, tol) else {
                         if keep {
                             apart[a][b] = t0 + horizon;
                         }
                         continue;
                     };
-                    self.spend(0, PAIR_TEST);
                     if keep {
                         apart[a][b] = t0
                             + match toi {
@@ -160,6 +178,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         _ => {}
                     }
                 }
+            }
+            // Cut before the round's event is handled (a pair slice, the dearest
+            // unit, included): nothing has moved since the round began.
+            if spent || (check && pair.is_some() && self.out_of_flights()) {
+                self.cut_together(SPACE, &live, &mut fl, &mut no_sleep, now, obs);
+                break;
             }
             if pair.is_none() && when >= S::ONE && plan[who].is_some_and(|(_, e)| e == Event::End) {
                 // Nothing before the end of the step: everyone flies there.

@@ -4,7 +4,7 @@
 
 use super::{
     cap_speed, impact_speed, max_abs, no_faster, Around, Contact, Event, Feature, Flight, Marble,
-    Scalar, Segment, Solver, TileIndex, World, EVERY, IDLE_EVENTS, MAX_EVENTS, T_LOG2,
+    Scalar, Segment, Solver, TileIndex, World, EVERY, IDLE_EVENTS, MAX_EVENTS, SLICE_END, T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -260,6 +260,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             dt: (f.t - sl.from).shr(k - T_LOG2),
         };
         let floor = m.rest_mask & (1 << 3) != 0;
+        self.charge(SLICE_END);
         let supported = self.contact_passes::<SPACE>(m, &solver, sl.start);
         m.vel = cap_speed(m.vel);
         if SPACE {
