@@ -124,6 +124,48 @@ fn small_budget<S: Scalar>() {
 }
 for_each_backend!(a_small_budget_keeps_every_rule, small_budget);
 
+/// Every pair's time of impact counts against the budget, those its quick bound
+/// rejects too: four marbles rolling slowly in the corners of a closed box, too
+/// far apart ever to touch, spend more a step when they are tested as pairs than
+/// the same four flown each on its own (no pair tested). Uncounted, four shaken
+/// marbles tested 20 to 30 pairs a frame past the budget.
+fn pair_tests_count<S: Scalar>() {
+    let g = closed_box(5);
+    let work = |marbles: bool| {
+        let p = params::<S>(spec_in(
+            Stepping::Events,
+            Effects {
+                marbles,
+                ..Effects::NONE
+            },
+        ));
+        let starts = [
+            cell_centre(&p, 1, 1),
+            cell_centre(&p, 9, 1),
+            cell_centre(&p, 1, 9),
+            cell_centre(&p, 9, 9),
+        ];
+        let mut w = world(p, &g, &starts);
+        let slow = [(0.5, 0.0), (-0.5, 0.0), (0.0, -0.5), (0.0, 0.5)];
+        for (m, (x, z)) in w.marbles_mut().iter_mut().zip(slow) {
+            m.vel = Vec3::new(S::from_f64(x), S::ZERO, S::from_f64(z));
+        }
+        w.set_sleeping(false);
+        for _ in 0..16 {
+            w.step();
+        }
+        assert_eq!(w.stats.budget_cuts, 0, "{}: the budget cut a step", S::NAME);
+        w.stats.work
+    };
+    let (alone, paired) = (work(false), work(true));
+    assert!(
+        paired >= alone + 16 * 6,
+        "{}: {alone} units flown alone, {paired} tested as six pairs over 16 steps",
+        S::NAME
+    );
+}
+for_each_backend!(every_pair_test_counts_against_the_budget, pair_tests_count);
+
 fn scene(name: &str) -> StressScene {
     *STRESS
         .iter()
