@@ -10,7 +10,9 @@ use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::game::stress::{StressScene, STRESS};
 use marble_rolling::input::axes::AccelMg;
-use marble_rolling::physics::{Effects, Fx, PhysicsSpec, Scalar, Vec3, FLIGHT_BUDGET};
+use marble_rolling::physics::{
+    Effects, Fx, Params, PhysicsSpec, Scalar, Vec3, World, FLIGHT_BUDGET,
+};
 use marble_rolling::player::Player;
 
 /// 5 µm in pitch (10 mm: `PhysicsSpec::DEFAULT`'s long tile).
@@ -40,19 +42,10 @@ fn small_budget<S: Scalar>() {
             },
         )
     });
-    let starts = [
-        cell_centre(&p, 1, 1),
-        cell_centre(&p, 5, 1),
-        cell_centre(&p, 1, 5),
-        cell_centre(&p, 5, 5),
-    ];
-    let mut w = world(p, &g, &starts);
+    let shots = [(40.0, 13.0), (-31.0, 22.0), (17.0, -45.0), (-8.0, -3.0)];
+    let mut w = four_in_corners(p, &g, 5, shots);
     w.set_flight_budget(8);
     assert_eq!(w.flight_budget(), 8);
-    let shots = [(40.0, 13.0), (-31.0, 22.0), (17.0, -45.0), (-8.0, -3.0)];
-    for (m, (x, z)) in w.marbles_mut().iter_mut().zip(shots) {
-        m.vel = Vec3::new(S::from_f64(x), S::ZERO, S::from_f64(z));
-    }
     let r = p.radius.to_f64();
     let floor = r * (1.0 - loose::<S>()) - FIVE_UM;
     let mut travelled = 0.0;
@@ -139,17 +132,8 @@ fn pair_tests_count<S: Scalar>() {
                 ..Effects::NONE
             },
         ));
-        let starts = [
-            cell_centre(&p, 1, 1),
-            cell_centre(&p, 9, 1),
-            cell_centre(&p, 1, 9),
-            cell_centre(&p, 9, 9),
-        ];
-        let mut w = world(p, &g, &starts);
         let slow = [(0.5, 0.0), (-0.5, 0.0), (0.0, -0.5), (0.0, 0.5)];
-        for (m, (x, z)) in w.marbles_mut().iter_mut().zip(slow) {
-            m.vel = Vec3::new(S::from_f64(x), S::ZERO, S::from_f64(z));
-        }
+        let mut w = four_in_corners(p, &g, 9, slow);
         w.set_sleeping(false);
         for _ in 0..16 {
             w.step();
@@ -165,6 +149,27 @@ fn pair_tests_count<S: Scalar>() {
     );
 }
 for_each_backend!(every_pair_test_counts_against_the_budget, pair_tests_count);
+
+/// Four marbles at the centres of the cells `(1, 1)`, `(far, 1)`, `(1, far)` and
+/// `(far, far)` of `g`, moving at `vel` (pitch/s, x' and z').
+fn four_in_corners<S: Scalar>(
+    p: Params<S>,
+    g: &Grid,
+    far: i32,
+    vel: [(f64, f64); 4],
+) -> World<'_, S, 4> {
+    let starts = [
+        cell_centre(&p, 1, 1),
+        cell_centre(&p, far, 1),
+        cell_centre(&p, 1, far),
+        cell_centre(&p, far, far),
+    ];
+    let mut w = world(p, g, &starts);
+    for (m, (x, z)) in w.marbles_mut().iter_mut().zip(vel) {
+        m.vel = Vec3::new(S::from_f64(x), S::ZERO, S::from_f64(z));
+    }
+    w
+}
 
 fn scene(name: &str) -> StressScene {
     *STRESS
