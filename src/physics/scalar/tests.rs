@@ -1,6 +1,9 @@
 //! The backends against each other and against exact arithmetic.
 
-use super::fixed_point::scaled_bits;
+use super::fixed_point::{
+    round_shr_bit, round_shr_bit_wide, round_shr_sum, round_shr_sum_wide, sat_shl_back,
+    sat_shl_back_wide, sat_shl_limit, sat_shl_limit_wide, scaled_bits,
+};
 use super::product::{mul_shr_halves, mul_shr_short, mul_shr_split, mul_wide_halves};
 use super::quotient::{div_frac, divide_digits, divide_reciprocal, divide_words};
 use super::rsqrt::{sqrt_bits, RSQRT_SEED};
@@ -14,9 +17,10 @@ fn fixed_floor_is_exact_for_negatives() {
     assert_eq!(I8F24::from_bits(0).floor_int(), 0);
 }
 
-/// The saturating left shift (shifted, and kept when it shifts back) against
-/// the range check it replaced (`MAX` above `MAX >> n`, `MIN` below its
-/// negation): every shift of every format, the ends of the range, each side
+/// The saturating left shift's two forms (shifted, and kept when it shifts
+/// back: the Cortex-M0's; the range check, `MAX` above `MAX >> n`, `MIN` below
+/// its negation: elsewhere) against the range check written out, and `shl`
+/// itself: every shift of every format, the ends of the range, each side
 /// of the limits and random words.
 #[test]
 fn shl_saturates_where_the_range_check_did() {
@@ -43,6 +47,9 @@ fn shl_saturates_where_the_range_check_did() {
         for b in words {
             assert_eq!(I8F24::from_bits(b).shl(n).to_bits(), want(b), "{b} << {n}");
             assert_eq!(I16F16::from_bits(b).shl(n).to_bits(), want(b), "{b} << {n}");
+            // Both forms, whichever this target's `shl` takes.
+            assert_eq!(sat_shl_back(b, n), want(b), "{b} << {n}");
+            assert_eq!(sat_shl_limit(b, n), want(b), "{b} << {n}");
         }
     }
     for n in 0..64u32 {
@@ -69,14 +76,17 @@ fn shl_saturates_where_the_range_check_did() {
                 b << n
             };
             assert_eq!(I32F32::from_bits(b).shl(n).to_bits(), want, "{b} << {n}");
+            assert_eq!(sat_shl_back_wide(b, n), want, "{b} << {n}");
+            assert_eq!(sat_shl_limit_wide(b, n), want, "{b} << {n}");
         }
     }
 }
 
-/// The rounding shift (`m + 2^(n−1)` shifted, the sign put back without a
-/// branch) against the form it replaced, `(m >> n) + ((m >> (n − 1)) & 1)`
-/// negated for a negative value: every shift of every format, the ends of the
-/// range, the ties and random words.
+/// The rounding shift's two forms (`m + 2^(n−1)` shifted, the sign put back
+/// without a branch: the Cortex-M0's; `(m >> n) + ((m >> (n − 1)) & 1)`
+/// negated for a negative value: elsewhere) against the latter written out,
+/// and `shr` itself: every shift of every format, the ends of the range, the
+/// ties and random words.
 #[test]
 fn shr_is_the_magnitude_rounded_half_up_and_the_sign_put_back() {
     let mut state = 0x5851_f42d_4c95_7f2d_u64;
@@ -123,7 +133,10 @@ fn shr_is_the_magnitude_rounded_half_up_and_the_sign_put_back() {
                 want(bits, n),
                 "{b} >> {n}"
             );
-            checked += 2;
+            // Both forms, whichever this target's `shr` takes.
+            assert_eq!(round_shr_sum(b, n) as i64, want(bits, n), "{b} >> {n}");
+            assert_eq!(round_shr_bit(b, n) as i64, want(bits, n), "{b} >> {n}");
+            checked += 4;
         }
     }
     for n in 1..64 {
@@ -135,6 +148,8 @@ fn shr_is_the_magnitude_rounded_half_up_and_the_sign_put_back() {
             let q = ((m >> n) + ((m >> (n - 1)) & 1)) as i64;
             let q = if bits < 0 { -q } else { q };
             assert_eq!(I32F32::from_bits(bits).shr(n).to_bits(), q, "{bits} >> {n}");
+            assert_eq!(round_shr_sum_wide(bits, n), q, "{bits} >> {n}");
+            assert_eq!(round_shr_bit_wide(bits, n), q, "{bits} >> {n}");
             checked += 1;
         }
     }
