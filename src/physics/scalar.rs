@@ -217,6 +217,8 @@ mod product;
 mod quotient;
 mod rsqrt;
 #[cfg(test)]
+mod shift_tests;
+#[cfg(test)]
 mod tests;
 
 pub use micro::MicroF32;

@@ -307,8 +307,8 @@ pub const MICROBIT_V1: Board = Board {
         ram: budget("V1_RAM_BUDGET", 12 * 1024),
         // 20 % of 16 MHz.
         cpu: budget("V1_CPU_BUDGET_CENTIPERCENT", 2000),
-        // A level's worst frame over it fails the check; the top-difficulty
-        // mazes' and the stress scenes' are reported against it (issue 40).
+        // A level's or top-difficulty maze's worst frame over it fails the
+        // check; the stress scenes' are reported against it (issue 40).
         frame: budget("WORST_FRAME_M0", 60_000),
     },
     hex: Some(HexSection {

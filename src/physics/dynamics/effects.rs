@@ -411,7 +411,11 @@ impl<S: Scalar> BoardMotion<S> {
         let r = p - self.pivot;
         let euler = -self.omega_dot.cross(r);
         let centrifugal = -self.omega.cross(self.omega.cross(r));
-        let coriolis = -self.omega.cross(v_step).scale(S::from_int(2));
+        // Doubled by a sum, the same bits as the product by 2 it replaces
+        // (both wrap, and overflow-checked builds check both at 2³⁰ LSB):
+        // three products a flight fewer, about 70 Cortex-M0 instructions.
+        let half = self.omega.cross(v_step);
+        let coriolis = -(half + half);
         let a = euler + centrifugal + coriolis; // pitch/step²
         Kick {
             dv: a.shl(k),

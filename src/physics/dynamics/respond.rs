@@ -30,7 +30,7 @@ use super::super::vec::Vec3;
 /// Eq. 1: the marble's velocity after bouncing off a board moving at `v_b`.
 #[inline]
 pub fn restitution<S: Scalar>(v_m: Vec3<S>, v_b: Vec3<S>, n: Vec3<S>, e: S) -> Vec3<S> {
-    let vn = (v_m - v_b).dot(n);
+    let vn = n.dot(v_m - v_b);
     v_m - n.scale((S::ONE + e).times(vn))
 }
 
@@ -87,7 +87,9 @@ pub(crate) fn normal_part<S: Scalar>(v: Vec3<S>, n: Vec3<S>, face: Option<(usize
                 -c
             }
         }
-        _ => v.dot(n),
+        // The normal first: an edge's zero component is then the Cortex-M0
+        // product's first operand, which it answers at once.
+        _ => n.dot(v),
     }
 }
 

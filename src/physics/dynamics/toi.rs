@@ -311,7 +311,7 @@ pub(crate) fn toi_box<S: Scalar>(seg: &Segment<S>, r: S, b: &Aabb<S>, len: S, to
             }
         } else {
             let u = if s == S::ZERO { seg.u } else { seg.u_at(s) };
-            (-u.dot(n), -seg.h.dot(n))
+            (-n.dot(u), -n.dot(seg.h))
         };
         let contact = || Toi::Hit {
             at: s,

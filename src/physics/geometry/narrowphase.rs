@@ -128,19 +128,26 @@ pub fn contact<S: Scalar>(
     if beyond(d, r) {
         return None;
     }
-    let mut nonzero = 0u8;
-    let mut face_axis = 0usize;
-    for axis in 0..3 {
-        let v = d.axis(axis);
-        if v != S::ZERO {
-            // Ghost-bump rule: the closest point is on a face shared with a solid tile.
-            if tiles.is_solid(neighbour(t, axis, v > S::ZERO)) {
-                return None;
-            }
-            nonzero += 1;
-            face_axis = axis;
-        }
+    // Ghost-bump rule: the closest point is on a face shared with a solid tile.
+    // Axis by axis, not a loop over an axis index: the contact passes ask this
+    // for every solid tile in reach, and on the Cortex-M0 the indexed reads
+    // of a `Vec3` and the neighbour's index cost more than the tests.
+    let step = |v: S| if v > S::ZERO { 1 } else { -1 };
+    let (on_x, on_y, on_z) = (d.x != S::ZERO, d.y != S::ZERO, d.z != S::ZERO);
+    if (on_x && tiles.is_solid(TileIndex::new(t.i + step(d.x), t.j, t.k)))
+        || (on_y && tiles.is_solid(TileIndex::new(t.i, t.j + step(d.y), t.k)))
+        || (on_z && tiles.is_solid(TileIndex::new(t.i, t.j, t.k + step(d.z))))
+    {
+        return None;
     }
+    let nonzero = on_x as u8 + on_y as u8 + on_z as u8;
+    let face_axis = if on_z {
+        2
+    } else if on_y {
+        1
+    } else {
+        0
+    };
     match nonzero {
         0 => inside(c, r, t, b, tiles),
         1 => {

@@ -18,6 +18,116 @@ impl FracProduct for i32 {
     }
 }
 
+/// `bits · 2^-n` rounded half away from zero, `0 < n < NBITS` ([`Scalar::shr`]
+/// on a format's bits): on the magnitude, so that neither MAX nor MIN can
+/// overflow. Two forms of the same bits: the Cortex-M0 takes
+/// [`round_shr_sum`]'s, which runs some 200 times in the v1's heaviest
+/// difficulty-9 frame, a few instructions and a branch fewer there (59 453 →
+/// 58 680 M0 instructions, and 1 212 B of flash back); elsewhere
+/// [`round_shr_bit`]'s `(m >> n) + ((m >> (n − 1)) & 1)` with a conditional
+/// negation (on the M4 the sum was no cheaper: the difficulty-9 mazes' average
+/// frames 0.4 % dearer).
+pub(super) trait RoundShr {
+    fn round_shr(self, n: u32) -> Self;
+}
+
+macro_rules! round_shr {
+    ($bits:ty, $sum:ident, $bit:ident) => {
+        impl RoundShr for $bits {
+            #[inline(always)]
+            fn round_shr(self, n: u32) -> Self {
+                if cfg!(all(target_arch = "arm", not(target_has_atomic = "32"))) {
+                    $sum(self, n)
+                } else {
+                    $bit(self, n)
+                }
+            }
+        }
+
+        /// [`RoundShr`]'s sum form: `(m + 2^(n−1)) >> n` (below `2^NBITS` for
+        /// `n < NBITS`), the sign put back by `(q ^ s) − s`.
+        #[inline(always)]
+        pub(super) fn $sum(bits: $bits, n: u32) -> $bits {
+            let sign = bits >> (<$bits>::BITS - 1);
+            let q = ((bits.unsigned_abs() + (1 << (n - 1))) >> n) as $bits;
+            (q ^ sign).wrapping_sub(sign)
+        }
+
+        /// [`RoundShr`]'s bit form: `(m >> n)` plus the bit below, negated for a
+        /// negative value.
+        #[inline(always)]
+        pub(super) fn $bit(bits: $bits, n: u32) -> $bits {
+            let m = bits.unsigned_abs();
+            let q = ((m >> n) + ((m >> (n - 1)) & 1)) as $bits;
+            if bits < 0 {
+                q.wrapping_neg()
+            } else {
+                q
+            }
+        }
+    };
+}
+
+/// `bits · 2^n` saturated to the word (`n < NBITS`: [`Scalar::shl`] on a
+/// format's bits). Two forms of the same bits: the Cortex-M0 takes
+/// [`sat_shl_back`]'s, the shift kept when shifting back gives the value
+/// again (four instructions fewer there than comparing with `±(MAX >> n)`,
+/// and 324 B of the v1's flash); elsewhere [`sat_shl_limit`]'s comparison,
+/// which LLVM can turn into a saturation instruction (with the shift-back form
+/// the M4's difficulty-9 mazes and grand-tour took 2 % more a frame).
+pub(super) trait SatShl {
+    fn sat_shl(self, n: u32) -> Self;
+}
+
+macro_rules! sat_shl {
+    ($bits:ty, $back:ident, $limit:ident) => {
+        impl SatShl for $bits {
+            #[inline(always)]
+            fn sat_shl(self, n: u32) -> Self {
+                if cfg!(all(target_arch = "arm", not(target_has_atomic = "32"))) {
+                    $back(self, n)
+                } else {
+                    $limit(self, n)
+                }
+            }
+        }
+
+        /// [`SatShl`]'s shift-back form (`−2^(NBITS−1−n)` shifts exactly to
+        /// MIN, which the comparison also gives).
+        #[inline(always)]
+        pub(super) fn $back(bits: $bits, n: u32) -> $bits {
+            let shifted = bits << n;
+            if shifted >> n == bits {
+                shifted
+            } else if bits > 0 {
+                <$bits>::MAX
+            } else {
+                <$bits>::MIN
+            }
+        }
+
+        /// [`SatShl`]'s comparison form: MAX above `MAX >> n`, MIN below its
+        /// negation.
+        #[inline(always)]
+        pub(super) fn $limit(bits: $bits, n: u32) -> $bits {
+            let limit = <$bits>::MAX >> n;
+            if bits > limit {
+                <$bits>::MAX
+            } else if bits < -limit {
+                <$bits>::MIN
+            } else {
+                bits << n
+            }
+        }
+    };
+}
+
+sat_shl!(i32, sat_shl_back, sat_shl_limit);
+sat_shl!(i64, sat_shl_back_wide, sat_shl_limit_wide);
+
+round_shr!(i32, round_shr_sum, round_shr_bit);
+round_shr!(i64, round_shr_sum_wide, round_shr_bit_wide);
+
 /// The fixed-point quotient on a format's bits: `fixed`'s `saturating_div`
 /// (`rhs != 0`).
 trait FracQuotient {
@@ -209,25 +319,14 @@ macro_rules! fixed_scalar {
                 if n == 0 {
                     return self;
                 }
-                let bits = self.to_bits();
-                // Round half away from zero so that +v and -v move by mirror amounts;
-                // on the magnitude, so that neither MAX nor MIN can overflow.
-                let m = bits.unsigned_abs();
-                let q = ((m >> n) + ((m >> (n - 1)) & 1)) as i64;
-                <$t>::from_bits((if bits < 0 { -q } else { q }) as _)
+                // Round half away from zero so that +v and -v move by mirror amounts.
+                <$t>::from_bits(self.to_bits().round_shr(n))
             }
             #[inline]
             fn shl(self, n: u32) -> Self {
-                // A range check and a shift (the generic saturating multiply is a call).
-                let bits = self.to_bits();
-                let limit = <$t>::MAX.to_bits() >> n;
-                if bits > limit {
-                    <$t>::MAX
-                } else if bits < -limit {
-                    <$t>::MIN
-                } else {
-                    <$t>::from_bits(bits << n)
-                }
+                // A shift and a range check (the generic saturating multiply is a
+                // call): see `SatShl`.
+                <$t>::from_bits(self.to_bits().sat_shl(n))
             }
             fn sqrt(self) -> Self {
                 if self <= <$t>::ZERO {

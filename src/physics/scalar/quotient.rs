@@ -26,6 +26,13 @@ pub(super) fn div_frac<const FRAC: u32>(a: i32, b: i32) -> i32 {
     } else {
         (n >> (32 - FRAC), n << FRAC)
     };
+    // A proper fraction, as most of the event step's quotients are (times
+    // within the step, the put-back's `wn²/|wt|²`): its bits one at a time.
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    if n < d {
+        let q = divide_below::<FRAC>(n, d) as i32;
+        return if negative { q.wrapping_neg() } else { q };
+    }
     // A quotient of 2^32 or more saturates whatever its sign.
     let limit = if negative {
         1u32 << 31
@@ -98,6 +105,34 @@ pub(super) fn divide_reciprocal(high: u32, low: u32, d: u32) -> u32 {
     while r >= d {
         q += 1;
         r -= d;
+    }
+    q
+}
+
+/// `(n · 2^FRAC) / d`, truncated, for `n < d`: restoring division, one
+/// quotient bit a round (a shift, a compare, at most a subtraction: about ten
+/// Cortex-M0 instructions), `FRAC` rounds. The remainder stays below `d ≤ 2³¹`,
+/// so its double fits a word. On the Cortex-M0 that is about 250 instructions
+/// where [`divide_reciprocal`] and its leading-zero count took about 400. The
+/// quotient's bit is the round's counter: with a counter of its own LLVM
+/// spilled a register in the loop (about 11 instructions a round).
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+pub(super) fn divide_below<const FRAC: u32>(n: u32, d: u32) -> u32 {
+    debug_assert!(n < d, "a proper fraction");
+    let (mut r, mut q) = (n, 0u32);
+    // The quotient's bit doubles as the round's counter.
+    let mut bit = (1u32 << FRAC) >> 1;
+    while bit != 0 {
+        r <<= 1;
+        if r >= d {
+            r -= d;
+            q |= bit;
+        }
+        bit >>= 1;
     }
     q
 }
@@ -181,6 +216,46 @@ mod tests {
     use super::*;
     use rand_core::{Rng, SeedableRng};
     use rand_xorshift::XorShiftRng;
+
+    /// The proper fractions' bit-by-bit quotient is the word division's: `n`
+    /// from zero to `d − 1`, divisors from 1 to 2³¹ (`|i32::MIN|`), random pairs.
+    #[test]
+    fn a_proper_fraction_is_divided_bit_by_bit() {
+        let mut rng = XorShiftRng::seed_from_u64(0x9e37_79b9_7f4a_7c15);
+        let mut checked = 0;
+        let mut check = |n: u32, d: u32| {
+            let exact = ((n as u64) << 24) / d as u64;
+            assert_eq!(divide_below::<24>(n, d) as u64, exact, "{n} / {d}");
+            assert_eq!(
+                divide_below::<16>(n, d) as u64,
+                ((n as u64) << 16) / d as u64,
+                "{n} / {d}"
+            );
+            checked += 1;
+        };
+        for d in [
+            1u32,
+            2,
+            3,
+            255,
+            1 << 16,
+            (1 << 24) + 1,
+            (1 << 31) - 1,
+            1 << 31,
+        ] {
+            for n in [0, 1, d / 2, d - 1] {
+                if n < d {
+                    check(n, d);
+                }
+            }
+        }
+        for _ in 0..1_000_000 {
+            let d = (rng.next_u32() >> (rng.next_u32() % 32)).clamp(1, 1 << 31);
+            let n = rng.next_u32() % d;
+            check(n, d);
+        }
+        assert!(checked > 1_000_000);
+    }
 
     /// The reciprocal is at most `2⁶³/d` and at most 8 units short of it
     /// (the quotient's estimate then at most 9 short): both ends of the range,

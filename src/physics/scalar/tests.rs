@@ -389,8 +389,9 @@ fn every_root_is_fixed_s_root() {
     }
 }
 
-/// A small deterministic generator (xorshift64*) for the equivalence sweeps.
-fn rng(state: &mut u64) -> u64 {
+/// A small deterministic generator (xorshift64*) for the equivalence sweeps
+/// (`shift_tests.rs` draws from it too).
+pub(super) fn rng(state: &mut u64) -> u64 {
     *state ^= *state >> 12;
     *state ^= *state << 25;
     *state ^= *state >> 27;

@@ -61,6 +61,17 @@ pub fn profiled_scenes() -> Vec<String> {
     mazes.chain(scenes).collect()
 }
 
+/// The stress scenes among [`profiled_scenes`] (`game::stress::STRESS`): the
+/// scenes whose worst frame the micro:bit v1's check reports against its bound
+/// without enforcing it (the top-difficulty mazes are held to it).
+pub fn stress_scenes() -> Vec<String> {
+    use marble_rolling::game::stress::STRESS;
+    STRESS
+        .iter()
+        .map(|s| s.level.info.name.to_string())
+        .collect()
+}
+
 /// Reports each of [`profiled_scenes`] that has no `profile` line or no
 /// `budget` line in `log`: a scene the board could not set up, or a profile
 /// cut short.

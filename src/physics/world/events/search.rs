@@ -217,7 +217,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         // Closing at `w = −u·d/|d|` (pitch/step) faster than the threshold, in
         // squares: (u·d)² > w_t²·|d|².
-        let ud = seg.u.dot(d);
+        let ud = d.dot(seg.u);
         let w_t = self.threshold_per_step();
         if ud >= S::ZERO {
             return true;

@@ -153,7 +153,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let (k, r, n) = (p.k, p.radius, c.normal);
         self.stats.contacts = self.stats.contacts.wrapping_add(1);
         // Half the approach acceleration (pitch/step²).
-        let beta = -seg.h.dot(n);
+        let beta = -n.dot(seg.h);
         // The normal speed at impact from the energy along the normal: for a face
         // from the flight's start to the exact contact plane, where the marble is
         // put; for an edge from where it is, put back on the rounded edge.
@@ -168,15 +168,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     at - seg.p.axis(a)
                 };
                 m.pos.set_axis(a, at);
-                (-seg.u.dot(n), d0)
+                (-n.dot(seg.u), d0)
             }
             _ => {
                 m.pos += n.scale(c.depth);
-                (-m.vel.shr(k).dot(n), -c.depth)
+                (-n.dot(m.vel.shr(k)), -c.depth)
             }
         };
         let wc = impact_speed(w, beta, d, k);
-        let vn = m.vel.dot(n);
+        let vn = n.dot(m.vel);
         if wc <= p.threshold.shl(T_LOG2) || e == S::ZERO {
             // A contact: no normal speed left (no bounce, no jitter, no Zeno).
             m.vel -= n.scale(vn);
