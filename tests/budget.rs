@@ -150,6 +150,53 @@ fn pair_tests_count<S: Scalar>() {
 }
 for_each_backend!(every_pair_test_counts_against_the_budget, pair_tests_count);
 
+/// A cut slows only the marbles that can meet: two marbles pressed together
+/// against a wall under a small budget are cut every step, while a third rolling
+/// freely across the box, out of their reach, ends each step where it would with
+/// no budget at all, bit for bit.
+fn free_marble_keeps_time<S: Scalar>() {
+    let g = closed_box(7);
+    let p = params::<S>(spec_in(
+        Stepping::Events,
+        Effects {
+            marbles: true,
+            ..Effects::NONE
+        },
+    ));
+    let (ax, az) = cell_centre(&p, 1, 1);
+    let two_r = (p.radius + p.radius).to_f64();
+    let b = (ax, S::from_f64(az.to_f64() + two_r));
+    let free = cell_centre(&p, 9, 11);
+    let run = |budget: u32| {
+        let mut w = world(p, &g, &[(ax, az), b, free]);
+        w.set_flight_budget(budget);
+        // The pair pressed against the wall at z' = 0; the free marble rolls
+        // along x', too slowly to reach a wall in the 48 steps.
+        w.set_gravity_mg([0, -1000, -100]);
+        w.marbles_mut()[2].vel = Vec3::new(S::from_f64(-2.0), S::ZERO, S::ZERO);
+        let mut path = Vec::new();
+        for _ in 0..48 {
+            w.step();
+            path.push(w.marbles()[2].pos);
+        }
+        (path, w.stats.budget_cuts)
+    };
+    let (cut, cuts) = run(24);
+    let (whole, none) = run(u32::MAX);
+    assert!(cuts > 4, "{}: only {cuts} marble-steps cut", S::NAME);
+    assert_eq!(none, 0);
+    assert_eq!(
+        cut,
+        whole,
+        "{}: the free marble was slowed by the cut",
+        S::NAME
+    );
+}
+for_each_backend!(
+    a_cut_slows_only_the_marbles_that_can_meet,
+    free_marble_keeps_time
+);
+
 /// Four marbles at the centres of the cells `(1, 1)`, `(far, 1)`, `(1, far)` and
 /// `(far, far)` of `g`, moving at `vel` (pitch/s, x' and z').
 fn four_in_corners<S: Scalar>(

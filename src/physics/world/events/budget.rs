@@ -15,7 +15,11 @@
 //! it (`tests/free_region.rs`). Once they are spent, the rest
 //! of the step is **carried over**: every marble still under way stays where its
 //! last flight left it, with that flight's velocity, and goes on from there in
-//! the next step, as if the clock had paused for it. The check is made before
+//! the next step, as if the clock had paused for it; only a marble whose own
+//! plan runs to the step's end with no event, out of every other marble's reach
+//! over the step by the pair tests' bound without a product, finishes it (a
+//! marble rolling freely is not slowed with a pair pressed together elsewhere on
+//! the board: `together.rs`, `cut_together`). The check is made before
 //! each unit from a step's second round (the first, a search per marble and a
 //! time of impact per pair, is never cut, so that every marble's step gets
 //! somewhere), so a step spends at most the first round, or `FLIGHT_BUDGET − 1`

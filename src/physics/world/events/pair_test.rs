@@ -25,7 +25,7 @@ pub(super) fn pair_toi<S: Scalar>(
     let near = r2 + tol;
     // Nearly half of four-shaken's pair tests end here, three in five of those
     // the swept test finds out of reach, which took them 31 products each.
-    if beyond(&fa.seg, &fb.seg, near + r2.shr(4)) {
+    if far_apart(fa, fb, r2, tol) {
         return None;
     }
     let rel = reach(fa, fb, t0, horizon, near)?;
@@ -34,6 +34,14 @@ pub(super) fn pair_toi<S: Scalar>(
         max: Vec3::ZERO,
     };
     Some(toi_box(&rel, r2, &point, horizon, tol))
+}
+
+/// Whether the marbles flying `fa` and `fb` are out of each other's reach over
+/// the whole step, wherever on their segments they are (`pair_toi`'s first
+/// answer).
+#[inline]
+pub(super) fn far_apart<S: Scalar>(fa: &Flight<S>, fb: &Flight<S>, r2: S, tol: S) -> bool {
+    beyond(&fa.seg, &fb.seg, r2 + tol + r2.shr(4))
 }
 
 /// Whether two flights are further apart on some axis than `far` and all that
