@@ -98,8 +98,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     #[inline]
     pub(super) fn spend(&mut self, flights: u32, units: u32) {
         self.stats.flights = self.stats.flights.wrapping_add(flights);
-        self.stats.work = self.stats.work.wrapping_add(units);
-        self.flights_left = self.flights_left.saturating_sub(units);
+        self.charge(units);
     }
 
     /// Counts `units` of work that are not a flight.

@@ -21,7 +21,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         rest_out: bool,
     ) -> (S, Event<S>) {
         let p = &self.params;
-        let (r, layout, tiles) = (p.radius, &p.layout, self.tiles);
+        // The layout copied (three words), so that the tile loop may charge the
+        // budget through `self`.
+        let (r, layout, tiles) = (p.radius, p.layout, self.tiles);
         let end = f.seg.pos_at(limit);
         f.end = Some((limit, end));
         let seg = &f.seg;
@@ -79,7 +81,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 EVERY
             };
         // Tiles in reach (plain loops: iterator adapters cost more than the test).
-        let mut range = reach(layout, &path, reach_r, SPACE);
+        let mut range = reach(&layout, &path, reach_r, SPACE);
         self.leave_out_held(m, &mut range);
         let mut empty = true;
         let mut k = range.lo.k;
@@ -95,9 +97,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         let b = layout.tile_box(t);
                         // `leave_out_held` left exactly the tiles not behind a held face.
                         debug_assert!(!behind_held(m, &b));
-                        // Charged as it goes (`charge` inlined: `p` borrows the params).
-                        self.stats.work = self.stats.work.wrapping_add(TILE);
-                        self.flights_left = self.flights_left.saturating_sub(TILE);
+                        self.charge(TILE);
                         match toi_box(seg, r, &b, best.0, tol) {
                             Toi::Hit { at, contact, d } => {
                                 if at < best.0 {
