@@ -7,7 +7,7 @@ use core::ops::Range;
 pub use crate::game::levels_region::*;
 
 /// The micro:bit v1's region: the last 4 KiB of the nRF51822's 256 KiB (the
-/// firmware's budget is 128 KiB).
+/// firmware's budget is 144 KiB).
 pub const V1: Range<u32> = 0x3_F000..0x4_0000;
 /// The micro:bit v2's region: the 4 KiB page below the best times
 /// (`board::microbit::RECORDS`, 0x7C000..0x80000, which checks that the two

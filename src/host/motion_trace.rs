@@ -35,6 +35,7 @@ use std::string::{String, ToString};
 use std::vec::Vec;
 
 use super::json_number;
+use crate::game::level::MAX_MARBLES;
 use crate::game::session::Session;
 use crate::physics::{Marble, Scalar, Segment, StepObserver, Vec3, World};
 
@@ -154,23 +155,14 @@ pub(super) enum ReplayError {
 }
 
 /// What a frame's replay starts from: the world as it was before the frame.
-pub(super) struct FrameStart<S> {
-    /// The marbles.
-    pub(crate) marbles: Vec<Marble<S>>,
-    /// The pull (milli-g).
-    pub(crate) pull: [i32; 3],
-    /// The step counters.
-    pub(crate) stats: crate::physics::StepStats,
+pub(super) struct FrameStart<'a, S: Scalar> {
+    world: World<'a, S, MAX_MARBLES>,
 }
 
-impl<S: Scalar> FrameStart<S> {
+impl<'a, S: Scalar> FrameStart<'a, S> {
     /// The world `w` as the next frame starts from it.
-    pub(super) fn of<const M: usize>(w: &World<'_, S, M>) -> Self {
-        FrameStart {
-            marbles: w.marbles().to_vec(),
-            pull: w.gravity_mg(),
-            stats: w.stats,
-        }
+    pub(super) fn of(w: &World<'a, S, MAX_MARBLES>) -> Self {
+        FrameStart { world: w.clone() }
     }
 }
 
@@ -178,7 +170,7 @@ impl<S: Scalar> FrameStart<S> {
 /// its rows; returns the rows written.
 pub(super) fn replay_frame<S: Scalar>(
     session: &Session<'_, S>,
-    start: &FrameStart<S>,
+    start: &FrameStart<'_, S>,
     substeps: u32,
     dt: f64,
     log: &mut FlightLog<S>,
@@ -186,18 +178,12 @@ pub(super) fn replay_frame<S: Scalar>(
 ) -> Result<u64, ReplayError> {
     let game = session.game();
     let after = game.world();
+    // The frame's pull and board motion, the state it started from: a marble
+    // the frame left asleep is not woken (its flights would count against the
+    // step's flight budget and could move the cut), and the edges the marbles
+    // rolled round into the frame are the ones it went on round.
     let mut w = after.clone();
-    w.marbles_mut().copy_from_slice(&start.marbles);
-    // A new pull woke the marbles before the frame's first step, which the
-    // copies from before it do not know; an unchanged one left them as they were.
-    // Waking a marble the frame left asleep would not be exact: its flights
-    // would count against the step's flight budget and could move the cut.
-    if after.gravity_mg() != start.pull {
-        for m in w.marbles_mut() {
-            m.asleep = false;
-        }
-    }
-    w.stats = start.stats;
+    w.rewind_to(&start.world);
     let layout = after.params().layout;
     let c = |v: S| layout.to_mm(v);
     let samples = samples_per_step(&w);

@@ -198,6 +198,23 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     pub fn marbles(&self) -> &[Marble<S>] {
         &self.marbles
     }
+    /// This world's state put back as it was in `start`, an earlier copy of it
+    /// (the sampled trace's replay of a frame: `host::motion_trace`): the
+    /// marbles, the edges they roll round from one step to the next, the caches
+    /// and the counters; the pull and the board's motion stay this world's. A
+    /// pull other than `start`'s wakes the marbles, as setting it did.
+    pub fn rewind_to(&mut self, start: &Self) {
+        self.marbles.clone_from(&start.marbles);
+        self.pivots = start.pivots;
+        self.clear = start.clear;
+        self.free = start.free;
+        self.stats = start.stats;
+        if self.gravity_mg != start.gravity_mg {
+            for m in self.marbles.iter_mut() {
+                m.asleep = false;
+            }
+        }
+    }
     /// Mutable marbles (tests, tools and game rules place them). Wakes them all:
     /// the caller may move one.
     pub fn marbles_mut(&mut self) -> &mut [Marble<S>] {

@@ -22,8 +22,8 @@ use crate::universal_hex::{self, HexError, Patch, BOARD_V1, BOARD_V2};
 use crate::Single;
 
 /// Bytes of the served hex the page can hand over, and of the result: the
-/// universal hex is about 550 KB (both boards' images, 128 KiB of flash at
-/// most on the v1); a region adds at most 11 KB a board. Zeroed statics: they
+/// universal hex is about 600 KB (both boards' images, 144 KiB of flash at
+/// most on each); a region adds at most 11 KB a board. Zeroed statics: they
 /// cost the module no bytes, the page's memory 2 MiB.
 pub(crate) const HEX_CAPACITY: usize = 1 << 20;
 

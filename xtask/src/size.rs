@@ -11,7 +11,7 @@
 //! Measured from the ELF's section headers with the `object` crate, with the
 //! Berkeley accounting of `llvm-size -B` (so no llvm-tools component is needed
 //! and the figures are the ones `llvm-size -B` prints). Budgets in bytes, the
-//! board's ([`crate::boards::MICROBIT`]'s): FLASH_BUDGET (default 131072 = 128
+//! board's ([`crate::boards::MICROBIT`]'s): FLASH_BUDGET (default 147456 = 144
 //! KiB), RAM_BUDGET (default 16384 = 16 KiB),
 //! issue 27's: the v2 runs event stepping, about 18 KiB more code than fixed steps.
 //!

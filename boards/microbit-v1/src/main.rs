@@ -82,7 +82,7 @@ pub static HEARTBEATS: Heartbeats = Heartbeats::new();
 const PILOT: bool = true;
 
 /// The stepper every board plays (`GameConfig::DEFAULT`, events): with the v1's
-/// flash budget at 128 KiB of its 256 KiB it fits (`cargo xtask
+/// flash budget at 144 KiB of its 256 KiB it fits (`cargo xtask
 /// check-microbit-v1` and docs/microbit-revisions.md have the figures).
 const EVENTS: bool = marble_rolling::game::rules::DEFAULT_EVENTS;
 

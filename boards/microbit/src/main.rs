@@ -87,7 +87,7 @@ const STACK_LOG_CHECKS: u32 = 100;
 const PILOT: bool = false;
 
 /// The stepper every board plays (`GameConfig::DEFAULT`, events: no speed cap,
-/// no sinking into walls). Its code (about 18 KiB here) fits the v2's 128 KiB
+/// no sinking into walls). Its code (about 18 KiB here) fits the v2's 144 KiB
 /// flash budget (`cargo xtask size-report`, which reads
 /// [`MARBLE_STEPPING_EVENTS`] back from the ELF).
 const EVENTS: bool = marble_rolling::game::rules::DEFAULT_EVENTS;

@@ -42,7 +42,9 @@
 //! that the pull sinks it at most `2^-12·r` into that one tile), with the events of
 //! every other tile found as always, and the fixed step's contact passes (the
 //! push-out of `respond`) at the slice's end. Two marbles pressed together go on
-//! the same way, pushed apart by the fixed step's pair code. A marble rolling
+//! the same way, pushed apart by the fixed step's pair code; a marble touching
+//! another that stands still rolls on it in slices about its centre, or rests
+//! there, and the still one is not woken (`events/rest.rs`). A marble rolling
 //! round an edge that holds it is flown in pivot slices (`events/pivot.rs`) instead: the pull's
 //! part into the edge dropped, the centre put back on the sphere about the edge
 //! at each end, so the slice is bounded by the turn and not by the sink — about
@@ -98,6 +100,7 @@ mod flight;
 mod free;
 mod pair_test;
 mod pivot;
+mod rest;
 mod search;
 mod speed;
 mod together;
@@ -296,7 +299,24 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             // Past every bound: blind slices to the end of the step.
             f.want = Some(EVERY);
         }
-        if let Some(skip) = f.want.take() {
+        let mut rolls = false;
+        if let Some(lo) = f.roll.take() {
+            // At rest on a still marble and an edge or a face (`events/rest.rs`),
+            // or on rolling on it; a slice about an edge touched goes first (its
+            // pair tests find the still marble again).
+            if self.rests_on(m, &self.marbles[lo as usize], f, SPACE) {
+                m.vel = Vec3::ZERO;
+                f.set_seg(Segment::still(m.pos));
+                f.rest = Some(lo);
+                f.want = None;
+                f.slice = None;
+                return (S::ONE - f.t, Event::End);
+            }
+            rolls = f.want.is_none() && self.roll_slice(m, f, lo);
+        }
+        if rolls {
+            // A roll slice begun (`events/rest.rs`): its flight is set.
+        } else if let Some(skip) = f.want.take() {
             let around = core::mem::replace(&mut f.around, Around::Slice);
             let rail = f.rail.take();
             // The edge's nearest point, once for the hold, the rail and the
@@ -330,6 +350,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     to: f.after(len),
                     pivot,
                     rail: !pivot && long.is_some(),
+                    on: None,
                 });
                 self.stats.slices = self.stats.slices.wrapping_add(1);
             }
@@ -342,6 +363,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             if let Some(sl) = f.slice.as_mut() {
                 sl.rail = false;
                 sl.to = sl.to.min(to);
+            }
+        } else if let Some(lo) = f.slice.and_then(|sl| sl.on) {
+            // A slice rolling on a sleeping marble goes on after an event inside
+            // it while the marble still holds it; else it ends here.
+            if !self.roll_hold(m, f, lo) {
+                if let Some(sl) = f.slice.as_mut() {
+                    sl.on = None;
+                }
+                self.end_slice::<SPACE>(m, f);
             }
         } else if let Some(sl) = f.slice.as_mut().filter(|sl| sl.pivot) {
             // A pivot slice goes on after an event inside it: the edge still holds
@@ -358,10 +388,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         match f.slice {
             Some(sl) => {
                 let limit = (sl.to - f.t).min(f.len);
-                let (s, ev) = if sl.skip == EVERY {
+                let (s, ev) = if sl.skip == EVERY && sl.on.is_none() {
                     (limit, Event::End)
                 } else {
-                    self.search::<SPACE>(n, m, f, limit, sl.skip, !sl.pivot)
+                    let rest_out = !sl.pivot && sl.on.is_none();
+                    self.search::<SPACE>(n, m, f, limit, sl.skip, rest_out)
                 };
                 if ev == Event::End && f.after(s) == sl.to {
                     (s, Event::SliceEnd)

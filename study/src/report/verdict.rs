@@ -138,7 +138,7 @@ pub fn section(w: &mut String, study: &Study, configs: &[Config]) {
             // the firmware's (docs/boards.md, "Budget").
             let _ = writeln!(
                 w,
-                "**Flash**: not measured by the study (it builds benchmarks, not the firmware). The firmware links one stepper, chosen at compile time (`Player<W, H, PILOT, EVENTS>`), and every board links {} (`EVENTS` is `game::rules::DEFAULT_EVENTS` in each board's src/main.rs) inside its flash budget: 128 KiB on the micro:bit v2 (`cargo xtask size-report`) and 128 KiB on the micro:bit v1 (`cargo xtask check-microbit-v1`); CI runs both, and docs/boards.md (\"Budget\") has their figures.\n",
+                "**Flash**: not measured by the study (it builds benchmarks, not the firmware). The firmware links one stepper, chosen at compile time (`Player<W, H, PILOT, EVENTS>`), and every board links {} (`EVENTS` is `game::rules::DEFAULT_EVENTS` in each board's src/main.rs) inside its flash budget: 144 KiB on the micro:bit v2 (`cargo xtask size-report`) and 144 KiB on the micro:bit v1 (`cargo xtask check-microbit-v1`); CI runs both, and docs/boards.md (\"Budget\") has their figures.\n",
                 if DEFAULT_EVENTS { "the event stepper" } else { "fixed steps" }
             );
         }

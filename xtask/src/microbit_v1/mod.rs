@@ -14,7 +14,7 @@
 //!   stress scenes' are held to it as a goal), a two-second play without the demo (the stub found
 //!   as the MMA8653FC, polled without a panic, the LEDs showing what the
 //!   supervision decided), and the budgets (RAM: statics + stack
-//!   high-water ≤ V1_RAM_BUDGET, 12 KiB; flash ≤ V1_FLASH_BUDGET, 128 KiB,
+//!   high-water ≤ V1_RAM_BUDGET, 12 KiB; flash ≤ V1_FLASH_BUDGET, 144 KiB,
 //!   with the code bytes per module when over; CPU ≤
 //!   V1_CPU_BUDGET_CENTIPERCENT, 20 % of 16 MHz).
 //!

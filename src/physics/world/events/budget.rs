@@ -23,7 +23,8 @@
 //! each unit from a step's second round (the first, a search per marble and a
 //! time of impact per pair, is never cut, so that every marble's step gets
 //! somewhere), so a step spends at most the first round, or `FLIGHT_BUDGET − 1`
-//! and the last unit (a search and the tiles it tested, or a pair slice),
+//! and the last unit (a search and the tiles it tested, or a pair slice and
+//! its marbles' searches),
 //! whatever the scene; the scene that asks for more plays slower than real time
 //! while it does.
 //!
@@ -73,7 +74,8 @@ pub(super) const SLICE_END: u32 = 5;
 /// A pair's time of impact, whatever ends it.
 pub(super) const PAIR_TEST: u32 = 2;
 
-/// A pair slice: both marbles flown, their passes and the pair's push.
+/// A pair slice: both marbles flown, their passes and the pair's push (each
+/// marble's search for its first tile event is charged as a search).
 pub(super) const PAIR_SLICE: u32 = 16;
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {

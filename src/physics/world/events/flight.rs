@@ -45,6 +45,9 @@ pub(super) struct Slice<S> {
     /// along the same axis; or a slice past edge `skip`, which the marble leaves
     /// (`pivot_len`). An event inside either makes the rest a plain slice.
     pub(super) rail: bool,
+    /// A slice rolling on this still marble (`rest.rs`): the pull's part into
+    /// it dropped, every tile searched (`skip` is [`EVERY`]: none left out).
+    pub(super) on: Option<u8>,
 }
 
 /// How a slice asked for around a tile begins.
@@ -91,6 +94,14 @@ pub(super) struct Flight<S> {
     pub(super) rail: Option<TileIndex>,
     /// How the slice asked for begins.
     pub(super) around: Around,
+    /// A slice rolling on this still marble asked for (`rest.rs`).
+    pub(super) roll: Option<u8>,
+    /// The still marble it was last asked to roll on this step: a touch on it
+    /// that neither rests nor rolls goes on as any pair's after that.
+    pub(super) tried: Option<u8>,
+    /// The still marble it rests on for the rest of the step (`rest.rs`): the
+    /// pair is not tested again while that one stays still.
+    pub(super) rest: Option<u8>,
     /// The slice under way.
     pub(super) slice: Option<Slice<S>>,
     /// Where `seg` puts the marble at the last search's limit (steps from `t`):
@@ -125,6 +136,9 @@ impl<S: Scalar> Flight<S> {
             want: None,
             rail: None,
             around: Around::Slice,
+            roll: None,
+            tried: None,
+            rest: None,
             slice: None,
             end: None,
         }
@@ -161,6 +175,9 @@ impl<S: Scalar> Flight<S> {
             want: None,
             rail: None,
             around: Around::Slice,
+            roll: None,
+            tried: None,
+            rest: None,
             slice: None,
             end: None,
         }

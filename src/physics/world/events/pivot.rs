@@ -214,21 +214,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let Some((q, n, _)) = self.pivot_point(m.pos, t) else {
             return;
         };
-        m.pos = q + n.scale(self.params.radius + self.tol());
-        // In pitch/T (1/32 s): components ≤ 4, squares ≤ 48.
-        let w = m.vel.shr(T_LOG2);
-        let wn = n.dot(w);
-        if wn > S::ZERO {
-            let wt = w - n.scale(wn);
-            let (t2, n2) = (wt.length_sq(), wn.times(wn));
-            // |wt|·(1 + x/2) ≤ |wt|·√(1 + x) = |w| with x = wn²/|wt|².
-            let wt = if n2 < t2 {
-                wt.scale(S::ONE + n2.div(t2).half())
-            } else {
-                wt
-            };
-            m.vel = wt.shl(T_LOG2);
-        }
+        onto_sphere(m, q, n, self.params.radius + self.tol());
     }
 
     /// Whether a marble resting on two parallel edges at once — over a slot, the
@@ -323,5 +309,26 @@ fn clamp_out<S: Scalar>(c: S, lo: S, hi: S) -> (S, bool) {
         (hi, true)
     } else {
         (c, false)
+    }
+}
+
+/// The centre put on the sphere of `radius` about `q` along the unit normal `n`
+/// from it, and the velocity turned to the sphere's tangent there, no faster
+/// than it was (the end of a slice rolling on an edge or a marble).
+pub(super) fn onto_sphere<S: Scalar>(m: &mut Marble<S>, q: Vec3<S>, n: Vec3<S>, radius: S) {
+    m.pos = q + n.scale(radius);
+    // In pitch/T (1/32 s): components ≤ 4, squares ≤ 48.
+    let w = m.vel.shr(T_LOG2);
+    let wn = n.dot(w);
+    if wn > S::ZERO {
+        let wt = w - n.scale(wn);
+        let (t2, n2) = (wt.length_sq(), wn.times(wn));
+        // |wt|·(1 + x/2) ≤ |wt|·√(1 + x) = |w| with x = wn²/|wt|².
+        let wt = if n2 < t2 {
+            wt.scale(S::ONE + n2.div(t2).half())
+        } else {
+            wt
+        };
+        m.vel = wt.shl(T_LOG2);
     }
 }

@@ -68,7 +68,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // A pivot slice leaves out only its edge: another tile it rests against
         // would be sunk into over the pivot slice's length (two edges under a
         // marble over a slot), so it is found at once and a plain slice takes over.
-        let slicing = rest_out && skip != EVERY && skip != LID;
+        // (A pair slice's search has no tile of its own, `EVERY`, and leaves
+        // out what each marble rests against all the same.)
+        let slicing = rest_out && skip != LID;
         // A pivot slice (`!rest_out`) keeps its edge out without asking: its
         // flight has no part along the edge's normal (`pivot_hold` dropped it), so
         // it neither closes on the edge nor has left it (205 host instructions a

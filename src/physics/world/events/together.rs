@@ -2,11 +2,11 @@
 //! marble's own or a pair's — in time order; a pair pressed together goes on in
 //! slices with the fixed step's pair code.
 
-use super::budget::{PAIR_SLICE, PAIR_TEST};
+use super::budget::{PAIR_SLICE, PAIR_TEST, SEARCH};
 use super::pair_test::{far_apart, pair_toi};
 use super::{
-    cap_speed, ended_round, marble_pair, max_abs, CarriedEdge, Contact, Event, Flight, Marble,
-    Scalar, Segment, Solver, StepObserver, Toi, Vec3, World, MAX_EVENTS, T_LOG2,
+    cap_speed, ended_round, marble_pair, max_abs, CarriedEdge, Contact, Event, Flight, FreeRegion,
+    Marble, Scalar, Segment, Solver, StepObserver, Toi, Vec3, World, EVERY, MAX_EVENTS, T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -89,6 +89,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     }
                     continue;
                 }
+                if let Some(lo) = fl[n].roll.map(usize::from) {
+                    // Rolling on only while that marble stays still.
+                    if !self.stands_still(&fl, lo) {
+                        fl[n].roll = None;
+                    }
+                }
                 let (s, ev) = self.next::<SPACE>(n, &mut m, &mut fl[n]);
                 self.marbles[n] = m;
                 plan[n] = Some((fl[n].after(s), ev));
@@ -122,6 +128,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     // frame, every frame (the drop-onto-marble stress scene:
                     // 370 k instructions a frame at rest).
                     if !live[a] || !live[b] || (self.marbles[a].asleep && self.marbles[b].asleep) {
+                        continue;
+                    }
+                    // A marble rolling on a still one, or at rest on it: the slice
+                    // keeps them touching, the rest keeps both where they are
+                    // (`events/rest.rs`).
+                    if self.lies_on(&fl, a, b) || self.lies_on(&fl, b, a) {
                         continue;
                     }
                     // Both at the later of their own times (a marble a slice
@@ -206,6 +218,29 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
             match pair {
                 Some((a, b, contact)) => {
+                    // A slow touch on a still marble may leave the marble resting
+                    // or rolling on it (`events/rest.rs`): the still one, asleep
+                    // or not (the same physics either way: sleeping only skips
+                    // work), is not woken. The moving one's next flight asks
+                    // which (once a step: if neither, the pair goes on as any
+                    // pair).
+                    if let Some((up, lo)) = self.lying(&fl, a, b, contact.as_ref()) {
+                        let mut m = self.marbles[up];
+                        if when > fl[up].t {
+                            let s = when - fl[up].t;
+                            self.fly(up, &mut m, &mut fl[up], s, obs);
+                        }
+                        self.marbles[up] = m;
+                        fl[up].roll = Some(lo);
+                        fl[up].tried = Some(lo);
+                        plan[up] = None;
+                        if keep {
+                            forget(&mut apart, up);
+                        }
+                        self.stats.events = self.stats.events.wrapping_add(1);
+                        now = now.max(when);
+                        continue;
+                    }
                     for n in [a, b] {
                         let mut m = self.marbles[n];
                         if m.asleep {
@@ -218,6 +253,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         }
                         self.marbles[n] = m;
                         plan[n] = None;
+                        fl[n].rest = None;
                     }
                     self.stats.events = self.stats.events.wrapping_add(1);
                     let slow = match contact {
@@ -425,11 +461,33 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             let seg = fl[n].seg;
             let (um, hm) = (max_abs(seg.u), max_abs(seg.h));
             let mut j = 3;
-            while j < 10 && (um.times(len) > r.shr(3) || hm.times(len.times(len)) > r.shr(12)) {
+            while j < 10 && (um.times(len) > r.shr(3) || hm.times(len.times(len)) > r.shr(SINK)) {
                 len = len.half();
                 j += 1;
             }
             len = len.min(fl[n].len);
+        }
+        // Each marble's first tile event ends the slice there (a tile it rests
+        // against is left to the passes, as in a plain slice): flown past it, a
+        // marble struck towards a wall went up to the slice's travel (`r/8`)
+        // into it before the passes at the end pushed it out (66 µm in the
+        // two-marble level's trace).
+        // The search neither asks nor builds the marble's free region: a pair
+        // slice's flight, pressed into another marble, is not one a region was
+        // built for (with it, the sampled trace's replay of a frame, which starts
+        // from the regions the frame ended with, found other events).
+        for n in [a, b] {
+            let m = self.marbles[n];
+            self.charge(SEARCH);
+            let region = core::mem::replace(&mut self.free[n], FreeRegion::EMPTY);
+            let built = core::mem::replace(&mut fl[n].built, true);
+            let (s, _) = self.search::<SPACE>(n, &m, &mut fl[n], len, EVERY, true);
+            self.free[n] = region;
+            fl[n].built = built;
+            // Where the search's limit would put the marble: not where the slice
+            // ends (a later flight of that length would take it).
+            fl[n].end = None;
+            len = len.min(s);
         }
         for n in [a, b] {
             let mut m = self.marbles[n];
@@ -460,6 +518,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     }
 }
 
+const SINK: u32 = 12;
 /// Forgets what was known of marble `n`'s pairs (it has a new plan).
 #[inline]
 fn forget<S: Scalar, const M: usize>(apart: &mut [[S; M]; M], n: usize) {

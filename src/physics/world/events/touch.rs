@@ -254,6 +254,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if sl.pivot {
             self.onto_pivot(m, sl.skip);
         }
+        if let Some(lo) = sl.on {
+            self.onto_marble(m, lo);
+        }
         let k = self.params.k;
         let solver = Solver {
             acc: self.solver(f.seg.dv, k).acc,
@@ -271,5 +274,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             f.want = Some(sl.skip);
             f.around = Around::Rolling;
         }
+        // On rolling on the sleeping marble while it holds (the next flight).
+        f.roll = sl.on;
     }
 }
