@@ -299,89 +299,94 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             // Past every bound: blind slices to the end of the step.
             f.want = Some(EVERY);
         }
-        let mut rolls = false;
-        if let Some(lo) = f.roll.take() {
-            // At rest on a still marble and an edge or a face (`events/rest.rs`),
-            // or on rolling on it; a slice about an edge touched goes first (its
-            // pair tests find the still marble again).
-            if self.rests_on(m, &self.marbles[lo as usize], f, SPACE) {
-                m.vel = Vec3::ZERO;
-                f.set_seg(Segment::still(m.pos));
-                f.rest = Some(lo);
-                f.want = None;
-                f.slice = None;
-                return (S::ONE - f.t, Event::End);
+        // Most flights ask for no slice, have none under way and roll on no
+        // marble: one test for the three.
+        if f.want.is_some() || f.roll.is_some() || f.slice.is_some() {
+            let mut rolls = false;
+            if let Some(lo) = f.roll.take() {
+                // At rest on a still marble and an edge or a face (`events/rest.rs`),
+                // or on rolling on it; a slice about an edge touched goes first (its
+                // pair tests find the still marble again).
+                if self.rests_on(m, &self.marbles[lo as usize], f, SPACE) {
+                    m.vel = Vec3::ZERO;
+                    f.set_seg(Segment::still(m.pos));
+                    f.rest = Some(lo);
+                    f.want = None;
+                    f.slice = None;
+                    return (S::ONE - f.t, Event::End);
+                }
+                rolls = f.want.is_none() && self.roll_slice(m, f, lo);
             }
-            rolls = f.want.is_none() && self.roll_slice(m, f, lo);
-        }
-        if rolls {
-            // A roll slice begun (`events/rest.rs`): its flight is set.
-        } else if let Some(skip) = f.want.take() {
-            let around = core::mem::replace(&mut f.around, Around::Slice);
-            let rail = f.rail.take();
-            // The edge's nearest point, once for the hold, the rail and the
-            // slice's length (neither moves the centre): a reciprocal square
-            // root each.
-            let asked =
-                skip != EVERY && (around != Around::Slice || (skip != LID && rail.is_some()));
-            let point = if asked {
-                self.pivot_point(m.pos, skip)
-            } else {
-                None
-            };
-            let pivot = around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, point);
-            let rail = !pivot
-                && skip != EVERY
-                && skip != LID
-                && rail.is_some_and(|first| self.rail_hold(m, f, first, skip, point));
-            if pivot || around != Around::Rolling {
-                // A touched edge the marble leaves is left out like a pivot's
-                // (`pivot_len`); an event inside ends that like a rail slice.
-                let long = if pivot || rail || around == Around::Touched {
-                    self.pivot_len(f, point, !pivot && !rail)
+            if rolls {
+                // A roll slice begun (`events/rest.rs`): its flight is set.
+            } else if let Some(skip) = f.want.take() {
+                let around = core::mem::replace(&mut f.around, Around::Slice);
+                let rail = f.rail.take();
+                // The edge's nearest point, once for the hold, the rail and the
+                // slice's length (neither moves the centre): a reciprocal square
+                // root each.
+                let asked =
+                    skip != EVERY && (around != Around::Slice || (skip != LID && rail.is_some()));
+                let point = if asked {
+                    self.pivot_point(m.pos, skip)
                 } else {
                     None
                 };
-                let len = long.unwrap_or_else(|| self.slice_len(&f.seg).min(f.len));
-                f.slice = Some(Slice {
-                    skip,
-                    start: m.pos,
-                    from: f.t,
-                    to: f.after(len),
-                    pivot,
-                    rail: !pivot && long.is_some(),
-                    on: None,
-                });
-                self.stats.slices = self.stats.slices.wrapping_add(1);
-            }
-        } else if f.slice.is_some_and(|sl| sl.rail) {
-            // An event inside a rail slice (a bounce off a wall at its end, say)
-            // leaves the flight its whole pull again: the rest of the slice is a
-            // plain one, bounded by the sink (a rail slice of 3/4 step going on
-            // after a bounce can sink the marble 3.4 % of r).
-            let to = f.after(self.slice_len(&f.seg).min(f.len));
-            if let Some(sl) = f.slice.as_mut() {
-                sl.rail = false;
-                sl.to = sl.to.min(to);
-            }
-        } else if let Some(lo) = f.slice.and_then(|sl| sl.on) {
-            // A slice rolling on a sleeping marble goes on after an event inside
-            // it while the marble still holds it; else it ends here.
-            if !self.roll_hold(m, f, lo) {
-                if let Some(sl) = f.slice.as_mut() {
-                    sl.on = None;
+                let pivot =
+                    around != Around::Slice && skip != EVERY && self.pivot_hold(m, f, point);
+                let rail = !pivot
+                    && skip != EVERY
+                    && skip != LID
+                    && rail.is_some_and(|first| self.rail_hold(m, f, first, skip, point));
+                if pivot || around != Around::Rolling {
+                    // A touched edge the marble leaves is left out like a pivot's
+                    // (`pivot_len`); an event inside ends that like a rail slice.
+                    let long = if pivot || rail || around == Around::Touched {
+                        self.pivot_len(f, point, !pivot && !rail)
+                    } else {
+                        None
+                    };
+                    let len = long.unwrap_or_else(|| self.slice_len(&f.seg).min(f.len));
+                    f.slice = Some(Slice {
+                        skip,
+                        start: m.pos,
+                        from: f.t,
+                        to: f.after(len),
+                        pivot,
+                        rail: !pivot && long.is_some(),
+                        on: None,
+                    });
+                    self.stats.slices = self.stats.slices.wrapping_add(1);
                 }
-                self.end_slice::<SPACE>(m, f);
-            }
-        } else if let Some(sl) = f.slice.as_mut().filter(|sl| sl.pivot) {
-            // A pivot slice goes on after an event inside it: the edge still holds
-            // the marble, or the rest is a plain slice.
-            let skip = sl.skip;
-            if !self.pivot_hold(m, f, self.pivot_point(m.pos, skip)) {
+            } else if f.slice.is_some_and(|sl| sl.rail) {
+                // An event inside a rail slice (a bounce off a wall at its end, say)
+                // leaves the flight its whole pull again: the rest of the slice is a
+                // plain one, bounded by the sink (a rail slice of 3/4 step going on
+                // after a bounce can sink the marble 3.4 % of r).
                 let to = f.after(self.slice_len(&f.seg).min(f.len));
                 if let Some(sl) = f.slice.as_mut() {
-                    sl.pivot = false;
+                    sl.rail = false;
                     sl.to = sl.to.min(to);
+                }
+            } else if let Some(lo) = f.slice.and_then(|sl| sl.on) {
+                // A slice rolling on a sleeping marble goes on after an event inside
+                // it while the marble still holds it; else it ends here.
+                if !self.roll_hold(m, f, lo) {
+                    if let Some(sl) = f.slice.as_mut() {
+                        sl.on = None;
+                    }
+                    self.end_slice::<SPACE>(m, f);
+                }
+            } else if let Some(sl) = f.slice.as_mut().filter(|sl| sl.pivot) {
+                // A pivot slice goes on after an event inside it: the edge still holds
+                // the marble, or the rest is a plain slice.
+                let skip = sl.skip;
+                if !self.pivot_hold(m, f, self.pivot_point(m.pos, skip)) {
+                    let to = f.after(self.slice_len(&f.seg).min(f.len));
+                    if let Some(sl) = f.slice.as_mut() {
+                        sl.pivot = false;
+                        sl.to = sl.to.min(to);
+                    }
                 }
             }
         }
