@@ -50,10 +50,12 @@ fn pair_gap<S: Scalar>(w: &World<'_, S, 4>) -> f64 {
     d - 2.0 * r
 }
 
-/// The top marble lands on the lower one, rolls on it into the hole's rim and
-/// rests there, touching both: within 0.1 s of landing both sleep, with zero
-/// velocities, and stay so; neither is ever more than 5 µm into the other or a
-/// tile; the budget cuts at most the landing's few steps.
+/// The top marble lands on the lower one (a strike on it first: the lower one,
+/// held by the floor and the wall, is never moved once at rest), rolls on it
+/// into the hole's rim and rests there, touching both: within a quarter second
+/// of its first touch at a step's end (its bounces at `e = ½` take a few
+/// hundredths) both sleep, with zero velocities, and stay so; neither is ever
+/// more than 5 µm into the other or a tile; the budget cuts at most a few steps.
 fn rests_in_the_cradle<S: Scalar>() {
     let mut w = drop_world::<S>();
     let p = *w.params();
@@ -61,6 +63,7 @@ fn rests_in_the_cradle<S: Scalar>() {
     let steps = 1u32 << p.k;
     let mut landed = None;
     let mut asleep_at = None;
+    let mut still_at = None;
     for n in 1..=steps {
         w.step();
         let gap = pair_gap(&w);
@@ -80,6 +83,17 @@ fn rests_in_the_cradle<S: Scalar>() {
         if landed.is_none() && gap < FIVE_UM {
             landed = Some(n);
         }
+        let lower = w.marbles()[1];
+        match still_at {
+            None if lower.asleep => still_at = Some(lower.pos),
+            Some(at) => assert_eq!(
+                lower.pos,
+                at,
+                "{} step {n}: the lower marble moved",
+                S::NAME
+            ),
+            None => {}
+        }
         let both = w.marbles().iter().all(|m| m.asleep);
         match (asleep_at, both) {
             (None, true) => asleep_at = Some(n),
@@ -96,7 +110,7 @@ fn rests_in_the_cradle<S: Scalar>() {
         w.stats.budget_cuts
     );
     assert!(
-        settle <= 0.1,
+        settle <= 0.25,
         "{}: {settle} s from landing to rest",
         S::NAME
     );

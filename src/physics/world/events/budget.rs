@@ -53,7 +53,8 @@
 //! `StepStats::budget_cuts` counts the marble-steps it cut, `StepStats::work` the
 //! units spent; no built-in level reaches the budget (at most 86 units in a
 //! frame, `grand-tour`; the top-difficulty mazes 103: `tests/budget.rs`), the
-//! stress scenes of a landing on a marble and of four marbles shaken do.
+//! stress scene of four marbles shaken does (a landing on a marble did until the
+//! marble below was struck, rolled and rested on: `rest.rs`).
 
 use super::{Flight, Scalar, World};
 

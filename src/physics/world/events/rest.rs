@@ -33,7 +33,15 @@
 //!   along the pair's normal are dropped, every tile is searched, and at the
 //!   slice's end the centre is put back `2r` (and a tolerance) from the still
 //!   one's, the velocity along the new tangent and no faster.
-//! - else (once a step) the pair goes on as any pair.
+//! - else the pair goes on as any pair (asked again only once the marble has
+//!   moved).
+//!
+//! A marble that touches one standing still **faster** than the threshold, where
+//! the still one's held faces carry the push, **strikes** it: eq. 1 against it as
+//! against a wall (the still marble and what holds it are one rigid support: the
+//! impulse passes through it into the faces), the moving marble's normal speed
+//! reversed and scaled by the restitution. A marble dropped down a hole onto one
+//! lying against the wall below once woke it, and the pair flew pair slices.
 //!
 //! The still marble is not woken: nothing moves it. Only motion below the
 //! threshold is dropped and the centre is put back only towards the still marble,
@@ -43,7 +51,8 @@
 use super::super::super::geometry::broadphase::{candidates, candidates_plane};
 use super::pivot::onto_sphere;
 use super::{
-    max_abs, Contact, Flight, Marble, Scalar, Segment, Slice, TileIndex, Vec3, World, EVERY, T_LOG2,
+    cap_speed, max_abs, no_faster, Contact, Flight, Marble, Scalar, Segment, Slice, TileIndex,
+    Vec3, World, EVERY, T_LOG2,
 };
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
@@ -119,9 +128,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 }
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
-    /// Of marbles `a` and `b` touching (the pair's `contact`, `None` inside each
-    /// other), the one that moves and the still one it lies on, when it touches
-    /// slowly and has not been asked this step whether it rests or rolls there.
+    /// Of marbles `a` and `b` touching at `when` (the pair's `contact`, `None`
+    /// inside each other), the one that moves and the still one it meets, and
+    /// whether it touches slowly: then only if it has not been asked whether it
+    /// rests or rolls there since its flight last moved it.
     // Out of line, and so are the rest's: one copy for both kinds of world (the
     // micro:bit v1's flash).
     #[inline(never)]
@@ -131,22 +141,56 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         a: usize,
         b: usize,
         contact: Option<&Contact<S>>,
-    ) -> Option<(usize, u8)> {
+        when: S,
+    ) -> Option<(usize, u8, bool)> {
         let (ma, mb) = (&self.marbles[a], &self.marbles[b]);
         let (up, lo) = match (still(ma, &fl[a]), still(mb, &fl[b])) {
             (true, false) => (b, a),
             (false, true) => (a, b),
             _ => return None,
         };
-        // Slower than the threshold, as `pair_touch` asks.
-        if let Some(c) = contact {
-            let approach = c.normal.dot(ma.vel.shr(T_LOG2) - mb.vel.shr(T_LOG2));
-            if approach > self.params.threshold {
-                return None;
-            }
-        }
+        // Slower than the threshold, as `pair_touch` asks; a faster touch is a
+        // strike (`World::strike`).
+        let slow = contact.is_none_or(|c| {
+            c.normal.dot(ma.vel.shr(T_LOG2) - mb.vel.shr(T_LOG2)) <= self.params.threshold
+        });
         let lo = lo as u8;
-        (fl[up].tried != Some(lo)).then_some((up, lo))
+        (!slow || fl[up].tried != Some(lo) || when > fl[up].t).then_some((up, lo, slow))
+    }
+
+    /// Marble `m` striking the still marble `lo` faster than the threshold: when
+    /// `lo`'s held faces carry the push, eq. 1 against `lo` as against a wall
+    /// (`lo` and what holds it are one rigid support: the impulse passes through
+    /// it into the faces), `m`'s normal speed reversed and scaled by the
+    /// restitution, `lo` not woken. Returns whether it did. (A landing on a
+    /// marble lying against a wall woke it, and the pair flew pair slices.)
+    #[inline(never)]
+    pub(super) fn strike(&mut self, m: &mut Marble<S>, lo: u8) -> bool {
+        let p = self.params;
+        let other = self.marbles[lo as usize];
+        let near = p.radius + p.radius + self.tol() + self.tol();
+        let Some(n) = normal(m.pos - other.pos, near) else {
+            return false;
+        };
+        // |v| ≤ 127 pitch/s (`cap_speed`), so |v·n| ≤ 127; the new normal speed
+        // is formed in pitch/T (≤ 4 a component), as `pair_touch` forms it.
+        let vn = n.dot(m.vel);
+        if vn >= S::ZERO || !carried(other.rest_mask, n) {
+            return false;
+        }
+        let w = S::ZERO - vn.shr(T_LOG2);
+        let out = p.restitution.times(w).shl(T_LOG2).min(p.v_max);
+        let t = m.vel - n.scale(vn);
+        let v = Vec3::new(
+            t.x.sat_add(n.x.times(out)),
+            t.y.sat_add(n.y.times(out)),
+            t.z.sat_add(n.z.times(out)),
+        );
+        m.vel = no_faster(cap_speed(v), m.vel);
+        self.impacts.record(w.shl(T_LOG2));
+        self.stats.collisions = self.stats.collisions.wrapping_add(1);
+        m.asleep = false;
+        true
     }
 
     /// Whether marble `n` stands still for the rest of its step (see [`still`]).

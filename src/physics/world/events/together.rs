@@ -218,28 +218,34 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             }
             match pair {
                 Some((a, b, contact)) => {
-                    // A slow touch on a still marble may leave the marble resting
-                    // or rolling on it (`events/rest.rs`): the still one, asleep
-                    // or not (the same physics either way: sleeping only skips
-                    // work), is not woken. The moving one's next flight asks
-                    // which (once a step: if neither, the pair goes on as any
-                    // pair).
-                    if let Some((up, lo)) = self.lying(&fl, a, b, contact.as_ref()) {
+                    // A touch on a still marble (`events/rest.rs`; the still one,
+                    // asleep or not, is not woken: the same physics either way,
+                    // sleeping only skips work): slow, the moving one's next
+                    // flight asks whether it rests or rolls there (again only
+                    // once it has moved: if neither, the pair goes on as any
+                    // pair); faster, a strike on it when what holds it carries
+                    // the push.
+                    if let Some((up, lo, slow)) = self.lying(&fl, a, b, contact.as_ref(), when) {
                         let mut m = self.marbles[up];
                         if when > fl[up].t {
                             let s = when - fl[up].t;
                             self.fly(up, &mut m, &mut fl[up], s, obs);
                         }
+                        let done = slow || self.strike(&mut m, lo);
                         self.marbles[up] = m;
-                        fl[up].roll = Some(lo);
-                        fl[up].tried = Some(lo);
-                        plan[up] = None;
-                        if keep {
-                            forget(&mut apart, up);
+                        if done {
+                            if slow {
+                                fl[up].roll = Some(lo);
+                                fl[up].tried = Some(lo);
+                            }
+                            plan[up] = None;
+                            if keep {
+                                forget(&mut apart, up);
+                            }
+                            self.stats.events = self.stats.events.wrapping_add(1);
+                            now = now.max(when);
+                            continue;
                         }
-                        self.stats.events = self.stats.events.wrapping_add(1);
-                        now = now.max(when);
-                        continue;
                     }
                     for n in [a, b] {
                         let mut m = self.marbles[n];
