@@ -9,7 +9,8 @@
 //! profile (`cargo qemu -- --demo`) and the micro:bit v1's (`cargo microbit-v1
 //! -- --demo --profile`) count every frame's instructions on them as on the
 //! levels (`app::profile_scenes`); `cargo xtask check-demo` holds both to the
-//! same bound, `cargo xtask check-microbit-v1` reports them against its goal;
+//! same bound, `cargo xtask check-microbit-v1` too but for four-shaken, which it
+//! reports against it;
 //! `tests/stress.rs` checks on the host that each scene does what it is named
 //! for. Beside them every board's profile (`app::profile_scenes`) plays
 //! [`HARD_MAZES`], generated mazes at the top difficulty.

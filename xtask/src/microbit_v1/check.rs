@@ -326,8 +326,8 @@ fn check_play_on_stub(
 /// Runs `--demo --profile` and prints each level's frame costs, then those of
 /// the top-difficulty mazes and the stress scenes (`app::profile_scenes`),
 /// each worst frame against `goal` (the board's frame budget, M0
-/// instructions: enforced on the levels and the top-difficulty mazes, a goal
-/// the physics work is to bring the stress scenes under, issue 40, reported);
+/// instructions: enforced on the levels, the top-difficulty mazes and the
+/// stress scenes, but for those of [`REPORTED_ONLY`], reported);
 /// it must still win every level and profile each, and log every scene's
 /// `profile` and `budget` lines.
 fn check_profile(
@@ -350,7 +350,6 @@ fn check_profile(
     let profiles: Vec<_> = text.lines().filter_map(parse_profile).collect();
     let (levels, _) = demo::parse_levels(&text);
     let scenes = demo::profiled_scenes();
-    let stress = demo::stress_scenes();
     let level_profiles = profiles
         .iter()
         .filter(|(name, ..)| !scenes.contains(name))
@@ -374,7 +373,11 @@ fn check_profile(
         let line = format!(
             "profile {what}{name}: {frames} frames, physics {average} per frame, worst {max}"
         );
-        match judge_frame(stress.contains(name), *max, goal) {
+        let reported = REPORTED_ONLY.contains(&name.as_str());
+        match judge_frame(reported, *max, goal) {
+            Frame::Within if reported => say!(
+                "{line}{cut} (within the bound: take it off REPORTED_ONLY, xtask/src/microbit_v1/check.rs)"
+            ),
             Frame::Within => say!("{line}{cut}"),
             Frame::OverGoal => say!("{line} (over the {} goal){cut}", grouped(goal)),
             Frame::OverBound => problems.report(format!(
@@ -392,22 +395,29 @@ fn check_profile(
     Ok(())
 }
 
+/// The stress scenes whose worst frame the v1 does not yet bring within its
+/// bound (issue 40): reported against it as a goal. Every other profiled
+/// scene is held to the bound as the levels are, so that one brought within it
+/// stays there (drop-onto-marble since the strike on a still marble).
+/// four-shaken spends the flight budget at about 710 M0 instructions a unit,
+/// and its step's first round, never cut, is itself about 50 000
+/// (docs/performance.md).
+const REPORTED_ONLY: &[&str] = &["four-shaken"];
+
 /// A profiled worst frame against the M0's frame bound.
 #[derive(Debug, PartialEq, Eq)]
 enum Frame {
     Within,
-    /// A stress scene's: reported, not enforced until every one of them is
-    /// within it (issue 40).
+    /// A scene of [`REPORTED_ONLY`]'s: reported, not enforced.
     OverGoal,
-    /// A built-in level's or a top-difficulty maze's: the check fails.
+    /// Any other level's or scene's: the check fails.
     OverBound,
 }
 
-/// Judges a worst frame of `max` instructions against `bound`: enforced on the
-/// built-in levels and the top-difficulty mazes, a goal on the stress scenes
-/// (`stress`).
-fn judge_frame(stress: bool, max: u64, bound: u64) -> Frame {
-    match (max > bound, stress) {
+/// Judges a worst frame of `max` instructions against `bound`: enforced, but
+/// only reported for a scene of [`REPORTED_ONLY`] (`reported`).
+fn judge_frame(reported: bool, max: u64, bound: u64) -> Frame {
+    match (max > bound, reported) {
         (false, _) => Frame::Within,
         (true, true) => Frame::OverGoal,
         (true, false) => Frame::OverBound,
@@ -486,26 +496,30 @@ mod tests {
     }
 
     #[test]
-    fn a_level_or_maze_over_the_bound_fails_and_a_stress_scene_over_it_is_reported() {
-        use super::{judge_frame, Frame};
+    fn a_scene_over_the_bound_fails_unless_it_is_only_reported() {
+        use super::{judge_frame, Frame, REPORTED_ONLY};
         assert_eq!(judge_frame(false, 60_000, 60_000), Frame::Within);
         assert_eq!(judge_frame(false, 60_001, 60_000), Frame::OverBound);
         assert_eq!(judge_frame(true, 60_001, 60_000), Frame::OverGoal);
         assert_eq!(judge_frame(true, 59_999, 60_000), Frame::Within);
-        // A top-difficulty maze is judged as a level: not one of the stress
-        // scenes, so over the bound it fails.
+        // Only stress scenes may be reported only (a misspelt name would
+        // enforce nothing and report nothing), and not all of them: the others
+        // are enforced, the levels and the top-difficulty mazes always.
         let stress = crate::demo::stress_scenes();
-        for maze in crate::demo::profiled_scenes() {
-            if stress.contains(&maze) {
+        for name in REPORTED_ONLY {
+            assert!(
+                stress.iter().any(|s| s == name),
+                "{name} is not a stress scene"
+            );
+        }
+        assert!(REPORTED_ONLY.len() < stress.len());
+        for scene in crate::demo::profiled_scenes() {
+            if REPORTED_ONLY.contains(&scene.as_str()) {
                 continue;
             }
             assert!(
-                maze.ends_with("-d9"),
-                "{maze}: neither a stress scene nor a d9 maze"
-            );
-            assert_eq!(
-                judge_frame(stress.contains(&maze), 60_001, 60_000),
-                Frame::OverBound
+                scene.ends_with("-d9") || stress.contains(&scene),
+                "{scene}: neither a stress scene nor a d9 maze"
             );
         }
     }
