@@ -106,7 +106,8 @@ fn neighbour(t: TileIndex, axis: usize, up: bool) -> TileIndex {
     }
 }
 
-fn unit<S: Scalar>(axis: usize, positive: bool) -> Vec3<S> {
+/// The unit vector along `axis`, up it if `positive` (a face's outward normal).
+pub(crate) fn unit<S: Scalar>(axis: usize, positive: bool) -> Vec3<S> {
     let v = if positive { S::ONE } else { -S::ONE };
     match axis {
         0 => Vec3::new(v, S::ZERO, S::ZERO),

@@ -49,6 +49,7 @@
 //! is a pure function of the state, the same on every target.
 
 use super::super::super::geometry::broadphase::{candidates, candidates_plane};
+use super::super::super::geometry::narrowphase::unit;
 use super::pivot::onto_sphere;
 use super::{
     cap_speed, max_abs, no_faster, Contact, Flight, Marble, Scalar, Segment, Slice, TileIndex,
@@ -70,13 +71,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     ) -> bool {
         let p = &self.params;
         let (r, tol) = (p.radius, self.tol());
-        let d = m.pos - lo.pos;
-        let Some(n) = normal(d, r + r + tol + tol) else {
-            return false;
-        };
-        if lo.vel != Vec3::ZERO || !carried(lo.rest_mask, n) {
+        if lo.vel != Vec3::ZERO {
             return false;
         }
+        let Some(n) = self.held_normal(m, lo) else {
+            return false;
+        };
+        let d = m.pos - lo.pos;
         let w_t = self.threshold_per_step();
         let u = m.vel.shr(p.k);
         if max_abs(u) > w_t {
@@ -117,8 +118,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             let bit = bits.trailing_zeros() as usize;
             bits &= bits - 1;
             let (axis, up) = (bit / 2, bit % 2 == 1);
-            let mut n1 = Vec3::ZERO;
-            n1.set_axis(axis, if up { S::ONE } else { S::ZERO - S::ONE });
+            let n1 = unit(axis, up);
             if (0..3).any(|other| other != axis && rail(n1, other)) {
                 return true;
             }
@@ -167,15 +167,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     #[inline(never)]
     pub(super) fn strike(&mut self, m: &mut Marble<S>, lo: u8) -> bool {
         let p = self.params;
-        let other = self.marbles[lo as usize];
-        let near = p.radius + p.radius + self.tol() + self.tol();
-        let Some(n) = normal(m.pos - other.pos, near) else {
+        let Some(n) = self.held_normal(m, &self.marbles[lo as usize]) else {
             return false;
         };
         // |v| ≤ 127 pitch/s (`cap_speed`), so |v·n| ≤ 127; the new normal speed
         // is formed in pitch/T (≤ 4 a component), as `pair_touch` forms it.
         let vn = n.dot(m.vel);
-        if vn >= S::ZERO || !carried(other.rest_mask, n) {
+        if vn >= S::ZERO {
             return false;
         }
         let w = S::ZERO - vn.shr(T_LOG2);
@@ -191,6 +189,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         self.stats.collisions = self.stats.collisions.wrapping_add(1);
         m.asleep = false;
         true
+    }
+
+    /// The unit normal from `lo`'s centre to `m`'s, when they touch (within `2r`
+    /// and two tolerances) and what holds `lo` carries a push along it
+    /// ([`carried`]): the pair's normal every rule here starts from.
+    fn held_normal(&self, m: &Marble<S>, lo: &Marble<S>) -> Option<Vec3<S>> {
+        let (r, tol) = (self.params.radius, self.tol());
+        let n = normal(m.pos - lo.pos, r + r + tol + tol)?;
+        carried(lo.rest_mask, n).then_some(n)
     }
 
     /// Whether marble `n` stands still for the rest of its step (see [`still`]).
@@ -222,14 +229,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if other.vel != Vec3::ZERO {
             return false;
         }
-        let p = &self.params;
-        let (r, tol) = (p.radius, self.tol());
-        let Some(n) = normal(m.pos - other.pos, r + r + tol + tol) else {
+        let Some(n) = self.held_normal(m, other) else {
             return false;
         };
-        if !carried(other.rest_mask, n) {
-            return false;
-        }
+        let (p, r) = (&self.params, self.params.radius);
         let seg = f.seg;
         // The normal first in its products (a zero component is the Cortex-M0's
         // short path).

@@ -4,6 +4,7 @@
 
 use super::budget::{PAIR_SLICE, PAIR_TEST, SEARCH};
 use super::pair_test::{far_apart, pair_toi};
+use super::touch::SINK;
 use super::{
     cap_speed, ended_round, marble_pair, max_abs, CarriedEdge, Contact, Event, Flight, FreeRegion,
     Marble, Scalar, Segment, Solver, StepObserver, Toi, Vec3, World, EVERY, MAX_EVENTS, T_LOG2,
@@ -524,7 +525,6 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     }
 }
 
-const SINK: u32 = 12;
 /// Forgets what was known of marble `n`'s pairs (it has a new plan).
 #[inline]
 fn forget<S: Scalar, const M: usize>(apart: &mut [[S; M]; M], n: usize) {

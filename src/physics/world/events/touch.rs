@@ -238,7 +238,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let (um, hm) = (max_abs(seg.u), max_abs(seg.h));
         let mut len = S::ONE.shr(3);
         let mut j = 3;
-        while j < 10 && (um.times(len) > r.shr(2) || hm.times(len.times(len)) > r.shr(12)) {
+        while j < 10 && (um.times(len) > r.shr(2) || hm.times(len.times(len)) > r.shr(SINK)) {
             len = len.half();
             j += 1;
         }
@@ -278,3 +278,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         f.roll = sl.on;
     }
 }
+
+/// A slice sinks the marble at most `2^-SINK·r` into what it rolls round or
+/// is pressed on (a plain slice's and a pair slice's bound, `slice_len`,
+/// `pair_slice`).
+pub(super) const SINK: u32 = 12;
