@@ -30,7 +30,7 @@
 //! bound (128 pitch/s), `|u| ≤ 1`, `|h| ≤ ½` at 2^7 steps/s and every square here
 //! stays below 16, inside the narrowest fixed format.
 
-use super::super::geometry::narrowphase::{offset, Contact, Feature};
+use super::super::geometry::narrowphase::{offset, unit, Contact, Feature};
 use super::super::geometry::tiles::Aabb;
 use super::super::scalar::Scalar;
 use super::super::vec::Vec3;
@@ -239,12 +239,6 @@ pub(crate) enum Toi<S> {
     },
     /// Not touched before `at` steps: search again from there.
     Later(S),
-}
-
-fn unit<S: Scalar>(axis: usize, positive: bool) -> Vec3<S> {
-    let mut n = Vec3::ZERO;
-    n.set_axis(axis, if positive { S::ONE } else { -S::ONE });
-    n
 }
 
 /// The first contact, within `len` steps, of a marble of radius `r` flying `seg`
