@@ -311,9 +311,8 @@ pub const MICROBIT_V1: Board = Board {
         ram: budget("V1_RAM_BUDGET", 12 * 1024),
         // 20 % of 16 MHz.
         cpu: budget("V1_CPU_BUDGET_CENTIPERCENT", 2000),
-        // A level's or top-difficulty maze's worst frame over it fails the
-        // check, and so does a stress scene's but those the check only
-        // reports (issue 40: `REPORTED_ONLY`, xtask/src/microbit_v1/check.rs).
+        // A level's, top-difficulty maze's or stress scene's worst frame
+        // over it fails the check (issue 40).
         frame: budget("WORST_FRAME_M0", 60_000),
     },
     hex: Some(HexSection {

@@ -61,18 +61,6 @@ pub fn profiled_scenes() -> Vec<String> {
     mazes.chain(scenes).collect()
 }
 
-/// The stress scenes among [`profiled_scenes`] (`game::stress::STRESS`): the
-/// only scenes the micro:bit v1's check may report against its bound without
-/// enforcing it (its tests hold `REPORTED_ONLY` to them).
-#[cfg(test)]
-pub fn stress_scenes() -> Vec<String> {
-    use marble_rolling::game::stress::STRESS;
-    STRESS
-        .iter()
-        .map(|s| s.level.info.name.to_string())
-        .collect()
-}
-
 /// Reports each of [`profiled_scenes`] that has no `profile` line or no
 /// `budget` line in `log`: a scene the board could not set up, or a profile
 /// cut short.

@@ -326,8 +326,7 @@ fn check_play_on_stub(
 /// Runs `--demo --profile` and prints each level's frame costs, then those of
 /// the top-difficulty mazes and the stress scenes (`app::profile_scenes`),
 /// each worst frame against `goal` (the board's frame budget, M0
-/// instructions: enforced on the levels, the top-difficulty mazes and the
-/// stress scenes, but for those of [`REPORTED_ONLY`], reported);
+/// instructions, enforced on every one of them);
 /// it must still win every level and profile each, and log every scene's
 /// `profile` and `budget` lines.
 fn check_profile(
@@ -373,17 +372,13 @@ fn check_profile(
         let line = format!(
             "profile {what}{name}: {frames} frames, physics {average} per frame, worst {max}"
         );
-        let reported = REPORTED_ONLY.contains(&name.as_str());
-        match judge_frame(reported, *max, goal) {
-            Frame::Within if reported => say!(
-                "{line}{cut} (within the bound: take it off REPORTED_ONLY, xtask/src/microbit_v1/check.rs)"
-            ),
-            Frame::Within => say!("{line}{cut}"),
-            Frame::OverGoal => say!("{line} (over the {} goal){cut}", grouped(goal)),
-            Frame::OverBound => problems.report(format!(
+        if *max > goal {
+            problems.report(format!(
                 "{line}{cut}: over the bound of {} M0 instructions",
                 grouped(goal)
-            )),
+            ));
+        } else {
+            say!("{line}{cut}");
         }
     }
     if let Some((statics, stack)) = parse_ram(&text) {
@@ -393,35 +388,6 @@ fn check_profile(
         );
     }
     Ok(())
-}
-
-/// The stress scenes whose worst frame the v1 does not yet bring within its
-/// bound (issue 40): reported against it as a goal. Every other profiled
-/// scene is held to the bound as the levels are, so that one brought within it
-/// stays there (drop-onto-marble since the strike on a still marble).
-/// four-shaken spends the flight budget at about 710 M0 instructions a unit,
-/// and its step's first round, never cut, is itself about 50 000
-/// (docs/performance.md).
-const REPORTED_ONLY: &[&str] = &["four-shaken"];
-
-/// A profiled worst frame against the M0's frame bound.
-#[derive(Debug, PartialEq, Eq)]
-enum Frame {
-    Within,
-    /// A scene of [`REPORTED_ONLY`]'s: reported, not enforced.
-    OverGoal,
-    /// Any other level's or scene's: the check fails.
-    OverBound,
-}
-
-/// Judges a worst frame of `max` instructions against `bound`: enforced, but
-/// only reported for a scene of [`REPORTED_ONLY`] (`reported`).
-fn judge_frame(reported: bool, max: u64, bound: u64) -> Frame {
-    match (max > bound, reported) {
-        (false, _) => Frame::Within,
-        (true, true) => Frame::OverGoal,
-        (true, false) => Frame::OverBound,
-    }
 }
 
 /// Checks the logged frames against the trace (see the module doc).
@@ -493,34 +459,5 @@ mod tests {
         assert_eq!(super::grouped(1_234_567), "1 234 567");
         assert_eq!(super::grouped(999), "999");
         assert_eq!(super::grouped(0), "0");
-    }
-
-    #[test]
-    fn a_scene_over_the_bound_fails_unless_it_is_only_reported() {
-        use super::{judge_frame, Frame, REPORTED_ONLY};
-        assert_eq!(judge_frame(false, 60_000, 60_000), Frame::Within);
-        assert_eq!(judge_frame(false, 60_001, 60_000), Frame::OverBound);
-        assert_eq!(judge_frame(true, 60_001, 60_000), Frame::OverGoal);
-        assert_eq!(judge_frame(true, 59_999, 60_000), Frame::Within);
-        // Only stress scenes may be reported only (a misspelt name would
-        // enforce nothing and report nothing), and not all of them: the others
-        // are enforced, the levels and the top-difficulty mazes always.
-        let stress = crate::demo::stress_scenes();
-        for name in REPORTED_ONLY {
-            assert!(
-                stress.iter().any(|s| s == name),
-                "{name} is not a stress scene"
-            );
-        }
-        assert!(REPORTED_ONLY.len() < stress.len());
-        for scene in crate::demo::profiled_scenes() {
-            if REPORTED_ONLY.contains(&scene.as_str()) {
-                continue;
-            }
-            assert!(
-                scene.ends_with("-d9") || stress.contains(&scene),
-                "{scene}: neither a stress scene nor a d9 maze"
-            );
-        }
     }
 }

@@ -4,29 +4,34 @@
 //! for many: a marble pressed on another flies plain pair slices, 32 or more a
 //! step; four marbles shaken in a box re-check every pair at every flight. A step
 //! may spend [`FLIGHT_BUDGET`] units of work, weighed by what each piece of work
-//! costs (one unit is about 300 host instructions, 650 on the Cortex-M0: the
-//! weights below were fitted to callgrind's count of every frame of the levels,
-//! the top-difficulty mazes and the stress scenes, `docs/performance.md`): a
-//! search's fixed part, each tile's time of impact in it, a slice's contact
-//! passes, every pair's time of impact (those its quick bound
-//! rejects too: four shaken marbles test 20 to 30 pairs a frame, and only those
-//! past the bound counted before), a pair slice. A free region's building is
-//! not counted: it is a cache, and a step cuts at the same place with or without
-//! it (`tests/free_region.rs`). Once they are spent, the rest
-//! of the step is **carried over**: every marble still under way stays where its
-//! last flight left it, with that flight's velocity, and goes on from there in
-//! the next step, as if the clock had paused for it; only a marble whose own
-//! plan runs to the step's end with no event, out of every other marble's reach
-//! over the step by the pair tests' bound without a product, finishes it (a
-//! marble rolling freely is not slowed with a pair pressed together elsewhere on
-//! the board: `together.rs`, `cut_together`). The check is made before
-//! each unit from a step's second round (the first, a search per marble and a
-//! time of impact per pair, is never cut, so that every marble's step gets
-//! somewhere), so a step spends at most the first round, or `FLIGHT_BUDGET − 1`
-//! and the last unit (a search and the tiles it tested, or a pair slice and
-//! its marbles' searches),
-//! whatever the scene; the scene that asks for more plays slower than real time
-//! while it does.
+//! costs (one unit is about 300 host instructions, 650 to 730 on the Cortex-M0;
+//! `docs/performance.md` has the measurements): a search's fixed part, each
+//! tile's time of impact in it, a slice's contact passes, every pair's test
+//! (those its quick bounds reject too: four shaken marbles test 20 to 30 pairs
+//! a frame), and its time of impact past those bounds, a pair slice. A free
+//! region's building is not counted: it is a cache, and a step cuts at the same
+//! place with or without it (`tests/free_region.rs`). Once they are spent, the
+//! rest of the step is **carried over**: every marble still under way stays
+//! where its last flight left it, with that flight's velocity, and goes on from
+//! there in the next step, as if the clock had paused for it; only a marble
+//! whose own plan runs to the step's end with no event, out of every other
+//! marble's reach over the step by the pair tests' bound without a product,
+//! finishes it (a marble rolling freely is not slowed with a pair pressed
+//! together elsewhere on the board: `together.rs`, `cut_together`). From a
+//! step's second round a search, a pair's test with its time of impact, and a
+//! pair slice with its marbles' searches is begun only when what is left of
+//! the budget covers it (the first round, a search per marble and a test per
+//! pair, is never cut, so that every marble's step gets somewhere); so a step
+//! spends at most the larger of its first round and the budget, past it only
+//! the tiles its last search tested and a slice's passes, whatever the scene;
+//! the scene that asks for more plays slower than real time while it does.
+//!
+//! The budget is the slowest board's: the micro:bit v1 has 60 000 Cortex-M0
+//! instructions for a frame's physics (issue 40), and four marbles shaken hard
+//! spend about 730 a unit in their worst frames, so 80 units (four-shaken's
+//! worst frame is then 58 844, `cargo xtask check-microbit-v1`). Where a unit
+//! was begun whenever any budget was left, a pair slice begun on the last unit
+//! overshot by 40 more, and the budget of 128 let four-shaken reach 101 719.
 //!
 //! What the cut keeps:
 //! - **No penetration**: the marbles are left in a state the event stepper
@@ -51,16 +56,18 @@
 //! state at a cut never repeats). `docs/performance.md` has the figures.
 //!
 //! `StepStats::budget_cuts` counts the marble-steps it cut, `StepStats::work` the
-//! units spent; no built-in level reaches the budget (at most 86 units in a
-//! frame, `grand-tour`; the top-difficulty mazes 103: `tests/budget.rs`), the
-//! stress scene of four marbles shaken does (a landing on a marble did until the
-//! marble below was struck, rolled and rested on: `rest.rs`).
+//! units spent; no built-in level reaches the budget (at most 73 units in a
+//! frame, `grand-tour`; the top-difficulty mazes 79: `tests/budget.rs`), the
+//! stress scene of four marbles shaken does, and a landing on a marble does in
+//! two frames as the top marble rolls off the hole's rim (in 44 before the
+//! marble below was struck, rolled and rested on: `rest.rs`); so does a board
+//! spun at the clamp of 16 rad/s, whose motion is held over 1/64 rad a flight.
 
 use super::{Flight, Scalar, World};
 
 /// Units of work a step may spend, all marbles together, unless
 /// [`World::set_flight_budget`] sets another budget (see the module doc).
-pub const FLIGHT_BUDGET: u32 = 16 * SEARCH;
+pub const FLIGHT_BUDGET: u32 = 80;
 
 /// A search for a marble's next event, its fixed part (the swept box, the held
 /// faces' supports, the flight's acceleration).
@@ -69,11 +76,17 @@ pub(super) const SEARCH: u32 = 8;
 /// A tile's time of impact in a search.
 pub(super) const TILE: u32 = 3;
 
-/// A slice's end: the contact passes.
-pub(super) const SLICE_END: u32 = 5;
+/// A slice's end: the contact passes (180 to 710 host instructions in a
+/// least-squares fit of every frame's count to its kinds of work).
+pub(super) const SLICE_END: u32 = 2;
 
-/// A pair's time of impact, whatever ends it.
-pub(super) const PAIR_TEST: u32 = 2;
+/// A pair's test, whatever ends it (a test its quick bounds end costs about
+/// 230 host instructions: four-shaken, callgrind).
+pub(super) const PAIR_TEST: u32 = 1;
+
+/// A pair's time of impact past its quick bounds (`toi_box` about a point:
+/// about 780 host instructions more).
+pub(super) const PAIR_TOI: u32 = 3;
 
 /// A pair slice: both marbles flown, their passes and the pair's push (each
 /// marble's search for its first tile event is charged as a search).
@@ -95,6 +108,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     #[inline]
     pub(super) fn out_of_flights(&self) -> bool {
         self.flights_left == 0
+    }
+
+    /// Whether what is left of the step's budget covers a piece of work of
+    /// `units`: a piece it does not cover is not begun.
+    #[inline]
+    pub(super) fn affords(&self, units: u32) -> bool {
+        self.flights_left >= units
     }
 
     /// Counts `flights` flights worth `units` of the step's budget.

@@ -2,7 +2,7 @@
 //! marble's own or a pair's — in time order; a pair pressed together goes on in
 //! slices with the fixed step's pair code.
 
-use super::budget::{PAIR_SLICE, PAIR_TEST, SEARCH};
+use super::budget::{PAIR_SLICE, PAIR_TEST, PAIR_TOI, SEARCH};
 use super::pair_test::{far_apart, pair_toi};
 use super::touch::SINK;
 use super::{
@@ -76,7 +76,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 if !live[n] || plan[n].is_some() {
                     continue;
                 }
-                if check && self.out_of_flights() {
+                if check && !self.affords(SEARCH) {
                     spent = true;
                     break;
                 }
@@ -153,7 +153,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     } else {
                         when - t0
                     };
-                    if check && self.out_of_flights() {
+                    if check && !self.affords(PAIR_TEST + PAIR_TOI) {
                         spent = true;
                         break 'pairs;
                     }
@@ -164,6 +164,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         }
                         continue;
                     };
+                    self.charge(PAIR_TOI);
                     if keep {
                         apart[a][b] = t0
                             + match toi {
@@ -192,9 +193,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                     }
                 }
             }
-            // Cut before the round's event is handled (a pair slice, the dearest
-            // unit, included): nothing has moved since the round began.
-            if spent || (check && pair.is_some() && self.out_of_flights()) {
+            if spent {
                 self.cut_together(SPACE, &live, &plan, &mut fl, &mut no_sleep, now, obs);
                 break;
             }
@@ -268,6 +267,20 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                         None => true,
                     };
                     if slow {
+                        // The dearest unit (both marbles' searches in it): cut
+                        // here, at the touch, when the budget does not cover it.
+                        if check && !self.affords(PAIR_SLICE + 2 * SEARCH) {
+                            self.cut_together(
+                                SPACE,
+                                &live,
+                                &plan,
+                                &mut fl,
+                                &mut no_sleep,
+                                when,
+                                obs,
+                            );
+                            break;
+                        }
                         self.pair_slice::<SPACE, O>(a, b, &mut fl, obs);
                     }
                 }
