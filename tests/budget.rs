@@ -247,10 +247,11 @@ fn play(s: &StressScene) -> (Vec<u32>, u32, u64, bool) {
 }
 
 /// Four marbles shaken hard reach the budget (it is what the budget is for),
-/// and with it no frame spends more than the budget and one unit past it (the
-/// budget is checked before each: a search and the tiles it tests, or a pair
-/// slice and its marbles' searches, is under a sixth of the budget here); the
-/// same scene gives the same frames and hash twice.
+/// and with it no frame spends more than a sixth past it: a search, a pair's
+/// test and a pair slice are begun only when the budget left covers them, so a
+/// frame spends the larger of its first round (never cut: up to 88 units here)
+/// and the budget, and past them only the tiles of its last search; the same
+/// scene gives the same frames and hash twice.
 #[test]
 fn four_shaken_marbles_are_cut_to_the_budget() {
     let s = scene("four-shaken");

@@ -52,7 +52,7 @@
 //!
 //! **Bounded work.** A step spends at most [`FLIGHT_BUDGET`] units of work, all
 //! marbles together, each piece of work weighed by its cost (a search, the tiles
-//! it tests, a slice's passes, every pair's time of impact, a pair slice); past
+//! it tests, a slice's passes, every pair's test and time of impact, a pair slice); past
 //! it the rest of the step is carried over to the next
 //! (`events/budget.rs`), so a marble landing on another or four marbles shaken in
 //! a box cost a bounded frame. No built-in level gets there. Within the budget a
