@@ -14,14 +14,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     }
 
     /// Every pair once, in order, by [`World::collide_pair`]'s code (a marble
-    /// out is left out there); `space`: the world has holes (3-D).
+    /// out is left out there); `space`: the world has holes (3-D). Returns
+    /// whether any pair touched: if none did, no marble changed.
     #[inline]
-    pub(super) fn collide_pairs(&mut self, space: bool) {
+    pub(super) fn collide_pairs(&mut self, space: bool) -> bool {
+        let mut touched = false;
         for a in 0..self.marbles.len() {
             for b in a + 1..self.marbles.len() {
-                self.collide_pair_in(a, b, space);
+                touched |= self.collide_pair_in(a, b, space);
             }
         }
+        touched
     }
 
     /// One pair of [`World::collide_marbles`]: pushed apart when they overlap, eq. 1
