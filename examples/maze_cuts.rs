@@ -64,7 +64,10 @@ fn main() {
             mazes += 1;
             if t.cut_frames > 0 {
                 cut_mazes += 1;
-                println!("{maze}: {} frames cut, {} marble-steps", t.cut_frames, t.cuts);
+                println!(
+                    "{maze}: {} frames cut, {} marble-steps",
+                    t.cut_frames, t.cuts
+                );
             }
             all.frames += t.frames;
             all.cut_frames += t.cut_frames;
