@@ -25,11 +25,10 @@ use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::{Session, SYNTHETIC_TILT};
 use marble_rolling::game::stress::{HARD_MAZES, STRESS};
 use marble_rolling::input::axes::AccelMg;
-use marble_rolling::physics::{Fx, StepStats};
-use marble_rolling::player::Player;
+use marble_rolling::physics::Fx;
+use support::{set_flight_budget, stats, HostPlayer};
 
-/// The host's player, as the tests play the levels.
-type HostPlayer<'a> = Player<'a, 19, 9, true, true>;
+mod support;
 
 #[derive(Parser)]
 #[command(about = "Each frame's work in a scene, one CSV row a frame")]
@@ -87,13 +86,7 @@ fn main() {
     let Ok(player) = &mut made else {
         fail(&format!("{} does not set up", args.scene));
     };
-    if let Some(budget) = args.flight_budget {
-        player
-            .session_mut()
-            .game_mut()
-            .world_mut()
-            .set_flight_budget(budget);
-    }
+    set_flight_budget(player, args.flight_budget);
     println!("frame,work,flights,events,slices,cuts");
     for n in 0..frames {
         let reading = match script {
@@ -120,10 +113,6 @@ fn main() {
             break;
         }
     }
-}
-
-fn stats(player: &HostPlayer<'_>) -> StepStats {
-    player.session().game().world().stats
 }
 
 fn fail(why: &str) -> ! {

@@ -15,10 +15,9 @@ use marble_rolling::game::endless::{MazeArgs, MazeSlot};
 use marble_rolling::game::rules::Phase;
 use marble_rolling::game::session::SYNTHETIC_TILT;
 use marble_rolling::input::axes::AccelMg;
-use marble_rolling::player::Player;
+use support::{set_flight_budget, stats, HostPlayer};
 
-/// The host's player, as the tests play the levels.
-type HostPlayer<'a> = Player<'a, 19, 9, true, true>;
+mod support;
 
 /// Cells along a side, storeys, difficulty.
 const SHAPES: [(u8, u8, u8); 4] = [(7, 2, 9), (5, 3, 6), (6, 1, 9), (4, 2, 4)];
@@ -92,19 +91,13 @@ fn play(maze: MazeArgs, args: &Args) -> Option<Tally> {
         MazeSlot::new(MAZE_REACH);
     let level = slot.make(maze).ok()?;
     let mut player = HostPlayer::single(level, SYNTHETIC_TILT, true).ok()?;
-    if let Some(budget) = args.flight_budget {
-        player
-            .session_mut()
-            .game_mut()
-            .world_mut()
-            .set_flight_budget(budget);
-    }
+    set_flight_budget(&mut player, args.flight_budget);
     let mut t = Tally::default();
     for _ in 0..args.frames {
         let reading = player.reading(AccelMg::LEVEL);
-        let before = player.session().game().world().stats;
+        let before = stats(&player);
         let phase = player.session_mut().frame(reading);
-        let after = player.session().game().world().stats;
+        let after = stats(&player);
         t.frames += 1;
         t.worst_units = t.worst_units.max(after.work - before.work);
         let cuts = after.budget_cuts - before.budget_cuts;
