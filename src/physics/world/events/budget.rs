@@ -17,14 +17,17 @@
 //! whose own plan runs to the step's end with no event, out of every other
 //! marble's reach over the step by the pair tests' bound without a product,
 //! finishes it (a marble rolling freely is not slowed with a pair pressed
-//! together elsewhere on the board: `together.rs`, `cut_together`). From a
-//! step's second round a search, a pair's test with its time of impact, and a
-//! pair slice with its marbles' searches is begun only when what is left of
-//! the budget covers it (the first round, a search per marble and a test per
-//! pair, is never cut, so that every marble's step gets somewhere); so a step
-//! spends at most the larger of its first round and the budget, past it only
-//! the tiles its last search tested and a slice's passes, whatever the scene;
-//! the scene that asks for more plays slower than real time while it does.
+//! together elsewhere on the board: `together.rs`, `cut_together`). Marbles
+//! that may touch: from a step's second round a search, a pair's test with its
+//! time of impact, and a pair slice with its marbles' searches is begun only
+//! when what is left of the budget covers it (the first round, a search per
+//! marble and a test per pair, is never cut, so that every marble's step gets
+//! somewhere); so a step spends at most the larger of its first round and the
+//! budget, past it only the tiles its last search tested and a slice's passes.
+//! A marble on its own (`fly_each`) begins a flight while any of its share is
+//! left, its first always: past the budget by at most a search and its tiles.
+//! Whatever the scene, the scene that asks for more plays slower than real
+//! time while it does.
 //!
 //! The budget is the slowest board's: the micro:bit v1 has 60 000 Cortex-M0
 //! instructions for a frame's physics (issue 40), and four marbles shaken hard
