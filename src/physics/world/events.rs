@@ -13,7 +13,9 @@
 //!    left out. In a maze nearly every frame finds nothing, and the frame is one
 //!    closed-form update — the same sums as one fixed step. A search that finds
 //!    nothing leaves the marble a *free region* (`events/free.rs`): later flights
-//!    whose swept box stays inside it skip the test.
+//!    whose swept box stays inside it skip the test, and a step that is one
+//!    such flight is the *quiet frame* (`events/quiet.rs`): the closed form and
+//!    a box test, without the event loop.
 //! 2. Otherwise **the earliest event** (`events/search.rs`): for every tile in
 //!    reach, the time of impact (`toi`: exact for
 //!    faces, converging separating planes for edges and corners; the ghost-bump
@@ -100,6 +102,7 @@ mod flight;
 mod free;
 mod pair_test;
 mod pivot;
+mod quiet;
 mod rest;
 mod search;
 mod speed;
@@ -225,7 +228,9 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             self.flights_left = share;
             let mut f = Flight::begin();
             self.go_on_round(n, &mut f);
-            self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
+            if !self.quiet::<SPACE, O>(n, &mut m, &mut f, obs) {
+                self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
+            }
             self.pivots[n] = ended_round(&f);
             left = left.saturating_sub(share - self.flights_left);
             to_fly = to_fly.saturating_sub(1);
@@ -293,8 +298,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         m: &mut Marble<S>,
         f: &mut Flight<S>,
     ) -> (S, Event<S>) {
-        self.spend(1, SEARCH);
-        self.prepare::<SPACE>(n, m, f);
+        if f.prepared {
+            f.prepared = false;
+        } else {
+            self.spend(1, SEARCH);
+            self.prepare::<SPACE>(n, m, f);
+        }
         if f.events >= 2 * MAX_EVENTS && f.slice.is_none() {
             // Past every bound: blind slices to the end of the step.
             f.want = Some(EVERY);

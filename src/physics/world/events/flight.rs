@@ -87,6 +87,9 @@ pub(super) struct Flight<S> {
     pub(super) built: bool,
     /// Events in a row with no time passing.
     pub(super) idle: u32,
+    /// The next flight's acceleration is set already: the step's first, which
+    /// the quiet frame (`quiet.rs`) prepared and could not finish.
+    pub(super) prepared: bool,
     /// A slice asked for (around this tile), started at the next flight.
     pub(super) want: Option<TileIndex>,
     /// The edge a pivot slice rolled round when a second edge ended it: the
@@ -133,6 +136,7 @@ impl<S: Scalar> Flight<S> {
             inelastic: false,
             built: false,
             idle: 0,
+            prepared: false,
             want: None,
             rail: None,
             around: Around::Slice,
@@ -172,6 +176,7 @@ impl<S: Scalar> Flight<S> {
             inelastic: false,
             built: false,
             idle: 0,
+            prepared: false,
             want: None,
             rail: None,
             around: Around::Slice,
