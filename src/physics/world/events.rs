@@ -93,7 +93,7 @@ pub(super) use free::FreeRegion;
 
 use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
 
-use flight::{Around, Event, Flight, Slice, EVERY, LID};
+use flight::{Accel, Around, Event, Flight, Slice, EVERY, LID};
 pub(crate) use speed::cap_speed;
 use speed::{max_abs, no_faster};
 
@@ -227,14 +227,19 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             };
             self.flights_left = share;
             let mut f = Flight::begin();
-            self.go_on_round(n, &mut f);
-            if !self.quiet::<SPACE, O>(n, &mut m, &mut f, obs) {
+            // No edge carried over to roll round: the step may be a quiet one.
+            let may_sleep = if self.pivots[n] == CarriedEdge::NONE
+                && self.quiet::<SPACE, O>(n, &mut m, &mut f, obs)
+            {
+                true
+            } else {
+                self.go_on_round(n, &mut f);
                 self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
-            }
-            self.pivots[n] = ended_round(&f);
+                self.pivots[n] = ended_round(&f);
+                f.t >= S::ONE || self.cut(&f)
+            };
             left = left.saturating_sub(share - self.flights_left);
             to_fly = to_fly.saturating_sub(1);
-            let may_sleep = f.t >= S::ONE || self.cut(&f);
             self.finish::<SPACE>(n, &mut m, may_sleep);
         }
     }
@@ -437,13 +442,29 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
     }
 
-    /// The flight from the marble's state at `f.t`: the pull (rolling when on the
-    /// floor), rolling resistance and the board's motion over their intervals, the
-    /// held faces' normal parts dropped.
+    /// The flight from the marble's state at `f.t` ([`World::accel`]).
     fn prepare<const SPACE: bool>(&self, n: usize, m: &mut Marble<S>, f: &mut Flight<S>) {
+        let a = self.accel::<SPACE>(n, m, S::ONE - f.t);
+        f.set_accel(m, &a, self.params.k);
+    }
+
+    /// The acceleration of a marble's flight with `rem` steps left: the pull
+    /// (rolling when on the floor), rolling resistance and the board's motion
+    /// over their intervals, the held faces' normal parts dropped.
+    ///
+    /// Inlined into both callers (`prepare`, the quiet frame) where flash is
+    /// plenty: 40 Cortex-M4 instructions a quiet frame (`cargo xtask bench-m4`,
+    /// maze). One copy on the Cortex-M0 (ARMv6-M has no 32-bit atomics): a
+    /// second cost the micro:bit v1 3.3 KB of flash and bought its worst frames
+    /// nothing.
+    #[cfg_attr(
+        not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+        inline(always)
+    )]
+    #[cfg_attr(all(target_arch = "arm", not(target_has_atomic = "32")), inline(never))]
+    fn accel<const SPACE: bool>(&self, n: usize, m: &mut Marble<S>, rem: S) -> Accel<S> {
         let p = &self.params;
         let (k, fx) = (p.k, p.spec.effects);
-        let rem = S::ONE - f.t;
         let supported = !SPACE || m.supported;
         let mut kick = if supported {
             self.kick_roll
@@ -455,9 +476,13 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             kick.dv.y = S::ZERO;
             kick.dp.y = S::ZERO;
         }
-        let mut len = rem;
-        f.stop = None;
-        f.holds = false;
+        let mut a = Accel {
+            kick,
+            len: rem,
+            stop: None,
+            holds: false,
+            dir: None,
+        };
         if fx.board_motion {
             let mut extra = self.motion.kick(m.pos, m.vel.shr(k), k);
             extra.dv = extra.dv.clamp_abs(p.v_max.half());
@@ -465,7 +490,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 extra.dv.y = S::ZERO;
                 extra.dp.y = S::ZERO;
             }
-            kick = Kick {
+            let kick = a.kick;
+            a.kick = Kick {
                 dv: Vec3::new(
                     kick.dv.x.sat_add(extra.dv.x),
                     kick.dv.y.sat_add(extra.dv.y),
@@ -473,34 +499,34 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 ),
                 dp: kick.dp + extra.dp.clamp_abs(S::ONE.half()),
             };
-            len = len.min(self.motion.flight_len(rem));
+            a.len = a.len.min(self.motion.flight_len(rem));
         }
-        if m.rest_mask != 0 && self.hold::<SPACE>(m, &mut kick, self.free[n].under_held(m, SPACE)) {
+        if m.rest_mask != 0 && self.hold::<SPACE>(m, &mut a.kick, self.free[n].under_held(m, SPACE))
+        {
             m.supported = true;
         }
         if fx.friction && supported {
             // On what the held faces leave of the pull: a marble pressed into a wall
             // and not along it is held by static friction.
-            let d = self.drag.flight(m.vel, &mut kick, len);
-            len = d.len;
-            f.stop = d.stop;
-            f.holds = d.holds;
-            f.dir = d.dir;
+            let d = self.drag.flight(m.vel, &mut a.kick, a.len);
+            a.len = d.len;
+            a.stop = d.stop;
+            a.holds = d.holds;
+            a.dir = Some(d.dir);
             // The held axes (bits `2·axis + up`) keep no kick: axis by axis,
             // where a loop over the set bits took a dozen instructions a bit.
             let held = m.rest_mask;
             if held & 0b11 != 0 {
-                kick.set_axis(0, (S::ZERO, S::ZERO));
+                a.kick.set_axis(0, (S::ZERO, S::ZERO));
             }
             if held & 0b1100 != 0 {
-                kick.set_axis(1, (S::ZERO, S::ZERO));
+                a.kick.set_axis(1, (S::ZERO, S::ZERO));
             }
             if held & 0b11_0000 != 0 {
-                kick.set_axis(2, (S::ZERO, S::ZERO));
+                a.kick.set_axis(2, (S::ZERO, S::ZERO));
             }
         }
-        f.set_seg(Segment::new(m.pos, m.vel, kick.dv, kick.dp, k));
-        f.len = len;
+        a
     }
 
     /// Flies `s` steps of the closed form.

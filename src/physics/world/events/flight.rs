@@ -3,7 +3,8 @@
 //! events that end a flight. Apart from the step (`events.rs`) so that the step
 //! reads as the order of the work and this as what the work carries.
 
-use super::{Contact, Scalar, Segment, TileIndex, Vec3};
+use super::super::super::dynamics::integrate::Kick;
+use super::{Contact, Marble, Scalar, Segment, TileIndex, Vec3};
 
 /// What ends a flight.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,6 +61,21 @@ pub(super) enum Around {
     Touched,
     /// A pivot slice ended: another while the edge holds, else free flight.
     Rolling,
+}
+
+/// A flight's acceleration and how long it holds (`World::accel`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Accel<S> {
+    /// The kick of a whole step, the held faces' normal parts dropped.
+    pub(super) kick: Kick<S>,
+    /// How long it holds (steps, at most the time left).
+    pub(super) len: S,
+    /// When rolling resistance stops the marble (steps), within `len`.
+    pub(super) stop: Option<S>,
+    /// Whether the pull alone cannot beat static friction.
+    pub(super) holds: bool,
+    /// Rolling resistance's direction, if it acts.
+    pub(super) dir: Option<(S, S)>,
 }
 
 /// One marble's way through the step.
@@ -186,6 +202,19 @@ impl<S: Scalar> Flight<S> {
             slice: None,
             end: None,
         }
+    }
+
+    /// The flight of marble `m` from `t` on under `a` (`World::accel`; a step of
+    /// `2^-k` s). Rolling resistance's direction is kept when `a` has none.
+    #[inline]
+    pub(super) fn set_accel(&mut self, m: &Marble<S>, a: &Accel<S>, k: u32) {
+        self.stop = a.stop;
+        self.holds = a.holds;
+        if let Some(dir) = a.dir {
+            self.dir = dir;
+        }
+        self.set_seg(Segment::new(m.pos, m.vel, a.kick.dv, a.kick.dp, k));
+        self.len = a.len;
     }
 
     /// A new closed form from `t` on.

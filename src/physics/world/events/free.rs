@@ -63,20 +63,21 @@ impl<S: Scalar> FreeRegion<S> {
     /// Whether the marble holds the faces the region was built with.
     #[inline]
     fn holds(&self, m: &Marble<S>) -> bool {
-        if self.held != m.rest_mask {
+        let held = self.held;
+        if held != m.rest_mask {
             return false;
         }
-        let mut bits = self.held;
-        while bits != 0 {
-            let bit = bits.trailing_zeros();
-            bits &= bits - 1;
-            let axis = (bit / 2) as usize;
-            let side = if bit % 2 == 1 { self.lo } else { self.hi };
-            if side.axis(axis) != m.rest_plane[axis] {
-                return false;
-            }
-        }
-        true
+        // Axis by axis (bit `2·axis + up`; held from above, the low side): no
+        // loop over the bits, and none of it for a marble that holds nothing.
+        let p = &m.rest_plane;
+        let side = |bit: u8, side: S, plane: S| held & (1 << bit) == 0 || side == plane;
+        held == 0
+            || (side(0, self.hi.x, p[0])
+                && side(1, self.lo.x, p[0])
+                && side(2, self.hi.y, p[1])
+                && side(3, self.lo.y, p[1])
+                && side(4, self.hi.z, p[2])
+                && side(5, self.lo.z, p[2]))
     }
 
     /// Whether the tile behind every face the marble is held on is there under

@@ -11,12 +11,12 @@
 //! on from there without preparing it again.
 
 use super::super::super::geometry::sweep::swept;
-use super::{cap_speed, Flight, Marble, Scalar, StepObserver, World, SEARCH};
+use super::{cap_speed, Flight, Marble, Scalar, Segment, StepObserver, World, SEARCH};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
-    /// Flies marble `n`'s whole step as one flight if its free region serves it;
-    /// else leaves `f` prepared for the general loop (or untouched if no flight
-    /// may begin) and returns false.
+    /// Flies marble `n`'s whole step as one flight if its free region serves it
+    /// (true); else sets `f` for the general loop: prepared if a flight was
+    /// begun, as the step's start otherwise.
     #[inline]
     pub(super) fn quiet<const SPACE: bool, O: StepObserver<S>>(
         &mut self,
@@ -25,30 +25,28 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         f: &mut Flight<S>,
         obs: &mut O,
     ) -> bool {
-        if f.want.is_some() || self.out_of_flights() {
+        if self.out_of_flights() {
             return false;
         }
         self.spend(1, SEARCH);
-        self.prepare::<SPACE>(n, m, f);
-        f.prepared = true;
+        let a = self.accel::<SPACE>(n, m, S::ONE);
         // The whole step one interval, no stop before its end: the search's
         // answer is then the step's end, if nothing is in reach.
-        if f.len != S::ONE || f.stop.is_some_and(|s| s < S::ONE) {
-            return false;
+        if a.len == S::ONE && a.stop.is_none_or(|s| s >= S::ONE) {
+            let seg = Segment::new(m.pos, m.vel, a.kick.dv, a.kick.dp, self.params.k);
+            let end = seg.pos_at(S::ONE);
+            let path = swept(seg.p, end, seg.h, S::ONE);
+            let reach = self.params.radius + self.tol();
+            if self.free[n].serves(m, &path, reach, SPACE) {
+                self.stats.free_served = self.stats.free_served.wrapping_add(1);
+                obs.flight(n, S::ZERO, S::ONE, &seg);
+                m.pos = end;
+                m.vel = cap_speed(seg.vel_at(S::ONE));
+                return true;
+            }
         }
-        let seg = &f.seg;
-        let end = seg.pos_at(S::ONE);
-        let path = swept(seg.p, end, seg.h, S::ONE);
-        let reach = self.params.radius + self.tol();
-        if !self.free[n].serves(m, &path, reach, SPACE) {
-            return false;
-        }
-        self.stats.free_served = self.stats.free_served.wrapping_add(1);
-        obs.flight(n, S::ZERO, S::ONE, seg);
-        m.pos = end;
-        m.vel = cap_speed(seg.vel_at(S::ONE));
-        f.t = S::ONE;
-        f.prepared = false;
-        true
+        f.set_accel(m, &a, self.params.k);
+        f.prepared = true;
+        false
     }
 }
