@@ -226,17 +226,19 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 (left / to_fly).max(1)
             };
             self.flights_left = share;
-            let mut f = Flight::begin();
             // No edge carried over to roll round: the step may be a quiet one.
-            let may_sleep = if self.pivots[n] == CarriedEdge::NONE
-                && self.quiet::<SPACE, O>(n, &mut m, &mut f, obs)
-            {
-                true
+            let flight = if self.pivots[n] == CarriedEdge::NONE {
+                self.quiet::<SPACE, O>(n, &mut m, obs)
             } else {
+                Some(Flight::begin())
+            };
+            let may_sleep = if let Some(mut f) = flight {
                 self.go_on_round(n, &mut f);
                 self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
                 self.pivots[n] = ended_round(&f);
                 f.t >= S::ONE || self.cut(&f)
+            } else {
+                true
             };
             left = left.saturating_sub(share - self.flights_left);
             to_fly = to_fly.saturating_sub(1);

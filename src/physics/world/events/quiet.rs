@@ -15,18 +15,17 @@ use super::{cap_speed, Flight, Marble, Scalar, Segment, StepObserver, World, SEA
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Flies marble `n`'s whole step as one flight if its free region serves it
-    /// (true); else sets `f` for the general loop: prepared if a flight was
-    /// begun, as the step's start otherwise.
+    /// (`None`); else the general loop's flight, its first acceleration
+    /// prepared if the budget let one begin.
     #[inline]
     pub(super) fn quiet<const SPACE: bool, O: StepObserver<S>>(
         &mut self,
         n: usize,
         m: &mut Marble<S>,
-        f: &mut Flight<S>,
         obs: &mut O,
-    ) -> bool {
+    ) -> Option<Flight<S>> {
         if self.out_of_flights() {
-            return false;
+            return Some(Flight::begin());
         }
         self.spend(1, SEARCH);
         let a = self.accel::<SPACE>(n, m, S::ONE);
@@ -42,11 +41,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 obs.flight(n, S::ZERO, S::ONE, &seg);
                 m.pos = end;
                 m.vel = cap_speed(seg.vel_at(S::ONE));
-                return true;
+                return None;
             }
         }
+        let mut f = Flight::begin();
         f.set_accel(m, &a, self.params.k);
         f.prepared = true;
-        false
+        Some(f)
     }
 }
