@@ -405,10 +405,9 @@ pub fn drive<S: Scalar>(
     let mask = (1u32 << sub) - 1;
     for n in from..to {
         if n & mask == 0 {
-            let g = trace.gravity_mg(n >> sub);
-            if g != w.gravity_mg() {
-                w.set_gravity_mg(g);
-            }
+            // The world compares with the tilt it has (as the firmware's tilt
+            // samples arrive): an unchanged one costs that compare only.
+            w.set_gravity_mg(trace.gravity_mg(n >> sub));
         }
         w.step();
         each(w, n + 1);
