@@ -245,7 +245,21 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     /// the one clamp on the tilt path, here because only the world knows its
     /// level's bound, and because tools and tests hand the world gravities
     /// directly. Computes the kicks once, so the steps that follow only add.
+    #[inline]
     pub fn set_gravity_mg(&mut self, g: [i32; 3]) {
+        // The same tilt again (a resting board, most samples on some axis)
+        // costs its compare where it is handed over, without a call. A tilt
+        // the clamp would make the same goes through the clamp.
+        let old = self.gravity_mg;
+        if self.kicks_ready && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
+            return;
+        }
+        self.set_gravity_mg_clamped(g);
+    }
+
+    /// [`World::set_gravity_mg`] past its quick compare.
+    #[inline(never)]
+    fn set_gravity_mg_clamped(&mut self, g: [i32; 3]) {
         let lim = self.params.mg_max;
         // max then min, not `clamp`: its `min <= max` assertion would link core::fmt.
         let clamp = |v: i32| v.max(-lim).min(lim);
