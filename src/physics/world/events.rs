@@ -484,6 +484,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             stop: None,
             holds: false,
             dir: None,
+            backed: false,
         };
         if fx.board_motion {
             let mut extra = self.motion.kick(m.pos, m.vel.shr(k), k);
@@ -503,9 +504,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             };
             a.len = a.len.min(self.motion.flight_len(rem));
         }
-        if m.rest_mask != 0 && self.hold::<SPACE>(m, &mut a.kick, self.free[n].under_held(m, SPACE))
-        {
-            m.supported = true;
+        if m.rest_mask != 0 {
+            a.backed = self.free[n].under_held(m, SPACE);
+            if self.hold::<SPACE>(m, &mut a.kick, a.backed) {
+                m.supported = true;
+            }
         }
         if fx.friction && supported {
             // On what the held faces leave of the pull: a marble pressed into a wall

@@ -76,6 +76,10 @@ pub(super) struct Accel<S> {
     pub(super) holds: bool,
     /// Rolling resistance's direction, if it acts.
     pub(super) dir: Option<(S, S)>,
+    /// The marble holds the faces its free region was built with, and its
+    /// centre is inside it (`FreeRegion::under_held`, asked for a marble held
+    /// on a face; a marble that holds none leaves it false).
+    pub(super) backed: bool,
 }
 
 /// One marble's way through the step.

@@ -60,6 +60,18 @@ impl<S: Scalar> FreeRegion<S> {
         held: NONE,
     };
 
+    /// Whether the region was built for a marble holding no face.
+    #[inline]
+    pub(in crate::physics::world) fn held_none(&self) -> bool {
+        self.held == 0
+    }
+
+    /// Whether the region was built for a marble holding the faces `rest_mask`.
+    #[inline]
+    pub(in crate::physics::world) fn built_with(&self, rest_mask: u8) -> bool {
+        self.held == rest_mask
+    }
+
     /// Whether the marble holds the faces the region was built with.
     #[inline]
     fn holds(&self, m: &Marble<S>) -> bool {
@@ -108,9 +120,19 @@ impl<S: Scalar> FreeRegion<S> {
         reach: S,
         space: bool,
     ) -> bool {
-        if !self.holds(m) {
-            return false;
-        }
+        self.holds(m) && self.contains(path, reach, space)
+    }
+
+    /// [`FreeRegion::serves`] for a marble known to hold the region's faces
+    /// (the quiet frame's: `under_held` said so before the hold, which kept
+    /// them all).
+    #[inline]
+    pub(in crate::physics::world) fn contains(
+        &self,
+        path: &Aabb<S>,
+        reach: S,
+        space: bool,
+    ) -> bool {
         // A held face's up bit (axis·2 + 1) bounds the low side, its down bit
         // the high side: that side is not widened.
         let widen = |bit: u8| {

@@ -36,7 +36,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             let end = seg.pos_at(S::ONE);
             let path = swept(seg.p, end, seg.h, S::ONE);
             let reach = self.params.radius + self.tol();
-            if self.free[n].serves(m, &path, reach, SPACE) {
+            // The region holds the marble's faces: as `under_held` found before
+            // the hold, if the hold kept them all; with none held, if it was
+            // built with none.
+            let region = &self.free[n];
+            let held = m.rest_mask;
+            let holds = if held == 0 {
+                region.held_none()
+            } else {
+                a.backed && region.built_with(held)
+            };
+            if holds && region.contains(&path, reach, SPACE) {
                 self.stats.free_served = self.stats.free_served.wrapping_add(1);
                 obs.flight(n, S::ZERO, S::ONE, &seg);
                 m.pos = end;
