@@ -370,6 +370,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     ///
     /// Both steppers are linked wherever this is called. Firmware, whose mode is
     /// a constant, calls `World::step_in` and links only its own.
+    #[inline]
     pub fn step(&mut self) {
         if self.params.events() {
             self.step_in::<true>();
