@@ -145,6 +145,11 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     ///
     /// `backed`: the tiles behind the held faces are known to be there (the
     /// marble's free region says so), and the grid is not asked.
+    ///
+    /// Inlined into its callers (the flight's acceleration, the fixed step):
+    /// out of line, its call and loop took 88 Cortex-M4 instructions a maze
+    /// frame; inlined, 23 fewer, and 52 B less of the micro:bit v1's flash.
+    #[inline(always)]
     pub(super) fn hold<const SPACE: bool>(
         &self,
         m: &mut Marble<S>,
