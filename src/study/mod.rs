@@ -142,6 +142,7 @@ pub enum Trace {
 
 impl Trace {
     /// The gravity for frame `frame` (milli-g, tile frame).
+    #[inline]
     pub fn gravity_mg(&self, frame: u32) -> [i32; 3] {
         let (gx, gz) = match *self {
             Trace::Constant { gx, gz } => (gx, gz),
