@@ -5,10 +5,13 @@
 //! under way) is then one closed form and a box test.
 //!
 //! The same work in the same order as the general loop's first flight, so the
-//! same bits: the flight's acceleration (`prepare`), the swept box against the
+//! same bits (every end-state hash is the same with it or without the free
+//! regions: `tests/free_region.rs`): the flight's acceleration (`World::accel`,
+//! which `prepare` writes into the loop's flight), the swept box against the
 //! region (the served search), the flight to the step's end. A frame that turns
-//! out not to be quiet hands its prepared flight to the general loop, which goes
-//! on from there without preparing it again.
+//! out not to be quiet hands the loop its first flight with that acceleration
+//! set (`Flight::prepared`), and the loop goes on from there without preparing
+//! it again.
 
 use super::super::super::geometry::sweep::swept;
 use super::{cap_speed, Flight, Marble, Scalar, Segment, StepObserver, World, SEARCH};
