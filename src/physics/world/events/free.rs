@@ -60,12 +60,6 @@ impl<S: Scalar> FreeRegion<S> {
         held: NONE,
     };
 
-    /// Whether the region was built for a marble holding no face.
-    #[inline]
-    pub(in crate::physics::world) fn held_none(&self) -> bool {
-        self.held == 0
-    }
-
     /// Whether the region was built for a marble holding the faces `rest_mask`.
     #[inline]
     pub(in crate::physics::world) fn built_with(&self, rest_mask: u8) -> bool {

@@ -44,11 +44,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             // built with none.
             let region = &self.free[n];
             let held = m.rest_mask;
-            let holds = if held == 0 {
-                region.held_none()
-            } else {
-                a.backed && region.built_with(held)
-            };
+            let holds = region.built_with(held) && (held == 0 || a.backed);
             if holds && region.contains(&path, reach, SPACE) {
                 self.stats.free_served = self.stats.free_served.wrapping_add(1);
                 obs.flight(n, S::ZERO, S::ONE, &seg);
