@@ -144,6 +144,92 @@ impl Tiles<'_> {
         }
     }
 
+    /// Whether every tile `i_lo ..= i_hi` of the row `(j, k)` along x' is
+    /// `solid` (outside the grid: empty; an empty span: yes). The row's tiles
+    /// are consecutive bits, so a word answers for up to 32 of them where
+    /// [`Tiles::is_solid`] asks one at a time (a free region's rows,
+    /// `world/events/free.rs`).
+    pub fn row_is(&self, j: i32, k: i32, i_lo: i32, i_hi: i32, solid: bool) -> bool {
+        if i_lo > i_hi {
+            return true;
+        }
+        let (nx, ny, nz) = (i32::from(self.nx), i32::from(self.ny), i32::from(self.nz));
+        let inside = (0..ny).contains(&j) && (0..nz).contains(&k);
+        // The span's part outside the grid is empty tiles.
+        if solid && (!inside || i_lo < 0 || i_hi >= nx) {
+            return false;
+        }
+        if !inside {
+            return true;
+        }
+        let (lo, hi) = (i_lo.max(0), i_hi.min(nx - 1));
+        if lo > hi {
+            return true;
+        }
+        let base = (j as usize * nz as usize + k as usize) * nx as usize;
+        let (first, last) = (base + lo as usize, base + hi as usize);
+        let mut bit = first;
+        while bit <= last {
+            let (word, from) = (bit / 32, bit % 32);
+            let to = (last - (bit - from)).min(31);
+            // Bits `from ..= to` of the word.
+            let mask = (u32::MAX >> (31 - to)) & (u32::MAX << from);
+            let w = self.bits.get(word).copied().unwrap_or(0) & mask;
+            if w != if solid { mask } else { 0 } {
+                return false;
+            }
+            bit += to + 1 - from;
+        }
+        true
+    }
+
+    /// How many tiles of the row `(j, k)` along x' are `solid` in a row from
+    /// tile `i` on, stepping up (`i, i + 1, …`) or down, up to `max` (at most
+    /// 32; outside the grid: empty). A free region grows across x' by these
+    /// runs, a row each, where row by row it would ask a column of tiles a row
+    /// (`world/events/free.rs`).
+    pub fn run_from(&self, j: i32, k: i32, i: i32, up: bool, max: u32, solid: bool) -> u32 {
+        let max = max.min(32);
+        if max == 0 {
+            return 0;
+        }
+        // The `max` tiles as bits, the first one lowest (up) or highest (down).
+        let first = if up {
+            i
+        } else {
+            i.saturating_sub(max as i32 - 1)
+        };
+        let window = self.window(j, k, first, max);
+        let run = if up {
+            let w = if solid { !window } else { window };
+            w.trailing_zeros()
+        } else {
+            let w = window << (64 - max);
+            let w = if solid { !w } else { w };
+            w.leading_zeros()
+        };
+        run.min(max)
+    }
+
+    /// Tiles `first .. first + n` of the row `(j, k)` (`n ≤ 32`) as the low `n`
+    /// bits, tile `first` lowest; outside the grid: 0.
+    fn window(&self, j: i32, k: i32, first: i32, n: u32) -> u64 {
+        let (nx, ny, nz) = (i32::from(self.nx), i32::from(self.ny), i32::from(self.nz));
+        if !(0..ny).contains(&j) || !(0..nz).contains(&k) {
+            return 0;
+        }
+        let last = first.saturating_add(n as i32 - 1);
+        let (lo, hi) = (first.max(0), last.min(nx - 1));
+        if lo > hi {
+            return 0;
+        }
+        let at = (j as usize * nz as usize + k as usize) * nx as usize + lo as usize;
+        let word = |w: usize| u64::from(self.bits.get(w).copied().unwrap_or(0));
+        let bits = (word(at / 32) | word(at / 32 + 1) << 32) >> (at % 32);
+        let count = (hi - lo + 1) as u32;
+        (bits & (u64::MAX >> (64 - count))) << (lo - first)
+    }
+
     /// Storeys: a slab and a wall layer each (a grid of the floor alone is one;
     /// a grid has at least one layer).
     pub fn storeys(&self) -> usize {
@@ -156,5 +242,98 @@ impl Tiles<'_> {
         self.storeys() > 1
             || (0..self.nz as i32)
                 .any(|k| (0..self.nx as i32).any(|i| !self.is_solid(TileIndex::new(i, 0, k))))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// A row read answers as its tiles asked one at a time, on and off the
+        /// grid, across word boundaries.
+        #[test]
+        fn a_row_read_is_its_tiles(
+            (nx, ny, nz) in (1usize..=40, 1usize..=3, 1usize..=6),
+            seed in any::<u64>(),
+            density in 0u32..=4,
+            j in -1i32..=3,
+            k in -1i32..=6,
+            i_lo in -3i32..=42,
+            len in -1i32..=45,
+            solid in any::<bool>(),
+        ) {
+            let mut g = TileGrid::<64>::new(nx, ny, nz).unwrap();
+            let mut x = seed | 1;
+            for jj in 0..ny {
+                for kk in 0..nz {
+                    for ii in 0..nx {
+                        x ^= x << 13;
+                        x ^= x >> 7;
+                        x ^= x << 17;
+                        // density 0: all empty, 4: all solid.
+                        g.set(ii, jj, kk, (x % 4) < u64::from(density));
+                    }
+                }
+            }
+            let t = g.view();
+            let i_hi = i_lo + len;
+            let one_by_one = (i_lo..=i_hi).all(|i| t.is_solid(TileIndex::new(i, j, k)) == solid);
+            prop_assert_eq!(t.row_is(j, k, i_lo, i_hi, solid), one_by_one);
+        }
+    }
+
+    proptest! {
+        /// A run counts the tiles asked one at a time, either way, on and off
+        /// the grid.
+        #[test]
+        fn a_run_counts_its_tiles(
+            (nx, ny, nz) in (1usize..=40, 1usize..=3, 1usize..=6),
+            seed in any::<u64>(),
+            density in 0u32..=4,
+            j in -1i32..=3,
+            k in -1i32..=6,
+            i in -40i32..=80,
+            up in any::<bool>(),
+            max in 0u32..=32,
+            solid in any::<bool>(),
+        ) {
+            let mut g = TileGrid::<64>::new(nx, ny, nz).unwrap();
+            let mut x = seed | 1;
+            for jj in 0..ny {
+                for kk in 0..nz {
+                    for ii in 0..nx {
+                        x ^= x << 13;
+                        x ^= x >> 7;
+                        x ^= x << 17;
+                        g.set(ii, jj, kk, (x % 4) < u64::from(density));
+                    }
+                }
+            }
+            let t = g.view();
+            let step = if up { 1 } else { -1 };
+            let one_by_one = (0..max as i32)
+                .take_while(|n| t.is_solid(TileIndex::new(i + step * n, j, k)) == solid)
+                .count() as u32;
+            prop_assert_eq!(t.run_from(j, k, i, up, max, solid), one_by_one);
+        }
+    }
+
+    #[test]
+    fn a_row_far_outside_the_grid_is_empty() {
+        let mut g = TileGrid::<8>::new(5, 1, 5).unwrap();
+        for i in 0..5 {
+            g.set(i, 0, 2, true);
+        }
+        let t = g.view();
+        assert!(t.row_is(0, 2, 0, 4, true));
+        assert!(!t.row_is(0, 2, -1, 4, true));
+        assert!(t.row_is(0, 9, i32::MIN, i32::MAX, false));
+        assert!(!t.row_is(0, 2, i32::MIN, i32::MAX, false));
+        assert!(t.row_is(0, 1, i32::MIN, i32::MAX, false));
+        assert_eq!(t.run_from(0, 2, i32::MAX, true, 32, false), 32);
+        assert_eq!(t.run_from(0, 2, i32::MIN, false, 32, false), 32);
+        assert_eq!(t.run_from(0, 2, 4, false, 32, true), 5);
     }
 }

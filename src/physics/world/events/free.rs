@@ -5,9 +5,12 @@
 //! face's support, yet each pays for the swept box's tile indices (eq. 6), the
 //! held faces' narrowing, the grid lookups and the support columns: some 800
 //! instructions, most of a quiet frame. The region is built when a search finds
-//! its tiles in reach empty: grown row by row from them, up to [`GROW`] rows each
-//! way, while every tile in it is empty and every tile behind a held face under
-//! it is solid. It is kept with the held faces it assumed; a later flight whose
+//! its tiles in reach empty: grown from them, up to [`GROW_X`] columns each way
+//! across x' and [`GROW`] rows across z' (and y'), while every tile in it is
+//! empty and every tile behind a held face under it is solid. The grid keeps a
+//! row along x' as consecutive bits, so the growth reads words: a column's worth
+//! of rows at once across x' (`Tiles::run_from`), a whole row across z'
+//! (`Tiles::row_is`). It is kept with the held faces it assumed; a later flight whose
 //! swept box (widened by the radius and the tolerance, as the reach test widens
 //! it) lies inside it, with the same held faces, has exactly the search's answer
 //! without the search: no tile, no lid, no support ending, only the flight's own
@@ -19,12 +22,18 @@
 //! eq. 6, which eq. 5 and 6 decide alike on every boundary, on every backend.
 
 use super::super::super::geometry::grid::Tiles;
-use super::{reach, Aabb, Marble, Scalar, TileIndex, TileRange, Vec3, World};
+use super::{reach, Aabb, Marble, Scalar, TileRange, Vec3, World};
 
-/// Rows a region grows each way beyond the search's own tiles: a marble crossing
-/// an open floor keeps one region for several frames (grown further, a rebuild
-/// would cost more than the searches it spares).
-const GROW: i32 = 4;
+/// Rows a region grows each way beyond the search's own tiles across y' and
+/// z', a row of tiles at a time: a marble crossing an open floor keeps one
+/// region for several frames (grown further, a rebuild would cost more than
+/// the searches it spares, and its frame on the micro:bit v1 more than the
+/// frame's budget).
+const GROW: i32 = 8;
+
+/// Columns a region grows each way across x', where the grid's rows answer
+/// for many tiles at once (`grow_x`, at most 32).
+const GROW_X: u32 = 16;
 
 /// Held-face bits of a region that holds none: it serves no flight.
 const NONE: u8 = u8::MAX;
@@ -197,10 +206,21 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if !fits(self.tiles, &range, &behind, range != *searched) {
             return;
         }
-        // Grow each side that no held face bounds, a row at a time.
+        // Grow each side that no held face bounds: across x' by runs along the
+        // grid's rows (`grow_x`), the others a row at a time.
         for side in 0..6 {
             let axis = side / 2;
             if (axis == 1 && !space) || held & (1 << (side ^ 1)) != 0 {
+                continue;
+            }
+            if axis == 0 {
+                let up = side == 1;
+                let g = grow_x(self.tiles, &range, &behind, up);
+                if up {
+                    range.hi.i += g;
+                } else {
+                    range.lo.i -= g;
+                }
                 continue;
             }
             for _ in 0..GROW {
@@ -210,7 +230,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut row = range;
                 let (row_lo, row_hi) = row.axis_mut(axis);
                 (*row_lo, *row_hi) = (next, next);
-                if !fits(self.tiles, &row, &behind, true) {
+                if !row_fits(self.tiles, &row, &behind, axis) {
                     break;
                 }
                 let (lo, hi) = range.axis_mut(axis);
@@ -230,6 +250,69 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             self.free[n] = region;
         }
     }
+}
+
+/// How many columns beyond its x' side (`up`: the high one) `r` can grow by,
+/// up to [`GROW_X`]: as many as the row-by-row growth would add (`fits` on each
+/// new column), counted along the grid's rows. A new column's tiles must be
+/// empty, and the tiles behind a held floor (`behind[1]`) or z' face
+/// (`behind[2]`) there solid; the row behind a held x' face is the same for
+/// every column (`fits` read it for `r`).
+fn grow_x(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], up: bool) -> i32 {
+    let from = if up { r.hi.i + 1 } else { r.lo.i - 1 };
+    let mut g = GROW_X;
+    for k in r.lo.k..=r.hi.k {
+        for j in r.lo.j..=r.hi.j {
+            g = g.min(tiles.run_from(j, k, from, up, g, false));
+        }
+        if let Some(j) = behind[1] {
+            g = g.min(tiles.run_from(j, k, from, up, g, true));
+        }
+    }
+    if let Some(k) = behind[2] {
+        for j in r.lo.j..=r.hi.j {
+            g = g.min(tiles.run_from(j, k, from, up, g, true));
+        }
+    }
+    g as i32
+}
+
+/// `fits(r, behind, true)` for the row `r` a region grows onto across `axis`
+/// (y' or z'), without the row behind a held face on that axis: growing across
+/// it leaves that row as `fits` read it for the region.
+fn row_fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], axis: usize) -> bool {
+    let (lo, hi) = (r.lo.i, r.hi.i);
+    for k in r.lo.k..=r.hi.k {
+        for j in r.lo.j..=r.hi.j {
+            if !tiles.row_is(j, k, lo, hi, false) {
+                return false;
+            }
+        }
+    }
+    if let Some(i) = behind[0] {
+        for k in r.lo.k..=r.hi.k {
+            for j in r.lo.j..=r.hi.j {
+                if !tiles.row_is(j, k, i, i, true) {
+                    return false;
+                }
+            }
+        }
+    }
+    if let (Some(j), true) = (behind[1], axis != 1) {
+        for k in r.lo.k..=r.hi.k {
+            if !tiles.row_is(j, k, lo, hi, true) {
+                return false;
+            }
+        }
+    }
+    if let (Some(k), true) = (behind[2], axis != 2) {
+        for j in r.lo.j..=r.hi.j {
+            if !tiles.row_is(j, k, lo, hi, true) {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 /// Whether every tile behind a held face under `r` (the row `behind[axis]`
@@ -252,12 +335,11 @@ fn fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], own: bool) -
             Some(None) => continue,
             None => {}
         }
+        // A row along x' at a time: a word of the grid answers for its tiles.
         for k in s.lo.k..=s.hi.k {
             for j in s.lo.j..=s.hi.j {
-                for i in s.lo.i..=s.hi.i {
-                    if tiles.is_solid(TileIndex::new(i, j, k)) != (axis < 3) {
-                        return false;
-                    }
+                if !tiles.row_is(j, k, s.lo.i, s.hi.i, axis < 3) {
+                    return false;
                 }
             }
         }
