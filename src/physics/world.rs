@@ -48,6 +48,12 @@ pub(crate) struct Solver<S> {
     dt: S,
 }
 
+/// A new world's gravity until `World::new` sets the first one (its kicks not
+/// yet computed): no tilt the clamp lets through, so no tilt compares equal to
+/// it and the first one computes every axis. A flag beside it was a load and a
+/// branch in every step's compare.
+const NO_GRAVITY: [i32; 3] = [i32::MIN; 3];
+
 /// A board of tiles with up to `M` marbles on it.
 #[derive(Clone, Debug)]
 pub struct World<'a, S: Scalar, const M: usize> {
@@ -63,7 +69,6 @@ pub struct World<'a, S: Scalar, const M: usize> {
     drag: Drag<S>,
     motion: BoardMotion<S>,
     extent: (S, S),
-    kicks_ready: bool,
     sleeping: bool,
     /// Per-milli-g scales: full gravity, the rolling (tangential) share, and the
     /// rolling-resistance deceleration per unit load.
@@ -151,13 +156,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             params,
             tiles,
             marbles,
-            gravity_mg: [0; 3],
+            gravity_mg: NO_GRAVITY,
             kick_roll: Kick::default(),
             kick_free: Kick::default(),
             drag: Drag::default(),
             motion: BoardMotion::default(),
             extent,
-            kicks_ready: false,
             sleeping: true,
             pulls: {
                 let pitch = params.layout.pitch_um;
@@ -251,7 +255,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // costs its compare where it is handed over, without a call. A tilt
         // the clamp would make the same goes through the clamp.
         let old = self.gravity_mg;
-        if self.kicks_ready && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
+        if g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
             return;
         }
         self.set_gravity_mg_clamped(g);
@@ -273,11 +277,11 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // and the micro:bit v1's worst difficulty-9 frame 86 M0, for 408 B of its
         // flash). Plain compares, no array of flags, and no `==` on the arrays (a
         // `memcmp` call on the Cortex-M).
-        let (old, fresh) = (self.gravity_mg, !self.kicks_ready);
+        let old = self.gravity_mg;
+        let fresh = old[0] == NO_GRAVITY[0];
         if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
             return;
         }
-        self.kicks_ready = true;
         self.gravity_mg = g;
         // A new pull can move a resting marble.
         for m in self.marbles.iter_mut() {
