@@ -14,7 +14,7 @@
 //! it again.
 
 use super::super::super::geometry::sweep::swept;
-use super::{cap_speed, Flight, Marble, Scalar, Segment, StepObserver, World, SEARCH};
+use super::{cap_speed, Flight, Marble, Scalar, Segment, StepObserver, Vec3, World, SEARCH};
 
 impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// Flies marble `n`'s whole step as one flight if its free region serves it
@@ -35,7 +35,15 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         // The whole step one interval, no stop before its end: the search's
         // answer is then the step's end, if nothing is in reach.
         if a.len == S::ONE && a.stop.is_none_or(|s| s >= S::ONE) {
-            let seg = Segment::new(m.pos, m.vel, a.kick.dv, a.kick.dp, self.params.k);
+            // In the plane the marble has no y' speed and its kick no y' part
+            // (`accel` drops it): said here, the flight's y' sums fold away.
+            debug_assert!(SPACE || m.vel.y == S::ZERO, "a plane marble moving in y'");
+            let v = if SPACE {
+                m.vel
+            } else {
+                Vec3::new(m.vel.x, S::ZERO, m.vel.z)
+            };
+            let seg = Segment::new(m.pos, v, a.kick.dv, a.kick.dp, self.params.k);
             let end = seg.pos_at(S::ONE);
             let path = swept(seg.p, end, seg.h, S::ONE);
             let reach = self.params.radius + self.tol();
