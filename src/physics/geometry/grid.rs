@@ -150,24 +150,57 @@ impl Tiles<'_> {
     /// [`Tiles::is_solid`] asks one at a time (a free region's rows,
     /// `world/events/free.rs`).
     pub fn row_is(&self, j: i32, k: i32, i_lo: i32, i_hi: i32, solid: bool) -> bool {
+        self.rows_run(j, k, true, 1, i_lo, i_hi, solid) == 1
+    }
+
+    /// How many rows along x' of layer `j`, from row `k` on, stepping up in z'
+    /// (`k, k + 1, …`) or down, up to `max`, have every tile `i_lo ..= i_hi`
+    /// `solid` (outside the grid: empty; an empty span: every row). A free
+    /// region grows across z' by these runs (`world/events/free.rs`).
+    pub fn rows_run(
+        &self,
+        j: i32,
+        k: i32,
+        up: bool,
+        max: u32,
+        i_lo: i32,
+        i_hi: i32,
+        solid: bool,
+    ) -> u32 {
         if i_lo > i_hi {
-            return true;
+            return max;
         }
         let (nx, ny, nz) = (i32::from(self.nx), i32::from(self.ny), i32::from(self.nz));
-        let inside = (0..ny).contains(&j) && (0..nz).contains(&k);
         // The span's part outside the grid is empty tiles.
-        if solid && (!inside || i_lo < 0 || i_hi >= nx) {
-            return false;
-        }
-        if !inside {
-            return true;
+        if solid && (!(0..ny).contains(&j) || i_lo < 0 || i_hi >= nx) {
+            return 0;
         }
         let (lo, hi) = (i_lo.max(0), i_hi.min(nx - 1));
-        if lo > hi {
-            return true;
+        if !(0..ny).contains(&j) || lo > hi {
+            return max;
         }
-        let base = (j as usize * nz as usize + k as usize) * nx as usize;
-        let (first, last) = (base + lo as usize, base + hi as usize);
+        let count = (hi - lo + 1) as usize;
+        let mut n = 0;
+        while n < max {
+            let row = i64::from(k) + if up { i64::from(n) } else { -i64::from(n) };
+            let holds = if (0..i64::from(nz)).contains(&row) {
+                let first = (j as usize * nz as usize + row as usize) * nx as usize + lo as usize;
+                self.bits_are(first, count, solid)
+            } else {
+                !solid
+            };
+            if !holds {
+                break;
+            }
+            n += 1;
+        }
+        n
+    }
+
+    /// Whether the `count` bits from bit `first` on are all `solid` (missing
+    /// words: empty).
+    fn bits_are(&self, first: usize, count: usize, solid: bool) -> bool {
+        let last = first + count - 1;
         let mut bit = first;
         while bit <= last {
             let (word, from) = (bit / 32, bit % 32);
@@ -317,6 +350,46 @@ mod tests {
                 .take_while(|n| t.is_solid(TileIndex::new(i + step * n, j, k)) == solid)
                 .count() as u32;
             prop_assert_eq!(t.run_from(j, k, i, up, max, solid), one_by_one);
+        }
+    }
+
+    proptest! {
+        /// A run of rows counts the rows asked tile by tile, either way, on
+        /// and off the grid.
+        #[test]
+        fn a_run_of_rows_counts_its_rows(
+            (nx, ny, nz) in (1usize..=40, 1usize..=3, 1usize..=6),
+            seed in any::<u64>(),
+            density in 0u32..=4,
+            j in -1i32..=3,
+            k in -3i32..=8,
+            up in any::<bool>(),
+            max in 0u32..=10,
+            i_lo in -3i32..=42,
+            len in -1i32..=45,
+            solid in any::<bool>(),
+        ) {
+            let mut g = TileGrid::<64>::new(nx, ny, nz).unwrap();
+            let mut x = seed | 1;
+            for jj in 0..ny {
+                for kk in 0..nz {
+                    for ii in 0..nx {
+                        x ^= x << 13;
+                        x ^= x >> 7;
+                        x ^= x << 17;
+                        g.set(ii, jj, kk, (x % 4) < u64::from(density));
+                    }
+                }
+            }
+            let t = g.view();
+            let step = if up { 1 } else { -1 };
+            let i_hi = i_lo + len;
+            let one_by_one = (0..max as i32)
+                .take_while(|n| {
+                    (i_lo..=i_hi).all(|i| t.is_solid(TileIndex::new(i, j, k + step * n)) == solid)
+                })
+                .count() as u32;
+            prop_assert_eq!(t.rows_run(j, k, up, max, i_lo, i_hi, solid), one_by_one);
         }
     }
 

@@ -213,13 +213,18 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             if (axis == 1 && !space) || held & (1 << (side ^ 1)) != 0 {
                 continue;
             }
-            if axis == 0 {
-                let up = side == 1;
-                let g = grow_x(self.tiles, &range, &behind, up);
-                if up {
-                    range.hi.i += g;
+            if axis != 1 {
+                let up = side % 2 == 1;
+                let g = if axis == 0 {
+                    grow_x(self.tiles, &range, &behind, up)
                 } else {
-                    range.lo.i -= g;
+                    grow_z(self.tiles, &range, &behind, up)
+                };
+                let (lo, hi) = range.axis_mut(axis);
+                if up {
+                    *hi += g;
+                } else {
+                    *lo -= g;
                 }
                 continue;
             }
@@ -273,6 +278,27 @@ fn grow_x(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], up: bool) 
         for j in r.lo.j..=r.hi.j {
             g = g.min(tiles.run_from(j, k, from, up, g, true));
         }
+    }
+    g as i32
+}
+
+/// How many rows beyond its z' side (`up`: the high one) `r` can grow by, up
+/// to [`GROW`]: as many as the row-by-row growth would add (`fits` on each new
+/// row), counted a layer's rows at a time. A new row's tiles must be empty,
+/// and the tiles behind a held floor (`behind[1]`) or x' face (`behind[0]`)
+/// there solid; the row behind a held z' face is the same for every row.
+fn grow_z(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], up: bool) -> i32 {
+    let from = if up { r.hi.k + 1 } else { r.lo.k - 1 };
+    let (lo, hi) = (r.lo.i, r.hi.i);
+    let mut g = GROW as u32;
+    for j in r.lo.j..=r.hi.j {
+        g = g.min(tiles.rows_run(j, from, up, g, lo, hi, false));
+        if let Some(i) = behind[0] {
+            g = g.min(tiles.rows_run(j, from, up, g, i, i, true));
+        }
+    }
+    if let Some(j) = behind[1] {
+        g = g.min(tiles.rows_run(j, from, up, g, lo, hi, true));
     }
     g as i32
 }
