@@ -150,12 +150,12 @@ impl Tiles<'_> {
     /// [`Tiles::is_solid`] asks one at a time (a free region's rows,
     /// `world/events/free.rs`).
     pub fn row_is(&self, j: i32, k: i32, i_lo: i32, i_hi: i32, solid: bool) -> bool {
-        self.rows_run(j, k, true, 1, i_lo, i_hi, solid) == 1
+        self.rows_run(j, k, true, 1, (i_lo, i_hi), solid) == 1
     }
 
     /// How many rows along x' of layer `j`, from row `k` on, stepping up in z'
     /// (`k, k + 1, …`) or down, up to `max`, have every tile `i_lo ..= i_hi`
-    /// `solid` (outside the grid: empty; an empty span: every row). A free
+    /// (`span`) `solid` (outside the grid: empty; an empty span: every row). A free
     /// region grows across z' by these runs (`world/events/free.rs`).
     pub fn rows_run(
         &self,
@@ -163,8 +163,7 @@ impl Tiles<'_> {
         k: i32,
         up: bool,
         max: u32,
-        i_lo: i32,
-        i_hi: i32,
+        (i_lo, i_hi): (i32, i32),
         solid: bool,
     ) -> u32 {
         if i_lo > i_hi {
@@ -389,7 +388,7 @@ mod tests {
                     (i_lo..=i_hi).all(|i| t.is_solid(TileIndex::new(i, j, k + step * n)) == solid)
                 })
                 .count() as u32;
-            prop_assert_eq!(t.rows_run(j, k, up, max, i_lo, i_hi, solid), one_by_one);
+            prop_assert_eq!(t.rows_run(j, k, up, max, (i_lo, i_hi), solid), one_by_one);
         }
     }
 

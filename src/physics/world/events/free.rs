@@ -292,13 +292,13 @@ fn grow_z(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], up: bool) 
     let (lo, hi) = (r.lo.i, r.hi.i);
     let mut g = GROW as u32;
     for j in r.lo.j..=r.hi.j {
-        g = g.min(tiles.rows_run(j, from, up, g, lo, hi, false));
+        g = g.min(tiles.rows_run(j, from, up, g, (lo, hi), false));
         if let Some(i) = behind[0] {
-            g = g.min(tiles.rows_run(j, from, up, g, i, i, true));
+            g = g.min(tiles.rows_run(j, from, up, g, (i, i), true));
         }
     }
     if let Some(j) = behind[1] {
-        g = g.min(tiles.rows_run(j, from, up, g, lo, hi, true));
+        g = g.min(tiles.rows_run(j, from, up, g, (lo, hi), true));
     }
     g as i32
 }
