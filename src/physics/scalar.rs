@@ -109,6 +109,13 @@ pub trait Scalar:
             Self::from_scaled(n, dp_shift, true),
         )
     }
+    /// [`Scalar::from_pull`] with its shifts known when compiled: the same
+    /// bits, where fixed point shifts its words by constants (the boards'
+    /// step rate, every tilt sample).
+    #[inline]
+    fn from_pull_at<const DV_SHIFT: u32, const DP_SHIFT: u32>(mg: i32, scale: i64) -> (Self, Self) {
+        Self::from_pull(mg, scale, DV_SHIFT, DP_SHIFT)
+    }
     /// The value as `f64` (exact for every implemented type except `f64` itself,
     /// which is the identity).
     fn to_f64(self) -> f64;

@@ -67,7 +67,14 @@ impl PullScale {
     /// short of the pull would add `a·ε` of energy every step (measured: +4·10⁻⁴ over
     /// 10⁴ elastic bounces in I32F32), while one rounded past it only loses it.
     pub fn kick<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
-        S::from_pull(mg, self.0, SCALE_SHIFT + k, SCALE_SHIFT + 2 * k + 1)
+        // The boards' step (`GameConfig::EVENTS`: one event step a 1/128 s
+        // frame) with its shifts constant, every other rate at run time.
+        const K: u32 = 7;
+        if k == K {
+            S::from_pull_at::<{ SCALE_SHIFT + K }, { SCALE_SHIFT + 2 * K + 1 }>(mg, self.0)
+        } else {
+            S::from_pull(mg, self.0, SCALE_SHIFT + k, SCALE_SHIFT + 2 * k + 1)
+        }
     }
 }
 

@@ -240,8 +240,33 @@ fn pull_wide<T: Scalar>(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (T
     )
 }
 
+/// [`Scalar::from_pull`]'s word path for a fixed-point format, inlined into
+/// its two entry points: `from_pull` (shifts at run time) and `from_pull_at`
+/// (constant shifts: a 64-bit shift by a constant is a few instructions fewer
+/// on the Cortex-M than one by a variable).
+trait PullWords: Sized {
+    fn pull_words(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self);
+}
+
 macro_rules! fixed_scalar {
     ($t:ty, $wide:ty, $name:literal) => {
+        impl PullWords for $t {
+            #[inline(always)]
+            fn pull_words(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self) {
+                let frac = <$t>::FRAC_NBITS;
+                let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
+                    && (32..64).contains(&dp_shift.wrapping_sub(frac));
+                if scale < 0 || !words {
+                    return pull_wide(mg, scale, dv_shift, dp_shift);
+                }
+                let product = pull_product(mg, scale as u64);
+                let range = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
+                let dv = pull_quotient(product, mg < 0, dv_shift - frac, false, range);
+                let dp = pull_quotient(product, mg < 0, dp_shift - frac, true, range);
+                (<$t>::from_bits(dv as _), <$t>::from_bits(dp as _))
+            }
+        }
+
         impl Scalar for $t {
             const ZERO: Self = <$t>::ZERO;
             const ONE: Self = <$t>::ONE;
@@ -378,17 +403,14 @@ macro_rules! fixed_scalar {
             // Out of line: one copy for every tilt sample's kicks (the v1's flash).
             #[inline(never)]
             fn from_pull(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self) {
-                let frac = <$t>::FRAC_NBITS;
-                let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
-                    && (32..64).contains(&dp_shift.wrapping_sub(frac));
-                if scale < 0 || !words {
-                    return pull_wide(mg, scale, dv_shift, dp_shift);
-                }
-                let product = pull_product(mg, scale as u64);
-                let range = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
-                let dv = pull_quotient(product, mg < 0, dv_shift - frac, false, range);
-                let dp = pull_quotient(product, mg < 0, dp_shift - frac, true, range);
-                (<$t>::from_bits(dv as _), <$t>::from_bits(dp as _))
+                <$t as PullWords>::pull_words(mg, scale, dv_shift, dp_shift)
+            }
+            #[inline(never)]
+            fn from_pull_at<const DV_SHIFT: u32, const DP_SHIFT: u32>(
+                mg: i32,
+                scale: i64,
+            ) -> (Self, Self) {
+                <$t as PullWords>::pull_words(mg, scale, DV_SHIFT, DP_SHIFT)
             }
             fn rsqrt(self) -> Self {
                 let bits = self.to_bits();

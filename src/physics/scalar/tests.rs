@@ -226,6 +226,48 @@ fn pull_kicks_are_the_128_bit_kicks() {
     }
 }
 
+/// The kick at the boards' step with its shifts constant
+/// ([`Scalar::from_pull_at`]) against the 128-bit product, in every format
+/// (floating point takes the default, `from_pull`).
+#[test]
+fn constant_shift_kicks_are_the_128_bit_kicks() {
+    fn check<S: Scalar>(mg: i32, scale: i64) {
+        let n = mg as i128 * scale as i128;
+        assert_eq!(
+            S::from_pull_at::<63, 71>(mg, scale),
+            (S::from_scaled(n, 63, false), S::from_scaled(n, 71, true)),
+            "{} {mg} · {scale}",
+            S::NAME
+        );
+    }
+    let mut state = 0x2f4a_7c15_9e37_79b9;
+    let mgs = [i32::MIN, -8_000, -1, 0, 1, 981, 8_000, i32::MAX];
+    let scales = [
+        0,
+        1,
+        0xffff_ffff,
+        1 << 32,
+        3 << 40,
+        i64::MAX >> 8,
+        i64::MAX,
+        -5,
+    ];
+    let random = (0..20_000).map(|_| {
+        let mg = rng(&mut state) as i32 >> (rng(&mut state) % 32);
+        (mg, (rng(&mut state) >> 1) as i64 >> (rng(&mut state) % 63))
+    });
+    let edges = mgs
+        .iter()
+        .flat_map(|&mg| scales.iter().map(move |&s| (mg, s)));
+    for (mg, scale) in edges.chain(random) {
+        check::<I8F24>(mg, scale);
+        check::<I16F16>(mg, scale);
+        check::<I32F32>(mg, scale);
+        check::<f32>(mg, scale);
+        check::<f64>(mg, scale);
+    }
+}
+
 /// The two-digit long division against the 64-bit one: every shift of the
 /// divisor, quotients at both ends, random words.
 #[test]
