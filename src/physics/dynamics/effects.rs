@@ -283,10 +283,14 @@ impl<S: Scalar> Drag<S> {
         kick.dp.z -= self.half_step.times(uz);
         // The speed along the drag's direction, and how fast it changes (both
         // scaled like the squares: only their ratio matters).
-        let along = v.x.shr(SC).times(ux) + v.z.shr(SC).times(uz);
+        // The rate first: a marble the pull speeds up along the drag's
+        // direction (half a maze's frames) cannot stop, and skips `along`.
         let rate = kick.dv.x.shr(SC).times(ux) + kick.dv.z.shr(SC).times(uz);
-        if along > S::ZERO && rate < S::ZERO && along + rate.times(out.len) <= S::ZERO {
-            out.stop = Some(along.div(-rate).min(out.len));
+        if rate < S::ZERO {
+            let along = v.x.shr(SC).times(ux) + v.z.shr(SC).times(uz);
+            if along > S::ZERO && along + rate.times(out.len) <= S::ZERO {
+                out.stop = Some(along.div(-rate).min(out.len));
+            }
         }
         out
     }
@@ -327,13 +331,15 @@ impl<S: Scalar> Drag<S> {
         };
         *dv = dv.sat_add(-self.decel.times(u));
         *dp -= self.half_step.times(u);
-        let along = va.shr(SC).times(u);
+        // The rate first, as the plane's: a marble sped up cannot stop.
         let rate = dv.shr(SC).times(u);
-        let stop = if along > S::ZERO && rate < S::ZERO && along + rate.times(rem) <= S::ZERO {
-            Some(along.div(-rate).min(rem))
-        } else {
-            None
-        };
+        let mut stop = None;
+        if rate < S::ZERO {
+            let along = va.shr(SC).times(u);
+            if along > S::ZERO && along + rate.times(rem) <= S::ZERO {
+                stop = Some(along.div(-rate).min(rem));
+            }
+        }
         Some((u, stop, holds))
     }
 
