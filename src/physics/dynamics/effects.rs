@@ -144,7 +144,9 @@ pub struct DragFlight<S> {
     /// When the speed along the drag's direction reaches zero (steps), if within
     /// `len`: an event.
     pub stop: Option<S>,
-    /// The pull alone cannot beat the static threshold: a stopped marble stays put.
+    /// The pull alone cannot beat the static threshold: a stopped marble stays
+    /// put. Asked only where it is read, with a stop or of a marble at rest
+    /// (else `false`).
     pub holds: bool,
     /// The drag's direction (x', z'; unit, or zero).
     pub dir: (S, S),
@@ -210,16 +212,16 @@ impl<S: Scalar> Drag<S> {
         const SC: u32 = FLIGHT_SCALE;
         let (ax, az) = (kick.dv.x, kick.dv.z);
         let (qx, qz) = (ax.shr(SC), az.shr(SC));
-        let pull2 = qx.times(qx) + qz.times(qz);
-        let holds = pull2 <= self.flight_limit2;
+        let holds = || qx.times(qx) + qz.times(qz) <= self.flight_limit2;
         let mut out = DragFlight {
             len: rem,
             stop: None,
-            holds,
+            holds: false,
             dir: (S::ZERO, S::ZERO),
         };
         let (dx, dz) = if v.x == S::ZERO && v.z == S::ZERO {
-            if holds {
+            if holds() {
+                out.holds = true;
                 kick.dv.x = S::ZERO;
                 kick.dv.z = S::ZERO;
                 kick.dp.x = S::ZERO;
@@ -290,6 +292,7 @@ impl<S: Scalar> Drag<S> {
             let along = v.x.shr(SC).times(ux) + v.z.shr(SC).times(uz);
             if along > S::ZERO && along + rate.times(out.len) <= S::ZERO {
                 out.stop = Some(along.div(-rate).min(out.len));
+                out.holds = holds();
             }
         }
         out
@@ -300,16 +303,17 @@ impl<S: Scalar> Drag<S> {
     /// sums with the other axis zero, term by term (each product with it is
     /// zero, the turn is none, so the interval is the time left), hence the same
     /// bits. Returns the unit along the axis (±1, or 0), the stop and whether the
-    /// pull alone cannot beat the static threshold; `None` for a marble at rest
+    /// pull alone cannot beat the static threshold (asked with a stop, as the
+    /// plane asks it); `None` for a marble at rest
     /// that stays put (the caller drops the plane's kick).
     #[inline]
     fn along(&self, va: S, dv: &mut S, dp: &mut S, rem: S) -> Option<(S, Option<S>, bool)> {
         const SC: u32 = FLIGHT_SCALE;
         let a = *dv;
         let q = a.shr(SC);
-        let holds = q.times(q) <= self.flight_limit2;
+        let holds = || q.times(q) <= self.flight_limit2;
         let d = if va == S::ZERO {
-            if holds {
+            if holds() {
                 return None;
             }
             q
@@ -333,14 +337,15 @@ impl<S: Scalar> Drag<S> {
         *dp -= self.half_step.times(u);
         // The rate first, as the plane's: a marble sped up cannot stop.
         let rate = dv.shr(SC).times(u);
-        let mut stop = None;
+        let (mut stop, mut held) = (None, false);
         if rate < S::ZERO {
             let along = va.shr(SC).times(u);
             if along > S::ZERO && along + rate.times(rem) <= S::ZERO {
                 stop = Some(along.div(-rate).min(rem));
+                held = holds();
             }
         }
-        Some((u, stop, holds))
+        Some((u, stop, held))
     }
 
     /// At a stop: the velocity's part along the drag's direction `dir` is spent;
