@@ -116,6 +116,24 @@ const WOBBLE: i32 = 45;
 /// The switchback's wobble period (frames).
 const WOBBLE_PERIOD: usize = 160;
 
+/// `frame % WOBBLE_PERIOD`, on the Cortex-M0 without a division below 2¹⁶
+/// frames: the quotient by a product and a shift
+/// (`wobble_phase_is_the_remainder`). The M0 has no divide instruction, nor a
+/// 64-bit product to divide by a constant with, and the library's routine took
+/// 87 of its instructions a frame of the harness's own, counted in the physics'
+/// figure (elsewhere the operator is that product already, 4 instructions
+/// fewer than this).
+#[inline]
+fn wobble_phase(frame: u32) -> usize {
+    const M0: bool = cfg!(all(target_arch = "arm", not(target_has_atomic = "32")));
+    if M0 && frame < 1 << 16 {
+        let q = (frame * 52_429) >> 23;
+        (frame - q * WOBBLE_PERIOD as u32) as usize
+    } else {
+        frame as usize % WOBBLE_PERIOD
+    }
+}
+
 /// The switchback's wobble frame by frame within its period: `(x', z')` milli-g.
 /// A table, so that the harness's own sums (a remainder, a signed division by
 /// 40 and one by 4: 43 Cortex-M4 instructions a frame) do not weigh on the
@@ -189,7 +207,7 @@ impl Trace {
                 // Triangle wobble of ±WOBBLE mg, period 160 frames (1.25 s), on x'
                 // (it rocks the marble back along the row) and, a quarter of it
                 // against 20 mg, on z' (`WOBBLES`).
-                let (wx, gz) = WOBBLES[t as usize % WOBBLE_PERIOD];
+                let (wx, gz) = WOBBLES[wobble_phase(t)];
                 (dir * MAIN + i32::from(wx), i32::from(gz))
             }
         };
@@ -487,6 +505,22 @@ mod tests {
             let wobble = tri * 45 / 40;
             let want = [dir * 30 + wobble, -1000, 20 - wobble / 4];
             assert_eq!(Trace::Switchback.gravity_mg(frame), want, "frame {frame}");
+        }
+    }
+
+    #[test]
+    fn wobble_phase_is_the_remainder() {
+        // The M0's quotient, checked here on the host.
+        for frame in 0..1u32 << 16 {
+            let q = (frame * 52_429) >> 23;
+            assert_eq!(frame - q * 160, frame % 160, "frame {frame}");
+        }
+        for frame in (0..1 << 17).chain([u32::MAX - 1, u32::MAX]) {
+            assert_eq!(
+                wobble_phase(frame),
+                frame as usize % WOBBLE_PERIOD,
+                "frame {frame}"
+            );
         }
     }
 
