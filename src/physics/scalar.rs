@@ -224,6 +224,8 @@ mod product;
 mod quotient;
 mod rsqrt;
 #[cfg(test)]
+mod pull_tests;
+#[cfg(test)]
 mod shift_tests;
 #[cfg(test)]
 mod tests;

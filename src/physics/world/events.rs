@@ -212,8 +212,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         };
         let mut left = self.flight_budget;
         for n in 0..self.marbles.len() {
-            // Asked in place, in one test: a marble at rest is most of a
-            // resting scene's step, and its copy would be most of that.
+            // Asked in place, in one test: a resting scene's step is mostly this.
             if self.marbles[n].out | self.marbles[n].asleep {
                 self.pivots[n] = CarriedEdge::NONE;
                 continue;
