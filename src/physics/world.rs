@@ -314,7 +314,10 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         };
         let [full, roll, resist] = self.pulls;
         // Rolling scales the tangential axes only (x', z'): the normal is full.
-        let rolls = axis != 1 && roll != full;
+        // Its scale is 5/7 of the full one whenever the effect is on (a pitch of
+        // at least 1 mm keeps both below the cap): the flag, not the two scales'
+        // 64-bit compare (9 of the Cortex-M0's instructions a tilt sample).
+        let rolls = axis != 1 && self.params.spec.effects.rolling;
         let rolling = Kick::axis_of(mg, if rolls { roll } else { full }, reach, k);
         self.kick_roll.set_axis(axis, rolling);
         // What a scene does not use costs nothing: a flat world never flies
