@@ -203,8 +203,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
     /// it over the marbles still to fly, so that one marble's hard step cannot
     /// leave the next one none.
     fn fly_each<const SPACE: bool, O: StepObserver<S>>(&mut self, obs: &mut O) {
-        // Only a share needs the count: one marble (most often) takes the whole
-        // budget whatever the count, and skips the pass over the marbles.
+        // Only a share needs the count: one marble (most often) takes it all.
         let mut to_fly = if self.marbles.len() > 1 {
             self.marbles.iter().filter(|m| !m.out && !m.asleep).count() as u32
         } else {
@@ -233,17 +232,17 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             } else {
                 Some(Flight::begin())
             };
-            let may_sleep = if let Some(mut f) = flight {
+            let (may_sleep, quiet) = if let Some(mut f) = flight {
                 self.go_on_round(n, &mut f);
                 self.fly_out::<SPACE, O>(n, &mut m, &mut f, obs);
                 self.pivots[n] = ended_round(&f);
-                f.t >= S::ONE || self.cut(&f)
+                (f.t >= S::ONE || self.cut(&f), false)
             } else {
-                true
+                (true, true)
             };
             left = left.saturating_sub(share - self.flights_left);
             to_fly = to_fly.saturating_sub(1);
-            self.finish::<SPACE>(n, &mut m, may_sleep);
+            self.finish::<SPACE>(n, &mut m, may_sleep, quiet);
         }
     }
 
@@ -284,15 +283,16 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
     }
 
-    /// The end of a marble's step: out of play, asleep (as the fixed step decides,
-    /// if it `may_sleep`: see `events/budget.rs`).
-    fn finish<const SPACE: bool>(&mut self, n: usize, m: &mut Marble<S>, may_sleep: bool) {
-        if !SPACE {
-            m.supported = true;
+    /// The end of a marble's step: out of play (not after a `quiet` step in the
+    /// plane, which ends in its free region, on the board), asleep (as the fixed
+    /// step decides, if it may `sleep`: see `events/budget.rs`).
+    fn finish<const SPACE: bool>(&mut self, n: usize, m: &mut Marble<S>, sleep: bool, quiet: bool) {
+        m.supported |= !SPACE;
+        if SPACE || !quiet {
+            self.check_out::<SPACE>(m);
         }
-        self.check_out::<SPACE>(m);
         m.asleep = self.sleeping
-            && may_sleep
+            && sleep
             && *m == self.marbles[n]
             && !self.params.spec.effects.board_motion;
         self.marbles[n] = *m;

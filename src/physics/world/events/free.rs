@@ -251,6 +251,12 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
             // The lid is searched when the widened box reaches it.
             region.hi.y = region.hi.y.min(self.lid());
         }
+        // On the board, so that a quiet step in the plane, which ends inside
+        // its region, has not left it (`finish` skips `check_out`): the border
+        // walls keep a region there anyway.
+        let (ex, ez) = self.extent();
+        (region.lo.x, region.lo.z) = (region.lo.x.max(S::ZERO), region.lo.z.max(S::ZERO));
+        (region.hi.x, region.hi.z) = (region.hi.x.min(ex), region.hi.z.min(ez));
         if region.holds(m) {
             self.free[n] = region;
         }
