@@ -282,6 +282,24 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// An `nx × ny × nz` grid, each tile solid with odds `density` in 4
+    /// (0: all empty, 4: all solid), from `seed` (xorshift).
+    fn random_grid((nx, ny, nz): (usize, usize, usize), seed: u64, density: u32) -> TileGrid<64> {
+        let mut g = TileGrid::<64>::new(nx, ny, nz).unwrap();
+        let mut x = seed | 1;
+        for j in 0..ny {
+            for k in 0..nz {
+                for i in 0..nx {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    g.set(i, j, k, (x % 4) < u64::from(density));
+                }
+            }
+        }
+        g
+    }
+
     proptest! {
         /// A row read answers as its tiles asked one at a time, on and off the
         /// grid, across word boundaries.
@@ -296,19 +314,7 @@ mod tests {
             len in -1i32..=45,
             solid in any::<bool>(),
         ) {
-            let mut g = TileGrid::<64>::new(nx, ny, nz).unwrap();
-            let mut x = seed | 1;
-            for jj in 0..ny {
-                for kk in 0..nz {
-                    for ii in 0..nx {
-                        x ^= x << 13;
-                        x ^= x >> 7;
-                        x ^= x << 17;
-                        // density 0: all empty, 4: all solid.
-                        g.set(ii, jj, kk, (x % 4) < u64::from(density));
-                    }
-                }
-            }
+            let g = random_grid((nx, ny, nz), seed, density);
             let t = g.view();
             let i_hi = i_lo + len;
             let one_by_one = (i_lo..=i_hi).all(|i| t.is_solid(TileIndex::new(i, j, k)) == solid);
@@ -331,18 +337,7 @@ mod tests {
             max in 0u32..=32,
             solid in any::<bool>(),
         ) {
-            let mut g = TileGrid::<64>::new(nx, ny, nz).unwrap();
-            let mut x = seed | 1;
-            for jj in 0..ny {
-                for kk in 0..nz {
-                    for ii in 0..nx {
-                        x ^= x << 13;
-                        x ^= x >> 7;
-                        x ^= x << 17;
-                        g.set(ii, jj, kk, (x % 4) < u64::from(density));
-                    }
-                }
-            }
+            let g = random_grid((nx, ny, nz), seed, density);
             let t = g.view();
             let step = if up { 1 } else { -1 };
             let one_by_one = (0..max as i32)
@@ -368,18 +363,7 @@ mod tests {
             len in -1i32..=45,
             solid in any::<bool>(),
         ) {
-            let mut g = TileGrid::<64>::new(nx, ny, nz).unwrap();
-            let mut x = seed | 1;
-            for jj in 0..ny {
-                for kk in 0..nz {
-                    for ii in 0..nx {
-                        x ^= x << 13;
-                        x ^= x >> 7;
-                        x ^= x << 17;
-                        g.set(ii, jj, kk, (x % 4) < u64::from(density));
-                    }
-                }
-            }
+            let g = random_grid((nx, ny, nz), seed, density);
             let t = g.view();
             let step = if up { 1 } else { -1 };
             let i_hi = i_lo + len;
