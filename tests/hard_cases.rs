@@ -953,3 +953,24 @@ fn round_a_rim_from_step_to_step() {
         w.stats.contacts
     );
 }
+
+/// A tilt past the level's bound is clamped axis by axis, whichever axes are
+/// out of it and however far (the world's one clamp on the tilt path).
+#[test]
+fn a_tilt_past_the_bound_is_clamped_axis_by_axis() {
+    let g = closed_box(3);
+    type S = fixed::types::I8F24;
+    let p = params::<S>(spec_in(Stepping::Events, Effects::NONE));
+    let mut w: W4<'_, S> = world(p, &g, &[cell_centre(&p, 3, 3)]);
+    let lim = p.mg_max;
+    for (tilt, want) in [
+        ([i32::MAX, -1000, i32::MIN], [lim, -1000, -lim]),
+        ([lim + 1, -(lim + 1), 5], [lim, -lim, 5]),
+        ([-lim, lim, 0], [-lim, lim, 0]),
+        ([3, i32::MIN, -lim - 7], [3, -lim, -lim]),
+        ([0, -1000, 0], [0, -1000, 0]),
+    ] {
+        w.set_gravity_mg(tilt);
+        assert_eq!(w.gravity_mg(), want, "{tilt:?}");
+    }
+}
