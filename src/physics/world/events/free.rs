@@ -9,8 +9,8 @@
 //! across x' and [`GROW`] rows across z' (and y'), while every tile in it is
 //! empty and every tile behind a held face under it is solid. The grid keeps a
 //! row along x' as consecutive bits, so the growth reads words: a column's worth
-//! of rows at once across x' (`Tiles::run_from`), a whole row across z'
-//! (`Tiles::row_is`). It is kept with the held faces it assumed; a later flight whose
+//! of rows at once across x' (`Tiles::run_from`), runs of whole rows across z'
+//! (`Tiles::rows_run`), a row at a time across y' (`Tiles::row_is`). It is kept with the held faces it assumed; a later flight whose
 //! swept box (widened by the radius and the tolerance, as the reach test widens
 //! it) lies inside it, with the same held faces, has exactly the search's answer
 //! without the search: no tile, no lid, no support ending, only the flight's own
@@ -25,7 +25,7 @@ use super::super::super::geometry::grid::Tiles;
 use super::{reach, Aabb, Marble, Scalar, TileRange, Vec3, World};
 
 /// Rows a region grows each way beyond the search's own tiles across y' and
-/// z', a row of tiles at a time: a marble crossing an open floor keeps one
+/// z': a marble crossing an open floor keeps one
 /// region for several frames (grown further, a rebuild would cost more than
 /// the searches it spares, and its frame on the micro:bit v1 more than the
 /// frame's budget).
@@ -206,8 +206,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         if !fits(self.tiles, &range, &behind, range != *searched) {
             return;
         }
-        // Grow each side that no held face bounds: across x' by runs along the
-        // grid's rows (`grow_x`), the others a row at a time.
+        // Grow each side that no held face bounds: across x' and z' by runs
+        // (`grow_x`, `grow_z`), across y' a layer at a time.
         for side in 0..6 {
             let axis = side / 2;
             if (axis == 1 && !space) || held & (1 << (side ^ 1)) != 0 {
@@ -235,7 +235,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
                 let mut row = range;
                 let (row_lo, row_hi) = row.axis_mut(axis);
                 (*row_lo, *row_hi) = (next, next);
-                if !row_fits(self.tiles, &row, &behind, axis) {
+                if !row_fits_y(self.tiles, &row, &behind) {
                     break;
                 }
                 let (lo, hi) = range.axis_mut(axis);
@@ -309,10 +309,10 @@ fn grow_z(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], up: bool) 
     g as i32
 }
 
-/// `fits(r, behind, true)` for the row `r` a region grows onto across `axis`
-/// (y' or z'), without the row behind a held face on that axis: growing across
-/// it leaves that row as `fits` read it for the region.
-fn row_fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], axis: usize) -> bool {
+/// `fits(r, behind, true)` for the layer `r` a region grows onto across y',
+/// without the layer behind a held floor or lid: growing across y' leaves it as
+/// `fits` read it for the region.
+fn row_fits_y(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3]) -> bool {
     let (lo, hi) = (r.lo.i, r.hi.i);
     for k in r.lo.k..=r.hi.k {
         for j in r.lo.j..=r.hi.j {
@@ -330,14 +330,7 @@ fn row_fits(tiles: Tiles<'_>, r: &TileRange, behind: &[Option<i32>; 3], axis: us
             }
         }
     }
-    if let (Some(j), true) = (behind[1], axis != 1) {
-        for k in r.lo.k..=r.hi.k {
-            if !tiles.row_is(j, k, lo, hi, true) {
-                return false;
-            }
-        }
-    }
-    if let (Some(k), true) = (behind[2], axis != 2) {
+    if let Some(k) = behind[2] {
         for j in r.lo.j..=r.hi.j {
             if !tiles.row_is(j, k, lo, hi, true) {
                 return false;
