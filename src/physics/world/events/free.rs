@@ -22,7 +22,7 @@
 //! eq. 6, which eq. 5 and 6 decide alike on every boundary, on every backend.
 
 use super::super::super::geometry::grid::Tiles;
-use super::{reach, Aabb, Marble, Scalar, TileRange, Vec3, World};
+use super::{reach, Aabb, Marble, Scalar, Segment, TileRange, Vec3, World};
 
 /// Rows a region grows each way beyond the search's own tiles across y' and
 /// z': a marble crossing an open floor keeps one
@@ -111,19 +111,85 @@ impl<S: Scalar> FreeRegion<S> {
             && (!space || (lo.y <= c.y && c.y < hi.y))
     }
 
-    /// Whether a flight of the marble whose centre sweeps `path` can meet
-    /// nothing: the search would return the flight's own end or stop. `space`:
-    /// the world has holes (3-D). Out of line, one copy for both kinds of world:
-    /// the micro:bit v1's flash.
+    /// Whether the flight `seg` of the marble, whose centre sweeps `path`, can
+    /// meet nothing: the search would return the flight's own end or stop.
+    /// `(r, reach)`: the radius, and with the tolerance. `space`: the world has
+    /// holes (3-D). Out of line, one copy for both kinds of world: the
+    /// micro:bit v1's flash.
     #[inline(never)]
     pub(in crate::physics::world) fn serves(
         &self,
         m: &Marble<S>,
+        seg: &Segment<S>,
         path: &Aabb<S>,
-        reach: S,
+        (r, reach): (S, S),
         space: bool,
     ) -> bool {
-        self.holds(m) && self.contains(path, reach, space)
+        if self.holds(m) {
+            self.contains(path, reach, space)
+        } else {
+            self.serves_still(m, seg, path, (r, reach), space)
+        }
+    }
+
+    /// Whether the region answers a still flight (no speed and no kick: the
+    /// centre stays where it is all step) of a marble that has let go of some
+    /// of the faces the region was built with and holds the others at their
+    /// planes: a marble at rest in a corner whose pull has turned away from
+    /// one wall without beating static friction, frame after frame while the
+    /// tilt wanders. The search would find nothing: a still centre approaches
+    /// no tile (every approach speed and pull is zero, bit for bit) and enters
+    /// no column (the hold kept only faces supported under it), and it is in
+    /// no tile: those in reach within the region are empty, and those behind a
+    /// let-go face lie beyond its plane, which the centre is at least a radius
+    /// in front of (so a rounded edge there is not nearer than the tolerance).
+    /// Asked by the search (`serves`): the quiet frame's served path stays as
+    /// it was, and a still marble's frame goes on to the search.
+    #[inline]
+    fn serves_still(
+        &self,
+        m: &Marble<S>,
+        seg: &Segment<S>,
+        path: &Aabb<S>,
+        (r, reach): (S, S),
+        space: bool,
+    ) -> bool {
+        // The faces first: most searches this asks have no region at all.
+        let (built, held) = (self.held, m.rest_mask);
+        if built == NONE || held & !built != 0 {
+            return false;
+        }
+        if seg.v != Vec3::ZERO || seg.dv != Vec3::ZERO || seg.h != Vec3::ZERO {
+            return false;
+        }
+        let mut bits = built;
+        while bits != 0 {
+            let bit = bits.trailing_zeros() as u8;
+            bits &= bits - 1;
+            let (axis, up) = ((bit / 2) as usize, bit % 2 == 1);
+            // Held from above (`up`) the face bounds the low side.
+            let (side, c) = (
+                if up {
+                    self.lo.axis(axis)
+                } else {
+                    self.hi.axis(axis)
+                },
+                m.pos.axis(axis),
+            );
+            let kept = if held & (1 << bit) != 0 {
+                m.rest_plane[axis] == side
+            } else if up {
+                // As the hold puts a resting centre (`plane ± r`): the same
+                // sums, so a float backend's rounding agrees too.
+                c >= side + r
+            } else {
+                c <= side - r
+            };
+            if !kept {
+                return false;
+            }
+        }
+        self.contains(path, reach, space)
     }
 
     /// [`FreeRegion::serves`] for a marble known to hold the region's faces

@@ -36,7 +36,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
         let path = swept(seg.p, end, seg.h, limit);
         let reach_r = r + tol;
-        if self.free[n].serves(m, &path, reach_r, SPACE) {
+        if self.free[n].serves(m, seg, &path, (r, reach_r), SPACE) {
             self.stats.free_served = self.stats.free_served.wrapping_add(1);
             return best;
         }
