@@ -270,10 +270,18 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // A sample within the bound on every axis (nearly all) in one test.
         let within = (g[0].unsigned_abs() | g[1].unsigned_abs() | g[2].unsigned_abs()) as i64
             <= i64::from(lim);
+        let old = self.gravity_mg;
+        let fresh = old[0] == NO_GRAVITY[0];
+        // A sample within the bound differs from the tilt the world has (its
+        // one caller compared them); a clamped one may not.
         let g = if within {
             g
         } else {
-            [clamp(g[0]), clamp(g[1]), clamp(g[2])]
+            let g = [clamp(g[0]), clamp(g[1]), clamp(g[2])];
+            if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
+                return;
+            }
+            g
         };
         // Axis by axis: each axis of the kicks depends on that axis of the pull
         // alone (the displacement clamp is per axis too), and a tilt sample
@@ -284,11 +292,6 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // and the micro:bit v1's worst difficulty-9 frame 86 M0, for 408 B of its
         // flash). Plain compares, no array of flags, and no `==` on the arrays (a
         // `memcmp` call on the Cortex-M).
-        let old = self.gravity_mg;
-        let fresh = old[0] == NO_GRAVITY[0];
-        if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
-            return;
-        }
         self.gravity_mg = g;
         // A new pull can move a resting marble. By index: a slice's loop was
         // unrolled eight times over, for the one marble most worlds hold (25 host

@@ -220,11 +220,12 @@ fn pull_quotient(
     } else {
         ((((high << 1) | u64::from(low >> 31)) >> t) + 1) >> 1
     };
-    if negative {
-        (q.min(lo.unsigned_abs()) as i64).wrapping_neg()
-    } else {
-        q.min(hi as u64) as i64
-    }
+    // Two's complement: the bound below zero is one past the bound above it
+    // (`lo = −hi − 1`), so one saturation and a conditional negation.
+    debug_assert_eq!(lo, -hi - 1);
+    let q = q.min(hi as u64 + u64::from(negative)) as i64;
+    let sign = -i64::from(negative);
+    (q ^ sign).wrapping_sub(sign)
 }
 
 /// [`Scalar::from_pull`] by the 128-bit product (shifts outside `32..64` of the
