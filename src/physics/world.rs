@@ -85,6 +85,9 @@ pub struct World<'a, S: Scalar, const M: usize> {
     pivots: [events::CarriedEdge; M],
     /// Whether searches build free regions (tests turn it off to compare).
     free_regions: bool,
+    /// A flat world flown by events, rolling (the boards' mazes): a tilt
+    /// sample's plane axes are its rolling kicks alone (`pull_axis`).
+    flat_events: bool,
     /// Flights a step may take in all ([`events::FLIGHT_BUDGET`] unless set).
     flight_budget: u32,
     /// Flights the step under way may still take.
@@ -181,6 +184,9 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             free: [events::FreeRegion::EMPTY; M],
             pivots: [events::CarriedEdge::NONE; M],
             free_regions: true,
+            flat_events: params.events()
+                && params.spec.effects.rolling
+                && !params.spec.effects.holes,
             flight_budget: events::FLIGHT_BUDGET,
             flights_left: 0,
             stats: StepStats::default(),
@@ -315,6 +321,15 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     #[inline(always)]
     fn pull_axis(&mut self, axis: usize, mg: i32) {
         let k = self.params.k;
+        // A plane axis of a flat world flown by events (the boards' mazes):
+        // its rolling kick alone, unclamped — `mg_max` keeps `a·dt` within
+        // 127 pitch/s at 2^k ≥ 128 steps a second (`Params::new`), so
+        // |½·a·dt²| < 1 pitch and the clamp below could not bind.
+        if axis != 1 && self.flat_events {
+            let [_, roll, _] = self.pulls;
+            self.kick_roll.set_axis(axis, roll.kick::<S>(mg, k));
+            return;
+        }
         // Fixed steps bound the kick's displacement (no tunnelling); events need no
         // bound (|½·a·dt²| < 1 pitch by `mg_max`).
         let reach = if self.params.events() {
@@ -483,4 +498,49 @@ pub(crate) fn overlaps_any<S: Scalar>(
         // Slab `j = 2n` (eq. 5) tops out at `y' = n`.
         .filter(|t: &TileIndex| t.j & 1 == 1 || S::from_int(t.j >> 1) > c.y)
         .any(|t| super::geometry::narrowphase::overlaps(c, r, &layout.tile_box(t)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Kick, Params, PhysicsSpec, PullScale, Scalar, Stepping};
+    use ::fixed::types::{I16F16, I32F32, I8F24};
+
+    /// Event stepping's kicks need no displacement clamp (`World::pull_axis`
+    /// gives a flat world's plane axes their kicks without it): at the
+    /// strongest pull a level allows (`Params::mg_max`), at every event rate,
+    /// pitch and rolling share, a step's displacement stays under a pitch and
+    /// the ±64-pitch clamp leaves the kick as it is, in every fixed-point
+    /// format.
+    #[test]
+    fn events_kicks_never_reach_the_clamp() {
+        fn check<S: Scalar>() {
+            for k in 7..=10 {
+                for (short_um, long_um) in [(200, 800), (2_000, 10_000), (20_000, 80_000)] {
+                    let spec = PhysicsSpec {
+                        short_um,
+                        long_um,
+                        radius_um: short_um,
+                        step_log2: k,
+                        stepping: Stepping::Events,
+                        ..PhysicsSpec::DEFAULT
+                    };
+                    let p = Params::<S>::new(spec).expect("valid spec");
+                    let pitch = short_um + long_um;
+                    for scale in [PullScale::new(1, 1, pitch), PullScale::new(5, 7, pitch)] {
+                        for mg in [p.mg_max, -p.mg_max] {
+                            let free = scale.kick::<S>(mg, k);
+                            // Under a pitch a step (what `mg_max` is for), so
+                            // far inside the clamp.
+                            assert!(free.1.abs() < S::ONE, "{} k {k} pitch {pitch} µm", S::NAME);
+                            let clamped = Kick::axis_of(mg, scale, S::from_int(64), k);
+                            assert_eq!(free, clamped, "{} k {k} pitch {pitch} µm {mg} mg", S::NAME);
+                        }
+                    }
+                }
+            }
+        }
+        check::<I8F24>();
+        check::<I16F16>();
+        check::<I32F32>();
+    }
 }
