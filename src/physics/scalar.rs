@@ -116,6 +116,17 @@ pub trait Scalar:
     fn from_pull_at<const DV_SHIFT: u32, const DP_SHIFT: u32>(mg: i32, scale: i64) -> (Self, Self) {
         Self::from_pull(mg, scale, DV_SHIFT, DP_SHIFT)
     }
+    /// [`Scalar::from_pull_at`] for a kick the format holds without
+    /// saturating (the caller's bound on `mg` says so: `World::pull_axis`):
+    /// the same bits, where a 32-bit fixed-point format takes the rounded
+    /// quotients on one word, with no saturation.
+    #[inline]
+    fn from_pull_fits_at<const DV_SHIFT: u32, const DP_SHIFT: u32>(
+        mg: i32,
+        scale: i64,
+    ) -> (Self, Self) {
+        Self::from_pull_at::<DV_SHIFT, DP_SHIFT>(mg, scale)
+    }
     /// The value as `f64` (exact for every implemented type except `f64` itself,
     /// which is the identity).
     fn to_f64(self) -> f64;

@@ -323,11 +323,12 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let k = self.params.k;
         // A plane axis of a flat world flown by events (the boards' mazes):
         // its rolling kick alone, unclamped — `mg_max` keeps `a·dt` within
-        // 127 pitch/s at 2^k ≥ 128 steps a second (`Params::new`), so
-        // |½·a·dt²| < 1 pitch and the clamp below could not bind.
+        // 127 pitch/s at 2^k ≥ 128 steps a second (`Params::new`), so the
+        // format holds the kick and |½·a·dt²| < 1 pitch: the clamp below
+        // could not bind.
         if axis != 1 && self.flat_events {
             let [_, roll, _] = self.pulls;
-            self.kick_roll.set_axis(axis, roll.kick::<S>(mg, k));
+            self.kick_roll.set_axis(axis, roll.kick_fits::<S>(mg, k));
             return;
         }
         // Fixed steps bound the kick's displacement (no tunnelling); events need no
@@ -527,8 +528,15 @@ mod tests {
                     let p = Params::<S>::new(spec).expect("valid spec");
                     let pitch = short_um + long_um;
                     for scale in [PullScale::new(1, 1, pitch), PullScale::new(5, 7, pitch)] {
-                        for mg in [p.mg_max, -p.mg_max] {
+                        let some = (-p.mg_max..=p.mg_max).step_by(37);
+                        for mg in some.chain([p.mg_max, -p.mg_max, 0, 1, -1]) {
                             let free = scale.kick::<S>(mg, k);
+                            assert_eq!(
+                                scale.kick_fits::<S>(mg, k),
+                                free,
+                                "{} k {k} pitch {pitch} µm {mg} mg",
+                                S::NAME
+                            );
                             // Under a pitch a step (what `mg_max` is for), so
                             // far inside the clamp.
                             assert!(free.1.abs() < S::ONE, "{} k {k} pitch {pitch} µm", S::NAME);

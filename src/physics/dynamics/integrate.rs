@@ -78,6 +78,20 @@ impl PullScale {
     }
 }
 
+impl PullScale {
+    /// [`PullScale::kick`] for a pull the number format holds (`|a·dt|` within
+    /// its range: `Params::mg_max` bounds event stepping's pull so), the same
+    /// bits: at the boards' step rate without the quotients' saturation.
+    pub fn kick_fits<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
+        const K: u32 = 7;
+        if k == K {
+            S::from_pull_fits_at::<{ SCALE_SHIFT + K }, { SCALE_SHIFT + 2 * K + 1 }>(mg, self.0)
+        } else {
+            self.kick(mg, k)
+        }
+    }
+}
+
 impl<S: Scalar> Kick<S> {
     /// One axis of the kick of a `mg` milli-g pull scaled by `scale`: `(a·dt, ½·a·dt²)`
     /// with the displacement limited to `±reach` (the step bound against tunnelling;

@@ -228,6 +228,27 @@ fn pull_quotient(
     (q ^ sign).wrapping_sub(sign)
 }
 
+/// [`pull_quotient`] for a quotient the format holds (below `2^31`, a 32-bit
+/// format's: [`Scalar::from_pull_fits_at`]): the same rounding, the high
+/// word's shift taken to one word (`⌊P/2^(s−1)⌋ < 2^32` then) and no
+/// saturation.
+#[inline(always)]
+fn pull_quotient_fits((low, high): (u32, u64), negative: bool, s: u32, away: bool) -> i32 {
+    let t = (s - 32) & 31;
+    let q = if away {
+        if high == 0 && low == 0 {
+            0
+        } else {
+            (((high - u64::from(low == 0)) >> t) as u32).wrapping_add(1)
+        }
+    } else {
+        let h = (((high << 1) | u64::from(low >> 31)) >> t) as u32;
+        (h >> 1) + (h & 1)
+    };
+    let sign = -i32::from(negative);
+    ((q as i32) ^ sign).wrapping_sub(sign)
+}
+
 /// [`Scalar::from_pull`] by the 128-bit product (shifts outside `32..64` of the
 /// format's fraction, a negative scale): out of line and cold, so that the word
 /// path every tilt sample takes saves and restores only the registers it uses.
@@ -247,6 +268,8 @@ fn pull_wide<T: Scalar>(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (T
 /// on the Cortex-M than one by a variable).
 trait PullWords: Sized {
     fn pull_words(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self);
+    /// `pull_words` for a kick the format holds ([`pull_quotient_fits`]).
+    fn pull_words_fits(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self);
 }
 
 macro_rules! fixed_scalar {
@@ -264,6 +287,25 @@ macro_rules! fixed_scalar {
                 let range = (<$t>::MIN.to_bits() as i64, <$t>::MAX.to_bits() as i64);
                 let dv = pull_quotient(product, mg < 0, dv_shift - frac, false, range);
                 let dp = pull_quotient(product, mg < 0, dp_shift - frac, true, range);
+                (<$t>::from_bits(dv as _), <$t>::from_bits(dp as _))
+            }
+            #[inline(always)]
+            fn pull_words_fits(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self) {
+                let frac = <$t>::FRAC_NBITS;
+                let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
+                    && (32..64).contains(&dp_shift.wrapping_sub(frac));
+                // A 64-bit format's quotients need their words.
+                if scale < 0 || !words || <$t>::MAX.to_bits() as i64 > i64::from(i32::MAX) {
+                    return Self::pull_words(mg, scale, dv_shift, dp_shift);
+                }
+                let product = pull_product(mg, scale as u64);
+                let dv = pull_quotient_fits(product, mg < 0, dv_shift - frac, false);
+                let dp = pull_quotient_fits(product, mg < 0, dp_shift - frac, true);
+                debug_assert_eq!(
+                    (<$t>::from_bits(dv as _), <$t>::from_bits(dp as _)),
+                    Self::pull_words(mg, scale, dv_shift, dp_shift),
+                    "a kick the format does not hold"
+                );
                 (<$t>::from_bits(dv as _), <$t>::from_bits(dp as _))
             }
         }
@@ -412,6 +454,13 @@ macro_rules! fixed_scalar {
                 scale: i64,
             ) -> (Self, Self) {
                 <$t as PullWords>::pull_words(mg, scale, DV_SHIFT, DP_SHIFT)
+            }
+            #[inline(never)]
+            fn from_pull_fits_at<const DV_SHIFT: u32, const DP_SHIFT: u32>(
+                mg: i32,
+                scale: i64,
+            ) -> (Self, Self) {
+                <$t as PullWords>::pull_words_fits(mg, scale, DV_SHIFT, DP_SHIFT)
             }
             fn rsqrt(self) -> Self {
                 let bits = self.to_bits();
