@@ -273,18 +273,20 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         let lim = self.params.mg_max;
         // max then min, not `clamp`: its `min <= max` assertion would link core::fmt.
         let clamp = |v: i32| v.max(-lim).min(lim);
-        // A sample within the bound on every axis (nearly all) in one test.
-        let within = (g[0].unsigned_abs() | g[1].unsigned_abs() | g[2].unsigned_abs()) as i64
-            <= i64::from(lim);
-        let old = self.gravity_mg;
-        let fresh = old[0] == NO_GRAVITY[0];
+        // A sample within the bound on every axis (nearly all): each axis one
+        // unsigned compare of its offset from −lim (`mg_max` ≥ 0).
+        let span = 2 * lim as u32;
+        let inside = |v: i32| v.wrapping_add(lim) as u32 <= span;
+        let within = inside(g[0]) & inside(g[1]) & inside(g[2]);
         // A sample within the bound differs from the tilt the world has (its
-        // one caller compared them); a clamped one may not.
+        // one caller compared them); a clamped one may not. None equals a new
+        // world's `NO_GRAVITY`, so its first tilt computes every axis.
+        let old = self.gravity_mg;
         let g = if within {
             g
         } else {
             let g = [clamp(g[0]), clamp(g[1]), clamp(g[2])];
-            if !fresh && g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
+            if g[0] == old[0] && g[1] == old[1] && g[2] == old[2] {
                 return;
             }
             g
@@ -305,13 +307,13 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         for n in 0..self.marbles.len() {
             self.marbles[n].asleep = false;
         }
-        if fresh || g[0] != old[0] {
+        if g[0] != old[0] {
             self.pull_axis(0, g[0]);
         }
-        if fresh || g[1] != old[1] {
+        if g[1] != old[1] {
             self.pull_axis(1, g[1]);
         }
-        if fresh || g[2] != old[2] {
+        if g[2] != old[2] {
             self.pull_axis(2, g[2]);
         }
     }
