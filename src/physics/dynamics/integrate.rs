@@ -82,6 +82,7 @@ impl PullScale {
     /// [`PullScale::kick`] for a pull the number format holds (`|a·dt|` within
     /// its range: `Params::mg_max` bounds event stepping's pull so), the same
     /// bits: at the boards' step rate without the quotients' saturation.
+    #[inline(always)]
     pub fn kick_fits<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
         const K: u32 = 7;
         if k == K {

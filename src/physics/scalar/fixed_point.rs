@@ -455,7 +455,9 @@ macro_rules! fixed_scalar {
             ) -> (Self, Self) {
                 <$t as PullWords>::pull_words(mg, scale, DV_SHIFT, DP_SHIFT)
             }
-            #[inline(never)]
+            // Inlined into a flat world's tilt sample, its one caller (the
+            // plane axes' two copies): its word path is short.
+            #[inline(always)]
             fn from_pull_fits_at<const DV_SHIFT: u32, const DP_SHIFT: u32>(
                 mg: i32,
                 scale: i64,
