@@ -255,7 +255,12 @@ impl<S: Scalar> Drag<S> {
                     off = off.shr(3);
                 }
             }
-            let half = out.len.half();
+            // A whole step's half a constant (a quiet frame's).
+            let half = if out.len == S::ONE {
+                S::ONE.half()
+            } else {
+                out.len.half()
+            };
             let (mx, mz) = (
                 v.x.sat_add(ax.times(half)).shr(SC),
                 v.z.sat_add(az.times(half)).shr(SC),
@@ -310,16 +315,25 @@ impl<S: Scalar> Drag<S> {
     fn along(&self, va: S, dv: &mut S, dp: &mut S, rem: S) -> Option<(S, Option<S>, bool)> {
         const SC: u32 = FLIGHT_SCALE;
         let a = *dv;
-        let q = a.shr(SC);
-        let holds = || q.times(q) <= self.flight_limit2;
+        // The pull scaled only where asked: at rest, or with a stop.
+        let holds = || {
+            let q = a.shr(SC);
+            q.times(q) <= self.flight_limit2
+        };
         let d = if va == S::ZERO {
             if holds() {
                 return None;
             }
-            q
+            a.shr(SC)
         } else {
             let s = va.shr(SC);
-            let m = va.sat_add(a.times(rem.half())).shr(SC);
+            // A quiet frame's whole step: its half a constant.
+            let half = if rem == S::ONE {
+                S::ONE.half()
+            } else {
+                rem.half()
+            };
+            let m = va.sat_add(a.times(half)).shr(SC);
             if m.times(s) > S::ZERO {
                 m
             } else {
