@@ -97,6 +97,21 @@ fn the_stress_scenes_play_the_same_without_it() {
     }
 }
 
+/// Event stepping with rolling and rolling resistance, holes (3-D) or not,
+/// marbles that touch or not.
+fn events_with<S: Scalar>(holes: bool, marbles: bool) -> marble_rolling::physics::Params<S> {
+    params::<S>(spec_in(
+        Stepping::Events,
+        Effects {
+            holes,
+            friction: true,
+            rolling: true,
+            marbles,
+            ..Effects::NONE
+        },
+    ))
+}
+
 /// Two marbles in a walled maze with a hole, rolled, tilted about, shot and
 /// left to rest, on every backend, with and without holes (3-D or the floor):
 /// the same marbles after every step, and the regions answered searches.
@@ -111,16 +126,7 @@ fn same_on_every_backend<S: Scalar>() {
         "###########",
     ]);
     for holes in [false, true] {
-        let p = params::<S>(spec_in(
-            Stepping::Events,
-            Effects {
-                holes,
-                friction: true,
-                rolling: true,
-                marbles: true,
-                ..Effects::NONE
-            },
-        ));
+        let p = events_with::<S>(holes, true);
         let starts = [cell_centre(&p, 1, 1), cell_centre(&p, 9, 5)];
         let mut a = world(p, &g, &starts);
         let mut b = world(p, &g, &starts);
@@ -164,15 +170,7 @@ for_each_backend!(the_same_on_every_backend, same_on_every_backend);
 fn still_in_a_corner<S: Scalar>() {
     let g = grid(&["#####", "#...#", "#...#", "#####"]);
     for holes in [false, true] {
-        let p = params::<S>(spec_in(
-            Stepping::Events,
-            Effects {
-                holes,
-                friction: true,
-                rolling: true,
-                ..Effects::NONE
-            },
-        ));
+        let p = events_with::<S>(holes, false);
         let start = [cell_centre(&p, 1, 1)];
         let mut a = world(p, &g, &start);
         let mut b = world(p, &g, &start);
