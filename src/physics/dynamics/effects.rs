@@ -136,6 +136,17 @@ const FLIGHT_SCALE: u32 = 5;
 /// marble off the model's path in one flight ([`Drag::flight`]).
 const TURN_LOG2: u32 = 10;
 
+/// Half an interval of `len` steps; a whole step's (a quiet frame's) a
+/// constant, without the rounding shift.
+#[inline(always)]
+fn half_of<S: Scalar>(len: S) -> S {
+    if len == S::ONE {
+        S::ONE.half()
+    } else {
+        len.half()
+    }
+}
+
 /// What rolling resistance does to one event flight ([`Drag::flight`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DragFlight<S> {
@@ -255,12 +266,7 @@ impl<S: Scalar> Drag<S> {
                     off = off.shr(3);
                 }
             }
-            // A whole step's half a constant (a quiet frame's).
-            let half = if out.len == S::ONE {
-                S::ONE.half()
-            } else {
-                out.len.half()
-            };
+            let half = half_of(out.len);
             let (mx, mz) = (
                 v.x.sat_add(ax.times(half)).shr(SC),
                 v.z.sat_add(az.times(half)).shr(SC),
@@ -327,13 +333,7 @@ impl<S: Scalar> Drag<S> {
             a.shr(SC)
         } else {
             let s = va.shr(SC);
-            // A quiet frame's whole step: its half a constant.
-            let half = if rem == S::ONE {
-                S::ONE.half()
-            } else {
-                rem.half()
-            };
-            let m = va.sat_add(a.times(half)).shr(SC);
+            let m = va.sat_add(a.times(half_of(rem))).shr(SC);
             if m.times(s) > S::ZERO {
                 m
             } else {

@@ -29,6 +29,13 @@ const G_UM_PER_MG_X100: i64 = 980_665;
 /// Fraction bits of a [`PullScale`].
 const SCALE_SHIFT: u32 = 56;
 
+/// The boards' step (`GameConfig::EVENTS`: one event step a 1/128 s frame),
+/// whose kicks take their shifts as constants: `a·dt` by `SCALE_SHIFT + k`,
+/// `½·a·dt²` by `SCALE_SHIFT + 2k + 1`.
+const BOARD_K: u32 = 7;
+const BOARD_DV_SHIFT: u32 = SCALE_SHIFT + BOARD_K;
+const BOARD_DP_SHIFT: u32 = SCALE_SHIFT + 2 * BOARD_K + 1;
+
 /// Pitches/s² per milli-g (times a ratio such as rolling's 5/7), as an integer with
 /// 56 fraction bits (10⁻¹⁸ relative: exact even for the `f64` reference): computed once per level with one division, after which a
 /// tilt sample's kick is a multiply and a shift per axis — no division on the
@@ -67,26 +74,21 @@ impl PullScale {
     /// short of the pull would add `a·ε` of energy every step (measured: +4·10⁻⁴ over
     /// 10⁴ elastic bounces in I32F32), while one rounded past it only loses it.
     pub fn kick<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
-        // The boards' step (`GameConfig::EVENTS`: one event step a 1/128 s
-        // frame) with its shifts constant, every other rate at run time.
-        const K: u32 = 7;
-        if k == K {
-            S::from_pull_at::<{ SCALE_SHIFT + K }, { SCALE_SHIFT + 2 * K + 1 }>(mg, self.0)
+        // The boards' step with its shifts constant, every other rate at run time.
+        if k == BOARD_K {
+            S::from_pull_at::<BOARD_DV_SHIFT, BOARD_DP_SHIFT>(mg, self.0)
         } else {
             S::from_pull(mg, self.0, SCALE_SHIFT + k, SCALE_SHIFT + 2 * k + 1)
         }
     }
-}
 
-impl PullScale {
     /// [`PullScale::kick`] for a pull the number format holds (`|a·dt|` within
     /// its range: `Params::mg_max` bounds event stepping's pull so), the same
     /// bits: at the boards' step rate without the quotients' saturation.
     #[inline(always)]
     pub fn kick_fits<S: Scalar>(self, mg: i32, k: u32) -> (S, S) {
-        const K: u32 = 7;
-        if k == K {
-            S::from_pull_fits_at::<{ SCALE_SHIFT + K }, { SCALE_SHIFT + 2 * K + 1 }>(mg, self.0)
+        if k == BOARD_K {
+            S::from_pull_fits_at::<BOARD_DV_SHIFT, BOARD_DP_SHIFT>(mg, self.0)
         } else {
             self.kick(mg, k)
         }

@@ -262,6 +262,15 @@ fn pull_wide<T: Scalar>(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (T
     )
 }
 
+/// Whether both of a kick's shifts leave the product's quotient on the high
+/// word pair ([`pull_quotient`]'s `s − 32` below 32) for a format of `frac`
+/// fraction bits; else the 128-bit path.
+#[inline(always)]
+fn word_shifts(frac: u32, dv_shift: u32, dp_shift: u32) -> bool {
+    (32..64).contains(&dv_shift.wrapping_sub(frac))
+        && (32..64).contains(&dp_shift.wrapping_sub(frac))
+}
+
 /// [`Scalar::from_pull`]'s word path for a fixed-point format, inlined into
 /// its two entry points: `from_pull` (shifts at run time) and `from_pull_at`
 /// (constant shifts: a 64-bit shift by a constant is a few instructions fewer
@@ -278,9 +287,7 @@ macro_rules! fixed_scalar {
             #[inline(always)]
             fn pull_words(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self) {
                 let frac = <$t>::FRAC_NBITS;
-                let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
-                    && (32..64).contains(&dp_shift.wrapping_sub(frac));
-                if scale < 0 || !words {
+                if scale < 0 || !word_shifts(frac, dv_shift, dp_shift) {
                     return pull_wide(mg, scale, dv_shift, dp_shift);
                 }
                 let product = pull_product(mg, scale as u64);
@@ -292,10 +299,9 @@ macro_rules! fixed_scalar {
             #[inline(always)]
             fn pull_words_fits(mg: i32, scale: i64, dv_shift: u32, dp_shift: u32) -> (Self, Self) {
                 let frac = <$t>::FRAC_NBITS;
-                let words = (32..64).contains(&dv_shift.wrapping_sub(frac))
-                    && (32..64).contains(&dp_shift.wrapping_sub(frac));
                 // A 64-bit format's quotients need their words.
-                if scale < 0 || !words || <$t>::MAX.to_bits() as i64 > i64::from(i32::MAX) {
+                let wide = <$t>::MAX.to_bits() as i64 > i64::from(i32::MAX);
+                if scale < 0 || !word_shifts(frac, dv_shift, dp_shift) || wide {
                     return Self::pull_words(mg, scale, dv_shift, dp_shift);
                 }
                 let product = pull_product(mg, scale as u64);
