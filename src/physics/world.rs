@@ -83,6 +83,11 @@ pub struct World<'a, S: Scalar, const M: usize> {
     /// slice of its own, without the touch that would find the edge again at
     /// once. Forgotten when the marbles are set from outside.
     pivots: [events::CarriedEdge; M],
+    /// Per marble: asleep, and its step found a still quiet frame under the
+    /// pull it fell asleep with or a later one (`events/wake.rs`), nothing
+    /// changed since; a new pull then need only be held as that one was.
+    /// Cleared with the marble's sleep, wherever it is woken from outside.
+    held_still: [bool; M],
     /// Whether searches build free regions (tests turn it off to compare).
     free_regions: bool,
     /// A flat world flown by events, rolling (the boards' mazes): a tilt
@@ -185,6 +190,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             clear: [TileRange::EMPTY; M],
             free: [events::FreeRegion::EMPTY; M],
             pivots: [events::CarriedEdge::NONE; M],
+            held_still: [false; M],
             free_regions: true,
             flat_events: params.events()
                 && params.spec.effects.rolling
@@ -220,11 +226,13 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         self.pivots = start.pivots;
         self.clear = start.clear;
         self.free = start.free;
+        self.held_still = start.held_still;
         self.stats = start.stats;
         if self.gravity_mg != start.gravity_mg {
             for m in self.marbles.iter_mut() {
                 m.asleep = false;
             }
+            self.held_still = [false; M];
         }
     }
     /// Mutable marbles (tests, tools and game rules place them). Wakes them all:
@@ -233,6 +241,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         for m in self.marbles.iter_mut() {
             m.asleep = false;
         }
+        self.held_still = [false; M];
         self.pivots = [events::CarriedEdge::NONE; M];
         &mut self.marbles
     }
@@ -303,12 +312,6 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         // flash). Plain compares, no array of flags, and no `==` on the arrays (a
         // `memcmp` call on the Cortex-M).
         self.gravity_mg = g;
-        // A new pull can move a resting marble. By index: a slice's loop was
-        // unrolled eight times over, for the one marble most worlds hold (25 host
-        // instructions a tilt sample).
-        for n in 0..self.marbles.len() {
-            self.marbles[n].asleep = false;
-        }
         if g[0] != old[0] {
             self.pull_axis(0, g[0]);
         }
@@ -317,6 +320,16 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         }
         if g[2] != old[2] {
             self.pull_axis(2, g[2]);
+        }
+        // A new pull can move a resting marble: `wake_moved` wakes those it
+        // can. By index: a slice's loop was unrolled eight times over, for the
+        // one marble most worlds hold (25 host instructions a tilt sample).
+        let mut asleep = false;
+        for n in 0..self.marbles.len() {
+            asleep |= self.marbles[n].asleep;
+        }
+        if asleep {
+            self.wake_moved();
         }
     }
 
@@ -375,6 +388,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
     pub fn set_free_regions(&mut self, on: bool) {
         self.free_regions = on;
         self.free = [events::FreeRegion::EMPTY; M];
+        self.held_still = [false; M];
     }
 
     /// Turns skipping of resting marbles on (the default) or off. Off, every marble
@@ -384,6 +398,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
         for m in self.marbles.iter_mut() {
             m.asleep = false;
         }
+        self.held_still = [false; M];
     }
 
     /// Sets the board's rotation (used with the `board_motion` effect).
@@ -403,6 +418,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
             for m in self.marbles.iter_mut() {
                 m.asleep = false;
             }
+            self.held_still = [false; M];
         }
     }
 

@@ -217,6 +217,15 @@ impl<S: Scalar> Drag<S> {
         self.plane(v, kick, rem)
     }
 
+    /// Whether static friction holds a marble at rest under the pull `(ax, az)`
+    /// (per step, x' and z', the held faces' parts dropped): the test
+    /// [`Drag::flight`] makes of a still marble, in the same sums (along one
+    /// axis the other term is zero).
+    pub fn holds_at_rest(&self, ax: S, az: S) -> bool {
+        let (qx, qz) = (ax.shr(FLIGHT_SCALE), az.shr(FLIGHT_SCALE));
+        qx.times(qx) + qz.times(qz) <= self.flight_limit2
+    }
+
     /// [`Drag::flight`] in the plane x'–z'.
     #[inline]
     fn plane(&self, v: Vec3<S>, kick: &mut Kick<S>, rem: S) -> DragFlight<S> {
@@ -340,25 +349,29 @@ impl<S: Scalar> Drag<S> {
                 s
             }
         };
-        let u = if d > S::ZERO {
-            S::ONE
-        } else if d < S::ZERO {
-            -S::ONE
-        } else {
-            S::ZERO
-        };
-        *dv = dv.sat_add(-self.decel.times(u));
-        *dp -= self.half_step.times(u);
+        if d == S::ZERO {
+            // No direction: every product with the unit is zero, the kick
+            // stays as it is and nothing slows.
+            return Some((S::ZERO, None, false));
+        }
+        // The unit is ±1: each product with it (exact, in every format) is
+        // the other factor or its negation, taken here without the product
+        // (a library call on the Cortex-M0).
+        let neg = d < S::ZERO;
+        let by_u = |x: S| if neg { -x } else { x };
+        *dv = dv.sat_add(-by_u(self.decel));
+        *dp -= by_u(self.half_step);
         // The rate first, as the plane's: a marble sped up cannot stop.
-        let rate = dv.shr(SC).times(u);
+        let rate = by_u(dv.shr(SC));
         let (mut stop, mut held) = (None, false);
         if rate < S::ZERO {
-            let along = va.shr(SC).times(u);
+            let along = by_u(va.shr(SC));
             if along > S::ZERO && along + rate.times(rem) <= S::ZERO {
                 stop = Some(along.div(-rate).min(rem));
                 held = holds();
             }
         }
+        let u = if neg { -S::ONE } else { S::ONE };
         Some((u, stop, held))
     }
 

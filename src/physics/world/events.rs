@@ -108,6 +108,7 @@ mod search;
 mod speed;
 mod together;
 mod touch;
+mod wake;
 
 /// Events one marble may have in one step at full restitution (see the module
 /// doc): past it the step's impacts are inelastic, and past twice it the rest of
