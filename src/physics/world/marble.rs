@@ -15,8 +15,10 @@ pub struct Marble<S> {
     /// Fallen through a hole or off the board: no longer simulated.
     pub out: bool,
     /// The last step left this marble exactly as it was and nothing has changed
-    /// since (same pull, board still, no neighbour touched it): every further step
-    /// would too, so it is skipped — bit-for-bit the same result, at no cost.
+    /// since (board still, no neighbour touched it, the same pull or, under
+    /// event stepping, one its held faces and static friction hold as still:
+    /// `events/wake.rs`): every further step would too, so it is skipped —
+    /// bit-for-bit the same result, at no cost.
     pub asleep: bool,
     /// Faces the marble rests on (bit `2·axis + up`) and their planes: while the pull
     /// still presses it there, the step holds it on them instead of letting it sink
