@@ -221,6 +221,7 @@ impl<S: Scalar> Drag<S> {
     /// (per step, x' and z', the held faces' parts dropped): the test
     /// [`Drag::flight`] makes of a still marble, in the same sums (along one
     /// axis the other term is zero).
+    #[inline]
     pub fn holds_at_rest(&self, ax: S, az: S) -> bool {
         let (qx, qz) = (ax.shr(FLIGHT_SCALE), az.shr(FLIGHT_SCALE));
         qx.times(qx) + qz.times(qz) <= self.flight_limit2
