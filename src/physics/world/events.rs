@@ -97,6 +97,7 @@ use flight::{Accel, Around, Event, Flight, Slice, EVERY, LID};
 pub(crate) use speed::cap_speed;
 use speed::{max_abs, no_faster};
 
+mod along;
 mod budget;
 mod flight;
 mod free;
@@ -129,12 +130,16 @@ const IDLE_EVENTS: u32 = 4;
 /// per marble; a marble's state can jump at a flight's end (a bounce, a slice's
 /// push-out), so a sample at that instant belongs to the next flight.
 pub trait StepObserver<S> {
+    /// Whether it is told anything: a step watched by none may take a
+    /// flight's shortcut that builds no [`Segment`] (`events/along.rs`).
+    const WATCHES: bool = true;
     /// Marble `marble` flew `seg` from `from` to `to` (fractions of the step;
     /// `seg` starts at `from`).
     fn flight(&mut self, marble: usize, from: S, to: S, seg: &Segment<S>);
 }
 
 impl<S> StepObserver<S> for () {
+    const WATCHES: bool = false;
     #[inline(always)]
     fn flight(&mut self, _: usize, _: S, _: S, _: &Segment<S>) {}
 }

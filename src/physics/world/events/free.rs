@@ -111,6 +111,25 @@ impl<S: Scalar> FreeRegion<S> {
             && (!space || (lo.y <= c.y && c.y < hi.y))
     }
 
+    /// [`FreeRegion::under_held`] for a flat world's marble holding one face,
+    /// bit `2·H + up`, with which the region was built: that face's plane is
+    /// the region's side (held from above, the low one) and the centre is
+    /// inside across x' and z'.
+    #[inline(always)]
+    pub(in crate::physics::world) fn under_face<const H: usize>(
+        &self,
+        m: &Marble<S>,
+        up: bool,
+    ) -> bool {
+        debug_assert_eq!(self.held, 1 << (2 * H + up as usize));
+        let (c, lo, hi) = (m.pos, self.lo, self.hi);
+        let side = if up { lo.axis(H) } else { hi.axis(H) };
+        let under =
+            side == m.rest_plane[H] && lo.x <= c.x && c.x < hi.x && lo.z <= c.z && c.z < hi.z;
+        debug_assert_eq!(under, self.under_held(m, false));
+        under
+    }
+
     /// Whether the flight `seg` of the marble, whose centre sweeps `path`, can
     /// meet nothing: the search would return the flight's own end or stop.
     /// `(r, reach)`: the radius, and with the tolerance. `space`: the world has

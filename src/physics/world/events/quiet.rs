@@ -27,6 +27,27 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         m: &mut Marble<S>,
         obs: &mut O,
     ) -> Option<Flight<S>> {
+        // Rolling along one wall of a flat world, unwatched: the same frame
+        // on that axis alone (`events/along.rs`).
+        if !SPACE
+            && !O::WATCHES
+            && m.rest_mask != 0
+            && self.params.spec.effects.friction
+            && self.roll_along(n, m)
+        {
+            return None;
+        }
+        self.quiet_frame::<SPACE, O>(n, m, obs)
+    }
+
+    /// [`World::quiet`] for any marble.
+    #[inline]
+    pub(super) fn quiet_frame<const SPACE: bool, O: StepObserver<S>>(
+        &mut self,
+        n: usize,
+        m: &mut Marble<S>,
+        obs: &mut O,
+    ) -> Option<Flight<S>> {
         if self.out_of_flights() {
             return Some(Flight::begin());
         }
