@@ -326,9 +326,10 @@ impl<S: Scalar> Drag<S> {
     /// bits. Returns the unit along the axis (±1, or 0), the stop and whether the
     /// pull alone cannot beat the static threshold (asked with a stop, as the
     /// plane asks it); `None` for a marble at rest
-    /// that stays put (the caller drops the plane's kick).
-    #[inline]
-    fn along(&self, va: S, dv: &mut S, dp: &mut S, rem: S) -> Option<(S, Option<S>, bool)> {
+    /// that stays put (the caller drops the plane's kick). Out of line: the
+    /// event step's marble rolling along a wall asks it directly.
+    #[inline(never)]
+    pub fn along(&self, va: S, dv: &mut S, dp: &mut S, rem: S) -> Option<(S, Option<S>, bool)> {
         const SC: u32 = FLIGHT_SCALE;
         let a = *dv;
         // The pull scaled only where asked: at rest, or with a stop.

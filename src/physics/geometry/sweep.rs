@@ -43,7 +43,7 @@ pub(crate) fn quarter<S: Scalar>(len: S) -> Option<S> {
 
 /// One axis of [`swept`]: from `a` to `b` bending with `h`, `quarter` from
 /// [`quarter`].
-#[inline]
+#[inline(always)]
 pub(crate) fn swept_axis<S: Scalar>(a: S, b: S, h: S, quarter: Option<S>) -> (S, S) {
     let bulge = match quarter {
         None => h.abs().shr(2),

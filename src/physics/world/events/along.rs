@@ -73,28 +73,33 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         let r = self.params.radius;
         let plane = m.rest_plane[H];
         let at = if up { plane + r } else { plane - r };
-        let mut kick = self.kick_roll;
+        let kick = &self.kick_roll;
         let pull = kick.dv.axis(H);
         let presses = if up { pull < S::ZERO } else { pull > S::ZERO };
         if m.pos.axis(H) != at || m.vel.axis(H) != S::ZERO || !presses {
             return false;
         }
-        // The plane's kick with the face's part dropped (`accel`, `hold`).
-        kick.dv.y = S::ZERO;
-        kick.dp.y = S::ZERO;
-        kick.dv.set_axis(H, S::ZERO);
-        kick.dp.set_axis(H, S::ZERO);
-        let d = self.drag.flight(m.vel, &mut kick, S::ONE);
-        if d.len != S::ONE || d.stop.is_some_and(|s| s < S::ONE) {
-            return false;
+        // The hold drops the pull across the face (and the plane's y'): what
+        // is left is the pull along `A`. Rolling resistance as
+        // `Drag::flight` makes it of a velocity and a pull along `A` alone:
+        // its one-axis sums, the whole step one interval; at rest and held,
+        // no kick.
+        let (mut dv, mut h) = (kick.dv.axis(A), kick.dp.axis(A));
+        let v = m.vel.axis(A);
+        match self.drag.along(v, &mut dv, &mut h, S::ONE) {
+            Some((_, stop, _)) => {
+                if stop.is_some_and(|s| s < S::ONE) {
+                    return false;
+                }
+            }
+            None => (dv, h) = (S::ZERO, S::ZERO),
         }
         // The whole step's closed form along `A` (`Segment::pos_at(1)`:
         // `p + (u + h)`, `u = v·dt`; `vel_at(1)`: `v + dv`, saturating);
         // across, the centre plus zeros, whose sums a fixed-point format
         // folds away and a float one makes as `quiet` does.
         let k = self.params.k;
-        let (p, v) = (m.pos.axis(A), m.vel.axis(A));
-        let (dv, h) = (kick.dv.axis(A), kick.dp.axis(A));
+        let p = m.pos.axis(A);
         let end_a = p + (v.shr(k) + h);
         let zero = S::ZERO.shr(k) + S::ZERO;
         let (end_h, end_y) = (m.pos.axis(H) + zero, m.pos.y + zero);

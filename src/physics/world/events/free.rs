@@ -214,7 +214,7 @@ impl<S: Scalar> FreeRegion<S> {
     /// [`FreeRegion::serves`] for a marble known to hold the region's faces
     /// (the quiet frame's: `under_held` said so before the hold, which kept
     /// them all).
-    #[inline]
+    #[inline(always)]
     pub(in crate::physics::world) fn contains(
         &self,
         path: &Aabb<S>,
