@@ -99,6 +99,8 @@ pub struct World<'a, S: Scalar, const M: usize> {
     flight_budget: u32,
     /// Flights the step under way may still take.
     flights_left: u32,
+    /// The touching tolerance (`events::touch_tolerance` of the radius).
+    tol: S,
     /// What the steps did so far.
     pub stats: StepStats,
     /// The bounces since [`World::take_impacts`].
@@ -197,6 +199,7 @@ impl<'a, S: Scalar, const M: usize> World<'a, S, M> {
                 && !params.spec.effects.holes,
             flight_budget: events::FLIGHT_BUDGET,
             flights_left: 0,
+            tol: events::touch_tolerance(params.radius),
             stats: StepStats::default(),
             impacts: Impacts::default(),
         };

@@ -96,6 +96,7 @@ use super::{marble_pair, Marble, Scalar, Solver, Vec3, World};
 use flight::{Accel, Around, Event, Flight, Slice, EVERY, LID};
 pub(crate) use speed::cap_speed;
 use speed::{max_abs, no_faster};
+pub(super) use touch::touch_tolerance;
 
 mod along;
 mod budget;
@@ -169,11 +170,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         }
     }
 
-    /// The touching tolerance: a ten-thousandth of the radius or four LSB.
+    /// The touching tolerance ([`touch_tolerance`]).
     #[inline]
     fn tol(&self) -> S {
-        let lsb = S::lsb();
-        self.params.radius.shr(14).max(lsb + lsb + lsb + lsb)
+        self.tol
     }
 
     /// The restitution threshold in pitch a step: slower than it, a marble's

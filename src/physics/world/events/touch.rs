@@ -283,3 +283,10 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
 /// is pressed on (a plain slice's and a pair slice's bound, `slice_len`,
 /// `pair_slice`).
 pub(super) const SINK: u32 = 12;
+
+/// The touching tolerance of marbles of radius `r`: a ten-thousandth of it
+/// or four LSB (`World::tol`, kept from the world's creation).
+pub(in crate::physics::world) fn touch_tolerance<S: Scalar>(r: S) -> S {
+    let lsb = S::lsb();
+    r.shr(14).max(lsb + lsb + lsb + lsb)
+}
