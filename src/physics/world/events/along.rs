@@ -4,14 +4,14 @@
 //! the pull there, the speed there is zero — so the quiet frame's sums on that
 //! axis and on y' are the centre's own coordinate plus zeros, and the flight is
 //! one axis's closed form. Here those sums are made on that axis alone, with
-//! the wall's axis a constant: the same bits as `quiet` (debug builds fly
-//! `quiet` beside it and compare), without the vector sums, the loop over the
-//! held faces and the acceleration's struct that `quiet` pays for.
+//! the wall's axis a constant: the same bits as `quiet_frame` (debug builds
+//! fly it beside and compare), without the vector sums, the loop over the held
+//! faces and the acceleration's struct that it pays for.
 //!
-//! Only where `quiet` would serve the frame: anything else (no wall or two,
-//! a face the hold lets go of, a region that does not back the wall or hold
-//! the path, rolling resistance's interval or stop inside the step, the board
-//! turning, an observer) is left to `quiet`, with nothing changed.
+//! Only where `quiet_frame` would serve the frame: anything else (no wall or
+//! two, a face the hold lets go of, a region that does not back the wall or
+//! hold the path, rolling resistance's interval or stop inside the step, the
+//! board turning, an observer) is left to it, with nothing changed.
 
 use super::super::super::geometry::sweep::swept_axis;
 use super::super::super::geometry::tiles::Aabb;

@@ -40,7 +40,8 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         self.quiet_frame::<SPACE, O>(n, m, obs)
     }
 
-    /// [`World::quiet`] for any marble.
+    /// The quiet frame by the general sums, for any marble (`quiet` asks the
+    /// one-axis roll first; debug builds compare the two).
     #[inline]
     pub(super) fn quiet_frame<const SPACE: bool, O: StepObserver<S>>(
         &mut self,
