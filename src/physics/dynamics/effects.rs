@@ -233,7 +233,7 @@ impl<S: Scalar> Drag<S> {
         const SC: u32 = FLIGHT_SCALE;
         let (ax, az) = (kick.dv.x, kick.dv.z);
         let (qx, qz) = (ax.shr(SC), az.shr(SC));
-        let holds = || qx.times(qx) + qz.times(qz) <= self.flight_limit2;
+        let holds = || self.holds_at_rest(ax, az);
         let mut out = DragFlight {
             len: rem,
             stop: None,

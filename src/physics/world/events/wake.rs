@@ -118,7 +118,7 @@ impl<S: Scalar, const M: usize> World<'_, S, M> {
         } else {
             self.held_by_pull::<false>(n)
         };
-        held && region.contains(&path, self.params.radius + self.tol(), space)
+        held && region.contains(&path, r + self.tol(), space)
     }
 
     /// For a marble at rest on its held faces, the hold's other tests passed
